@@ -1,0 +1,1 @@
+"""Backends: one interface (`ClipBackend`), several places to run the kernels."""

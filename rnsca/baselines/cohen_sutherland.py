@@ -1,0 +1,81 @@
+"""Cohen–Sutherland line clipping.
+
+Classify both ends by outcode; accept if both are zero, reject if they share a bit,
+otherwise move one outside end to the edge named by one of its bits (TOP, BOTTOM, RIGHT,
+LEFT, in that order) and classify again. Each move computes one intersection. The
+intersection is computed from the original segment (``t = (edge - x0) / dx``) rather
+than from the already-moved ends, so errors do not accumulate and the parameter
+interval of the piece is known.
+"""
+
+from rnsca.kernels import counters as C
+from rnsca.kernels.jit import scalar
+from rnsca.kernels.outcode import (
+    BOTTOM,
+    EDGE_BOTTOM,
+    EDGE_LEFT,
+    EDGE_RIGHT,
+    EDGE_TOP,
+    RIGHT,
+    TOP,
+    edge_point,
+    is_piece,
+    outcode,
+)
+
+# In exact arithmetic each end moves at most twice (to an edge, then across a corner),
+# so four moves decide every segment. Rounding near a corner can make a moved end test
+# outside the edge it was not moved to; the bound ends that loop, and the piece found
+# so far (ulp-close to the corner) is kept only if its interval is not empty.
+_MAX_MOVES = 8
+
+
+@scalar
+def _edge_parameter(code, x0, y0, dx, dy, xmin, ymin, xmax, ymax):
+    """Return (t, edge) where the segment's line crosses the edge named by `code`."""
+    if code & TOP:
+        return (ymax - y0) / dy, EDGE_TOP
+    if code & BOTTOM:
+        return (ymin - y0) / dy, EDGE_BOTTOM
+    if code & RIGHT:
+        return (xmax - x0) / dx, EDGE_RIGHT
+    return (xmin - x0) / dx, EDGE_LEFT
+
+
+@scalar
+def cohen_sutherland_segment(x0, y0, x1, y1, xmin, ymin, xmax, ymax, st):
+    """Clip one segment with Cohen–Sutherland; return (keep, t0, t1, ax, ay, bx, by)."""
+    dx = x1 - x0
+    dy = y1 - y0
+    t0 = 0.0
+    t1 = 1.0
+    ax, ay, bx, by = x0, y0, x1, y1
+    ca = outcode(ax, ay, xmin, ymin, xmax, ymax)
+    cb = outcode(bx, by, xmin, ymin, xmax, ymax)
+    for _ in range(_MAX_MOVES):
+        st[C.EVALUATED] += 1
+        st[C.LEVELS] += 1
+        if (ca | cb) == 0:
+            st[C.ACCEPTED] += 1
+            return is_piece(dx == 0.0 and dy == 0.0, t0, t1, ax, ay, bx, by), t0, t1, ax, ay, bx, by
+        if ca & cb:
+            st[C.REJECTED] += 1
+            return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+        st[C.CLIPPED] += 1
+        st[C.INTERSECTIONS] += 1
+        if ca != 0:
+            t, edge = _edge_parameter(ca, x0, y0, dx, dy, xmin, ymin, xmax, ymax)
+            if t > t0:
+                t0 = t
+                # The moved end is not clamped: the next outcode test must see it.
+                ax, ay = edge_point(x0, y0, dx, dy, t, edge, xmin, ymin, xmax, ymax)
+            ca = outcode(ax, ay, xmin, ymin, xmax, ymax)
+        else:
+            t, edge = _edge_parameter(cb, x0, y0, dx, dy, xmin, ymin, xmax, ymax)
+            if t < t1:
+                t1 = t
+                bx, by = edge_point(x0, y0, dx, dy, t, edge, xmin, ymin, xmax, ymax)
+            cb = outcode(bx, by, xmin, ymin, xmax, ymax)
+        if t0 > t1:
+            return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    return is_piece(False, t0, t1, ax, ay, bx, by), t0, t1, ax, ay, bx, by

@@ -1,0 +1,132 @@
+"""Midpoint subdivision (Sproull and Sutherland, 1968).
+
+Two binary searches, no intersection: the farthest visible point from P0 (the exit) and
+the farthest visible point from P1 (the entry). Searching for the exit, the bracket
+[a, b] is halved at m; if the half [m, b] is trivially invisible (its outcodes share a
+bit) the exit lies in [a, m], otherwise in [m, b]. The second rule is sound because the
+window is convex: past the exit, every point lies beyond the exit edge, so a half that
+starts past the exit is always trivially invisible. The search stops when the bracket is
+no longer than `tol` or `max_depth` halvings were made.
+
+The final bracket is the leaf. In approx mode it is dropped and the visible end of the
+bracket is the piece's end, so no point is outside and at most one bracket length is
+lost per end; in exact mode the bracket is clipped with Liang–Barsky, as RNSCA does.
+"""
+
+import math
+
+from rnsca.baselines.liang_barsky import liang_barsky_interval
+from rnsca.kernels import counters as C
+from rnsca.kernels.jit import scalar
+from rnsca.kernels.outcode import end_point, is_piece, outcode
+
+
+@scalar
+def _search(x0, y0, dx, dy, x1, y1, c0, c1, length, toward_end, max_depth, tol,
+            xmin, ymin, xmax, ymax, st):
+    """Return the final bracket (a, xa, ya, ca, b, xb, yb, cb, level) of one search.
+
+    ``toward_end=True`` brackets the exit (the farthest visible point from P0), else
+    the entry (the farthest visible point from P1).
+    """
+    a = 0.0
+    xa, ya, ca = x0, y0, c0
+    b = 1.0
+    xb, yb, cb = x1, y1, c1
+    level = 0
+    while level < max_depth and (b - a) * length > tol:
+        m = a + (b - a) * 1 / 2
+        xm = x0 + m * dx
+        ym = y0 + m * dy
+        cm = outcode(xm, ym, xmin, ymin, xmax, ymax)
+        level += 1
+        st[C.EVALUATED] += 1
+        # The half on the far side of the searched end: [m, b] for the exit, [a, m] for the entry.
+        far = cb if toward_end else ca
+        if cm & far:
+            st[C.REJECTED] += 1
+            st[C.LEVELS + level] += 1
+            if toward_end:
+                b, xb, yb, cb = m, xm, ym, cm
+            else:
+                a, xa, ya, ca = m, xm, ym, cm
+        else:
+            st[C.SUBDIVIDED] += 1
+            if toward_end:
+                a, xa, ya, ca = m, xm, ym, cm
+            else:
+                b, xb, yb, cb = m, xm, ym, cm
+    if level > st[C.DEEPEST]:
+        st[C.DEEPEST] = level
+    return a, xa, ya, ca, b, xb, yb, cb, level
+
+
+@scalar
+def _leaf(x0, y0, dx, dy, a, xa, ya, ca, b, xb, yb, cb, level, exact, xmin, ymin, xmax, ymax, st):
+    """Decide a final bracket; return (ok, u0, ax, ay, u1, bx, by) of its visible part.
+
+    In approx mode the visible part is the bracket's visible end alone (u0 == u1).
+    """
+    st[C.EVALUATED] += 1
+    st[C.LEVELS + level] += 1
+    if ca & cb:
+        st[C.REJECTED] += 1
+        return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    if (ca | cb) == 0:
+        st[C.ACCEPTED] += 1
+        return True, a, xa, ya, b, xb, yb
+    if not exact:
+        st[C.DROPPED] += 1
+        if ca == 0:
+            return True, a, xa, ya, a, xa, ya
+        if cb == 0:
+            return True, b, xb, yb, b, xb, yb
+        return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    st[C.CLIPPED] += 1
+    ok, u0, e0, u1, e1 = liang_barsky_interval(x0, y0, dx, dy, a, b, xmin, ymin, xmax, ymax, st)
+    if not ok:
+        return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    px, py = end_point(x0, y0, dx, dy, u0, e0, xa, ya, xmin, ymin, xmax, ymax)
+    qx, qy = end_point(x0, y0, dx, dy, u1, e1, xb, yb, xmin, ymin, xmax, ymax)
+    return True, u0, px, py, u1, qx, qy
+
+
+@scalar
+def midpoint_segment(x0, y0, x1, y1, xmin, ymin, xmax, ymax, max_depth, tol, exact, st):
+    """Clip one segment by midpoint subdivision; return (keep, t0, t1, ax, ay, bx, by)."""
+    dx = x1 - x0
+    dy = y1 - y0
+    length = math.hypot(dx, dy)
+    c0 = outcode(x0, y0, xmin, ymin, xmax, ymax)
+    c1 = outcode(x1, y1, xmin, ymin, xmax, ymax)
+    if (c0 | c1) == 0 or c0 & c1 or max_depth == 0 or length <= tol:
+        # Decided at level 0 (accepted, rejected, or the whole segment is the leaf).
+        ok, t0, ax, ay, t1, bx, by = _leaf(x0, y0, dx, dy, 0.0, x0, y0, c0, 1.0, x1, y1, c1,
+                                           0, exact, xmin, ymin, xmax, ymax, st)
+        if not ok or t0 == t1 and (c0 | c1) != 0:  # a dropped approx leaf leaves one point
+            return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+        return is_piece(dx == 0.0 and dy == 0.0, t0, t1, ax, ay, bx, by), t0, t1, ax, ay, bx, by
+    st[C.EVALUATED] += 1
+    st[C.SUBDIVIDED] += 1
+    # Exit end: P1 itself when visible, else the end found by the search from P0.
+    if c1 == 0:
+        t1, bx, by = 1.0, x1, y1
+    else:
+        a, xa, ya, ca, b, xb, yb, cb, level = _search(
+            x0, y0, dx, dy, x1, y1, c0, c1, length, True, max_depth, tol,
+            xmin, ymin, xmax, ymax, st)
+        ok, _, _, _, t1, bx, by = _leaf(x0, y0, dx, dy, a, xa, ya, ca, b, xb, yb, cb, level,
+                                        exact, xmin, ymin, xmax, ymax, st)
+        if not ok:
+            return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    if c0 == 0:
+        t0, ax, ay = 0.0, x0, y0
+    else:
+        a, xa, ya, ca, b, xb, yb, cb, level = _search(
+            x0, y0, dx, dy, x1, y1, c0, c1, length, False, max_depth, tol,
+            xmin, ymin, xmax, ymax, st)
+        ok, t0, ax, ay, _, _, _ = _leaf(x0, y0, dx, dy, a, xa, ya, ca, b, xb, yb, cb, level,
+                                        exact, xmin, ymin, xmax, ymax, st)
+        if not ok:
+            return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    return is_piece(False, t0, t1, ax, ay, bx, by), t0, t1, ax, ay, bx, by

@@ -1,0 +1,139 @@
+"""Clipping options: strings at the edge, enums and checked numbers inside."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from enum import Enum
+
+from rnsca.errors import InvalidOptionError
+from rnsca.window import Window
+
+__all__ = ["Method", "Mode", "Backend", "SegmentOptions", "N_MIN", "N_MAX", "MAX_DEPTH_LIMIT"]
+
+N_MIN = 2
+N_MAX = 64
+MAX_DEPTH_LIMIT = 32
+#: In approx mode the default tolerance is this fraction of the window's longer side.
+APPROX_RELATIVE_TOLERANCE = 1e-9
+
+
+class _ChoiceEnum(str, Enum):
+    """A string enum whose lookup error lists the valid choices (case-insensitive)."""
+
+    @classmethod
+    def _missing_(cls, value):
+        if isinstance(value, str):
+            for member in cls:
+                if member.value == value.lower():
+                    return member
+        choices = ", ".join(repr(m.value) for m in cls)
+        raise InvalidOptionError(f"{cls.__name__.lower()} must be one of {choices}, got {value!r}")
+
+    def __str__(self) -> str:
+        return self.value
+
+
+class Method(_ChoiceEnum):
+    """Segment clipping algorithm; all share one output contract."""
+
+    RNSCA = "rnsca"
+    """Recursive N-subdivision: outcode-classify N pieces, recurse into ambiguous ones."""
+    COHEN_SUTHERLAND = "cohen_sutherland"
+    """Cohen–Sutherland (1967): outcodes, then cut at one edge at a time."""
+    LIANG_BARSKY = "liang_barsky"
+    """Liang–Barsky (1984): parametric clip against the four boundary half-planes."""
+    NICHOLL_LEE_NICHOLL = "nicholl_lee_nicholl"
+    """Nicholl–Lee–Nicholl (1987): region tests pick the edges, at most two intersections."""
+    MIDPOINT = "midpoint"
+    """Sproull–Sutherland midpoint subdivision: bisection towards each visible end."""
+
+
+class Mode(_ChoiceEnum):
+    """What subdivision methods do with a piece still undecided at the last level."""
+
+    EXACT = "exact"
+    """Clip it with Liang–Barsky: the output is the analytic clip."""
+    APPROX = "approx"
+    """Drop it: no intersection computed; output is a subset of the true clip."""
+
+
+class Backend(_ChoiceEnum):
+    """Where the kernels run."""
+
+    NUMBA = "numba"
+    """Numba-compiled, parallel over blocks of primitives (default)."""
+    NUMPY = "numpy"
+    """Vectorized NumPy reference; slow, written to be read, used as a second opinion."""
+
+
+@dataclass(frozen=True, slots=True)
+class SegmentOptions:
+    """Validated options for one segment clipping call.
+
+    Attributes
+    ----------
+    method, mode : Method, Mode
+    n : int
+        Pieces per subdivision, 2..64, or 0 for ``"auto"``.
+    max_depth : int
+        Deepest subdivision level, 0..32.
+    tolerance : float
+        A piece no longer than this is not subdivided further (absolute units).
+    auto_piece : float
+        The piece length that ``n="auto"`` aims for: the window's longer side.
+    """
+
+    method: Method
+    mode: Mode
+    n: int
+    max_depth: int
+    tolerance: float
+    auto_piece: float
+
+    @classmethod
+    def resolve(cls, window: Window, *, method="rnsca", n="auto", max_depth=None,
+                tolerance=None, mode="exact") -> SegmentOptions:
+        """Return checked options, with defaults filled in for `window`.
+
+        Defaults: ``max_depth=32``; ``tolerance`` is ``1e-9 * window.size`` in approx mode
+        (the accuracy promise) and ``window.size`` in exact mode (leaves are clipped
+        exactly, so refining below the window's scale only adds work; see README).
+        ``method="midpoint"`` always bisects (N = 2).
+        """
+        method = Method(method)
+        mode = Mode(mode)
+        if isinstance(n, str):
+            if n.lower() != "auto":
+                raise InvalidOptionError(f"n must be an integer {N_MIN}..{N_MAX} or 'auto', got {n!r}")
+            n_value = 0
+        else:
+            n_value = _integer("n", n, N_MIN, N_MAX)
+        if method is Method.MIDPOINT:
+            n_value = 2
+        depth = MAX_DEPTH_LIMIT if max_depth is None else _integer(
+            "max_depth", max_depth, 0, MAX_DEPTH_LIMIT)
+        if tolerance is None:
+            tol = window.size * (APPROX_RELATIVE_TOLERANCE if mode is Mode.APPROX else 1.0)
+        else:
+            if isinstance(tolerance, bool):
+                raise InvalidOptionError(f"tolerance must be a positive number, got {tolerance!r}")
+            try:
+                tol = float(tolerance)
+            except (TypeError, ValueError):
+                raise InvalidOptionError(
+                    f"tolerance must be a positive number, got {tolerance!r}") from None
+            if not (math.isfinite(tol) and tol > 0):
+                raise InvalidOptionError(f"tolerance must be finite and > 0, got {tolerance!r}")
+        return cls(method, mode, n_value, depth, tol, window.size)
+
+
+def _integer(name: str, value, low: int, high: int) -> int:
+    if isinstance(value, bool) or not isinstance(value, (int,)) and not (
+        hasattr(value, "__index__")
+    ):
+        raise InvalidOptionError(f"{name} must be an integer {low}..{high}, got {value!r}")
+    value = int(value)
+    if not low <= value <= high:
+        raise InvalidOptionError(f"{name} must be in {low}..{high}, got {value}")
+    return value

@@ -112,9 +112,10 @@ def clip_segments(segments, window, *, method="rnsca", n="auto", max_depth=None,
         length and the window's size (see README, "Choosing N").
     max_depth : int in 0..32, default 32
         Deepest subdivision level (RNSCA, midpoint).
-    tolerance : float > 0, optional
+    tolerance : float > 0 (may be inf), optional
         A piece no longer than this is a leaf. Default: ``1e-9 * window.size`` in approx
-        mode, ``window.size`` in exact mode.
+        mode; infinite in exact mode, where splitting cannot save the clip at a boundary
+        crossing, so every segment is decided at level 0 (see README, "Exact mode").
     mode : {"exact", "approx"}
         What happens to undecided leaves: clipped with Liang–Barsky, or dropped. In
         approx mode the length lost at each boundary crossing is at most one leaf,

@@ -97,15 +97,18 @@ class SegmentOptions:
         """Return checked options, with defaults filled in for `window`.
 
         Defaults: ``max_depth=32``; ``tolerance`` is ``1e-9 * window.size`` in approx mode
-        (the accuracy promise) and ``window.size`` in exact mode (leaves are clipped
-        exactly, so refining below the window's scale only adds work; see README).
+        (the accuracy promise) and infinite in exact mode: an exact leaf is clipped
+        analytically, and splitting a segment never saves the clip at its boundary
+        crossings, so by default a segment is decided at level 0 (see README, "Exact
+        mode"). Pass a tolerance to make exact mode subdivide.
         ``method="midpoint"`` always bisects (N = 2).
         """
         method = Method(method)
         mode = Mode(mode)
         if isinstance(n, str):
             if n.lower() != "auto":
-                raise InvalidOptionError(f"n must be an integer {N_MIN}..{N_MAX} or 'auto', got {n!r}")
+                raise InvalidOptionError(
+                    f"n must be an integer {N_MIN}..{N_MAX} or 'auto', got {n!r}")
             n_value = 0
         else:
             n_value = _integer("n", n, N_MIN, N_MAX)
@@ -114,7 +117,7 @@ class SegmentOptions:
         depth = MAX_DEPTH_LIMIT if max_depth is None else _integer(
             "max_depth", max_depth, 0, MAX_DEPTH_LIMIT)
         if tolerance is None:
-            tol = window.size * (APPROX_RELATIVE_TOLERANCE if mode is Mode.APPROX else 1.0)
+            tol = window.size * APPROX_RELATIVE_TOLERANCE if mode is Mode.APPROX else math.inf
         else:
             if isinstance(tolerance, bool):
                 raise InvalidOptionError(f"tolerance must be a positive number, got {tolerance!r}")
@@ -123,8 +126,8 @@ class SegmentOptions:
             except (TypeError, ValueError):
                 raise InvalidOptionError(
                     f"tolerance must be a positive number, got {tolerance!r}") from None
-            if not (math.isfinite(tol) and tol > 0):
-                raise InvalidOptionError(f"tolerance must be finite and > 0, got {tolerance!r}")
+            if not tol > 0:  # NaN fails too; +inf means "never subdivide"
+                raise InvalidOptionError(f"tolerance must be > 0, got {tolerance!r}")
         return cls(method, mode, n_value, depth, tol, window.size)
 
 

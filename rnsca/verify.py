@@ -2,13 +2,14 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import asdict, dataclass
 
 import numpy as np
 import shapely
 
 from rnsca.clip import SegmentClipResult, as_segments
-from rnsca.errors import UnsupportedGeometryError
+from rnsca.errors import InvalidGeometryError, UnsupportedGeometryError
 from rnsca.options import Method, Mode
 from rnsca.window import Window
 
@@ -65,6 +66,17 @@ def approx_leaf_bound(lengths: np.ndarray, result: SegmentClipResult) -> np.ndar
     return np.maximum(options.tolerance, lengths / float(base) ** options.max_depth)
 
 
+def _unit_scale(window: Window, segments: np.ndarray) -> float:
+    """Return the power of two that scales `window`'s size into [0.5, 1).
+
+    It is made smaller when needed so that no scaled coordinate exceeds about 2**1000.
+    """
+    exponent = math.frexp(window.size)[1]
+    largest = max(float(np.abs(segments).max(initial=0.0)), *map(abs, window.bounds))
+    exponent = max(exponent, math.frexp(largest)[1] - 1000)
+    return math.ldexp(1.0, -exponent)
+
+
 def verify(original, clipped: SegmentClipResult, window) -> Verification:
     """Return how `clipped` compares with Shapely's intersection of `original` and `window`.
 
@@ -90,17 +102,27 @@ def verify(original, clipped: SegmentClipResult, window) -> Verification:
     segments = as_segments(original)
     n = segments.shape[0]
     size = window.size
+    if clipped.stats.segments_in != n or (len(clipped) and clipped.source.max() >= n):
+        raise InvalidGeometryError(
+            f"verify needs the {clipped.stats.segments_in} segments that were clipped, "
+            f"got {n}")
 
+    # GEOS loses whole pieces to overflow or underflow far from 1 (beyond about 1e+-150),
+    # so Shapely sees the geometry scaled by a power of two that brings the window's size
+    # near 1: exact in floating point, and distances scale back exactly.
+    scale = _unit_scale(window, segments)
+    scaled = segments * scale
     ours_length = np.zeros(n)
     ours = np.full(n, None, dtype=object)
     if len(clipped):
-        pieces = clipped.segments
+        pieces = clipped.segments * scale
         ours[clipped.source] = shapely.linestrings(pieces.reshape(-1, 2, 2))
         ours_length[clipped.source] = np.hypot(pieces[:, 2] - pieces[:, 0],
                                                pieces[:, 3] - pieces[:, 1])
 
-    lines = shapely.linestrings(segments.reshape(-1, 2, 2))
-    expected = shapely.intersection(lines, shapely.box(*window.bounds))
+    lines = shapely.linestrings(scaled.reshape(-1, 2, 2))
+    box = shapely.box(*(bound * scale for bound in window.bounds))
+    expected = shapely.intersection(lines, box)
     # Keep the input's dimension: a point where a segment touches the window is no piece.
     is_line = shapely.get_type_id(expected) == shapely.GeometryType.LINESTRING
     expected = np.where(is_line & ~shapely.is_empty(expected), expected, None)
@@ -119,6 +141,14 @@ def verify(original, clipped: SegmentClipResult, window) -> Verification:
         deviation[both] = shapely.hausdorff_distance(ours[both], expected[both])
     deviation[has_ours & ~has_expected] = ours_length[has_ours & ~has_expected]
     deviation[~has_ours & has_expected] = expected_length[~has_ours & has_expected]
+    total_expected = float(expected_length.sum())
+    total_ours = float(ours_length.sum())
+    ratio = 1.0 if total_expected == 0.0 and total_ours == 0.0 else (
+        total_ours / total_expected if total_expected > 0 else float("inf"))
+    # Back to the caller's units (dividing by a power of two is exact).
+    deviation /= scale
+    ours_length /= scale
+    expected_length /= scale
 
     margin = EXACT_RELATIVE_TOLERANCE * size
     if len(clipped):
@@ -129,16 +159,13 @@ def verify(original, clipped: SegmentClipResult, window) -> Verification:
         false_positives = int(outside.sum())
     else:
         false_positives = 0
-    total_expected = float(expected_length.sum())
-    total_ours = float(ours_length.sum())
-    ratio = 1.0 if total_expected == 0.0 and total_ours == 0.0 else (
-        total_ours / total_expected if total_expected > 0 else float("inf"))
 
     approx = clipped.mode is Mode.APPROX and clipped.method in (Method.RNSCA, Method.MIDPOINT)
     if approx:
         lengths = np.hypot(segments[:, 2] - segments[:, 0], segments[:, 3] - segments[:, 1])
         allowed = 2.0 * approx_leaf_bound(lengths, clipped) + margin
-        within = bool((deviation <= allowed).all()) and bool((ours_length <= expected_length + margin).all())
+        within = (bool((deviation <= allowed).all())
+                  and bool((ours_length <= expected_length + margin).all()))
         allowed_deviation = float(allowed.max()) if n else margin
     else:
         within = bool((deviation <= margin).all())

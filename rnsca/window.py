@@ -62,7 +62,7 @@ class Window:
 
     @classmethod
     def of(cls, window: Window | tuple | list) -> Window:
-        """Return `window` as a Window, accepting a Window or 4 bounds ``[xmin, ymin, xmax, ymax]``."""
+        """Return `window` as a Window, from a Window or 4 bounds ``[xmin, ymin, xmax, ymax]``."""
         if isinstance(window, Window):
             return window
         try:

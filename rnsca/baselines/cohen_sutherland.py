@@ -16,6 +16,7 @@ from rnsca.kernels.outcode import (
     EDGE_LEFT,
     EDGE_RIGHT,
     EDGE_TOP,
+    LEFT,
     RIGHT,
     TOP,
     edge_point,
@@ -24,22 +25,24 @@ from rnsca.kernels.outcode import (
 )
 
 # In exact arithmetic each end moves at most twice (to an edge, then across a corner),
-# so four moves decide every segment. Rounding near a corner can make a moved end test
-# outside the edge it was not moved to; the bound ends that loop, and the piece found
-# so far (ulp-close to the corner) is kept only if its interval is not empty.
-_MAX_MOVES = 8
+# so four moves decide every segment. Rounding near a corner can make an end moved onto
+# one edge test a hair outside the other edge, whose crossing lies at or before that end
+# (t no further on): that bit is rounding noise and is cleared without moving the end.
+# Every step either moves an end to a later edge crossing (at most 4 per end) or clears
+# one of the at most 2 bits an outcode has, so 32 steps always decide the segment.
+_MAX_MOVES = 32
 
 
 @scalar
 def _edge_parameter(code, x0, y0, dx, dy, xmin, ymin, xmax, ymax):
-    """Return (t, edge) where the segment's line crosses the edge named by `code`."""
+    """Return (t, edge, bit) where the segment's line crosses the edge named by `code`."""
     if code & TOP:
-        return (ymax - y0) / dy, EDGE_TOP
+        return (ymax - y0) / dy, EDGE_TOP, TOP
     if code & BOTTOM:
-        return (ymin - y0) / dy, EDGE_BOTTOM
+        return (ymin - y0) / dy, EDGE_BOTTOM, BOTTOM
     if code & RIGHT:
-        return (xmax - x0) / dx, EDGE_RIGHT
-    return (xmin - x0) / dx, EDGE_LEFT
+        return (xmax - x0) / dx, EDGE_RIGHT, RIGHT
+    return (xmin - x0) / dx, EDGE_LEFT, LEFT
 
 
 @scalar
@@ -64,18 +67,23 @@ def cohen_sutherland_segment(x0, y0, x1, y1, xmin, ymin, xmax, ymax, st):
         st[C.CLIPPED] += 1
         st[C.INTERSECTIONS] += 1
         if ca != 0:
-            t, edge = _edge_parameter(ca, x0, y0, dx, dy, xmin, ymin, xmax, ymax)
+            t, edge, bit = _edge_parameter(ca, x0, y0, dx, dy, xmin, ymin, xmax, ymax)
             if t > t0:
                 t0 = t
                 # The moved end is not clamped: the next outcode test must see it.
                 ax, ay = edge_point(x0, y0, dx, dy, t, edge, xmin, ymin, xmax, ymax)
-            ca = outcode(ax, ay, xmin, ymin, xmax, ymax)
+                ca = outcode(ax, ay, xmin, ymin, xmax, ymax)
+            else:
+                ca &= ~bit  # the end is already past this edge's crossing
         else:
-            t, edge = _edge_parameter(cb, x0, y0, dx, dy, xmin, ymin, xmax, ymax)
+            t, edge, bit = _edge_parameter(cb, x0, y0, dx, dy, xmin, ymin, xmax, ymax)
             if t < t1:
                 t1 = t
                 bx, by = edge_point(x0, y0, dx, dy, t, edge, xmin, ymin, xmax, ymax)
-            cb = outcode(bx, by, xmin, ymin, xmax, ymax)
+                cb = outcode(bx, by, xmin, ymin, xmax, ymax)
+            else:
+                cb &= ~bit
         if t0 > t1:
             return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
-    return is_piece(False, t0, t1, ax, ay, bx, by), t0, t1, ax, ay, bx, by
+    # Unreachable (see _MAX_MOVES); an undecided segment never yields an unclipped end.
+    return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0

@@ -4,18 +4,27 @@ Y.-D. Liang and B. A. Barsky, "A new concept and method for line clipping", ACM 
 1984. The segment ``P(t) = P0 + t (P1 - P0)`` is inside the window where
 ``p_k t <= q_k`` for the four half-planes; each ``p_k != 0`` gives one boundary parameter
 ``q_k / p_k`` (one division, counted as one intersection). Entering parameters raise the
-lower end of the interval, leaving ones lower the upper end. RNSCA clips its exact-mode
-leaves with `liang_barsky_interval`, restricted to the leaf's interval.
+lower end of the interval, leaving ones lower the upper end.
+
+Subdivision methods (RNSCA, midpoint) clip their exact-mode leaves with
+`liang_barsky_leaf`: the same test restricted to the leaf's interval and to the
+half-planes its end outcodes flag. A half-plane that holds at both ends of a leaf holds
+on all of it (it is convex), so skipping it changes nothing and saves the division.
 """
 
 from rnsca.kernels import counters as C
 from rnsca.kernels.jit import scalar
 from rnsca.kernels.outcode import (
+    BOTTOM,
     EDGE_BOTTOM,
     EDGE_LEFT,
     EDGE_RIGHT,
     EDGE_TOP,
+    LEFT,
     NO_EDGE,
+    RIGHT,
+    TOP,
+    clamp,
     end_point,
     is_piece,
 )
@@ -87,3 +96,69 @@ def liang_barsky_segment(x0, y0, x1, y1, xmin, ymin, xmax, ymax, st):
     bx, by = end_point(x0, y0, dx, dy, u1, e1, x1, y1, xmin, ymin, xmax, ymax)
     keep = is_piece(dx == 0.0 and dy == 0.0, u0, u1, ax, ay, bx, by)
     return keep, u0, u1, ax, ay, bx, by
+
+
+@scalar
+def _cut(on, p, q, x_edge, edge_value, u0, ax, ay, u1, bx, by, x0, y0, dx, dy):
+    """Apply half-plane ``p t <= q`` when `on`, with selects instead of branches.
+
+    A cut end lies on the edge line: its coordinate across the edge (x for a vertical
+    edge, ``x_edge``) is `edge_value` exactly, and the other one is interpolated.
+    """
+    # Off (or parallel, which an ambiguous leaf never is on a flagged edge): divide by 1
+    # so no infinity or NaN is formed; the result is not used.
+    r = q / (p if on else 1.0)
+    enter = on & (p < 0.0) & (r > u0)  # & rather than `and`: no short-circuit branches
+    leave = on & (p > 0.0) & (r < u1)
+    x = edge_value if x_edge else x0 + r * dx
+    y = y0 + r * dy if x_edge else edge_value
+    u0 = r if enter else u0
+    ax = x if enter else ax
+    ay = y if enter else ay
+    u1 = r if leave else u1
+    bx = x if leave else bx
+    by = y if leave else by
+    return u0, ax, ay, u1, bx, by
+
+
+@scalar
+def half_plane(bit, x0, y0, dx, dy, xmin, ymin, xmax, ymax):
+    """Return (p, q, x_edge, edge_value) of the half-plane ``p t <= q`` of edge `bit`."""
+    if bit == LEFT:
+        return -dx, x0 - xmin, True, xmin
+    if bit == RIGHT:
+        return dx, xmax - x0, True, xmax
+    if bit == BOTTOM:
+        return -dy, y0 - ymin, False, ymin
+    return dy, ymax - y0, False, ymax
+
+
+@scalar
+def leaf_cut(bit, flags, u0, ax, ay, u1, bx, by, x0, y0, dx, dy, xmin, ymin, xmax, ymax):
+    """Apply the half-plane of edge `bit` to a leaf when `flags` has that bit."""
+    p, q, x_edge, edge_value = half_plane(bit, x0, y0, dx, dy, xmin, ymin, xmax, ymax)
+    return _cut((flags & bit) != 0, p, q, x_edge, edge_value, u0, ax, ay, u1, bx, by,
+                x0, y0, dx, dy)
+
+
+@scalar
+def count_divisions(flags):
+    """Return the number of edges flagged in an outcode: the divisions a leaf clip makes."""
+    return (flags & 1) + ((flags >> 1) & 1) + ((flags >> 2) & 1) + ((flags >> 3) & 1)
+
+
+@scalar
+def liang_barsky_leaf(x0, y0, dx, dy, ta, tb, xa, ya, xb, yb, flags, xmin, ymin, xmax, ymax):
+    """Return (ok, u0, ax, ay, u1, bx, by, divisions) for the leaf [ta, tb] of a segment.
+
+    (xa, ya), (xb, yb) are the leaf's ends, kept where no edge cuts them. `flags` is the
+    OR of the leaf's end outcodes; only those half-planes are tested, one division each
+    (`divisions`). A cut end takes the edge's coordinate exactly and the other one
+    interpolated and clamped into the window. Branch-free, for the hot loop.
+    """
+    u0, ax, ay, u1, bx, by = ta, xa, ya, tb, xb, yb
+    for bit in (LEFT, RIGHT, BOTTOM, TOP):
+        u0, ax, ay, u1, bx, by = leaf_cut(bit, flags, u0, ax, ay, u1, bx, by, x0, y0, dx, dy,
+                                          xmin, ymin, xmax, ymax)
+    return (u0 <= u1, u0, clamp(ax, xmin, xmax), clamp(ay, ymin, ymax),
+            u1, clamp(bx, xmin, xmax), clamp(by, ymin, ymax), count_divisions(flags))

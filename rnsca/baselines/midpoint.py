@@ -15,10 +15,10 @@ lost per end; in exact mode the bracket is clipped with Liang–Barsky, as RNSCA
 
 import math
 
-from rnsca.baselines.liang_barsky import liang_barsky_interval
+from rnsca.baselines.liang_barsky import liang_barsky_leaf
 from rnsca.kernels import counters as C
 from rnsca.kernels.jit import scalar
-from rnsca.kernels.outcode import end_point, is_piece, outcode
+from rnsca.kernels.outcode import is_piece, outcode
 
 
 @scalar
@@ -83,11 +83,17 @@ def _leaf(x0, y0, dx, dy, a, xa, ya, ca, b, xb, yb, cb, level, exact, xmin, ymin
             return True, b, xb, yb, b, xb, yb
         return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
     st[C.CLIPPED] += 1
-    ok, u0, e0, u1, e1 = liang_barsky_interval(x0, y0, dx, dy, a, b, xmin, ymin, xmax, ymax, st)
+    ok, u0, px, py, u1, qx, qy, divisions = liang_barsky_leaf(
+        x0, y0, dx, dy, a, b, xa, ya, xb, yb, ca | cb, xmin, ymin, xmax, ymax)
+    st[C.INTERSECTIONS] += divisions
     if not ok:
+        # Rounding: when the window's corner or edge is ulp-close to a bracket end that
+        # tested inside, Liang–Barsky can find [a, b] empty; that end is the piece's end.
+        if ca == 0:
+            return True, a, xa, ya, a, xa, ya
+        if cb == 0:
+            return True, b, xb, yb, b, xb, yb
         return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
-    px, py = end_point(x0, y0, dx, dy, u0, e0, xa, ya, xmin, ymin, xmax, ymax)
-    qx, qy = end_point(x0, y0, dx, dy, u1, e1, xb, yb, xmin, ymin, xmax, ymax)
     return True, u0, px, py, u1, qx, qy
 
 

@@ -31,22 +31,15 @@ EDGE_TOP = 3
 @scalar
 def outcode(x, y, xmin, ymin, xmax, ymax):
     """Return the 4-bit outcode of (x, y); 0 for a point inside or on the boundary."""
-    code = 0
-    if x < xmin:
-        code = LEFT
-    elif x > xmax:
-        code = RIGHT
-    if y < ymin:
-        code |= BOTTOM
-    elif y > ymax:
-        code |= TOP
-    return code
+    # Bit arithmetic rather than if/elif: the comparisons are data-dependent, and a
+    # mispredicted branch costs more than the whole computation.
+    return ((x < xmin) * LEFT) | ((x > xmax) * RIGHT) | ((y < ymin) * BOTTOM) | ((y > ymax) * TOP)
 
 
 @scalar
 def clamp(v, low, high):
     """Return v limited to [low, high]."""
-    return low if v < low else (high if v > high else v)
+    return min(max(v, low), high)
 
 
 @scalar
@@ -70,13 +63,17 @@ def end_point(x0, y0, dx, dy, t, edge, px, py, xmin, ymin, xmax, ymax):
     """Return the coordinates of a piece end at parameter `t` of the segment.
 
     An end not cut by an edge (``edge == NO_EDGE``) is the known point (px, py). An end
-    cut by an edge is `edge_point`, with the interpolated coordinate clamped into the
-    window: the last-ulp overshoot of ``y0 + t * dy`` must not put a point outside.
+    cut by an edge takes that edge's coordinate exactly (the intersection lies on the
+    edge line by definition), and the other coordinate is interpolated and clamped into
+    the window: the last-ulp overshoot of ``y0 + t * dy`` must not put a point outside.
+    Written with selects only, so it costs no mispredicted branch.
     """
-    if edge == NO_EDGE:
-        return px, py
-    x, y = edge_point(x0, y0, dx, dy, t, edge, xmin, ymin, xmax, ymax)
-    return clamp(x, xmin, xmax), clamp(y, ymin, ymax)
+    xi = clamp(x0 + t * dx, xmin, xmax)
+    yi = clamp(y0 + t * dy, ymin, ymax)
+    x = xmin if edge == EDGE_LEFT else (xmax if edge == EDGE_RIGHT else xi)
+    y = ymin if edge == EDGE_BOTTOM else (ymax if edge == EDGE_TOP else yi)
+    uncut = edge == NO_EDGE
+    return (px if uncut else x), (py if uncut else y)
 
 
 @scalar
@@ -87,8 +84,4 @@ def is_piece(degenerate, t0, t1, ax, ay, bx, by):
     segment, an empty interval or a single point (the segment only touches the window)
     is not a piece.
     """
-    if not t0 <= t1:
-        return False
-    if degenerate:
-        return True
-    return not (ax == bx and ay == by)
+    return (t0 <= t1) & (degenerate | (ax != bx) | (ay != by))

@@ -8,6 +8,7 @@ import numpy as np
 
 from rnsca.backends.registry import get_backend
 from rnsca.errors import InvalidGeometryError
+from rnsca.kernels.validate import first_invalid_segment
 from rnsca.options import Backend, Method, Mode, SegmentOptions
 from rnsca.stats import ClipStats
 from rnsca.window import Window
@@ -76,18 +77,14 @@ def as_segments(segments) -> np.ndarray:
         raise InvalidGeometryError(
             f"segments must have shape (n, 4) or (n, 2, 2), got {array.shape}")
     array = np.ascontiguousarray(array, dtype=np.float64)
-    finite = np.isfinite(array).all(axis=1)
-    if not finite.all():
-        row = int(np.flatnonzero(~finite)[0])
-        raise InvalidGeometryError(
-            f"segment {row} has a non-finite coordinate: {array[row].tolist()}")
-    with np.errstate(over="ignore"):
-        span = np.isfinite(array[:, 2:] - array[:, :2]).all(axis=1)
-    if not span.all():
-        row = int(np.flatnonzero(~span)[0])
+    row = int(first_invalid_segment(array, 65536))
+    if row >= 0:
+        values = array[row].tolist()
+        if not np.isfinite(array[row]).all():
+            raise InvalidGeometryError(f"segment {row} has a non-finite coordinate: {values}")
         raise InvalidGeometryError(
             f"segment {row} spans more than float64 can hold (x1 - x0 or y1 - y0 overflows): "
-            f"{array[row].tolist()}")
+            f"{values}")
     return array
 
 

@@ -109,7 +109,9 @@ def midpoint_segment(x0, y0, x1, y1, xmin, ymin, xmax, ymax, max_depth, tol, exa
         # Decided at level 0 (accepted, rejected, or the whole segment is the leaf).
         ok, t0, ax, ay, t1, bx, by = _leaf(x0, y0, dx, dy, 0.0, x0, y0, c0, 1.0, x1, y1, c1,
                                            0, exact, xmin, ymin, xmax, ymax, st)
-        if not ok or t0 == t1 and (c0 | c1) != 0:  # a dropped approx leaf leaves one point
+        # A dropped approx leaf leaves one point. (In exact mode t0 == t1 can be a real piece:
+        # a window far smaller than the segment lies within one rounding step of t.)
+        if not ok or not exact and t0 == t1 and (c0 | c1) != 0:
             return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
         return is_piece(dx == 0.0 and dy == 0.0, t0, t1, ax, ay, bx, by), t0, t1, ax, ay, bx, by
     st[C.EVALUATED] += 1

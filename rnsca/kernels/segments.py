@@ -308,16 +308,19 @@ def _rnsca_block(segments, first, last, xmin, ymin, xmax, ymax, n_fixed, max_dep
                 segments[i, 0], segments[i, 1], segments[i, 2], segments[i, 3],
                 xmin, ymin, xmax, ymax, n_fixed, max_depth, tol, auto_piece, exact,
                 st, stack_f, stack_i)
-    if not write:
-        for j in range(size):
-            k += 1 if keep[j] else 0
-        return k
+    # Compact the kept rows' indices without branches (the slot past the last kept row
+    # is always inside the scratch), then copy those rows out.
+    kept = np.empty(size, dtype=np.int64)
+    count = 0
     for j in range(size):
-        if keep[j]:
-            _write_piece(out_segments, out_source, out_t, k, first + j, u0[j], u1[j],
+        kept[count] = j
+        count += 1 if keep[j] else 0
+    if write:
+        for r in range(count):
+            j = kept[r]
+            _write_piece(out_segments, out_source, out_t, k + r, first + j, u0[j], u1[j],
                          ax[j], ay[j], bx[j], by[j], xmin, ymin, xmax, ymax)
-            k += 1
-    return k
+    return k + count
 
 
 @parallel

@@ -17,6 +17,8 @@ __all__ = ["Verification", "verify", "approx_leaf_bound"]
 
 #: Exact results must lie within this fraction of the window's size of Shapely's.
 EXACT_RELATIVE_TOLERANCE = 1e-9
+# GEOS computes correct intersections for windows within 2**+-400 (about 1e+-120) in size.
+_SAFE_EXPONENT = 400
 
 
 @dataclass(frozen=True, slots=True)
@@ -67,11 +69,16 @@ def approx_leaf_bound(lengths: np.ndarray, result: SegmentClipResult) -> np.ndar
 
 
 def _unit_scale(window: Window, segments: np.ndarray) -> float:
-    """Return the power of two that scales `window`'s size into [0.5, 1).
+    """Return the power of two by which Shapely should see the geometry.
 
-    It is made smaller when needed so that no scaled coordinate exceeds about 2**1000.
+    1.0 for windows from about 1e-120 to 1e120 in size; beyond, the power of two that
+    brings the window's size near 1, made smaller if needed so that no scaled coordinate
+    exceeds about 2**1000. (Scaling down flushes coordinates below 2**-1074 of the new
+    unit to zero, which is why it is not done where it is not needed.)
     """
     exponent = math.frexp(window.size)[1]
+    if -_SAFE_EXPONENT <= exponent <= _SAFE_EXPONENT:
+        return 1.0
     largest = max(float(np.abs(segments).max(initial=0.0)), *map(abs, window.bounds))
     exponent = max(exponent, math.frexp(largest)[1] - 1000)
     return math.ldexp(1.0, -exponent)
@@ -108,8 +115,8 @@ def verify(original, clipped: SegmentClipResult, window) -> Verification:
             f"got {n}")
 
     # GEOS loses whole pieces to overflow or underflow far from 1 (beyond about 1e+-150),
-    # so Shapely sees the geometry scaled by a power of two that brings the window's size
-    # near 1: exact in floating point, and distances scale back exactly.
+    # so there Shapely sees the geometry scaled by a power of two that brings the window's
+    # size near 1: exact in floating point, and distances scale back exactly.
     scale = _unit_scale(window, segments)
     scaled = segments * scale
     ours_length = np.zeros(n)

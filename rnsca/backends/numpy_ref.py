@@ -41,7 +41,7 @@ from rnsca.kernels.outcode import (
     RIGHT,
     TOP,
 )
-from rnsca.kernels.segments import N_MAX
+from rnsca.kernels.segments import AUTO_N_MIN, N_MAX
 from rnsca.options import Backend, Method, Mode, SegmentOptions
 from rnsca.stats import ClipStats
 from rnsca.window import Window
@@ -62,7 +62,7 @@ class NumpyBackend:
     >>> pieces.tolist(), source.tolist(), t.tolist()
     ([[0.0, 5.0, 10.0, 5.0]], [0], [[0.25, 0.75]])
     >>> stats.clipped, stats.rejected, stats.intersections
-    (1, 1, 5)
+    (1, 1, 4)
     """
 
     kind = Backend.NUMPY
@@ -327,16 +327,17 @@ def _liang_barsky(s: _Segments, w: Window, options: SegmentOptions, st) -> _Clip
 
 
 def _edge_parameter(code, s: _Segments, w: Window):
-    """Return (t, edge) where each line crosses the edge named by `code`.
+    """Return (t, edge, bit) where each line crosses the edge named by `code`.
 
     One bit is chosen in the kernel's order of preference: TOP, BOTTOM, RIGHT, LEFT
     (``_edge_parameter``). The parameter comes from the original segment.
     """
-    bits = [(code & TOP) != 0, (code & BOTTOM) != 0, (code & RIGHT) != 0]
-    t = np.select(bits, [(w.ymax - s.y0) / s.dy, (w.ymin - s.y0) / s.dy,
-                         (w.xmax - s.x0) / s.dx], (w.xmin - s.x0) / s.dx)
-    edge = np.select(bits, [EDGE_TOP, EDGE_BOTTOM, EDGE_RIGHT], EDGE_LEFT)
-    return t, edge
+    has = [(code & TOP) != 0, (code & BOTTOM) != 0, (code & RIGHT) != 0]
+    t = np.select(has, [(w.ymax - s.y0) / s.dy, (w.ymin - s.y0) / s.dy,
+                        (w.xmax - s.x0) / s.dx], (w.xmin - s.x0) / s.dx)
+    edge = np.select(has, [EDGE_TOP, EDGE_BOTTOM, EDGE_RIGHT], EDGE_LEFT)
+    bit = np.select(has, [TOP, BOTTOM, RIGHT], LEFT)
+    return t, edge, bit
 
 
 def _cohen_sutherland(s: _Segments, w: Window, options: SegmentOptions, st) -> _Clipped:
@@ -364,22 +365,22 @@ def _cohen_sutherland(s: _Segments, w: Window, options: SegmentOptions, st) -> _
         _count(st, C.INTERSECTIONS, undecided)
         # Move P0's end if it is outside, else P1's, to the edge named by one of its bits;
         # an end only ever moves inwards. The moved end is not clamped: the next outcode
-        # test must see where it really is.
+        # test must see where it really is. An end already past that edge's crossing
+        # (rounding near a corner) stays, and the bit is cleared as noise.
         move_a = undecided & (ca != 0)
         move_b = undecided & (ca == 0)
-        t, edge = _edge_parameter(np.where(move_a, ca, cb), s, w)
+        t, edge, bit = _edge_parameter(np.where(move_a, ca, cb), s, w)
         x, y = _edge_point(s, t, edge, w)
         raise_t0 = move_a & (t > t0)
         t0, ax, ay = (np.where(raise_t0, new, old) for new, old in ((t, t0), (x, ax), (y, ay)))
+        ca = np.where(raise_t0, _outcode(ax, ay, *w.bounds), np.where(move_a, ca & ~bit, ca))
         lower_t1 = move_b & (t < t1)
         t1, bx, by = (np.where(lower_t1, new, old) for new, old in ((t, t1), (x, bx), (y, by)))
-        ca = np.where(move_a, _outcode(ax, ay, *w.bounds), ca)
-        cb = np.where(move_b, _outcode(bx, by, *w.bounds), cb)
+        cb = np.where(lower_t1, _outcode(bx, by, *w.bounds), np.where(move_b, cb & ~bit, cb))
         undecided &= ~(t0 > t1)  # the moves crossed: nothing is left
-    # Accepted segments keep a zero-length input; a segment still undecided after the
-    # last move (rounding at a corner) keeps what it has if that is a piece.
-    keep = ((accepted & _is_piece(s.degenerate, t0, t1, ax, ay, bx, by))
-            | (undecided & _is_piece(False, t0, t1, ax, ay, bx, by)))
+    # Accepted segments keep a zero-length input. (The kernel proves that _MAX_MOVES
+    # passes decide every segment; one still undecided would give no piece.)
+    keep = accepted & _is_piece(s.degenerate, t0, t1, ax, ay, bx, by)
     return _Clipped(keep, t0, t1, ax, ay, bx, by)
 
 
@@ -390,17 +391,16 @@ def _cohen_sutherland(s: _Segments, w: Window, options: SegmentOptions, st) -> _
 _BIG = 2.0 ** 500
 _SMALL = 2.0 ** -500
 
-# Exit edge from inside towards a corner region, indexed by that region's outcode:
-# when the direction is counter-clockwise of the ray to the corner, and when it is not.
-_CORNER_EXIT_CCW = np.full(16, EDGE_RIGHT)
-_CORNER_EXIT_CW = np.full(16, EDGE_BOTTOM)
-for _code, _ccw, _cw in ((RIGHT | TOP, EDGE_TOP, EDGE_RIGHT), (LEFT | TOP, EDGE_LEFT, EDGE_TOP),
-                         (LEFT | BOTTOM, EDGE_BOTTOM, EDGE_LEFT)):
-    _CORNER_EXIT_CCW[_code] = _ccw
-    _CORNER_EXIT_CW[_code] = _cw
+# Leaving the window from inside towards a corner region (by its outcode), the exit
+# edge when the direction is counter-clockwise of the ray to that corner, and when not
+# (``_exit_from_inside``; any other code is treated as RIGHT | BOTTOM, as there).
+_CORNER_EXITS = {RIGHT | TOP: (EDGE_TOP, EDGE_RIGHT), LEFT | TOP: (EDGE_LEFT, EDGE_TOP),
+                 LEFT | BOTTOM: (EDGE_BOTTOM, EDGE_LEFT)}
+_CORNER_EXIT_CCW = np.array([_CORNER_EXITS.get(c, (EDGE_RIGHT, EDGE_BOTTOM))[0] for c in range(16)])
+_CORNER_EXIT_CW = np.array([_CORNER_EXITS.get(c, (EDGE_RIGHT, EDGE_BOTTOM))[1] for c in range(16)])
 # The edge of a one-bit outcode (anything else maps to TOP, as in ``_single_edge``).
-_SINGLE_EDGE = np.full(16, EDGE_TOP)
-_SINGLE_EDGE[[LEFT, RIGHT, BOTTOM]] = [EDGE_LEFT, EDGE_RIGHT, EDGE_BOTTOM]
+_SINGLE_EDGE = np.array([{LEFT: EDGE_LEFT, RIGHT: EDGE_RIGHT, BOTTOM: EDGE_BOTTOM}.get(c, EDGE_TOP)
+                         for c in range(16)])
 
 
 def _rescale(x, y):
@@ -633,8 +633,9 @@ def _midpoint_leaf(s: _Segments, br: _Bracket, exact: bool, w: Window, st):
     """Decide final brackets; return (ok, u0, ax, ay, u1, bx, by) of their visible parts.
 
     ``_leaf``: accepted or rejected by outcodes, else clipped with Liang–Barsky (exact
-    mode) or dropped (approx mode), when the visible end of the bracket alone remains
-    (``u0 == u1``).
+    mode) or dropped (approx mode). A dropped bracket leaves its visible end alone
+    (``u0 == u1``), and so does a bracket that Liang–Barsky finds empty: rounding, when
+    the window's corner or edge is ulp-close to an end that tested inside.
     """
     st[C.EVALUATED] += br.a.size
     _count_decided(st, br.level)
@@ -646,21 +647,23 @@ def _midpoint_leaf(s: _Segments, br: _Bracket, exact: bool, w: Window, st):
     ok = inside.copy()
     u0, ax, ay = br.a.copy(), br.xa.copy(), br.ya.copy()
     u1, bx, by = br.b.copy(), br.xb.copy(), br.yb.copy()
-    if not exact:
+    if exact:
+        _count(st, C.CLIPPED, straddles)
+        k = np.flatnonzero(straddles)
+        ok[k], u0[k], ax[k], ay[k], u1[k], bx[k], by[k] = _liang_barsky_leaf(
+            s.take(k), br.a[k], br.b[k], br.xa[k], br.ya[k], br.xb[k], br.yb[k],
+            br.ca[k] | br.cb[k], w, st)
+        end_only = straddles & ~ok
+    else:
         _count(st, C.DROPPED, straddles)
-        a_visible = straddles & (br.ca == 0)
-        b_visible = straddles & ~a_visible & (br.cb == 0)
-        ok |= a_visible | b_visible
-        u1, bx, by = (np.where(a_visible, v, old) for v, old in
-                      ((br.a, u1), (br.xa, bx), (br.ya, by)))
-        u0, ax, ay = (np.where(b_visible, v, old) for v, old in
-                      ((br.b, u0), (br.xb, ax), (br.yb, ay)))
-        return ok, u0, ax, ay, u1, bx, by
-    _count(st, C.CLIPPED, straddles)
-    k = np.flatnonzero(straddles)
-    ok[k], u0[k], ax[k], ay[k], u1[k], bx[k], by[k] = _liang_barsky_leaf(
-        s.take(k), br.a[k], br.b[k], br.xa[k], br.ya[k], br.xb[k], br.yb[k],
-        br.ca[k] | br.cb[k], w, st)
+        end_only = straddles
+    a_visible = end_only & (br.ca == 0)
+    b_visible = end_only & ~a_visible & (br.cb == 0)
+    ok |= a_visible | b_visible
+    u0, ax, ay, u1, bx, by = (
+        np.where(a_visible, at_a, np.where(b_visible, at_b, old)) for at_a, at_b, old in
+        ((br.a, br.b, u0), (br.xa, br.xb, ax), (br.ya, br.yb, ay),
+         (br.a, br.b, u1), (br.xa, br.xb, bx), (br.ya, br.yb, by)))
     return ok, u0, ax, ay, u1, bx, by
 
 
@@ -678,7 +681,9 @@ def _midpoint(s: _Segments, w: Window, options: SegmentOptions, st) -> _Clipped:
     sr = s.take(rows)
     ok, t0, ax, ay, t1, bx, by = _midpoint_leaf(
         sr, _Bracket.whole(sr, c0[rows], c1[rows]), exact, w, st)
-    ok &= ~((t0 == t1) & ((c0[rows] | c1[rows]) != 0))  # a dropped approx leaf: one point
+    # A dropped approx leaf leaves one point. (In exact mode t0 == t1 can be a real piece:
+    # a window far smaller than the segment lies within one rounding step of t.)
+    ok &= exact | ~((t0 == t1) & ((c0[rows] | c1[rows]) != 0))
     out.set(rows, ok & _is_piece(sr.degenerate, t0, t1, ax, ay, bx, by), t0, t1, ax, ay, bx, by)
 
     # The others are searched: the exit first (unless P1 is visible), then the entry
@@ -795,13 +800,17 @@ def _first_lowest(n_segments, seg, key, t, x, y):
 
 
 def _split_count(frontier: _Fragments, length, options: SegmentOptions) -> np.ndarray:
-    """Return N for each fragment: fixed, or ``ceil(length / auto_piece)`` in 2..64 (``auto_n``)."""
+    """Return N for each fragment: fixed, or ``n="auto"`` (``auto_n``).
+
+    Auto: ``ceil(piece length / window size)`` clamped to AUTO_N_MIN..N_MAX, so a piece
+    much longer than the window is cut into window-sized pieces in one step.
+    """
     if options.n > 0:
         return np.full(len(frontier), options.n, dtype=np.int64)
     piece = (frontier.tb - frontier.ta) * length[frontier.seg]
     k = np.ceil(piece / options.auto_piece)
     many = np.where(k > N_MAX, N_MAX, k)
-    return np.where(~(piece > 2.0 * options.auto_piece), 2, many).astype(np.int64)
+    return np.where(~(piece > AUTO_N_MIN * options.auto_piece), AUTO_N_MIN, many).astype(np.int64)
 
 
 def _split(frontier: _Fragments, level: int, s: _Segments, length, options, w: Window):
@@ -860,8 +869,10 @@ def _decide(kids: _Fragments, key, level: int, s: _Segments, length, options, w:
     _count(st, C.SUBDIVIDED, ambiguous & ~leaf)
     st[C.LEVELS + level] += np.count_nonzero(inside | outside | leaf)
 
-    a = kids.take(inside)
-    candidates.add(a.seg, key[inside], a.ta, a.xa, a.ya, a.tb, a.xb, a.yb)
+    # A zero-width accepted child carries no length and gives no end (as in the kernel).
+    wide = inside & (kids.ta < kids.tb)
+    a = kids.take(wide)
+    candidates.add(a.seg, key[wide], a.ta, a.xa, a.ya, a.tb, a.xb, a.yb)
     if options.mode is Mode.EXACT:
         _count(st, C.CLIPPED, leaf)
         lf = kids.take(leaf)

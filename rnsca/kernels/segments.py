@@ -62,8 +62,8 @@ def auto_n(piece_length, auto_piece):
     """
     if not piece_length > AUTO_N_MIN * auto_piece:
         return AUTO_N_MIN  # the common case, without the division
-    k = math.ceil(piece_length / auto_piece)
-    return N_MAX if k > N_MAX else int(k)
+    k = piece_length / auto_piece  # capped as a float: ceil of 2**63 would wrap around
+    return N_MAX if k > N_MAX else int(math.ceil(k))
 
 
 @scalar
@@ -152,9 +152,12 @@ def rnsca_segment(x0, y0, x1, y1, xmin, ymin, xmax, ymax, n_fixed, max_depth, to
             if (pc | c) == 0:
                 st[C.ACCEPTED] += 1
                 st[C.LEVELS + level] += 1
-                if pt < lo_t:
+                # A child of zero width (t no longer resolves the piece, on a segment some
+                # 1e16 windows long) carries no length: its rounded point must not stand
+                # in for an end that a clipped leaf computes exactly.
+                if pt < t and pt < lo_t:
                     lo_t, lo_x, lo_y = pt, px, py
-                if t > hi_t:
+                if pt < t and t > hi_t:
                     hi_t, hi_x, hi_y = t, x, y
             elif pc & c:
                 st[C.REJECTED] += 1

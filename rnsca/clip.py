@@ -77,7 +77,7 @@ def as_segments(segments) -> np.ndarray:
         raise InvalidGeometryError(
             f"segments must have shape (n, 4) or (n, 2, 2), got {array.shape}")
     array = np.ascontiguousarray(array, dtype=np.float64)
-    row = int(first_invalid_segment(array, 65536))
+    row = int(first_invalid_segment(array))
     if row >= 0:
         values = array[row].tolist()
         if not np.isfinite(array[row]).all():

@@ -17,8 +17,9 @@ __all__ = ["Verification", "verify", "approx_leaf_bound"]
 
 #: Exact results must lie within this fraction of the window's size of Shapely's.
 EXACT_RELATIVE_TOLERANCE = 1e-9
-# GEOS computes correct intersections for windows within 2**+-400 (about 1e+-120) in size.
-_SAFE_EXPONENT = 400
+# GEOS computes wrong intersections from about 1e+-110 on; windows up to 2**300 (1e90)
+# are compared unscaled.
+_LARGEST_UNSCALED_EXPONENT = 300
 
 
 @dataclass(frozen=True, slots=True)
@@ -71,13 +72,15 @@ def approx_leaf_bound(lengths: np.ndarray, result: SegmentClipResult) -> np.ndar
 def _unit_scale(window: Window, segments: np.ndarray) -> float:
     """Return the power of two by which Shapely should see the geometry.
 
-    1.0 for windows from about 1e-120 to 1e120 in size; beyond, the power of two that
-    brings the window's size near 1, made smaller if needed so that no scaled coordinate
-    exceeds about 2**1000. (Scaling down flushes coordinates below 2**-1074 of the new
-    unit to zero, which is why it is not done where it is not needed.)
+    Windows smaller than 1 are scaled up to a size in [0.5, 1) (exact: nothing
+    underflows, and subnormal offsets become normal numbers GEOS handles). Windows from
+    1 to 2**300 are left alone. Larger ones are scaled down the same way (there,
+    coordinates below 2**-1074 of the new unit flush to zero, which is why it is not
+    done where it is not needed). The scale is made smaller if needed so that no scaled
+    coordinate exceeds about 2**1000.
     """
     exponent = math.frexp(window.size)[1]
-    if -_SAFE_EXPONENT <= exponent <= _SAFE_EXPONENT:
+    if 0 < exponent <= _LARGEST_UNSCALED_EXPONENT:
         return 1.0
     largest = max(float(np.abs(segments).max(initial=0.0)), *map(abs, window.bounds))
     exponent = max(exponent, math.frexp(largest)[1] - 1000)
@@ -114,8 +117,8 @@ def verify(original, clipped: SegmentClipResult, window) -> Verification:
             f"verify needs the {clipped.stats.segments_in} segments that were clipped, "
             f"got {n}")
 
-    # GEOS loses whole pieces to overflow or underflow far from 1 (beyond about 1e+-150),
-    # so there Shapely sees the geometry scaled by a power of two that brings the window's
+    # GEOS loses whole pieces to overflow or underflow far from 1 (from about 1e+-110 on),
+    # so Shapely sees tiny and huge windows scaled by a power of two that brings their
     # size near 1: exact in floating point, and distances scale back exactly.
     scale = _unit_scale(window, segments)
     scaled = segments * scale

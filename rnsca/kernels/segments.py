@@ -326,6 +326,35 @@ def _rnsca_block(segments, first, last, xmin, ymin, xmax, ymax, n_fixed, max_dep
     return k + count
 
 
+@scalar
+def _clip_block(blk, segments, xmin, ymin, xmax, ymax, method, n_fixed, max_depth, tol,
+                auto_piece, exact, block_size, write, block_start,
+                out_segments, out_source, out_t, block_count, counters):
+    """Count or write block `blk`'s pieces: the one body both drivers run."""
+    st = counters[blk]
+    first = blk * block_size
+    last = min(first + block_size, segments.shape[0])
+    k = block_start[blk]
+    if method == RNSCA:
+        k = _rnsca_block(segments, first, last, xmin, ymin, xmax, ymax, n_fixed,
+                         max_depth, tol, auto_piece, exact, st, write, k,
+                         out_segments, out_source, out_t)
+    else:
+        stack_f = np.empty((STACK_CAPACITY, 6), dtype=np.float64)
+        stack_i = np.empty((STACK_CAPACITY, 3), dtype=np.int64)
+        for i in range(first, last):
+            keep, t0, t1, ax, ay, bx, by = clip_one(
+                method, segments[i, 0], segments[i, 1], segments[i, 2], segments[i, 3],
+                xmin, ymin, xmax, ymax, n_fixed, max_depth, tol, auto_piece, exact,
+                st, stack_f, stack_i)
+            if keep:
+                if write:
+                    _write_piece(out_segments, out_source, out_t, k, i, t0, t1,
+                                 ax, ay, bx, by, xmin, ymin, xmax, ymax)
+                k += 1
+    block_count[blk] = k - block_start[blk]
+
+
 @parallel
 def clip_segment_blocks(segments, xmin, ymin, xmax, ymax, method, n_fixed, max_depth, tol,
                         auto_piece, exact, block_size, write, block_start,
@@ -344,28 +373,22 @@ def clip_segment_blocks(segments, xmin, ymin, xmax, ymax, method, n_fixed, max_d
     out_segments, out_source, out_t : float64 (m, 4), int64 (m,), float64 (m, 2).
     block_count : int64 (n_blocks,); counters : int64 (n_blocks, counters.WIDTH).
     """
-    n = segments.shape[0]
-    n_blocks = block_count.shape[0]
-    for blk in prange(n_blocks):
-        st = counters[blk]
-        first = blk * block_size
-        last = min(first + block_size, n)
-        k = block_start[blk]
-        if method == RNSCA:
-            k = _rnsca_block(segments, first, last, xmin, ymin, xmax, ymax, n_fixed,
-                             max_depth, tol, auto_piece, exact, st, write, k,
-                             out_segments, out_source, out_t)
-        else:
-            stack_f = np.empty((STACK_CAPACITY, 6), dtype=np.float64)
-            stack_i = np.empty((STACK_CAPACITY, 3), dtype=np.int64)
-            for i in range(first, last):
-                keep, t0, t1, ax, ay, bx, by = clip_one(
-                    method, segments[i, 0], segments[i, 1], segments[i, 2], segments[i, 3],
-                    xmin, ymin, xmax, ymax, n_fixed, max_depth, tol, auto_piece, exact,
-                    st, stack_f, stack_i)
-                if keep:
-                    if write:
-                        _write_piece(out_segments, out_source, out_t, k, i, t0, t1,
-                                     ax, ay, bx, by, xmin, ymin, xmax, ymax)
-                    k += 1
-        block_count[blk] = k - block_start[blk]
+    for blk in prange(block_count.shape[0]):
+        _clip_block(blk, segments, xmin, ymin, xmax, ymax, method, n_fixed, max_depth, tol,
+                    auto_piece, exact, block_size, write, block_start,
+                    out_segments, out_source, out_t, block_count, counters)
+
+
+@scalar
+def clip_segment_blocks_serial(segments, xmin, ymin, xmax, ymax, method, n_fixed, max_depth,
+                               tol, auto_piece, exact, block_size, write, block_start,
+                               out_segments, out_source, out_t, block_count, counters):
+    """Do what `clip_segment_blocks` does on the calling thread (for small inputs).
+
+    Waking the worker threads costs more than clipping a few thousand segments, and
+    far more when the machine is busy.
+    """
+    for blk in range(block_count.shape[0]):
+        _clip_block(blk, segments, xmin, ymin, xmax, ymax, method, n_fixed, max_depth, tol,
+                    auto_piece, exact, block_size, write, block_start,
+                    out_segments, out_source, out_t, block_count, counters)

@@ -1,0 +1,203 @@
+"""Run the segment benchmarks; print a summary, write JSON and the Figure 5 plot.
+
+Usage::
+
+    python -m benchmarks.run            # full run (several minutes; make bench)
+    python -m benchmarks.run --quick    # small sizes only, a smoke test (seconds)
+    RNSCA_BENCH_QUICK=1 python -m benchmarks.run
+
+Writes ``<out>/segments-<timestamp>.json`` and ``.png``, and copies both to
+``<out>/latest.json`` and ``latest.png``. A full run into the default directory also
+copies the plot to ``benchmarks/figure5.png`` (the copy the README shows).
+"""
+
+from __future__ import annotations
+
+import argparse
+import gc
+import json
+import os
+import shutil
+import sys
+import time
+from datetime import datetime, timezone
+from pathlib import Path
+
+import numba
+
+from benchmarks import datasets
+from benchmarks.bench_segments import (
+    Plan,
+    backend_unavailable_reason,
+    evaluate_targets,
+    run_n_sweep,
+    run_workload,
+)
+from benchmarks.machine import describe_machine, load_average, source_digest
+from benchmarks.plot import draw_figure5
+from benchmarks.report import print_summary
+from benchmarks.startup import measure_startup
+from benchmarks.timing import Policy
+
+SCHEMA = "rnsca-bench-segments/1"
+HERE = Path(__file__).resolve().parent
+PROJECT_ROOT = HERE.parent
+DEFAULT_OUT = HERE / "results"
+FIGURE_COPY = HERE / "figure5.png"
+
+
+def _full_policy(n: int) -> Policy:
+    if n >= 10_000_000:
+        return Policy(min_sample=0.05, budget=10.0, min_repeats=2, max_repeats=3)
+    if n >= 1_000_000:
+        return Policy(min_sample=0.05, budget=3.0, min_repeats=3, max_repeats=5)
+    return Policy(min_sample=0.05, budget=1.5, min_repeats=3, max_repeats=7)
+
+
+def _quick_policy(n: int) -> Policy:
+    return Policy(min_sample=0.002, budget=0.01, min_repeats=1, max_repeats=1)
+
+
+def build_config(quick: bool, sizes: list[int] | None, shapely_10m: str) -> dict:
+    """Return what to run: uniform sizes, shaped-set size, sweep sets, timing plan."""
+    if quick:
+        uniform = sizes or [100, 1_000]
+        shaped_n = 1_000
+        plan = Plan(policy_for=_quick_policy,
+                    sweep_policy=Policy(min_sample=0.002, budget=0.01, min_repeats=1,
+                                        max_repeats=1))
+    else:
+        uniform = sizes or [*datasets.PAPER_SIZES, *datasets.LARGE_SIZES]
+        shaped_n = 1_000_000
+        plan = Plan(policy_for=_full_policy,
+                    shapely_extrapolate_from=10_000_000 if shapely_10m == "extrapolate" else None)
+    sweep_uniform = min(uniform, key=lambda n: abs(n - shaped_n))
+    return {"uniform_sizes": sorted(uniform), "shaped_n": shaped_n, "plan": plan,
+            "sweep_sets": [f"uniform-{sweep_uniform}", f"long_segments-{shaped_n}"],
+            "startup_warm_runs": 1 if quick else 3, "startup_empty_cache": not quick}
+
+
+def _log(message: str) -> None:
+    print(message, file=sys.stderr, flush=True)
+
+
+def _json_default(obj):
+    if hasattr(obj, "item"):
+        return obj.item()
+    raise TypeError(f"cannot serialise {type(obj).__name__}")
+
+
+def run(quick: bool, out_dir: Path, sizes: list[int] | None = None,
+        shapely_10m: str = "measure", copy_figure: bool = True) -> dict:
+    """Run every benchmark; write JSON and PNG into `out_dir`; return the result dict."""
+    started = time.monotonic()
+    stamp = datetime.now(timezone.utc).strftime("%Y%m%dT%H%M%SZ")
+    config = build_config(quick, sizes, shapely_10m)
+    plan: Plan = config["plan"]
+    machine = describe_machine(PROJECT_ROOT)
+
+    _log("startup: spawning child processes")
+    startup = measure_startup(PROJECT_ROOT, warm_runs=config["startup_warm_runs"],
+                              empty_cache=config["startup_empty_cache"])
+
+    numpy_skip = backend_unavailable_reason("numpy")
+    if numpy_skip:
+        _log(f"numpy backend unavailable, recorded as skipped: {numpy_skip}")
+
+    workloads = [*datasets.table2(config["uniform_sizes"]), *datasets.shaped(config["shaped_n"])]
+    by_name = {w.name: w for w in workloads}
+    results = []
+    shapely_per_segment: dict[str, float] = {}
+    for w in workloads:
+        _log(f"workload {w.name}")
+        res = run_workload(w, plan, numpy_skip, shapely_per_segment, log=_log)
+        if w.family == "uniform":
+            for r in res["runs"]:
+                if r["kind"] == "shapely" and r["measured"]:
+                    shapely_per_segment[r["label"]] = r["seconds"] / w.n
+        results.append(res)
+        gc.collect()
+
+    sweeps = []
+    for name in config["sweep_sets"]:
+        sweeps.append(run_n_sweep(by_name[name], plan, log=_log))
+        gc.collect()
+
+    # The threading layer is known only once a parallel kernel has run.
+    machine["numba_threading_layer"] = numba.threading_layer()
+    largest = max((r for r in results if r["workload"]["family"] == "uniform"),
+                  key=lambda r: r["workload"]["n"])
+    targets = evaluate_targets(largest, startup)
+
+    out_dir.mkdir(parents=True, exist_ok=True)
+    json_path = out_dir / f"segments-{stamp}.json"
+    png_path = out_dir / f"segments-{stamp}.png"
+    result = {
+        "schema": SCHEMA,
+        "created": stamp,
+        "quick": quick,
+        "machine": machine,
+        "load_average_at_end": load_average(),
+        "rnsca_source_sha256_at_end": source_digest(PROJECT_ROOT),
+        "rnsca_changed_during_run": (source_digest(PROJECT_ROOT)
+                                     != machine["git"]["rnsca_source_sha256"]),
+        "config": {
+            "uniform_sizes": config["uniform_sizes"],
+            "shaped_n": config["shaped_n"],
+            "sweep_sets": config["sweep_sets"],
+            "numpy_max_n": 100_000,
+            "shapely_10m": None if quick else shapely_10m,
+            "timing": ("best (min) of repeats; contenders of a workload timed round-robin; "
+                       "inputs below min_sample seconds timed in loops of `number` calls; "
+                       "kernels compiled before timing"),
+            "policies": {str(n): vars(plan.policy_for(n))
+                         for n in sorted({*config["uniform_sizes"], config["shaped_n"]})},
+            "time_ratio": "this contender's seconds / the reference's seconds, same workload",
+            "peak_memory": ("tracemalloc peak during one extra call (NumPy buffers and Python "
+                            "objects; not Numba-runtime or GEOS allocations), over the "
+                            "input array's nbytes"),
+        },
+        "workloads": results,
+        "n_sweep": sweeps,
+        "startup": startup,
+        "targets": targets,
+        "elapsed_seconds": None,
+        "paths": {"json": str(json_path), "figure": str(png_path)},
+    }
+    note = f"{result['machine']['cpu_model']}, {result['machine']['cpus_usable']} cores, {stamp}"
+    draw_figure5(results, png_path, title_note=note + (" (QUICK)" if quick else ""))
+    result["elapsed_seconds"] = time.monotonic() - started
+    text = json.dumps(result, indent=1, default=_json_default)
+    json_path.write_text(text)
+    (out_dir / "latest.json").write_text(text)
+    shutil.copyfile(png_path, out_dir / "latest.png")
+    if copy_figure and not quick:
+        shutil.copyfile(png_path, FIGURE_COPY)
+    return result
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Parse the command line, run, print the summary."""
+    parser = argparse.ArgumentParser(prog="python -m benchmarks.run", description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--quick", action="store_true",
+                        default=os.environ.get("RNSCA_BENCH_QUICK", "") not in ("", "0"),
+                        help="small sizes only (smoke test); also RNSCA_BENCH_QUICK=1")
+    parser.add_argument("--out", type=Path, default=DEFAULT_OUT,
+                        help=f"directory for the JSON and PNG (default {DEFAULT_OUT})")
+    parser.add_argument("--sizes", type=lambda s: [int(v) for v in s.split(",")],
+                        help="comma-separated uniform sizes instead of the default ones")
+    parser.add_argument("--shapely-10m", choices=("measure", "extrapolate"), default="measure",
+                        help="time Shapely once at 10M, or extrapolate from the largest "
+                             "smaller uniform size (marked in the JSON)")
+    parser.add_argument("--no-figure-copy", action="store_true",
+                        help="do not update benchmarks/figure5.png")
+    args = parser.parse_args(argv)
+    copy_figure = not args.no_figure_copy and args.out.resolve() == DEFAULT_OUT
+    result = run(args.quick, args.out, args.sizes, args.shapely_10m, copy_figure)
+    print_summary(result)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

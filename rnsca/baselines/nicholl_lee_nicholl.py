@@ -13,7 +13,8 @@ point and leave the segment's parameter t unchanged, so the parameters found in 
 canonical frame are used directly, and each edge is mapped back for the output point.
 
 Ray tests are signs of cross products; `_turn` rescales vectors whose products would
-overflow or underflow, so coordinates from 1e-300 to 1e300 keep their geometry.
+overflow or underflow, so coordinates from 1e-300 to 1e300 (and subnormal offsets) keep
+their geometry.
 """
 
 from rnsca.kernels import counters as C
@@ -39,19 +40,32 @@ _SMALL = 2.0 ** -500
 
 
 @scalar
-def _rescale(x, y):
-    """Return (x, y) divided by its larger magnitude when that is extreme (sign kept)."""
+def _extreme(x, y):
+    """Return whether a product with a component of (x, y) may overflow or underflow."""
+    ax = abs(x)
+    ay = abs(y)
+    return max(ax, ay) > _BIG or 0.0 < ax < _SMALL or 0.0 < ay < _SMALL
+
+
+@scalar
+def _normalized(x, y):
+    """Return (x, y) divided by its larger magnitude (sign and direction kept)."""
     m = max(abs(x), abs(y))
-    if m > _BIG or (0.0 < m < _SMALL):
-        return x / m, y / m
-    return x, y
+    return (x / m, y / m) if m > 0.0 else (x, y)
 
 
 @scalar
 def _turn(ax, ay, bx, by):
-    """Return the sign of cross(a, b): +1 if b is counter-clockwise of a, -1 if clockwise."""
-    ax, ay = _rescale(ax, ay)
-    bx, by = _rescale(bx, by)
+    """Return the sign of cross(a, b): +1 if b is counter-clockwise of a, -1 if clockwise.
+
+    When a product of components could overflow or underflow (a magnitude above 2**500
+    or a non-zero component below 2**-500), both vectors are first divided by their
+    larger magnitude: the sign is unchanged, and ``(5e-17, 0) x (5e-17, -5e-324)`` no
+    longer underflows to "collinear".
+    """
+    if _extreme(ax, ay) or _extreme(bx, by):
+        ax, ay = _normalized(ax, ay)
+        bx, by = _normalized(bx, by)
     c = ax * by - ay * bx
     return 1 if c > 0.0 else (-1 if c < 0.0 else 0)
 
@@ -123,7 +137,9 @@ def _canonical_clip(px, py, qx, qy, left, bottom, right, top, st):
         if c1 == 0:
             return True, 0.0, NO_EDGE, 1.0, NO_EDGE
         e1 = _exit_from_inside(c1, px, py, ex, ey, left, bottom, right, top)
-        return True, 0.0, NO_EDGE, _parameter(e1, px, py, ex, ey, left, bottom, right, top, st), e1
+        # Q is outside, so the exit comes before it: a parameter past 1 is rounding.
+        u1 = min(_parameter(e1, px, py, ex, ey, left, bottom, right, top, st), 1.0)
+        return True, 0.0, NO_EDGE, u1, e1
     if c1 & c0:
         return False, 0.0, NO_EDGE, 0.0, NO_EDGE
     if c0 == LEFT:

@@ -1,0 +1,59 @@
+"""Fixtures shared by every test layer: Hypothesis profiles, a seeded generator, and the
+backend, method and mode axes that the correctness tests run over.
+
+Hypothesis profiles (pick one with ``HYPOTHESIS_PROFILE=<name>``):
+
+- ``dev`` (default): random examples, 30 per test.
+- ``ci`` (used when ``CI=true``): derandomized, so a run is reproducible and a failure in
+  CI is the same failure on a laptop; 25 examples per test.
+- ``thorough``: 1000 examples per test, for a long local hunt.
+
+Every profile has ``deadline=None``: the first call of a kernel compiles it (or loads it
+from Numba's cache), which would blow any per-example deadline.
+"""
+
+import os
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, settings
+
+from rnsca import Method, Mode
+from rnsca.backends.registry import available_backends
+
+_COMMON = dict(deadline=None, print_blob=True,
+               suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
+settings.register_profile("dev", max_examples=30, **_COMMON)
+settings.register_profile("ci", max_examples=25, derandomize=True, **_COMMON)
+settings.register_profile("thorough", max_examples=1000, **_COMMON)
+settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE")
+                      or ("ci" if os.environ.get("CI", "").lower() == "true" else "dev"))
+
+#: The seed of every non-Hypothesis random input, so a failure reproduces exactly.
+SEED = 20_241_122
+
+
+@pytest.fixture
+def rng() -> np.random.Generator:
+    """Return a generator seeded with `SEED`, fresh for each test."""
+    return np.random.default_rng(SEED)
+
+
+# Session scope: Hypothesis refuses function-scoped fixtures in @given tests (they would
+# not be reset between examples); these are plain values, so nothing needs resetting.
+@pytest.fixture(scope="session", params=available_backends(), ids=lambda b: b.value)
+def backend(request):
+    """Each backend that can run here (a missing one fails its tests, never skips)."""
+    return request.param
+
+
+@pytest.fixture(scope="session", params=list(Method), ids=lambda m: m.value)
+def method(request):
+    """Each segment clipping method."""
+    return request.param
+
+
+@pytest.fixture(scope="session", params=list(Mode), ids=lambda m: m.value)
+def mode(request):
+    """Each mode: exact, approx."""
+    return request.param

@@ -40,6 +40,8 @@ from rnsca.kernels.outcode import (
     NO_EDGE,
     RIGHT,
     TOP,
+    difference_dd,
+    line_coordinate_dd,
 )
 from rnsca.kernels.segments import AUTO_N_MIN, N_MAX
 from rnsca.options import Backend, Method, Mode, SegmentOptions
@@ -196,28 +198,71 @@ def _clamp(v: np.ndarray, low: float, high: float) -> np.ndarray:
     return np.where(v < low, low, np.where(v > high, high, v))
 
 
+def _line_coordinate(e, a0, b0, a1, b1) -> np.ndarray:
+    """Return the b of the line through (a0, b0), (a1, b1) where its a is e (``line_coordinate``).
+
+    Measured from the nearer end, in double-double (the kernels' own arithmetic), with
+    the plain formula where that overflows.
+    """
+    near1 = np.abs(e - a1) < np.abs(e - a0)
+    a = np.where(near1, a1, a0)
+    b = np.where(near1, b1, b0)
+    da, da_err = difference_dd(a1, a0)
+    db, db_err = difference_dd(b1, b0)
+    with np.errstate(all="ignore"):
+        precise = line_coordinate_dd(e, a, b, da, da_err, db, db_err)
+        plain = b + (e - a) / da * db
+    return np.where(np.isfinite(precise), precise, plain)
+
+
 def _edge_point(s: _Segments, t, edge, w: Window) -> tuple[np.ndarray, np.ndarray]:
-    """Return the points at `t` on the line of `edge` (``edge_point``).
+    """Return the points where the segments' lines meet the lines of `edge` (``edge_point``).
 
     The coordinate across the edge is the edge's own value exactly; the other one is
-    interpolated.
+    `_line_coordinate`. (`t` is not needed: the edge names the point.)
     """
-    x, y = s.at(t)
-    x = np.select([edge == EDGE_LEFT, edge == EDGE_RIGHT], [w.xmin, w.xmax], x)
-    y = np.select([edge == EDGE_BOTTOM, edge == EDGE_TOP], [w.ymin, w.ymax], y)
+    shape = np.broadcast_shapes(np.shape(t), s.x0.shape)
+    x0, y0, x1, y1 = (np.broadcast_to(v, shape) for v in (s.x0, s.y0, s.x1, s.y1))
+    with np.errstate(all="ignore"):
+        y_left = _line_coordinate(w.xmin, x0, y0, x1, y1)
+        y_right = _line_coordinate(w.xmax, x0, y0, x1, y1)
+        x_bottom = _line_coordinate(w.ymin, y0, x0, y1, x1)
+        x_top = _line_coordinate(w.ymax, y0, x0, y1, x1)
+    x = np.select([edge == EDGE_LEFT, edge == EDGE_RIGHT, edge == EDGE_BOTTOM],
+                  [w.xmin, w.xmax, x_bottom], x_top)
+    y = np.select([edge == EDGE_LEFT, edge == EDGE_RIGHT, edge == EDGE_BOTTOM],
+                  [y_left, y_right, w.ymin], w.ymax)
     return x, y
 
 
-def _end_point(s: _Segments, t, edge, px, py, w: Window) -> tuple[np.ndarray, np.ndarray]:
-    """Return the piece ends at `t`: (px, py) where not cut, else the clamped edge point.
+def _snap_into_window(x, y, s: _Segments, w: Window) -> tuple[np.ndarray, np.ndarray]:
+    """Return ends on the segments' lines slid along them into the window (``snap_into_window``).
 
-    Clamping keeps the last-ulp overshoot of the interpolated coordinate inside the
-    window (``end_point``).
+    An end outside in y moves to the horizontal edge it overshoots, then one outside in
+    x to the vertical edge; every coordinate is then clamped.
+    """
+    with np.errstate(all="ignore"):
+        over = (y > w.ymax) | (y < w.ymin)
+        edge = np.where(y > w.ymax, w.ymax, w.ymin)
+        x = np.where(over, _line_coordinate(edge, s.y0, s.x0, s.y1, s.x1), x)
+        y = np.where(over, edge, y)
+        over = (x > w.xmax) | (x < w.xmin)
+        edge = np.where(x > w.xmax, w.xmax, w.xmin)
+        y = np.where(over, _line_coordinate(edge, s.x0, s.y0, s.x1, s.y1), y)
+        x = np.where(over, edge, x)
+    return _clamp(x, w.xmin, w.xmax), _clamp(y, w.ymin, w.ymax)
+
+
+def _end_point(s: _Segments, t, edge, px, py, w: Window) -> tuple[np.ndarray, np.ndarray]:
+    """Return the piece ends: (px, py) where not cut, else the edge point snapped into the window.
+
+    ``end_point``: the snap moves an end that parameter rounding put on the wrong
+    edge's line back along the segment onto the window's boundary.
     """
     x, y = _edge_point(s, t, edge, w)
+    x, y = _snap_into_window(x, y, s, w)
     cut = edge != NO_EDGE
-    return (np.where(cut, _clamp(x, w.xmin, w.xmax), px),
-            np.where(cut, _clamp(y, w.ymin, w.ymax), py))
+    return np.where(cut, x, px), np.where(cut, y, py)
 
 
 def _is_piece(degenerate, t0, t1, ax, ay, bx, by) -> np.ndarray:
@@ -297,14 +342,19 @@ def _liang_barsky_leaf(s: _Segments, ta, tb, xa, ya, xb, yb, flags, w: Window, s
         on = (flags & bit) != 0
         _count(st, C.INTERSECTIONS, on)
         r = q / np.where(on, p, 1.0)  # rows not flagged divide by 1 (result unused)
-        x = np.full(r.shape, value) if vertical else s.x0 + r * s.dx
-        y = s.y0 + r * s.dy if vertical else np.full(r.shape, value)
+        if vertical:
+            x = np.full(r.shape, value)
+            y = _line_coordinate(value, s.x0, s.y0, s.x1, s.y1)
+        else:
+            x = _line_coordinate(value, s.y0, s.x0, s.y1, s.x1)
+            y = np.full(r.shape, value)
         enter = on & (p < 0.0) & (r > u0)
         leave = on & (p > 0.0) & (r < u1)
         u0, ax, ay = (np.where(enter, new, old) for new, old in ((r, u0), (x, ax), (y, ay)))
         u1, bx, by = (np.where(leave, new, old) for new, old in ((r, u1), (x, bx), (y, by)))
-    return (u0 <= u1, u0, _clamp(ax, w.xmin, w.xmax), _clamp(ay, w.ymin, w.ymax),
-            u1, _clamp(bx, w.xmin, w.xmax), _clamp(by, w.ymin, w.ymax))
+    ax, ay = _snap_into_window(ax, ay, s, w)
+    bx, by = _snap_into_window(bx, by, s, w)
+    return u0 <= u1, u0, ax, ay, u1, bx, by
 
 
 def _liang_barsky(s: _Segments, w: Window, options: SegmentOptions, st) -> _Clipped:

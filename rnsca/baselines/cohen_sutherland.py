@@ -71,7 +71,7 @@ def cohen_sutherland_segment(x0, y0, x1, y1, xmin, ymin, xmax, ymax, st):
             if t > t0:
                 t0 = t
                 # The moved end is not clamped: the next outcode test must see it.
-                ax, ay = edge_point(x0, y0, dx, dy, t, edge, xmin, ymin, xmax, ymax)
+                ax, ay = edge_point(x0, y0, x1, y1, edge, xmin, ymin, xmax, ymax)
                 ca = outcode(ax, ay, xmin, ymin, xmax, ymax)
             else:
                 ca &= ~bit  # the end is already past this edge's crossing
@@ -79,7 +79,7 @@ def cohen_sutherland_segment(x0, y0, x1, y1, xmin, ymin, xmax, ymax, st):
             t, edge, bit = _edge_parameter(cb, x0, y0, dx, dy, xmin, ymin, xmax, ymax)
             if t < t1:
                 t1 = t
-                bx, by = edge_point(x0, y0, dx, dy, t, edge, xmin, ymin, xmax, ymax)
+                bx, by = edge_point(x0, y0, x1, y1, edge, xmin, ymin, xmax, ymax)
                 cb = outcode(bx, by, xmin, ymin, xmax, ymax)
             else:
                 cb &= ~bit

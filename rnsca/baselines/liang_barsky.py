@@ -24,9 +24,10 @@ from rnsca.kernels.outcode import (
     NO_EDGE,
     RIGHT,
     TOP,
-    clamp,
     end_point,
     is_piece,
+    line_coordinate,
+    snap_into_window,
 )
 
 
@@ -92,26 +93,28 @@ def liang_barsky_segment(x0, y0, x1, y1, xmin, ymin, xmax, ymax, st):
         st[C.ACCEPTED] += 1
     else:
         st[C.CLIPPED] += 1
-    ax, ay = end_point(x0, y0, dx, dy, u0, e0, x0, y0, xmin, ymin, xmax, ymax)
-    bx, by = end_point(x0, y0, dx, dy, u1, e1, x1, y1, xmin, ymin, xmax, ymax)
+    ax, ay = end_point(x0, y0, x1, y1, e0, x0, y0, xmin, ymin, xmax, ymax)
+    bx, by = end_point(x0, y0, x1, y1, e1, x1, y1, xmin, ymin, xmax, ymax)
     keep = is_piece(dx == 0.0 and dy == 0.0, u0, u1, ax, ay, bx, by)
     return keep, u0, u1, ax, ay, bx, by
 
 
 @scalar
-def _cut(on, p, q, x_edge, edge_value, u0, ax, ay, u1, bx, by, x0, y0, dx, dy):
+def _cut(on, p, q, x_edge, edge_value, u0, ax, ay, u1, bx, by, x0, y0, x1, y1):
     """Apply half-plane ``p t <= q`` when `on`, with selects instead of branches.
 
     A cut end lies on the edge line: its coordinate across the edge (x for a vertical
-    edge, ``x_edge``) is `edge_value` exactly, and the other one is interpolated.
+    edge, ``x_edge``) is `edge_value` exactly, and the other one is `line_coordinate`.
     """
     # Off (or parallel, which an ambiguous leaf never is on a flagged edge): divide by 1
     # so no infinity or NaN is formed; the result is not used.
     r = q / (p if on else 1.0)
     enter = on & (p < 0.0) & (r > u0)  # & rather than `and`: no short-circuit branches
     leave = on & (p > 0.0) & (r < u1)
-    x = edge_value if x_edge else x0 + r * dx
-    y = y0 + r * dy if x_edge else edge_value
+    other = line_coordinate(edge_value, x0, y0, x1, y1) if x_edge else \
+        line_coordinate(edge_value, y0, x0, y1, x1)
+    x = edge_value if x_edge else other
+    y = other if x_edge else edge_value
     u0 = r if enter else u0
     ax = x if enter else ax
     ay = y if enter else ay
@@ -134,11 +137,12 @@ def half_plane(bit, x0, y0, dx, dy, xmin, ymin, xmax, ymax):
 
 
 @scalar
-def leaf_cut(bit, flags, u0, ax, ay, u1, bx, by, x0, y0, dx, dy, xmin, ymin, xmax, ymax):
+def leaf_cut(bit, flags, u0, ax, ay, u1, bx, by, x0, y0, x1, y1, xmin, ymin, xmax, ymax):
     """Apply the half-plane of edge `bit` to a leaf when `flags` has that bit."""
-    p, q, x_edge, edge_value = half_plane(bit, x0, y0, dx, dy, xmin, ymin, xmax, ymax)
+    p, q, x_edge, edge_value = half_plane(bit, x0, y0, x1 - x0, y1 - y0,
+                                          xmin, ymin, xmax, ymax)
     return _cut((flags & bit) != 0, p, q, x_edge, edge_value, u0, ax, ay, u1, bx, by,
-                x0, y0, dx, dy)
+                x0, y0, x1, y1)
 
 
 @scalar
@@ -148,7 +152,7 @@ def count_divisions(flags):
 
 
 @scalar
-def liang_barsky_leaf(x0, y0, dx, dy, ta, tb, xa, ya, xb, yb, flags, xmin, ymin, xmax, ymax):
+def liang_barsky_leaf(x0, y0, x1, y1, ta, tb, xa, ya, xb, yb, flags, xmin, ymin, xmax, ymax):
     """Return (ok, u0, ax, ay, u1, bx, by, divisions) for the leaf [ta, tb] of a segment.
 
     (xa, ya), (xb, yb) are the leaf's ends, kept where no edge cuts them. `flags` is the
@@ -158,7 +162,8 @@ def liang_barsky_leaf(x0, y0, dx, dy, ta, tb, xa, ya, xb, yb, flags, xmin, ymin,
     """
     u0, ax, ay, u1, bx, by = ta, xa, ya, tb, xb, yb
     for bit in (LEFT, RIGHT, BOTTOM, TOP):
-        u0, ax, ay, u1, bx, by = leaf_cut(bit, flags, u0, ax, ay, u1, bx, by, x0, y0, dx, dy,
+        u0, ax, ay, u1, bx, by = leaf_cut(bit, flags, u0, ax, ay, u1, bx, by, x0, y0, x1, y1,
                                           xmin, ymin, xmax, ymax)
-    return (u0 <= u1, u0, clamp(ax, xmin, xmax), clamp(ay, ymin, ymax),
-            u1, clamp(bx, xmin, xmax), clamp(by, ymin, ymax), count_divisions(flags))
+    ax, ay = snap_into_window(ax, ay, x0, y0, x1, y1, xmin, ymin, xmax, ymax)
+    bx, by = snap_into_window(bx, by, x0, y0, x1, y1, xmin, ymin, xmax, ymax)
+    return u0 <= u1, u0, ax, ay, u1, bx, by, count_divisions(flags)

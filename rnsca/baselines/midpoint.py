@@ -62,7 +62,7 @@ def _search(x0, y0, dx, dy, x1, y1, c0, c1, length, toward_end, max_depth, tol,
 
 
 @scalar
-def _leaf(x0, y0, dx, dy, a, xa, ya, ca, b, xb, yb, cb, level, exact, xmin, ymin, xmax, ymax, st):
+def _leaf(x0, y0, x1, y1, a, xa, ya, ca, b, xb, yb, cb, level, exact, xmin, ymin, xmax, ymax, st):
     """Decide a final bracket; return (ok, u0, ax, ay, u1, bx, by) of its visible part.
 
     In approx mode the visible part is the bracket's visible end alone (u0 == u1).
@@ -84,7 +84,7 @@ def _leaf(x0, y0, dx, dy, a, xa, ya, ca, b, xb, yb, cb, level, exact, xmin, ymin
         return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
     st[C.CLIPPED] += 1
     ok, u0, px, py, u1, qx, qy, divisions = liang_barsky_leaf(
-        x0, y0, dx, dy, a, b, xa, ya, xb, yb, ca | cb, xmin, ymin, xmax, ymax)
+        x0, y0, x1, y1, a, b, xa, ya, xb, yb, ca | cb, xmin, ymin, xmax, ymax)
     st[C.INTERSECTIONS] += divisions
     if not ok:
         # Rounding: when the window's corner or edge is ulp-close to a bracket end that
@@ -107,7 +107,7 @@ def midpoint_segment(x0, y0, x1, y1, xmin, ymin, xmax, ymax, max_depth, tol, exa
     c1 = outcode(x1, y1, xmin, ymin, xmax, ymax)
     if (c0 | c1) == 0 or c0 & c1 or max_depth == 0 or length <= tol:
         # Decided at level 0 (accepted, rejected, or the whole segment is the leaf).
-        ok, t0, ax, ay, t1, bx, by = _leaf(x0, y0, dx, dy, 0.0, x0, y0, c0, 1.0, x1, y1, c1,
+        ok, t0, ax, ay, t1, bx, by = _leaf(x0, y0, x1, y1, 0.0, x0, y0, c0, 1.0, x1, y1, c1,
                                            0, exact, xmin, ymin, xmax, ymax, st)
         # A dropped approx leaf leaves one point. (In exact mode t0 == t1 can be a real piece:
         # a window far smaller than the segment lies within one rounding step of t.)
@@ -123,7 +123,7 @@ def midpoint_segment(x0, y0, x1, y1, xmin, ymin, xmax, ymax, max_depth, tol, exa
         a, xa, ya, ca, b, xb, yb, cb, level = _search(
             x0, y0, dx, dy, x1, y1, c0, c1, length, True, max_depth, tol,
             xmin, ymin, xmax, ymax, st)
-        ok, _, _, _, t1, bx, by = _leaf(x0, y0, dx, dy, a, xa, ya, ca, b, xb, yb, cb, level,
+        ok, _, _, _, t1, bx, by = _leaf(x0, y0, x1, y1, a, xa, ya, ca, b, xb, yb, cb, level,
                                         exact, xmin, ymin, xmax, ymax, st)
         if not ok:
             return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
@@ -133,7 +133,7 @@ def midpoint_segment(x0, y0, x1, y1, xmin, ymin, xmax, ymax, max_depth, tol, exa
         a, xa, ya, ca, b, xb, yb, cb, level = _search(
             x0, y0, dx, dy, x1, y1, c0, c1, length, False, max_depth, tol,
             xmin, ymin, xmax, ymax, st)
-        ok, t0, ax, ay, _, _, _ = _leaf(x0, y0, dx, dy, a, xa, ya, ca, b, xb, yb, cb, level,
+        ok, t0, ax, ay, _, _, _ = _leaf(x0, y0, x1, y1, a, xa, ya, ca, b, xb, yb, cb, level,
                                         exact, xmin, ymin, xmax, ymax, st)
         if not ok:
             return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0

@@ -215,6 +215,6 @@ def nicholl_lee_nicholl_segment(x0, y0, x1, y1, xmin, ymin, xmax, ymax, st):
         st[C.CLIPPED] += 1
     e0 = _original_edge(e0, flip_x, flip_y, swap)
     e1 = _original_edge(e1, flip_x, flip_y, swap)
-    ax, ay = end_point(x0, y0, dx, dy, u0, e0, x0, y0, xmin, ymin, xmax, ymax)
-    bx, by = end_point(x0, y0, dx, dy, u1, e1, x1, y1, xmin, ymin, xmax, ymax)
+    ax, ay = end_point(x0, y0, x1, y1, e0, x0, y0, xmin, ymin, xmax, ymax)
+    bx, by = end_point(x0, y0, x1, y1, e1, x1, y1, xmin, ymin, xmax, ymax)
     return is_piece(False, u0, u1, ax, ay, bx, by), u0, u1, ax, ay, bx, by

@@ -13,6 +13,8 @@ A piece whose two outcodes are both zero is inside (the window is convex); a pie
 outcodes share a bit lies wholly beyond that edge; anything else is ambiguous.
 """
 
+import math
+
 from rnsca.kernels.jit import scalar
 
 LEFT = 1
@@ -42,38 +44,126 @@ def clamp(v, low, high):
     return min(max(v, low), high)
 
 
+# Veltkamp's splitter for Dekker's exact product (2**27 + 1): no fused multiply-add is
+# needed, so the kernels, plain Python and the NumPy reference round identically.
+_SPLITTER = 134217729.0
+
+
+def difference_dd(x1, x0):
+    """Return (d, d_err) with ``d + d_err == x1 - x0`` exactly (Knuth's TwoSum)."""
+    d = x1 - x0
+    v = d - x1
+    return d, (x1 - (d - v)) + (-x0 - v)
+
+
+def line_coordinate_dd(e, a, b, da, da_err, db, db_err):
+    """Return ``b + ((e - a) / da) * db`` carried in double-double, to about one ulp.
+
+    (da + da_err, db + db_err) is the segment's direction, exactly. The cut point of a
+    long segment lies far from both its ends: computed plainly, the rounding of the
+    direction and of the parameter, times the segment's length, can exceed the window's
+    own size (a segment 1e8 windows long misses by ~1e-8 of the window). Every rounding
+    step here keeps its error term (Knuth's TwoSum, Dekker's TwoProduct). The parameter
+    is formed first, so with the nearer end as base |t| <= 1/2 and no product underflows
+    or overflows that the result would not. Plain arithmetic only, so this one function
+    serves Numba (jitted below) and NumPy arrays alike. Returns NaN when a split
+    overflows (magnitudes beyond ~1e300); callers then fall back to the plain formula.
+    """
+    s = e - a  # TwoSum(e, -a), written out: the jitted copy may call no plain function
+    v = s - e
+    s_err = (e - (s - v)) + (-a - v)
+    t = s / da
+    r = t * da  # TwoProduct(t, da)
+    c = _SPLITTER * t
+    th = c - (c - t)
+    tl = t - th
+    c = _SPLITTER * da
+    ah = c - (c - da)
+    al = da - ah
+    r_err = (((th * ah - r) + th * al) + tl * ah) + tl * al
+    # t + t_lo == (e - a) / (da + da_err) to ~eps**2
+    t_lo = ((((s - r) - r_err) + s_err) - t * da_err) / da
+    p = t * db  # TwoProduct(t, db)
+    c = _SPLITTER * db
+    dh = c - (c - db)
+    dl = db - dh
+    p_err = (((th * dh - p) + th * dl) + tl * dh) + tl * dl + (t_lo * db + t * db_err)
+    y = b + p  # TwoSum(b, p)
+    v = y - b
+    y_err = (b - (y - v)) + (p - v)
+    return y + (y_err + p_err)
+
+
+_difference_dd = scalar(difference_dd)
+_line_coordinate_dd = scalar(line_coordinate_dd)
+
+
 @scalar
-def edge_point(x0, y0, dx, dy, t, edge, xmin, ymin, xmax, ymax):
-    """Return the point at parameter `t`, which lies on the line of `edge`.
+def line_coordinate(e, a0, b0, a1, b1):
+    """Return the b-coordinate of the line through (a0, b0), (a1, b1) where its a equals e.
+
+    Measured from the nearer end (so a cut at an end point returns that end exactly),
+    in double-double (`line_coordinate_dd`), falling back to plain arithmetic where
+    that overflows (coordinates beyond ~1e300).
+    """
+    near1 = abs(e - a1) < abs(e - a0)
+    a = a1 if near1 else a0
+    b = b1 if near1 else b0
+    da, da_err = _difference_dd(a1, a0)
+    db, db_err = _difference_dd(b1, b0)
+    precise = _line_coordinate_dd(e, a, b, da, da_err, db, db_err)
+    return precise if math.isfinite(precise) else b + (e - a) / da * db
+
+
+@scalar
+def edge_point(x0, y0, x1, y1, edge, xmin, ymin, xmax, ymax):
+    """Return the point where the segment's line meets the line of `edge`.
 
     The coordinate across the edge is the edge's own value exactly (the intersection
-    lies on the edge line by definition); the other is interpolated, not clamped.
+    lies on the edge line by definition); the other is `line_coordinate`, not clamped.
     """
     if edge == EDGE_LEFT:
-        return xmin, y0 + t * dy
+        return xmin, line_coordinate(xmin, x0, y0, x1, y1)
     if edge == EDGE_RIGHT:
-        return xmax, y0 + t * dy
+        return xmax, line_coordinate(xmax, x0, y0, x1, y1)
     if edge == EDGE_BOTTOM:
-        return x0 + t * dx, ymin
-    return x0 + t * dx, ymax
+        return line_coordinate(ymin, y0, x0, y1, x1), ymin
+    return line_coordinate(ymax, y0, x0, y1, x1), ymax
 
 
 @scalar
-def end_point(x0, y0, dx, dy, t, edge, px, py, xmin, ymin, xmax, ymax):
-    """Return the coordinates of a piece end at parameter `t` of the segment.
+def snap_into_window(x, y, x0, y0, x1, y1, xmin, ymin, xmax, ymax):
+    """Return a piece end on the segment's line, moved along the line into the window.
+
+    A cut end is chosen by comparing parameters t, which cannot tell two edges apart
+    when the segment is so long (~1e15 windows) that the window spans less than an ulp
+    of t; the end then lands on the line of the wrong edge, outside the window in its
+    other coordinate. Sliding it along the line to the edge it overshoots puts it back
+    on the true boundary. Every coordinate is then clamped (the last-ulp overshoot).
+    Rarely taken branches, outside the vectorized loops.
+    """
+    if y > ymax or y < ymin:
+        edge = ymax if y > ymax else ymin
+        x = line_coordinate(edge, y0, x0, y1, x1)
+        y = edge
+    if x > xmax or x < xmin:
+        edge = xmax if x > xmax else xmin
+        y = line_coordinate(edge, x0, y0, x1, y1)
+        x = edge
+    return clamp(x, xmin, xmax), clamp(y, ymin, ymax)
+
+
+@scalar
+def end_point(x0, y0, x1, y1, edge, px, py, xmin, ymin, xmax, ymax):
+    """Return the coordinates of a piece end.
 
     An end not cut by an edge (``edge == NO_EDGE``) is the known point (px, py). An end
-    cut by an edge takes that edge's coordinate exactly (the intersection lies on the
-    edge line by definition), and the other coordinate is interpolated and clamped into
-    the window: the last-ulp overshoot of ``y0 + t * dy`` must not put a point outside.
-    Written with selects only, so it costs no mispredicted branch.
+    cut by an edge is `edge_point`, moved into the window by `snap_into_window`.
     """
-    xi = clamp(x0 + t * dx, xmin, xmax)
-    yi = clamp(y0 + t * dy, ymin, ymax)
-    x = xmin if edge == EDGE_LEFT else (xmax if edge == EDGE_RIGHT else xi)
-    y = ymin if edge == EDGE_BOTTOM else (ymax if edge == EDGE_TOP else yi)
-    uncut = edge == NO_EDGE
-    return (px if uncut else x), (py if uncut else y)
+    if edge == NO_EDGE:
+        return px, py
+    x, y = edge_point(x0, y0, x1, y1, edge, xmin, ymin, xmax, ymax)
+    return snap_into_window(x, y, x0, y0, x1, y1, xmin, ymin, xmax, ymax)
 
 
 @scalar

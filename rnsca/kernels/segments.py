@@ -27,7 +27,16 @@ from rnsca.baselines.midpoint import midpoint_segment
 from rnsca.baselines.nicholl_lee_nicholl import nicholl_lee_nicholl_segment
 from rnsca.kernels import counters as C
 from rnsca.kernels.jit import parallel, scalar
-from rnsca.kernels.outcode import BOTTOM, LEFT, RIGHT, TOP, clamp, is_piece, outcode
+from rnsca.kernels.outcode import (
+    BOTTOM,
+    LEFT,
+    RIGHT,
+    TOP,
+    clamp,
+    is_piece,
+    outcode,
+    snap_into_window,
+)
 
 # Method ids as the driver knows them (rnsca.backends.numba_cpu maps the enum).
 RNSCA = 0
@@ -67,10 +76,10 @@ def auto_n(piece_length, auto_piece):
 
 
 @scalar
-def _clip_leaf(x0, y0, dx, dy, ta, tb, xa, ya, xb, yb, flags, xmin, ymin, xmax, ymax, st):
+def _clip_leaf(x0, y0, x1, y1, ta, tb, xa, ya, xb, yb, flags, xmin, ymin, xmax, ymax, st):
     """Clip the leaf [ta, tb] (ends (xa, ya), (xb, yb)); return (ok, u0, ax, ay, u1, bx, by)."""
     ok, u0, ax, ay, u1, bx, by, divisions = liang_barsky_leaf(
-        x0, y0, dx, dy, ta, tb, xa, ya, xb, yb, flags, xmin, ymin, xmax, ymax)
+        x0, y0, x1, y1, ta, tb, xa, ya, xb, yb, flags, xmin, ymin, xmax, ymax)
     st[C.INTERSECTIONS] += divisions
     return ok and is_piece(False, u0, u1, ax, ay, bx, by), u0, ax, ay, u1, bx, by
 
@@ -109,7 +118,7 @@ def rnsca_segment(x0, y0, x1, y1, xmin, ymin, xmax, ymax, n_fixed, max_depth, to
             st[C.DROPPED] += 1
             return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
         st[C.CLIPPED] += 1
-        ok, u0, ax, ay, u1, bx, by = _clip_leaf(x0, y0, dx, dy, 0.0, 1.0, x0, y0, x1, y1,
+        ok, u0, ax, ay, u1, bx, by = _clip_leaf(x0, y0, x1, y1, 0.0, 1.0, x0, y0, x1, y1,
                                                 c0 | c1, xmin, ymin, xmax, ymax, st)
         return ok, u0, u1, ax, ay, bx, by
     st[C.SUBDIVIDED] += 1
@@ -166,7 +175,7 @@ def rnsca_segment(x0, y0, x1, y1, xmin, ymin, xmax, ymax, n_fixed, max_depth, to
                 st[C.LEVELS + level] += 1
                 if exact:
                     st[C.CLIPPED] += 1
-                    ok, u0, ax, ay, u1, bx, by = _clip_leaf(x0, y0, dx, dy, pt, t, px, py, x, y,
+                    ok, u0, ax, ay, u1, bx, by = _clip_leaf(x0, y0, x1, y1, pt, t, px, py, x, y,
                                                             pc | c, xmin, ymin, xmax, ymax, st)
                     if ok:
                         if u0 < lo_t:
@@ -236,8 +245,8 @@ def _rnsca_block(segments, first, last, xmin, ymin, xmax, ymax, n_fixed, max_dep
     size = last - first
     x0 = np.empty(size)
     y0 = np.empty(size)
-    dx = np.empty(size)
-    dy = np.empty(size)
+    x1 = np.empty(size)
+    y1 = np.empty(size)
     flags = np.empty(size, dtype=np.int64)
     rejected = np.empty(size, dtype=np.bool_)
     ambiguous = np.empty(size, dtype=np.bool_)
@@ -254,14 +263,14 @@ def _rnsca_block(segments, first, last, xmin, ymin, xmax, ymax, n_fixed, max_dep
         i = first + j
         x0[j] = segments[i, 0]
         y0[j] = segments[i, 1]
-        dx[j] = segments[i, 2] - x0[j]
-        dy[j] = segments[i, 3] - y0[j]
+        x1[j] = segments[i, 2]
+        y1[j] = segments[i, 3]
         c0 = outcode(segments[i, 0], segments[i, 1], xmin, ymin, xmax, ymax)
         c1 = outcode(segments[i, 2], segments[i, 3], xmin, ymin, xmax, ymax)
         reject = (c0 & c1) != 0
         amb = (not reject) & ((c0 | c1) != 0)
         # |dx| + |dy| >= length: a cheap test that the segment may need splitting.
-        spl = amb & (max_depth > 0) & (abs(dx[j]) + abs(dy[j]) > tol)
+        spl = amb & (max_depth > 0) & (abs(x1[j] - x0[j]) + abs(y1[j] - y0[j]) > tol)
         clip = amb & exact & (not spl)
         # An accepted segment has no flagged edge, so the leaf clip returns it whole.
         flags[j] = (c0 | c1) if clip else 0
@@ -292,15 +301,15 @@ def _rnsca_block(segments, first, last, xmin, ymin, xmax, ymax, n_fixed, max_dep
         for j in range(size):
             u0[j], ax[j], ay[j], u1[j], bx[j], by[j] = leaf_cut(
                 bit, flags[j], u0[j], ax[j], ay[j], u1[j], bx[j], by[j],
-                x0[j], y0[j], dx[j], dy[j], xmin, ymin, xmax, ymax)
+                x0[j], y0[j], x1[j], y1[j], xmin, ymin, xmax, ymax)
     keep = np.empty(size, dtype=np.bool_)
     for j in range(size):
-        ax[j] = clamp(ax[j], xmin, xmax)
-        ay[j] = clamp(ay[j], ymin, ymax)
-        bx[j] = clamp(bx[j], xmin, xmax)
-        by[j] = clamp(by[j], ymin, ymax)
+        ax[j], ay[j] = snap_into_window(ax[j], ay[j], x0[j], y0[j], x1[j], y1[j],
+                                        xmin, ymin, xmax, ymax)
+        bx[j], by[j] = snap_into_window(bx[j], by[j], x0[j], y0[j], x1[j], y1[j],
+                                        xmin, ymin, xmax, ymax)
         keep[j] = (u0[j] <= u1[j]) & (not rejected[j]) & (exact | (not ambiguous[j])) & is_piece(
-            (dx[j] == 0.0) & (dy[j] == 0.0), u0[j], u1[j], ax[j], ay[j], bx[j], by[j])
+            (x0[j] == x1[j]) & (y0[j] == y1[j]), u0[j], u1[j], ax[j], ay[j], bx[j], by[j])
     # Deeper levels, for the few segments that need them.
     stack_f = np.empty((STACK_CAPACITY, 6), dtype=np.float64)
     stack_i = np.empty((STACK_CAPACITY, 3), dtype=np.int64)

@@ -39,7 +39,9 @@ from rnsca.kernels.outcode import (
     LEFT,
     NO_EDGE,
     RIGHT,
+    SURE_SHIFT,
     TOP,
+    UNSURE_BITS,
     difference_dd,
     line_coordinate_dd,
 )
@@ -191,6 +193,24 @@ def _outcode(x, y, xmin, ymin, xmax, ymax) -> np.ndarray:
     across = np.where(x < xmin, LEFT, np.where(x > xmax, RIGHT, 0))
     along = np.where(y < ymin, BOTTOM, np.where(y > ymax, TOP, 0))
     return across | along
+
+
+def _wide(code: np.ndarray) -> np.ndarray:
+    """Return the wide codes of exactly known points (``wide``)."""
+    return code | (code << SURE_SHIFT)
+
+
+def _margin(a0: np.ndarray, da: np.ndarray) -> np.ndarray:
+    """Return the rounding bound of ``a0 + t * da`` (``interpolation_margin``)."""
+    return np.where(da == 0.0, 0.0, 8.881784197001252e-16 * (np.abs(a0) + np.abs(da)) + 1e-323)
+
+
+def _wide_outcode(x, y, s: _Segments, w: Window) -> np.ndarray:
+    """Return the wide codes of points interpolated on segments `s` (``wide_outcode``)."""
+    ex, ey = _margin(s.x0, s.dx), _margin(s.y0, s.dy)
+    unsure = _outcode(x, y, w.xmin + ex, w.ymin + ey, w.xmax - ex, w.ymax - ey)
+    sure = _outcode(x, y, w.xmin - ex, w.ymin - ey, w.xmax + ex, w.ymax + ey)
+    return unsure | (sure << SURE_SHIFT)
 
 
 def _clamp(v: np.ndarray, low: float, high: float) -> np.ndarray:
@@ -633,8 +653,8 @@ class _Bracket:
     def whole(cls, s: _Segments, c0, c1) -> _Bracket:
         """Return the brackets [0, 1] of whole segments, at level 0."""
         n = s.size
-        return cls(np.zeros(n), s.x0.copy(), s.y0.copy(), c0.copy(),
-                   np.ones(n), s.x1.copy(), s.y1.copy(), c1.copy(), np.zeros(n, dtype=np.int64))
+        return cls(np.zeros(n), s.x0.copy(), s.y0.copy(), _wide(c0),
+                   np.ones(n), s.x1.copy(), s.y1.copy(), _wide(c1), np.zeros(n, dtype=np.int64))
 
     def take(self, index) -> _Bracket:
         """Return the brackets at `index`."""
@@ -654,29 +674,51 @@ def _bisect(s: _Segments, bracket: _Bracket, length, toward_end: bool,
     ``toward_end=True`` brackets the exit (the farthest visible point from P0), else the
     entry (the farthest visible point from P1). Each step halves the bracket at m; if
     the half on the far side of the searched end ([m, b] for the exit, [a, m] for the
-    entry) is trivially invisible (its outcodes share a bit), the end lies in the near
-    half, otherwise in the far one. Brackets still searching have all made the same
-    number of steps, so a step is one level.
+    entry) is surely invisible (its wide codes share a sure bit), the end lies in the
+    near half, otherwise in the far one. Brackets still searching have all made the same
+    number of steps, so a step is one level. The near end returned follows the kernel:
+    the last surely inside one (exact mode, or when the classic one is not trusted), or
+    the classic one marked visible (approx mode, within rounding of the boundary).
     """
+    exact = options.mode is Mode.EXACT
+    near = ("a", "xa", "ya", "ca") if toward_end else ("b", "xb", "yb", "cb")
+    sure = [getattr(bracket, name).copy() for name in near]
+    found = np.zeros(bracket.a.size, dtype=bool)
     for level in range(1, options.max_depth + 1):
         active = (bracket.b - bracket.a) * length > options.tolerance
         if not active.any():
             break
-        m = bracket.a + (bracket.b - bracket.a) / 2
+        m = bracket.a + (bracket.b - bracket.a) * 1 / 2
         xm, ym = s.at(m)
-        cm = _outcode(xm, ym, *w.bounds)
+        cm = _wide_outcode(xm, ym, s, w)
         _count(st, C.EVALUATED, active)
         far = bracket.cb if toward_end else bracket.ca
-        beyond = active & ((cm & far) != 0)
+        beyond = active & (((cm & far) >> SURE_SHIFT) != 0)
         _count(st, C.REJECTED, beyond)
         st[C.LEVELS + level] += np.count_nonzero(beyond)
         _count(st, C.SUBDIVIDED, active & ~beyond)
         # Far half invisible: the bracket shrinks to the near half, else to the far one.
         bracket = bracket.moved(beyond, toward_end, m, xm, ym, cm, level)
         bracket = bracket.moved(active & ~beyond, not toward_end, m, xm, ym, cm, level)
+        surely_in = active & ~beyond & ((cm & UNSURE_BITS) == 0)
+        sure = [np.where(surely_in, new, old) for new, old in zip((m, xm, ym, cm), sure,
+                                                                   strict=True)]
+        found |= surely_in
     if bracket.level.size:
         _reach(st, int(bracket.level.max()))
-    return bracket
+    near_t, near_c = getattr(bracket, near[0]), getattr(bracket, near[3])
+    # A search that jumped from its start straight to the boundary: the point halfway
+    # back tells a segment running inside from one lying within rounding outside.
+    check = ~found & ((near_c >> SURE_SHIFT) == 0) & (near_t != sure[0])
+    lo, hi = np.minimum(near_t, sure[0]), np.maximum(near_t, sure[0])
+    h = lo + (hi - lo) * 1 / 2
+    hx, hy = s.at(h)
+    found |= check & ((_wide_outcode(hx, hy, s, w) & UNSURE_BITS) == 0)
+    trusted = ~np.asarray(exact) & found & ((near_c >> SURE_SHIFT) == 0)
+    values = [np.where(trusted, getattr(bracket, name), old) for name, old in zip(near, sure,
+                                                                                 strict=True)]
+    values[3] = np.where(trusted, 0, values[3])
+    return replace(bracket, **dict(zip(near, values, strict=True)))
 
 
 def _midpoint_leaf(s: _Segments, br: _Bracket, exact: bool, w: Window, st):
@@ -689,7 +731,7 @@ def _midpoint_leaf(s: _Segments, br: _Bracket, exact: bool, w: Window, st):
     """
     st[C.EVALUATED] += br.a.size
     _count_decided(st, br.level)
-    apart = (br.ca & br.cb) != 0
+    apart = ((br.ca & br.cb) >> SURE_SHIFT) != 0
     inside = ~apart & ((br.ca | br.cb) == 0)
     straddles = ~apart & ~inside
     _count(st, C.REJECTED, apart)
@@ -702,7 +744,7 @@ def _midpoint_leaf(s: _Segments, br: _Bracket, exact: bool, w: Window, st):
         k = np.flatnonzero(straddles)
         ok[k], u0[k], ax[k], ay[k], u1[k], bx[k], by[k] = _liang_barsky_leaf(
             s.take(k), br.a[k], br.b[k], br.xa[k], br.ya[k], br.xb[k], br.yb[k],
-            br.ca[k] | br.cb[k], w, st)
+            (br.ca[k] | br.cb[k]) & UNSURE_BITS, w, st)
         end_only = straddles & ~ok
     else:
         _count(st, C.DROPPED, straddles)
@@ -770,10 +812,11 @@ def _midpoint(s: _Segments, w: Window, options: SegmentOptions, st) -> _Clipped:
 # (its comparisons are strict). To keep the same one, each decision carries the key of
 # its place in the kernel's walk (see `_Fragments.path`), and ties are broken by it.
 #
-# The kernel's stack is never full: along a segment each edge line is crossed once, so
-# a fragment has at most four ambiguous children (five with the last-ulp difference
-# between P1 and P0 + 1 (P1 - P0)), and 31 levels of pushes hold at most 125 entries of
-# its 136. Its "stack full" leaf rule has no counterpart here.
+# The kernel's stack is never full: a fragment is split only if its two wide codes
+# differ, i.e. it crosses one of the eight band lines (edge +- rounding margin), each
+# crossed once along a segment (nine children with the last-ulp difference between P1
+# and P0 + 1 (P1 - P0)), so 31 levels of pushes hold at most 8 * 31 + 1 entries of its
+# 272. Its "stack full" leaf rule has no counterpart here.
 
 
 @dataclass(frozen=True)
@@ -877,8 +920,9 @@ def _split(frontier: _Fragments, level: int, s: _Segments, length, options, w: W
     n = n[parent]
     up = frontier.take(parent)
     t = up.ta + (up.tb - up.ta) * j / n
-    x, y = s.take(up.seg).at(t)
-    c = _outcode(x, y, *w.bounds)
+    su = s.take(up.seg)
+    x, y = su.at(t)
+    c = _wide_outcode(x, y, su, w)
     last = j == n
     tb, xb, yb, cb = (np.where(last, old, new) for new, old in
                       ((t, up.tb), (x, up.xb), (y, up.yb), (c, up.cb)))
@@ -910,10 +954,11 @@ def _decide(kids: _Fragments, key, level: int, s: _Segments, length, options, w:
     """
     st[C.EVALUATED] += len(kids)
     inside = (kids.ca | kids.cb) == 0
-    outside = ~inside & ((kids.ca & kids.cb) != 0)
+    outside = ~inside & (((kids.ca & kids.cb) >> SURE_SHIFT) != 0)
     ambiguous = ~inside & ~outside
     short = (kids.tb - kids.ta) * length[kids.seg] <= options.tolerance
-    leaf = ambiguous & ((level >= options.max_depth) | short)
+    # ``ca == cb``: both ends within rounding of the same edges; splitting cannot help.
+    leaf = ambiguous & ((level >= options.max_depth) | short | (kids.ca == kids.cb))
     _count(st, C.ACCEPTED, inside)
     _count(st, C.REJECTED, outside)
     _count(st, C.SUBDIVIDED, ambiguous & ~leaf)
@@ -927,7 +972,7 @@ def _decide(kids: _Fragments, key, level: int, s: _Segments, length, options, w:
         _count(st, C.CLIPPED, leaf)
         lf = kids.take(leaf)
         ok, u0, ax, ay, u1, bx, by = _clip_leaf(s.take(lf.seg), lf.ta, lf.tb, lf.xa, lf.ya,
-                                                lf.xb, lf.yb, lf.ca | lf.cb, w, st)
+                                                lf.xb, lf.yb, (lf.ca | lf.cb) & UNSURE_BITS, w, st)
         candidates.add(lf.seg[ok], key[leaf][ok], u0[ok], ax[ok], ay[ok], u1[ok], bx[ok], by[ok])
     else:
         _count(st, C.DROPPED, leaf)
@@ -970,7 +1015,8 @@ def _rnsca(s: _Segments, w: Window, options: SegmentOptions, st) -> _Clipped:
     rows = np.flatnonzero(ambiguous & ~leaf)
     st[C.SUBDIVIDED] += rows.size
     frontier = _Fragments(rows, np.zeros(rows.size), np.ones(rows.size),
-                          s.x0[rows], s.y0[rows], s.x1[rows], s.y1[rows], c0[rows], c1[rows],
+                          s.x0[rows], s.y0[rows], s.x1[rows], s.y1[rows],
+                          _wide(c0[rows]), _wide(c1[rows]),
                           np.zeros((rows.size, options.max_depth), dtype=np.uint8))
     candidates = _Candidates()
     level = 0

@@ -18,32 +18,56 @@ import math
 from rnsca.baselines.liang_barsky import liang_barsky_leaf
 from rnsca.kernels import counters as C
 from rnsca.kernels.jit import scalar
-from rnsca.kernels.outcode import is_piece, outcode
+from rnsca.kernels.outcode import (
+    SURE_SHIFT,
+    UNSURE_BITS,
+    interpolation_margin,
+    is_piece,
+    outcode,
+    wide,
+    wide_outcode,
+)
 
 
 @scalar
-def _search(x0, y0, dx, dy, x1, y1, c0, c1, length, toward_end, max_depth, tol,
+def _search(x0, y0, dx, dy, x1, y1, c0, c1, length, toward_end, max_depth, tol, exact,
             xmin, ymin, xmax, ymax, st):
     """Return the final bracket (a, xa, ya, ca, b, xb, yb, cb, level) of one search.
 
     ``toward_end=True`` brackets the exit (the farthest visible point from P0), else
-    the entry (the farthest visible point from P1).
+    the entry (the farthest visible point from P1). Codes are wide codes
+    (``rnsca.kernels.outcode``): bisection points are rounded.
+
+    The bracket's far end is surely past the searched end. Its near end, in exact mode,
+    is the last point the search found surely inside (or the search's start point), so
+    the leaf clip finds the searched end exactly. In approx mode it is the classic near
+    end if that is at worst within rounding of the boundary and the search did pass a
+    surely inside point, else that last surely inside point: a segment lying an ulp
+    outside an edge never yields a piece.
     """
+    ex = interpolation_margin(x0, dx)
+    ey = interpolation_margin(y0, dy)
     a = 0.0
     xa, ya, ca = x0, y0, c0
     b = 1.0
     xb, yb, cb = x1, y1, c1
+    # The last near end surely inside, initially the search's start point.
+    if toward_end:
+        st_t, st_x, st_y, st_c = a, xa, ya, ca
+    else:
+        st_t, st_x, st_y, st_c = b, xb, yb, cb
+    found = False
     level = 0
     while level < max_depth and (b - a) * length > tol:
         m = a + (b - a) * 1 / 2
         xm = x0 + m * dx
         ym = y0 + m * dy
-        cm = outcode(xm, ym, xmin, ymin, xmax, ymax)
+        cm = wide_outcode(xm, ym, ex, ey, xmin, ymin, xmax, ymax)
         level += 1
         st[C.EVALUATED] += 1
         # The half on the far side of the searched end: [m, b] for the exit, [a, m] for the entry.
         far = cb if toward_end else ca
-        if cm & far:
+        if (cm & far) >> SURE_SHIFT:
             st[C.REJECTED] += 1
             st[C.LEVELS + level] += 1
             if toward_end:
@@ -56,8 +80,32 @@ def _search(x0, y0, dx, dy, x1, y1, c0, c1, length, toward_end, max_depth, tol,
                 a, xa, ya, ca = m, xm, ym, cm
             else:
                 b, xb, yb, cb = m, xm, ym, cm
+            if (cm & UNSURE_BITS) == 0:
+                st_t, st_x, st_y, st_c = m, xm, ym, cm
+                found = True
     if level > st[C.DEEPEST]:
         st[C.DEEPEST] = level
+    near_t, near_c = (a, ca) if toward_end else (b, cb)
+    if not found and (near_c >> SURE_SHIFT) == 0 and near_t != st_t:
+        # The search jumped from its start straight to the boundary: the point halfway
+        # back tells a segment that runs inside (surely inside there) from one that lies
+        # within rounding outside an edge all along.
+        lo = min(near_t, st_t)
+        hi = max(near_t, st_t)
+        h = lo + (hi - lo) * 1 / 2
+        found = (wide_outcode(x0 + h * dx, y0 + h * dy, ex, ey, xmin, ymin, xmax, ymax)
+                 & UNSURE_BITS) == 0
+    # In approx mode a near end within rounding of the boundary counts as visible (0).
+    if toward_end:
+        if exact or not (found and (ca >> SURE_SHIFT) == 0):
+            a, xa, ya, ca = st_t, st_x, st_y, st_c
+        else:
+            ca = 0
+        return a, xa, ya, ca, b, xb, yb, cb, level
+    if exact or not (found and (cb >> SURE_SHIFT) == 0):
+        b, xb, yb, cb = st_t, st_x, st_y, st_c
+    else:
+        cb = 0
     return a, xa, ya, ca, b, xb, yb, cb, level
 
 
@@ -69,7 +117,7 @@ def _leaf(x0, y0, x1, y1, a, xa, ya, ca, b, xb, yb, cb, level, exact, xmin, ymin
     """
     st[C.EVALUATED] += 1
     st[C.LEVELS + level] += 1
-    if ca & cb:
+    if (ca & cb) >> SURE_SHIFT:
         st[C.REJECTED] += 1
         return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
     if (ca | cb) == 0:
@@ -84,7 +132,7 @@ def _leaf(x0, y0, x1, y1, a, xa, ya, ca, b, xb, yb, cb, level, exact, xmin, ymin
         return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
     st[C.CLIPPED] += 1
     ok, u0, px, py, u1, qx, qy, divisions = liang_barsky_leaf(
-        x0, y0, x1, y1, a, b, xa, ya, xb, yb, ca | cb, xmin, ymin, xmax, ymax)
+        x0, y0, x1, y1, a, b, xa, ya, xb, yb, (ca | cb) & UNSURE_BITS, xmin, ymin, xmax, ymax)
     st[C.INTERSECTIONS] += divisions
     if not ok:
         # Rounding: when the window's corner or edge is ulp-close to a bracket end that
@@ -107,8 +155,8 @@ def midpoint_segment(x0, y0, x1, y1, xmin, ymin, xmax, ymax, max_depth, tol, exa
     c1 = outcode(x1, y1, xmin, ymin, xmax, ymax)
     if (c0 | c1) == 0 or c0 & c1 or max_depth == 0 or length <= tol:
         # Decided at level 0 (accepted, rejected, or the whole segment is the leaf).
-        ok, t0, ax, ay, t1, bx, by = _leaf(x0, y0, x1, y1, 0.0, x0, y0, c0, 1.0, x1, y1, c1,
-                                           0, exact, xmin, ymin, xmax, ymax, st)
+        ok, t0, ax, ay, t1, bx, by = _leaf(x0, y0, x1, y1, 0.0, x0, y0, wide(c0), 1.0, x1, y1,
+                                           wide(c1), 0, exact, xmin, ymin, xmax, ymax, st)
         # A dropped approx leaf leaves one point. (In exact mode t0 == t1 can be a real piece:
         # a window far smaller than the segment lies within one rounding step of t.)
         if not ok or not exact and t0 == t1 and (c0 | c1) != 0:
@@ -121,7 +169,7 @@ def midpoint_segment(x0, y0, x1, y1, xmin, ymin, xmax, ymax, max_depth, tol, exa
         t1, bx, by = 1.0, x1, y1
     else:
         a, xa, ya, ca, b, xb, yb, cb, level = _search(
-            x0, y0, dx, dy, x1, y1, c0, c1, length, True, max_depth, tol,
+            x0, y0, dx, dy, x1, y1, wide(c0), wide(c1), length, True, max_depth, tol, exact,
             xmin, ymin, xmax, ymax, st)
         ok, _, _, _, t1, bx, by = _leaf(x0, y0, x1, y1, a, xa, ya, ca, b, xb, yb, cb, level,
                                         exact, xmin, ymin, xmax, ymax, st)
@@ -131,7 +179,7 @@ def midpoint_segment(x0, y0, x1, y1, xmin, ymin, xmax, ymax, max_depth, tol, exa
         t0, ax, ay = 0.0, x0, y0
     else:
         a, xa, ya, ca, b, xb, yb, cb, level = _search(
-            x0, y0, dx, dy, x1, y1, c0, c1, length, False, max_depth, tol,
+            x0, y0, dx, dy, x1, y1, wide(c0), wide(c1), length, False, max_depth, tol, exact,
             xmin, ymin, xmax, ymax, st)
         ok, t0, ax, ay, _, _, _ = _leaf(x0, y0, x1, y1, a, xa, ya, ca, b, xb, yb, cb, level,
                                         exact, xmin, ymin, xmax, ymax, st)

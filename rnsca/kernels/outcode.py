@@ -38,6 +38,43 @@ def outcode(x, y, xmin, ymin, xmax, ymax):
     return ((x < xmin) * LEFT) | ((x > xmax) * RIGHT) | ((y < ymin) * BOTTOM) | ((y > ymax) * TOP)
 
 
+# Points interpolated inside a segment, ``x0 + t * (x1 - x0)``, are rounded: their
+# outcodes alone could accept a piece lying an ulp outside an edge. Subdivision methods
+# therefore classify such points with a "wide" code: bits 0-3 name the edges the point
+# is not surely inside of, bits 4-7 the edges it is surely beyond, given the rounding
+# bound of `interpolation_margin`. A piece is accepted only if both its ends are surely
+# inside (wide codes OR to 0), rejected only if both are surely beyond one edge (AND of
+# the high bits), and otherwise stays ambiguous, so it is refined, clipped exactly, or
+# (approx mode) dropped. An exact point (an input end point) has ``wide(c)``.
+SURE_SHIFT = 4
+UNSURE_BITS = 15
+
+
+@scalar
+def wide(code):
+    """Return the wide code of an exactly known point with outcode `code`."""
+    return code | (code << SURE_SHIFT)
+
+
+@scalar
+def interpolation_margin(a0, da):
+    """Return a bound on the rounding of ``a0 + t * da`` for t in [0, 1], da = a1 - a0 rounded.
+
+    Three roundings, each at most half an ulp of a value no larger than |a0| + |da|,
+    give under 4 eps (|a0| + |da|); two subnormal steps cover underflow. A coordinate
+    that does not change (da == 0) is exact.
+    """
+    return 0.0 if da == 0.0 else 8.881784197001252e-16 * (abs(a0) + abs(da)) + 1e-323
+
+
+@scalar
+def wide_outcode(x, y, ex, ey, xmin, ymin, xmax, ymax):
+    """Return the wide code of an interpolated point whose coordinates may be off by ex, ey."""
+    unsure = outcode(x, y, xmin + ex, ymin + ey, xmax - ex, ymax - ey)
+    sure = outcode(x, y, xmin - ex, ymin - ey, xmax + ex, ymax + ey)
+    return unsure | (sure << SURE_SHIFT)
+
+
 @scalar
 def clamp(v, low, high):
     """Return v limited to [low, high]."""

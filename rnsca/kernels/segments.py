@@ -31,11 +31,16 @@ from rnsca.kernels.outcode import (
     BOTTOM,
     LEFT,
     RIGHT,
+    SURE_SHIFT,
     TOP,
+    UNSURE_BITS,
     clamp,
+    interpolation_margin,
     is_piece,
     outcode,
     snap_into_window,
+    wide,
+    wide_outcode,
 )
 
 # Method ids as the driver knows them (rnsca.backends.numba_cpu maps the enum).
@@ -46,10 +51,12 @@ NICHOLL_LEE_NICHOLL = 3
 MIDPOINT = 4
 
 N_MAX = 64
-# Along a segment each of the four edge lines is crossed at most once, and computed
-# points are monotone in t, so at most four children of a piece are ambiguous: the
-# depth-first stack holds at most three pending siblings per level plus the current one.
-STACK_CAPACITY = 4 * (C.N_LEVELS + 1)
+# A child is split further only if its two wide codes differ, that is, if it crosses one
+# of the eight lines that bound the edges' rounding bands (edge +- margin). A segment
+# crosses each line at most once and computed points are monotone in t, so at most
+# eight children of a piece are split, and the depth-first stack holds at most seven
+# pending siblings per level plus the current one.
+STACK_CAPACITY = 8 * (C.N_LEVELS + 1)
 # Stack rows: floats (ta, tb, xa, ya, xb, yb); ints (ca, cb, level).
 _TA, _TB, _XA, _YA, _XB, _YB = 0, 1, 2, 3, 4, 5
 _CA, _CB, _LEVEL = 0, 1, 2
@@ -128,8 +135,11 @@ def rnsca_segment(x0, y0, x1, y1, xmin, ymin, xmax, ymax, n_fixed, max_depth, to
     stack_f[0, _YA] = y0
     stack_f[0, _XB] = x1
     stack_f[0, _YB] = y1
-    stack_i[0, _CA] = c0
-    stack_i[0, _CB] = c1
+    # Children's ends are interpolated: classify them with wide codes (see outcode.py).
+    ex = interpolation_margin(x0, dx)
+    ey = interpolation_margin(y0, dy)
+    stack_i[0, _CA] = wide(c0)
+    stack_i[0, _CB] = wide(c1)
     stack_i[0, _LEVEL] = 0
     sp = 1
     while sp > 0:
@@ -156,7 +166,7 @@ def rnsca_segment(x0, y0, x1, y1, xmin, ymin, xmax, ymax, n_fixed, max_depth, to
                 t = ta + step * j / n
                 x = x0 + t * dx
                 y = y0 + t * dy
-                c = outcode(x, y, xmin, ymin, xmax, ymax)
+                c = wide_outcode(x, y, ex, ey, xmin, ymin, xmax, ymax)
             st[C.EVALUATED] += 1
             if (pc | c) == 0:
                 st[C.ACCEPTED] += 1
@@ -168,15 +178,19 @@ def rnsca_segment(x0, y0, x1, y1, xmin, ymin, xmax, ymax, n_fixed, max_depth, to
                     lo_t, lo_x, lo_y = pt, px, py
                 if pt < t and t > hi_t:
                     hi_t, hi_x, hi_y = t, x, y
-            elif pc & c:
+            elif (pc & c) >> SURE_SHIFT:
                 st[C.REJECTED] += 1
                 st[C.LEVELS + level] += 1
-            elif level >= max_depth or (t - pt) * length <= tol or sp >= STACK_CAPACITY:
+            elif (level >= max_depth or (t - pt) * length <= tol or pc == c
+                  or sp >= STACK_CAPACITY):
+                # A leaf; ``pc == c``: both ends within rounding of the same edges (the
+                # child hugs the boundary), which splitting could not resolve.
                 st[C.LEVELS + level] += 1
                 if exact:
                     st[C.CLIPPED] += 1
                     ok, u0, ax, ay, u1, bx, by = _clip_leaf(x0, y0, x1, y1, pt, t, px, py, x, y,
-                                                            pc | c, xmin, ymin, xmax, ymax, st)
+                                                            (pc | c) & UNSURE_BITS,
+                                                            xmin, ymin, xmax, ymax, st)
                     if ok:
                         if u0 < lo_t:
                             lo_t, lo_x, lo_y = u0, ax, ay

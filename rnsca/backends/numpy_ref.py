@@ -43,6 +43,7 @@ from rnsca.kernels.outcode import (
     TOP,
     UNSURE_BITS,
     difference_dd,
+    interpolate_dd,
     line_coordinate_dd,
 )
 from rnsca.kernels.segments import AUTO_N_MIN, N_MAX
@@ -200,17 +201,30 @@ def _wide(code: np.ndarray) -> np.ndarray:
     return code | (code << SURE_SHIFT)
 
 
-def _margin(a0: np.ndarray, da: np.ndarray) -> np.ndarray:
-    """Return the rounding bound of ``a0 + t * da`` (``interpolation_margin``)."""
-    return np.where(da == 0.0, 0.0, 8.881784197001252e-16 * (np.abs(a0) + np.abs(da)) + 1e-323)
+def _interpolated(s: _Segments, t) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Return (x, y, ex, ey): the rounded points at t and their margins (``interpolated_point``)."""
+    with np.errstate(all="ignore"):
+        dx, dx_err = difference_dd(s.x1, s.x0)
+        dy, dy_err = difference_dd(s.y1, s.y0)
+        x, x_err = interpolate_dd(s.x0, dx, dx_err, t)
+        y, y_err = interpolate_dd(s.y0, dy, dy_err, t)
+        margins = []
+        for err in (x_err, y_err):
+            m = np.where(err != 0.0, np.abs(err) * 1.0000000000000009 + 1e-323, 0.0)
+            margins.append(np.where(m < np.inf, m, np.inf))  # NaN: never trusted
+    return x, y, margins[0], margins[1]
 
 
-def _wide_outcode(x, y, s: _Segments, w: Window) -> np.ndarray:
-    """Return the wide codes of points interpolated on segments `s` (``wide_outcode``)."""
-    ex, ey = _margin(s.x0, s.dx), _margin(s.y0, s.dy)
-    unsure = _outcode(x, y, w.xmin + ex, w.ymin + ey, w.xmax - ex, w.ymax - ey)
-    sure = _outcode(x, y, w.xmin - ex, w.ymin - ey, w.xmax + ex, w.ymax + ey)
-    return unsure | (sure << SURE_SHIFT)
+def _wide_outcode_at(s: _Segments, t, w: Window):
+    """Return (x, y, wide code) of the points at t on segments `s` (``wide_outcode``)."""
+    x, y, ex, ey = _interpolated(s, t)
+    with np.errstate(all="ignore"):
+        dl, dr, db, dt = x - w.xmin, w.xmax - x, y - w.ymin, w.ymax - y
+        unsure = ((dl < ex) * LEFT | (dr < ex) * RIGHT | (db < ey) * BOTTOM
+                  | (dt < ey) * TOP)
+        sure = ((-dl > ex) * LEFT | (-dr > ex) * RIGHT | (-db > ey) * BOTTOM
+                | (-dt > ey) * TOP)
+    return x, y, unsure | (sure << SURE_SHIFT)
 
 
 def _clamp(v: np.ndarray, low: float, high: float) -> np.ndarray:
@@ -689,8 +703,7 @@ def _bisect(s: _Segments, bracket: _Bracket, length, toward_end: bool,
         if not active.any():
             break
         m = bracket.a + (bracket.b - bracket.a) * 1 / 2
-        xm, ym = s.at(m)
-        cm = _wide_outcode(xm, ym, s, w)
+        xm, ym, cm = _wide_outcode_at(s, m, w)
         _count(st, C.EVALUATED, active)
         far = bracket.cb if toward_end else bracket.ca
         beyond = active & (((cm & far) >> SURE_SHIFT) != 0)
@@ -712,8 +725,8 @@ def _bisect(s: _Segments, bracket: _Bracket, length, toward_end: bool,
     check = ~found & ((near_c >> SURE_SHIFT) == 0) & (near_t != sure[0])
     lo, hi = np.minimum(near_t, sure[0]), np.maximum(near_t, sure[0])
     h = lo + (hi - lo) * 1 / 2
-    hx, hy = s.at(h)
-    found |= check & ((_wide_outcode(hx, hy, s, w) & UNSURE_BITS) == 0)
+    _, _, ch = _wide_outcode_at(s, h, w)
+    found |= check & ((ch & UNSURE_BITS) == 0)
     trusted = ~np.asarray(exact) & found & ((near_c >> SURE_SHIFT) == 0)
     values = [np.where(trusted, getattr(bracket, name), old) for name, old in zip(near, sure,
                                                                                  strict=True)]
@@ -920,9 +933,7 @@ def _split(frontier: _Fragments, level: int, s: _Segments, length, options, w: W
     n = n[parent]
     up = frontier.take(parent)
     t = up.ta + (up.tb - up.ta) * j / n
-    su = s.take(up.seg)
-    x, y = su.at(t)
-    c = _wide_outcode(x, y, su, w)
+    x, y, c = _wide_outcode_at(s.take(up.seg), t, w)
     last = j == n
     tb, xb, yb, cb = (np.where(last, old, new) for new, old in
                       ((t, up.tb), (x, up.xb), (y, up.yb), (c, up.cb)))

@@ -21,7 +21,8 @@ from rnsca.kernels.jit import scalar
 from rnsca.kernels.outcode import (
     SURE_SHIFT,
     UNSURE_BITS,
-    interpolation_margin,
+    direction_error,
+    interpolated_point,
     is_piece,
     outcode,
     wide,
@@ -45,8 +46,8 @@ def _search(x0, y0, dx, dy, x1, y1, c0, c1, length, toward_end, max_depth, tol, 
     surely inside point, else that last surely inside point: a segment lying an ulp
     outside an edge never yields a piece.
     """
-    ex = interpolation_margin(x0, dx)
-    ey = interpolation_margin(y0, dy)
+    _, dx_err = direction_error(x1, x0)
+    _, dy_err = direction_error(y1, y0)
     a = 0.0
     xa, ya, ca = x0, y0, c0
     b = 1.0
@@ -60,8 +61,7 @@ def _search(x0, y0, dx, dy, x1, y1, c0, c1, length, toward_end, max_depth, tol, 
     level = 0
     while level < max_depth and (b - a) * length > tol:
         m = a + (b - a) * 1 / 2
-        xm = x0 + m * dx
-        ym = y0 + m * dy
+        xm, ym, ex, ey = interpolated_point(x0, y0, dx, dx_err, dy, dy_err, m)
         cm = wide_outcode(xm, ym, ex, ey, xmin, ymin, xmax, ymax)
         level += 1
         st[C.EVALUATED] += 1
@@ -93,8 +93,8 @@ def _search(x0, y0, dx, dy, x1, y1, c0, c1, length, toward_end, max_depth, tol, 
         lo = min(near_t, st_t)
         hi = max(near_t, st_t)
         h = lo + (hi - lo) * 1 / 2
-        found = (wide_outcode(x0 + h * dx, y0 + h * dy, ex, ey, xmin, ymin, xmax, ymax)
-                 & UNSURE_BITS) == 0
+        hx, hy, ex, ey = interpolated_point(x0, y0, dx, dx_err, dy, dy_err, h)
+        found = (wide_outcode(hx, hy, ex, ey, xmin, ymin, xmax, ymax) & UNSURE_BITS) == 0
     # In approx mode a near end within rounding of the boundary counts as visible (0).
     if toward_end:
         if exact or not (found and (ca >> SURE_SHIFT) == 0):

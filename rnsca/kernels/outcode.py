@@ -56,22 +56,65 @@ def wide(code):
     return code | (code << SURE_SHIFT)
 
 
-@scalar
-def interpolation_margin(a0, da):
-    """Return a bound on the rounding of ``a0 + t * da`` for t in [0, 1], da = a1 - a0 rounded.
+def interpolate_dd(a0, da, da_err, t):
+    """Return (a, err): ``a = a0 + t * da`` as the kernels round it, and its error.
 
-    Three roundings, each at most half an ulp of a value no larger than |a0| + |da|,
-    give under 4 eps (|a0| + |da|); two subnormal steps cover underflow. A coordinate
-    that does not change (da == 0) is exact.
+    ``a + err`` is ``a0 + t * (da + da_err)`` (the point of the exact segment at t) up
+    to a rounding of `err` itself: Dekker's TwoProduct and Knuth's TwoSum recover the
+    two roundings, and `da_err` is that of the direction. Plain arithmetic, shared by
+    Numba (jitted below) and NumPy.
     """
-    return 0.0 if da == 0.0 else 8.881784197001252e-16 * (abs(a0) + abs(da)) + 1e-323
+    p = t * da  # TwoProduct(t, da)
+    c = _SPLITTER * t
+    th = c - (c - t)
+    tl = t - th
+    c = _SPLITTER * da
+    dh = c - (c - da)
+    dl = da - dh
+    p_err = (((th * dh - p) + th * dl) + tl * dh) + tl * dl
+    a = a0 + p  # TwoSum(a0, p)
+    v = a - a0
+    a_err = (a0 - (a - v)) + (p - v)
+    return a, a_err + p_err + t * da_err
+
+
+_interpolate_dd = scalar(interpolate_dd)
+
+
+@scalar
+def interpolation_margin(err):
+    """Return how far a rounded interpolated coordinate may be from the true one.
+
+    `err` is the error `interpolate_dd` found; it is itself rounded (a few ulps of a
+    tiny number), and a split overflow (|coordinates| beyond ~1e300) makes it NaN or
+    infinite: then the margin is infinite and the point is never trusted near an edge.
+    """
+    m = abs(err) * 1.0000000000000009 + 1e-323 if err != 0.0 else 0.0
+    return m if m < math.inf else math.inf
+
+
+@scalar
+def interpolated_point(x0, y0, dx, dx_err, dy, dy_err, t):
+    """Return (x, y, ex, ey): the rounded point at t and the margins of its coordinates."""
+    x, x_err = _interpolate_dd(x0, dx, dx_err, t)
+    y, y_err = _interpolate_dd(y0, dy, dy_err, t)
+    return x, y, interpolation_margin(x_err), interpolation_margin(y_err)
 
 
 @scalar
 def wide_outcode(x, y, ex, ey, xmin, ymin, xmax, ymax):
-    """Return the wide code of an interpolated point whose coordinates may be off by ex, ey."""
-    unsure = outcode(x, y, xmin + ex, ymin + ey, xmax - ex, ymax - ey)
-    sure = outcode(x, y, xmin - ex, ymin - ey, xmax + ex, ymax + ey)
+    """Return the wide code of an interpolated point whose coordinates may be off by ex, ey.
+
+    Distances to the edges are compared with the margins (rather than moving the edges
+    by them): a margin below an ulp of the edge coordinate would round away, while the
+    difference of two nearby numbers is exact.
+    """
+    dl = x - xmin
+    dr = xmax - x
+    db = y - ymin
+    dt = ymax - y
+    unsure = (dl < ex) * LEFT | (dr < ex) * RIGHT | (db < ey) * BOTTOM | (dt < ey) * TOP
+    sure = (-dl > ex) * LEFT | (-dr > ex) * RIGHT | (-db > ey) * BOTTOM | (-dt > ey) * TOP
     return unsure | (sure << SURE_SHIFT)
 
 
@@ -132,6 +175,7 @@ def line_coordinate_dd(e, a, b, da, da_err, db, db_err):
 
 
 _difference_dd = scalar(difference_dd)
+direction_error = _difference_dd
 _line_coordinate_dd = scalar(line_coordinate_dd)
 
 

@@ -35,7 +35,8 @@ from rnsca.kernels.outcode import (
     TOP,
     UNSURE_BITS,
     clamp,
-    interpolation_margin,
+    direction_error,
+    interpolated_point,
     is_piece,
     outcode,
     snap_into_window,
@@ -136,8 +137,8 @@ def rnsca_segment(x0, y0, x1, y1, xmin, ymin, xmax, ymax, n_fixed, max_depth, to
     stack_f[0, _XB] = x1
     stack_f[0, _YB] = y1
     # Children's ends are interpolated: classify them with wide codes (see outcode.py).
-    ex = interpolation_margin(x0, dx)
-    ey = interpolation_margin(y0, dy)
+    _, dx_err = direction_error(x1, x0)
+    _, dy_err = direction_error(y1, y0)
     stack_i[0, _CA] = wide(c0)
     stack_i[0, _CB] = wide(c1)
     stack_i[0, _LEVEL] = 0
@@ -164,8 +165,7 @@ def rnsca_segment(x0, y0, x1, y1, xmin, ymin, xmax, ymax, n_fixed, max_depth, to
                 t, x, y, c = tb, xb, yb, cb
             else:
                 t = ta + step * j / n
-                x = x0 + t * dx
-                y = y0 + t * dy
+                x, y, ex, ey = interpolated_point(x0, y0, dx, dx_err, dy, dy_err, t)
                 c = wide_outcode(x, y, ex, ey, xmin, ymin, xmax, ymax)
             st[C.EVALUATED] += 1
             if (pc | c) == 0:

@@ -201,29 +201,37 @@ def _wide(code: np.ndarray) -> np.ndarray:
     return code | (code << SURE_SHIFT)
 
 
-def _interpolated(s: _Segments, t) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Return (x, y, ex, ey): the rounded points at t and their margins (``interpolated_point``)."""
+def _interpolated(s: _Segments, t):
+    """Return (x, y, cx, mx, cy, my): rounded points at t, corrections, margins.
+
+    ``interpolated_point``: the true coordinate is the rounded one plus the correction,
+    to within the margin (the a-priori bound where the error terms overflowed).
+    """
     with np.errstate(all="ignore"):
         dx, dx_err = difference_dd(s.x1, s.x0)
         dy, dy_err = difference_dd(s.y1, s.y0)
         x, x_err = interpolate_dd(s.x0, dx, dx_err, t)
         y, y_err = interpolate_dd(s.y0, dy, dy_err, t)
-        margins = []
-        for err in (x_err, y_err):
-            m = np.where(err != 0.0, np.abs(err) * 1.0000000000000009 + 1e-323, 0.0)
-            margins.append(np.where(m < np.inf, m, np.inf))  # NaN: never trusted
-    return x, y, margins[0], margins[1]
+        out = [x, y]
+        for err, a0, da in ((x_err, s.x0, dx), (y_err, s.y0, dy)):
+            finite = np.isfinite(err)
+            a_priori = 8.881784197001252e-16 * np.abs(a0) + 8.881784197001252e-16 * np.abs(da)
+            margin = np.where(err != 0.0, np.abs(err) * 8.881784197001252e-16 + 1e-323, 0.0)
+            out += [np.where(finite, err, 0.0), np.where(finite, margin, a_priori + 1e-323)]
+    x, y, cx, mx, cy, my = out
+    return x, y, cx, mx, cy, my
 
 
 def _wide_outcode_at(s: _Segments, t, w: Window):
     """Return (x, y, wide code) of the points at t on segments `s` (``wide_outcode``)."""
-    x, y, ex, ey = _interpolated(s, t)
+    x, y, cx, mx, cy, my = _interpolated(s, t)
     with np.errstate(all="ignore"):
-        dl, dr, db, dt = x - w.xmin, w.xmax - x, y - w.ymin, w.ymax - y
-        unsure = ((dl < ex) * LEFT | (dr < ex) * RIGHT | (db < ey) * BOTTOM
-                  | (dt < ey) * TOP)
-        sure = ((-dl > ex) * LEFT | (-dr > ex) * RIGHT | (-db > ey) * BOTTOM
-                | (-dt > ey) * TOP)
+        dl, dr = (x - w.xmin) + cx, (w.xmax - x) - cx
+        db, dt = (y - w.ymin) + cy, (w.ymax - y) - cy
+        unsure = ((dl < mx) * LEFT | (dr < mx) * RIGHT | (db < my) * BOTTOM
+                  | (dt < my) * TOP)
+        sure = ((-dl > mx) * LEFT | (-dr > mx) * RIGHT | (-db > my) * BOTTOM
+                | (-dt > my) * TOP)
     return x, y, unsure | (sure << SURE_SHIFT)
 
 

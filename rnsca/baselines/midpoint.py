@@ -61,8 +61,8 @@ def _search(x0, y0, dx, dy, x1, y1, c0, c1, length, toward_end, max_depth, tol, 
     level = 0
     while level < max_depth and (b - a) * length > tol:
         m = a + (b - a) * 1 / 2
-        xm, ym, ex, ey = interpolated_point(x0, y0, dx, dx_err, dy, dy_err, m)
-        cm = wide_outcode(xm, ym, ex, ey, xmin, ymin, xmax, ymax)
+        xm, ym, cx, mx, cy, my = interpolated_point(x0, y0, dx, dx_err, dy, dy_err, m)
+        cm = wide_outcode(xm, ym, cx, mx, cy, my, xmin, ymin, xmax, ymax)
         level += 1
         st[C.EVALUATED] += 1
         # The half on the far side of the searched end: [m, b] for the exit, [a, m] for the entry.
@@ -93,8 +93,9 @@ def _search(x0, y0, dx, dy, x1, y1, c0, c1, length, toward_end, max_depth, tol, 
         lo = min(near_t, st_t)
         hi = max(near_t, st_t)
         h = lo + (hi - lo) * 1 / 2
-        hx, hy, ex, ey = interpolated_point(x0, y0, dx, dx_err, dy, dy_err, h)
-        found = (wide_outcode(hx, hy, ex, ey, xmin, ymin, xmax, ymax) & UNSURE_BITS) == 0
+        hx, hy, cx, mx, cy, my = interpolated_point(x0, y0, dx, dx_err, dy, dy_err, h)
+        found = (wide_outcode(hx, hy, cx, mx, cy, my, xmin, ymin, xmax, ymax)
+                 & UNSURE_BITS) == 0
     # In approx mode a near end within rounding of the boundary counts as visible (0).
     if toward_end:
         if exact or not (found and (ca >> SURE_SHIFT) == 0):

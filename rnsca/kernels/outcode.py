@@ -82,39 +82,45 @@ _interpolate_dd = scalar(interpolate_dd)
 
 
 @scalar
-def interpolation_margin(err):
-    """Return how far a rounded interpolated coordinate may be from the true one.
+def interpolation_margin(err, a0, da):
+    """Return (correction, margin) for a rounded interpolated coordinate.
 
-    `err` is the error `interpolate_dd` found; it is itself rounded (a few ulps of a
-    tiny number), and a split overflow (|coordinates| beyond ~1e300) makes it NaN or
-    infinite: then the margin is infinite and the point is never trusted near an edge.
+    The true coordinate is the rounded one plus `correction`, to within `margin`.
+    `err`, from `interpolate_dd`, is itself rounded (to an ulp of a tiny number). Where
+    its splitting overflowed (|coordinates| beyond ~1e300) it is not finite: then no
+    correction, and the a-priori bound of three roundings, 4 eps (|a0| + |da|).
     """
-    m = abs(err) * 1.0000000000000009 + 1e-323 if err != 0.0 else 0.0
-    return m if m < math.inf else math.inf
+    if not math.isfinite(err):
+        return 0.0, 8.881784197001252e-16 * abs(a0) + 8.881784197001252e-16 * abs(da) + 1e-323
+    return err, (abs(err) * 8.881784197001252e-16 + 1e-323 if err != 0.0 else 0.0)
 
 
 @scalar
 def interpolated_point(x0, y0, dx, dx_err, dy, dy_err, t):
-    """Return (x, y, ex, ey): the rounded point at t and the margins of its coordinates."""
+    """Return (x, y, cx, mx, cy, my): the rounded point at t, and for each coordinate
+    the correction to the true one and its margin (`interpolation_margin`).
+    """
     x, x_err = _interpolate_dd(x0, dx, dx_err, t)
     y, y_err = _interpolate_dd(y0, dy, dy_err, t)
-    return x, y, interpolation_margin(x_err), interpolation_margin(y_err)
+    cx, mx = interpolation_margin(x_err, x0, dx)
+    cy, my = interpolation_margin(y_err, y0, dy)
+    return x, y, cx, mx, cy, my
 
 
 @scalar
-def wide_outcode(x, y, ex, ey, xmin, ymin, xmax, ymax):
-    """Return the wide code of an interpolated point whose coordinates may be off by ex, ey.
+def wide_outcode(x, y, cx, mx, cy, my, xmin, ymin, xmax, ymax):
+    """Return the wide code of the true point (x + cx, y + cy), known to within mx, my.
 
-    Distances to the edges are compared with the margins (rather than moving the edges
-    by them): a margin below an ulp of the edge coordinate would round away, while the
-    difference of two nearby numbers is exact.
+    Distances to the edges are formed from the rounded point (exact near an edge, where
+    it matters) plus the correction, and compared with the margins: so a point is
+    unsure only when it lies within its own tiny residual error of an edge.
     """
-    dl = x - xmin
-    dr = xmax - x
-    db = y - ymin
-    dt = ymax - y
-    unsure = (dl < ex) * LEFT | (dr < ex) * RIGHT | (db < ey) * BOTTOM | (dt < ey) * TOP
-    sure = (-dl > ex) * LEFT | (-dr > ex) * RIGHT | (-db > ey) * BOTTOM | (-dt > ey) * TOP
+    dl = (x - xmin) + cx
+    dr = (xmax - x) - cx
+    db = (y - ymin) + cy
+    dt = (ymax - y) - cy
+    unsure = (dl < mx) * LEFT | (dr < mx) * RIGHT | (db < my) * BOTTOM | (dt < my) * TOP
+    sure = (-dl > mx) * LEFT | (-dr > mx) * RIGHT | (-db > my) * BOTTOM | (-dt > my) * TOP
     return unsure | (sure << SURE_SHIFT)
 
 

@@ -165,8 +165,8 @@ def rnsca_segment(x0, y0, x1, y1, xmin, ymin, xmax, ymax, n_fixed, max_depth, to
                 t, x, y, c = tb, xb, yb, cb
             else:
                 t = ta + step * j / n
-                x, y, ex, ey = interpolated_point(x0, y0, dx, dx_err, dy, dy_err, t)
-                c = wide_outcode(x, y, ex, ey, xmin, ymin, xmax, ymax)
+                x, y, cx, mx, cy, my = interpolated_point(x0, y0, dx, dx_err, dy, dy_err, t)
+                c = wide_outcode(x, y, cx, mx, cy, my, xmin, ymin, xmax, ymax)
             st[C.EVALUATED] += 1
             if (pc | c) == 0:
                 st[C.ACCEPTED] += 1

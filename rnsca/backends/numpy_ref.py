@@ -223,7 +223,10 @@ def _interpolated(s: _Segments, t):
 
 
 def _wide_outcode_at(s: _Segments, t, w: Window):
-    """Return (x, y, wide code) of the points at t on segments `s` (``wide_outcode``)."""
+    """Return (x, y, wide code) of the points at t on segments `s` (``wide_outcode``).
+
+    The coordinates returned are the corrected ones.
+    """
     x, y, cx, mx, cy, my = _interpolated(s, t)
     with np.errstate(all="ignore"):
         dl, dr = (x - w.xmin) + cx, (w.xmax - x) - cx
@@ -232,7 +235,8 @@ def _wide_outcode_at(s: _Segments, t, w: Window):
                   | (dt < my) * TOP)
         sure = ((-dl > mx) * LEFT | (-dr > mx) * RIGHT | (-db > my) * BOTTOM
                 | (-dt > my) * TOP)
-    return x, y, unsure | (sure << SURE_SHIFT)
+    # The corrected position, for output (as the kernels do).
+    return x + cx, y + cy, unsure | (sure << SURE_SHIFT)
 
 
 def _clamp(v: np.ndarray, low: float, high: float) -> np.ndarray:

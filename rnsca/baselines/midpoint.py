@@ -63,6 +63,8 @@ def _search(x0, y0, dx, dy, x1, y1, c0, c1, length, toward_end, max_depth, tol, 
         m = a + (b - a) * 1 / 2
         xm, ym, cx, mx, cy, my = interpolated_point(x0, y0, dx, dx_err, dy, dy_err, m)
         cm = wide_outcode(xm, ym, cx, mx, cy, my, xmin, ymin, xmax, ymax)
+        xm += cx  # the corrected position, for output
+        ym += cy
         level += 1
         st[C.EVALUATED] += 1
         # The half on the far side of the searched end: [m, b] for the exit, [a, m] for the entry.

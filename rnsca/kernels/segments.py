@@ -167,6 +167,9 @@ def rnsca_segment(x0, y0, x1, y1, xmin, ymin, xmax, ymax, n_fixed, max_depth, to
                 t = ta + step * j / n
                 x, y, cx, mx, cy, my = interpolated_point(x0, y0, dx, dx_err, dy, dy_err, t)
                 c = wide_outcode(x, y, cx, mx, cy, my, xmin, ymin, xmax, ymax)
+                # Ends of accepted pieces are output: give them the corrected position.
+                x += cx
+                y += cy
             st[C.EVALUATED] += 1
             if (pc | c) == 0:
                 st[C.ACCEPTED] += 1

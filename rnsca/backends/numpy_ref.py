@@ -216,7 +216,8 @@ def _interpolated(s: _Segments, t):
         for err, a0, da in ((x_err, s.x0, dx), (y_err, s.y0, dy)):
             finite = np.isfinite(err)
             a_priori = 8.881784197001252e-16 * np.abs(a0) + 8.881784197001252e-16 * np.abs(da)
-            margin = np.where(err != 0.0, np.abs(err) * 8.881784197001252e-16 + 1e-323, 0.0)
+            floor = np.where((da != 0.0) & (np.abs(da) < 1e-290), 1e-322, 0.0)
+            margin = np.abs(err) * 8.881784197001252e-16 + floor
             out += [np.where(finite, err, 0.0), np.where(finite, margin, a_priori + 1e-323)]
     x, y, cx, mx, cy, my = out
     return x, y, cx, mx, cy, my

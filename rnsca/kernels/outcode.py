@@ -92,13 +92,18 @@ def interpolation_margin(err, a0, da):
     """
     if not math.isfinite(err):
         return 0.0, 8.881784197001252e-16 * abs(a0) + 8.881784197001252e-16 * abs(da) + 1e-323
-    return err, (abs(err) * 8.881784197001252e-16 + 1e-323 if err != 0.0 else 0.0)
+    # Error terms of a direction below ~1e-290 can underflow into the subnormals, where
+    # they are no longer exact: allow a few subnormal steps there.
+    floor = 1e-322 if da != 0.0 and abs(da) < 1e-290 else 0.0
+    return err, abs(err) * 8.881784197001252e-16 + floor
 
 
 @scalar
 def interpolated_point(x0, y0, dx, dx_err, dy, dy_err, t):
-    """Return (x, y, cx, mx, cy, my): the rounded point at t, and for each coordinate
-    the correction to the true one and its margin (`interpolation_margin`).
+    """Return the rounded point at t with corrections and margins: (x, y, cx, mx, cy, my).
+
+    For each coordinate: the correction to the true one and its margin
+    (`interpolation_margin`).
     """
     x, x_err = _interpolate_dd(x0, dx, dx_err, t)
     y, y_err = _interpolate_dd(y0, dy, dy_err, t)

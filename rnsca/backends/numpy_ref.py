@@ -245,21 +245,47 @@ def _clamp(v: np.ndarray, low: float, high: float) -> np.ndarray:
     return np.where(v < low, low, np.where(v > high, high, v))
 
 
-def _line_coordinate(e, a0, b0, a1, b1) -> np.ndarray:
-    """Return the b of the line through (a0, b0), (a1, b1) where its a is e (``line_coordinate``).
-
-    Measured from the nearer end, in double-double (the kernels' own arithmetic), with
-    the plain formula where that overflows.
-    """
+def _line_coordinate_residual(e, a0, b0, a1, b1) -> tuple[np.ndarray, np.ndarray]:
+    """Return (b, residual) as ``line_coordinate_residual`` does."""
     near1 = np.abs(e - a1) < np.abs(e - a0)
     a = np.where(near1, a1, a0)
     b = np.where(near1, b1, b0)
     da, da_err = difference_dd(a1, a0)
     db, db_err = difference_dd(b1, b0)
     with np.errstate(all="ignore"):
-        precise = line_coordinate_dd(e, a, b, da, da_err, db, db_err)
+        precise, residual = line_coordinate_dd(e, a, b, da, da_err, db, db_err)
         plain = b + (e - a) / da * db
-    return np.where(np.isfinite(precise), precise, plain)
+    ok = np.isfinite(precise) & np.isfinite(residual)
+    return np.where(ok, precise, plain), np.where(ok, residual, 0.0)
+
+
+def _edge_point_code(s: _Segments, edge, w: Window):
+    """Return (x, y, code): `_edge_point` and the true point's outcode (``edge_point_code``)."""
+    shape = np.shape(edge)
+    x0, y0, x1, y1 = (np.broadcast_to(v, shape) for v in (s.x0, s.y0, s.x1, s.y1))
+    vertical = (edge == EDGE_LEFT) | (edge == EDGE_RIGHT)
+    xe = np.where(edge == EDGE_LEFT, w.xmin, w.xmax)
+    ye = np.where(edge == EDGE_BOTTOM, w.ymin, w.ymax)
+    yv, rv = _line_coordinate_residual(xe, x0, y0, x1, y1)
+    xh, rh = _line_coordinate_residual(ye, y0, x0, y1, x1)
+    x = np.where(vertical, xe, xh)
+    y = np.where(vertical, yv, ye)
+    cx = np.where(vertical, 0.0, rh)
+    cy = np.where(vertical, rv, 0.0)
+    with np.errstate(all="ignore"):
+        dl, dr = (x - w.xmin) + cx, (w.xmax - x) - cx
+        db, dt = (y - w.ymin) + cy, (w.ymax - y) - cy
+    code = (dl < 0) * LEFT | (dr < 0) * RIGHT | (db < 0) * BOTTOM | (dt < 0) * TOP
+    return x, y, code
+
+
+def _line_coordinate(e, a0, b0, a1, b1) -> np.ndarray:
+    """Return the b of the line through (a0, b0), (a1, b1) where its a is e (``line_coordinate``).
+
+    Measured from the nearer end, in double-double (the kernels' own arithmetic), with
+    the plain formula where that overflows.
+    """
+    return _line_coordinate_residual(e, a0, b0, a1, b1)[0]
 
 
 def _edge_point(s: _Segments, t, edge, w: Window) -> tuple[np.ndarray, np.ndarray]:
@@ -467,13 +493,13 @@ def _cohen_sutherland(s: _Segments, w: Window, options: SegmentOptions, st) -> _
         move_a = undecided & (ca != 0)
         move_b = undecided & (ca == 0)
         t, edge, bit = _edge_parameter(np.where(move_a, ca, cb), s, w)
-        x, y = _edge_point(s, t, edge, w)
+        x, y, c = _edge_point_code(s, edge, w)
         raise_t0 = move_a & (t > t0)
         t0, ax, ay = (np.where(raise_t0, new, old) for new, old in ((t, t0), (x, ax), (y, ay)))
-        ca = np.where(raise_t0, _outcode(ax, ay, *w.bounds), np.where(move_a, ca & ~bit, ca))
+        ca = np.where(raise_t0, c, np.where(move_a, ca & ~bit, ca))
         lower_t1 = move_b & (t < t1)
         t1, bx, by = (np.where(lower_t1, new, old) for new, old in ((t, t1), (x, bx), (y, by)))
-        cb = np.where(lower_t1, _outcode(bx, by, *w.bounds), np.where(move_b, cb & ~bit, cb))
+        cb = np.where(lower_t1, c, np.where(move_b, cb & ~bit, cb))
         undecided &= ~(t0 > t1)  # the moves crossed: nothing is left
     # Accepted segments keep a zero-length input. (The kernel proves that _MAX_MOVES
     # passes decide every segment; one still undecided would give no piece.)

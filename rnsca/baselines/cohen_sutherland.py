@@ -19,7 +19,7 @@ from rnsca.kernels.outcode import (
     LEFT,
     RIGHT,
     TOP,
-    edge_point,
+    edge_point_code,
     is_piece,
     outcode,
 )
@@ -70,17 +70,16 @@ def cohen_sutherland_segment(x0, y0, x1, y1, xmin, ymin, xmax, ymax, st):
             t, edge, bit = _edge_parameter(ca, x0, y0, dx, dy, xmin, ymin, xmax, ymax)
             if t > t0:
                 t0 = t
-                # The moved end is not clamped: the next outcode test must see it.
-                ax, ay = edge_point(x0, y0, x1, y1, edge, xmin, ymin, xmax, ymax)
-                ca = outcode(ax, ay, xmin, ymin, xmax, ymax)
+                # The moved end is not clamped: the next outcode test must see it, and
+                # sees the true point, not its rounding (see `edge_point_code`).
+                ax, ay, ca = edge_point_code(x0, y0, x1, y1, edge, xmin, ymin, xmax, ymax)
             else:
                 ca &= ~bit  # the end is already past this edge's crossing
         else:
             t, edge, bit = _edge_parameter(cb, x0, y0, dx, dy, xmin, ymin, xmax, ymax)
             if t < t1:
                 t1 = t
-                bx, by = edge_point(x0, y0, x1, y1, edge, xmin, ymin, xmax, ymax)
-                cb = outcode(bx, by, xmin, ymin, xmax, ymax)
+                bx, by, cb = edge_point_code(x0, y0, x1, y1, edge, xmin, ymin, xmax, ymax)
             else:
                 cb &= ~bit
         if t0 > t1:

@@ -157,8 +157,9 @@ def line_coordinate_dd(e, a, b, da, da_err, db, db_err):
     step here keeps its error term (Knuth's TwoSum, Dekker's TwoProduct). The parameter
     is formed first, so with the nearer end as base |t| <= 1/2 and no product underflows
     or overflows that the result would not. Plain arithmetic only, so this one function
-    serves Numba (jitted below) and NumPy arrays alike. Returns NaN when a split
-    overflows (magnitudes beyond ~1e300); callers then fall back to the plain formula.
+    serves Numba (jitted below) and NumPy arrays alike. Returns the rounded value and
+    its residual (true minus rounded); NaN when a split overflows (magnitudes beyond
+    ~1e300), and callers then fall back to the plain formula.
     """
     s = e - a  # TwoSum(e, -a), written out: the jitted copy may call no plain function
     v = s - e
@@ -182,7 +183,10 @@ def line_coordinate_dd(e, a, b, da, da_err, db, db_err):
     y = b + p  # TwoSum(b, p)
     v = y - b
     y_err = (b - (y - v)) + (p - v)
-    return y + (y_err + p_err)
+    e = y_err + p_err
+    z = y + e  # TwoSum(y, e): the rounded result and what rounding left out
+    v = z - y
+    return z, (y - (z - v)) + (e - v)
 
 
 _difference_dd = scalar(difference_dd)
@@ -191,20 +195,49 @@ _line_coordinate_dd = scalar(line_coordinate_dd)
 
 
 @scalar
-def line_coordinate(e, a0, b0, a1, b1):
-    """Return the b-coordinate of the line through (a0, b0), (a1, b1) where its a equals e.
+def line_coordinate_residual(e, a0, b0, a1, b1):
+    """Return (b, residual): the line's b-coordinate where its a equals e, and the rest.
 
-    Measured from the nearer end (so a cut at an end point returns that end exactly),
-    in double-double (`line_coordinate_dd`), falling back to plain arithmetic where
-    that overflows (coordinates beyond ~1e300).
+    The line runs through (a0, b0), (a1, b1); `b` is rounded and `residual` is the true
+    value minus `b`. Measured from the nearer end (so a cut at an end point returns that
+    end exactly), in double-double (`line_coordinate_dd`), falling back to plain
+    arithmetic (and a zero residual) where that overflows (coordinates beyond ~1e300).
     """
     near1 = abs(e - a1) < abs(e - a0)
     a = a1 if near1 else a0
     b = b1 if near1 else b0
     da, da_err = _difference_dd(a1, a0)
     db, db_err = _difference_dd(b1, b0)
-    precise = _line_coordinate_dd(e, a, b, da, da_err, db, db_err)
-    return precise if math.isfinite(precise) else b + (e - a) / da * db
+    precise, residual = _line_coordinate_dd(e, a, b, da, da_err, db, db_err)
+    if math.isfinite(precise) and math.isfinite(residual):
+        return precise, residual
+    return b + (e - a) / da * db, 0.0
+
+
+@scalar
+def line_coordinate(e, a0, b0, a1, b1):
+    """Return the b-coordinate of the line through (a0, b0), (a1, b1) where its a equals e.
+
+    Correctly rounded but for the rare double-double tie (see
+    `line_coordinate_residual`).
+    """
+    return line_coordinate_residual(e, a0, b0, a1, b1)[0]
+
+
+@scalar
+def edge_point_code(x0, y0, x1, y1, edge, xmin, ymin, xmax, ymax):
+    """Return (x, y, code): `edge_point` and the outcode of the true point it rounds.
+
+    A rounded cut point can land inside the window while the true one lies a fraction
+    of an ulp outside (a segment nearly parallel to an edge); its residual decides.
+    """
+    if edge == EDGE_LEFT or edge == EDGE_RIGHT:
+        x = xmin if edge == EDGE_LEFT else xmax
+        y, r = line_coordinate_residual(x, x0, y0, x1, y1)
+        return x, y, wide_outcode(x, y, 0.0, 0.0, r, 0.0, xmin, ymin, xmax, ymax) & UNSURE_BITS
+    y = ymin if edge == EDGE_BOTTOM else ymax
+    x, r = line_coordinate_residual(y, y0, x0, y1, x1)
+    return x, y, wide_outcode(x, y, r, 0.0, 0.0, 0.0, xmin, ymin, xmax, ymax) & UNSURE_BITS
 
 
 @scalar

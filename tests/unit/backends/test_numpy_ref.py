@@ -197,13 +197,14 @@ def test_every_piece_lies_in_the_closed_window():
 def test_equal_parameters_keep_the_end_the_depth_first_kernel_meets_first():
     # Two exact leaves meet at t = 0.28, a hair above the bottom edge: the left one's
     # clipped start is on the edge, (0.99, 0.0); the right one starts at the computed
-    # point (0.99, 1.1e-16). Both start the merged interval at t = 0.28. The Numba kernel
+    # point (0.99, 8.3e-17: the true position at that t, not its 1.1e-16 rounding).
+    # Both start the merged interval at t = 0.28. The Numba kernel
     # walks the subdivision tree depth first, rightmost child first, and keeps the first
     # of equal starts it meets: the right leaf's. Breadth first, the reference must
     # break the tie by the same walk order to give the same point.
     pieces, _, t, stats = clip([[0.5, -0.875, 2.25, 2.25]], window=Window(0.0, 0.0, 1.0, 1.0),
                                n=5, max_depth=3, tolerance=1e-9)
-    np.testing.assert_array_equal(pieces, [[0.99, 1.1102230246251565e-16,
-                                            1.0, 0.017857142857142794]])
+    np.testing.assert_array_equal(pieces, [[0.99, 8.326672684688674e-17,
+                                            1.0, 0.017857142857142856]])
     np.testing.assert_array_equal(t, [[0.28, 0.2857142857142857]])
     assert (stats.clipped, stats.deepest_level) == (2, 3)

@@ -19,7 +19,7 @@ lint: $(STAMP)
 # pure Python (NUMBA_DISABLE_JIT=1) so every kernel line also runs uncompiled.
 test: $(STAMP) lint
 	$(PY) -m pytest -n 2 -q
-	NUMBA_DISABLE_JIT=1 $(PY) -m pytest -q -p no:randomly tests/unit -k "not slow"
+	NUMBA_DISABLE_JIT=1 $(PY) -m pytest -n 2 -q tests/unit -k "not slow"
 
 bench: $(STAMP)
 	$(PY) -m benchmarks.run

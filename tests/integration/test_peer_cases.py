@@ -1,4 +1,4 @@
-"""Other projects' rectangle-clipping cases (``shared/peer-cases/*.jsonl``), as segments.
+"""Other projects' rectangle-clipping cases (``tests/data/peer-cases/*.jsonl``), as segments.
 
 Which records are used, and against what:
 
@@ -46,7 +46,9 @@ from rnsca import Method, Mode, clip_segments
 from rnsca.verify import approx_leaf_bound
 from tests.checks import assert_inside_window, lengths
 
-PEER_CASES = Path(__file__).resolve().parents[3] / "shared" / "peer-cases"
+# A copy of the workplace's shared/peer-cases (with its README: sources and licences), kept
+# in the repository so a clean checkout on any machine has it.
+PEER_CASES = Path(__file__).resolve().parents[1] / "data" / "peer-cases"
 TOLERANCE = 1e-9
 
 
@@ -126,7 +128,7 @@ def _allowed(record) -> float:
 def _fail_if_missing(record):
     if record == "missing":
         pytest.fail(f"no peer cases found: expected *.jsonl files in {PEER_CASES} "
-                    "(the shared/peer-cases directory next to the repository)")
+                    "(tests/data/peer-cases, copied from the workplace's shared/peer-cases)")
 
 
 @pytest.mark.parametrize("record", _records())

@@ -282,10 +282,17 @@ def _edge_point_code(s: _Segments, edge, w: Window):
 def _line_coordinate(e, a0, b0, a1, b1) -> np.ndarray:
     """Return the b of the line through (a0, b0), (a1, b1) where its a is e (``line_coordinate``).
 
-    Measured from the nearer end, in double-double (the kernels' own arithmetic), with
-    the plain formula where that overflows.
+    Measured from the nearer end: plainly where that is within a few ulps, else in
+    double-double (the kernels' own arithmetic).
     """
-    return _line_coordinate_residual(e, a0, b0, a1, b1)[0]
+    near1 = np.abs(e - a1) < np.abs(e - a0)
+    a = np.where(near1, a1, a0)
+    b = np.where(near1, b1, b0)
+    db = b1 - b0
+    with np.errstate(all="ignore"):
+        plain = b + (e - a) / (a1 - a0) * db
+    well_conditioned = (np.abs(b) + np.abs(db) <= 16.0 * np.abs(plain)) | (np.abs(db) < 1e-290)
+    return np.where(well_conditioned, plain, _line_coordinate_residual(e, a0, b0, a1, b1)[0])
 
 
 def _edge_point(s: _Segments, t, edge, w: Window) -> tuple[np.ndarray, np.ndarray]:

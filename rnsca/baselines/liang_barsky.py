@@ -24,9 +24,9 @@ from rnsca.kernels.outcode import (
     NO_EDGE,
     RIGHT,
     TOP,
+    edge_point,
     end_point,
     is_piece,
-    line_coordinate,
     snap_into_window,
 )
 
@@ -100,49 +100,45 @@ def liang_barsky_segment(x0, y0, x1, y1, xmin, ymin, xmax, ymax, st):
 
 
 @scalar
-def _cut(on, p, q, x_edge, edge_value, u0, ax, ay, u1, bx, by, x0, y0, x1, y1):
-    """Apply half-plane ``p t <= q`` when `on`, with selects instead of branches.
+def half_plane(bit, x0, y0, dx, dy, xmin, ymin, xmax, ymax):
+    """Return (p, q, edge) of the half-plane ``p t <= q`` of the edge with outcode `bit`."""
+    if bit == LEFT:
+        return -dx, x0 - xmin, EDGE_LEFT
+    if bit == RIGHT:
+        return dx, xmax - x0, EDGE_RIGHT
+    if bit == BOTTOM:
+        return -dy, y0 - ymin, EDGE_BOTTOM
+    return dy, ymax - y0, EDGE_TOP
 
-    A cut end lies on the edge line: its coordinate across the edge (x for a vertical
-    edge, ``x_edge``) is `edge_value` exactly, and the other one is `line_coordinate`.
+
+@scalar
+def leaf_cut(bit, flags, u0, e0, u1, e1, x0, y0, x1, y1, xmin, ymin, xmax, ymax):
+    """Apply the half-plane of edge `bit` to a leaf's [u0, u1] when `flags` has that bit.
+
+    Only parameters and the edge ids of the cut ends change, with selects instead of
+    branches (the hot loops vectorize); `leaf_end` then computes each end once.
     """
+    p, q, edge = half_plane(bit, x0, y0, x1 - x0, y1 - y0, xmin, ymin, xmax, ymax)
+    on = (flags & bit) != 0
     # Off (or parallel, which an ambiguous leaf never is on a flagged edge): divide by 1
     # so no infinity or NaN is formed; the result is not used.
     r = q / (p if on else 1.0)
     enter = on & (p < 0.0) & (r > u0)  # & rather than `and`: no short-circuit branches
     leave = on & (p > 0.0) & (r < u1)
-    other = line_coordinate(edge_value, x0, y0, x1, y1) if x_edge else \
-        line_coordinate(edge_value, y0, x0, y1, x1)
-    x = edge_value if x_edge else other
-    y = other if x_edge else edge_value
     u0 = r if enter else u0
-    ax = x if enter else ax
-    ay = y if enter else ay
+    e0 = edge if enter else e0
     u1 = r if leave else u1
-    bx = x if leave else bx
-    by = y if leave else by
-    return u0, ax, ay, u1, bx, by
+    e1 = edge if leave else e1
+    return u0, e0, u1, e1
 
 
 @scalar
-def half_plane(bit, x0, y0, dx, dy, xmin, ymin, xmax, ymax):
-    """Return (p, q, x_edge, edge_value) of the half-plane ``p t <= q`` of edge `bit`."""
-    if bit == LEFT:
-        return -dx, x0 - xmin, True, xmin
-    if bit == RIGHT:
-        return dx, xmax - x0, True, xmax
-    if bit == BOTTOM:
-        return -dy, y0 - ymin, False, ymin
-    return dy, ymax - y0, False, ymax
-
-
-@scalar
-def leaf_cut(bit, flags, u0, ax, ay, u1, bx, by, x0, y0, x1, y1, xmin, ymin, xmax, ymax):
-    """Apply the half-plane of edge `bit` to a leaf when `flags` has that bit."""
-    p, q, x_edge, edge_value = half_plane(bit, x0, y0, x1 - x0, y1 - y0,
-                                          xmin, ymin, xmax, ymax)
-    return _cut((flags & bit) != 0, p, q, x_edge, edge_value, u0, ax, ay, u1, bx, by,
-                x0, y0, x1, y1)
+def leaf_end(x0, y0, x1, y1, edge, px, py, xmin, ymin, xmax, ymax):
+    """Return a leaf end: on `edge` (`edge_point`) if cut, else (px, py); snapped inside."""
+    x, y = px, py
+    if edge != NO_EDGE:
+        x, y = edge_point(x0, y0, x1, y1, edge, xmin, ymin, xmax, ymax)
+    return snap_into_window(x, y, x0, y0, x1, y1, xmin, ymin, xmax, ymax)
 
 
 @scalar
@@ -160,10 +156,10 @@ def liang_barsky_leaf(x0, y0, x1, y1, ta, tb, xa, ya, xb, yb, flags, xmin, ymin,
     (`divisions`). A cut end takes the edge's coordinate exactly and the other one
     interpolated and clamped into the window. Branch-free, for the hot loop.
     """
-    u0, ax, ay, u1, bx, by = ta, xa, ya, tb, xb, yb
+    u0, e0, u1, e1 = ta, NO_EDGE, tb, NO_EDGE
     for bit in (LEFT, RIGHT, BOTTOM, TOP):
-        u0, ax, ay, u1, bx, by = leaf_cut(bit, flags, u0, ax, ay, u1, bx, by, x0, y0, x1, y1,
-                                          xmin, ymin, xmax, ymax)
-    ax, ay = snap_into_window(ax, ay, x0, y0, x1, y1, xmin, ymin, xmax, ymax)
-    bx, by = snap_into_window(bx, by, x0, y0, x1, y1, xmin, ymin, xmax, ymax)
+        u0, e0, u1, e1 = leaf_cut(bit, flags, u0, e0, u1, e1, x0, y0, x1, y1,
+                                  xmin, ymin, xmax, ymax)
+    ax, ay = leaf_end(x0, y0, x1, y1, e0, xa, ya, xmin, ymin, xmax, ymax)
+    bx, by = leaf_end(x0, y0, x1, y1, e1, xb, yb, xmin, ymin, xmax, ymax)
     return u0 <= u1, u0, ax, ay, u1, bx, by, count_divisions(flags)

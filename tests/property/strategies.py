@@ -23,9 +23,9 @@ touching one kept), which breaks the 1e-9 promise past ~1e7 windows (see README,
 
 One documented limitation is left out: a segment whose direction has a non-zero
 component that is subnormal or below 2**-500 (~3e-151) of the window's size (e.g. from
-an edge at 0 to one ulp beside it). There the cut point itself is not representable to the promise's precision and
-rounding flushes its residual, so the result may include or miss a sub-ulp sliver (see
-README, "Limits").
+an edge at 0 to one ulp beside it). There the cut point itself is not representable to
+the promise's precision and rounding flushes its residual, so the result may include or
+miss a sub-ulp sliver (see README, "Limits").
 """
 
 from __future__ import annotations

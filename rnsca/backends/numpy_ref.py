@@ -340,9 +340,8 @@ def _end_point(s: _Segments, t, edge, px, py, w: Window) -> tuple[np.ndarray, np
     edge's line back along the segment onto the window's boundary.
     """
     x, y = _edge_point(s, t, edge, w)
-    x, y = _snap_into_window(x, y, s, w)
     cut = edge != NO_EDGE
-    return np.where(cut, x, px), np.where(cut, y, py)
+    return _snap_into_window(np.where(cut, x, px), np.where(cut, y, py), s, w)
 
 
 def _is_piece(degenerate, t0, t1, ax, ay, bx, by) -> np.ndarray:

@@ -24,10 +24,8 @@ from rnsca.kernels.outcode import (
     NO_EDGE,
     RIGHT,
     TOP,
-    edge_point,
     end_point,
     is_piece,
-    snap_into_window,
 )
 
 
@@ -116,7 +114,7 @@ def leaf_cut(bit, flags, u0, e0, u1, e1, x0, y0, x1, y1, xmin, ymin, xmax, ymax)
     """Apply the half-plane of edge `bit` to a leaf's [u0, u1] when `flags` has that bit.
 
     Only parameters and the edge ids of the cut ends change, with selects instead of
-    branches (the hot loops vectorize); `leaf_end` then computes each end once.
+    branches (the hot loops vectorize); `end_point` then computes each end once.
     """
     p, q, edge = half_plane(bit, x0, y0, x1 - x0, y1 - y0, xmin, ymin, xmax, ymax)
     on = (flags & bit) != 0
@@ -130,15 +128,6 @@ def leaf_cut(bit, flags, u0, e0, u1, e1, x0, y0, x1, y1, xmin, ymin, xmax, ymax)
     u1 = r if leave else u1
     e1 = edge if leave else e1
     return u0, e0, u1, e1
-
-
-@scalar
-def leaf_end(x0, y0, x1, y1, edge, px, py, xmin, ymin, xmax, ymax):
-    """Return a leaf end: on `edge` (`edge_point`) if cut, else (px, py); snapped inside."""
-    x, y = px, py
-    if edge != NO_EDGE:
-        x, y = edge_point(x0, y0, x1, y1, edge, xmin, ymin, xmax, ymax)
-    return snap_into_window(x, y, x0, y0, x1, y1, xmin, ymin, xmax, ymax)
 
 
 @scalar
@@ -160,6 +149,6 @@ def liang_barsky_leaf(x0, y0, x1, y1, ta, tb, xa, ya, xb, yb, flags, xmin, ymin,
     for bit in (LEFT, RIGHT, BOTTOM, TOP):
         u0, e0, u1, e1 = leaf_cut(bit, flags, u0, e0, u1, e1, x0, y0, x1, y1,
                                   xmin, ymin, xmax, ymax)
-    ax, ay = leaf_end(x0, y0, x1, y1, e0, xa, ya, xmin, ymin, xmax, ymax)
-    bx, by = leaf_end(x0, y0, x1, y1, e1, xb, yb, xmin, ymin, xmax, ymax)
+    ax, ay = end_point(x0, y0, x1, y1, e0, xa, ya, xmin, ymin, xmax, ymax)
+    bx, by = end_point(x0, y0, x1, y1, e1, xb, yb, xmin, ymin, xmax, ymax)
     return u0 <= u1, u0, ax, ay, u1, bx, by, count_divisions(flags)

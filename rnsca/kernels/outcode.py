@@ -290,14 +290,15 @@ def snap_into_window(x, y, x0, y0, x1, y1, xmin, ymin, xmax, ymax):
 
 @scalar
 def end_point(x0, y0, x1, y1, edge, px, py, xmin, ymin, xmax, ymax):
-    """Return the coordinates of a piece end.
+    """Return the coordinates of a piece end, inside the window.
 
-    An end not cut by an edge (``edge == NO_EDGE``) is the known point (px, py). An end
-    cut by an edge is `edge_point`, moved into the window by `snap_into_window`.
+    An end not cut by an edge (``edge == NO_EDGE``) is the known point (px, py); an end
+    cut by an edge is `edge_point`. Either is then moved into the window by
+    `snap_into_window` (a no-op for a known point inside it).
     """
-    if edge == NO_EDGE:
-        return px, py
-    x, y = edge_point(x0, y0, x1, y1, edge, xmin, ymin, xmax, ymax)
+    x, y = px, py
+    if edge != NO_EDGE:
+        x, y = edge_point(x0, y0, x1, y1, edge, xmin, ymin, xmax, ymax)
     return snap_into_window(x, y, x0, y0, x1, y1, xmin, ymin, xmax, ymax)
 
 

@@ -20,7 +20,6 @@ from rnsca.baselines.cohen_sutherland import cohen_sutherland_segment
 from rnsca.baselines.liang_barsky import (
     count_divisions,
     leaf_cut,
-    leaf_end,
     liang_barsky_leaf,
     liang_barsky_segment,
 )
@@ -38,6 +37,7 @@ from rnsca.kernels.outcode import (
     UNSURE_BITS,
     clamp,
     direction_error,
+    end_point,
     interpolated_point,
     is_piece,
     outcode,
@@ -221,12 +221,11 @@ def rnsca_segment(x0, y0, x1, y1, xmin, ymin, xmax, ymax, n_fixed, max_depth, to
 
 
 @scalar
-def clip_one(method, x0, y0, x1, y1, xmin, ymin, xmax, ymax, n_fixed, max_depth, tol,
-             auto_piece, exact, st, stack_f, stack_i):
-    """Clip one segment with the method of id `method`; return (keep, t0, t1, ax, ay, bx, by)."""
-    if method == RNSCA:
-        return rnsca_segment(x0, y0, x1, y1, xmin, ymin, xmax, ymax, n_fixed, max_depth, tol,
-                             auto_piece, exact, st, stack_f, stack_i)
+def clip_one(method, x0, y0, x1, y1, xmin, ymin, xmax, ymax, max_depth, tol, exact, st):
+    """Clip one segment with the baseline of id `method`; return (keep, t0, t1, ax, ay, bx, by).
+
+    RNSCA is not here: it runs block-wise (`_rnsca_block`).
+    """
     if method == COHEN_SUTHERLAND:
         return cohen_sutherland_segment(x0, y0, x1, y1, xmin, ymin, xmax, ymax, st)
     if method == LIANG_BARSKY:
@@ -323,10 +322,10 @@ def _rnsca_block(segments, first, last, xmin, ymin, xmax, ymax, n_fixed, max_dep
     keep = np.empty(size, dtype=np.bool_)
     for j in range(size):
         # Each end once: a cut end is computed in double-double here, not per edge.
-        ax[j], ay[j] = leaf_end(x0[j], y0[j], x1[j], y1[j], e0[j], x0[j], y0[j],
-                                xmin, ymin, xmax, ymax)
-        bx[j], by[j] = leaf_end(x0[j], y0[j], x1[j], y1[j], e1[j], x1[j], y1[j],
-                                xmin, ymin, xmax, ymax)
+        ax[j], ay[j] = end_point(x0[j], y0[j], x1[j], y1[j], e0[j], x0[j], y0[j],
+                                 xmin, ymin, xmax, ymax)
+        bx[j], by[j] = end_point(x0[j], y0[j], x1[j], y1[j], e1[j], x1[j], y1[j],
+                                 xmin, ymin, xmax, ymax)
         keep[j] = (u0[j] <= u1[j]) & (not rejected[j]) & (exact | (not ambiguous[j])) & is_piece(
             (x0[j] == x1[j]) & (y0[j] == y1[j]), u0[j], u1[j], ax[j], ay[j], bx[j], by[j])
     # Deeper levels, for the few segments that need them.
@@ -368,13 +367,10 @@ def _clip_block(blk, segments, xmin, ymin, xmax, ymax, method, n_fixed, max_dept
                          max_depth, tol, auto_piece, exact, st, write, k,
                          out_segments, out_source, out_t)
     else:
-        stack_f = np.empty((STACK_CAPACITY, 6), dtype=np.float64)
-        stack_i = np.empty((STACK_CAPACITY, 3), dtype=np.int64)
         for i in range(first, last):
             keep, t0, t1, ax, ay, bx, by = clip_one(
                 method, segments[i, 0], segments[i, 1], segments[i, 2], segments[i, 3],
-                xmin, ymin, xmax, ymax, n_fixed, max_depth, tol, auto_piece, exact,
-                st, stack_f, stack_i)
+                xmin, ymin, xmax, ymax, max_depth, tol, exact, st)
             if keep:
                 if write:
                     _write_piece(out_segments, out_source, out_t, k, i, t0, t1,

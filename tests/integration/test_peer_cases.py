@@ -1,4 +1,4 @@
-"""Other projects' rectangle-clipping cases (``tests/data/peer-cases/*.jsonl``), as segments.
+"""Other projects' rectangle-clipping cases (``tests/data/peer/*.jsonl``), as segments.
 
 Which records are used, and against what:
 
@@ -16,13 +16,13 @@ Which records are used, and against what:
   is an area. The invalid (self-intersecting) geojson-vt ring and the degenerate ring of
   GEOSClipByRectTest-14 are fine as linework.
 - **Point records** (kind "point": POINT and MULTIPOINT input, empty ones included) are
-  left out: they have no segments. Clipping points, and polygon areas as areas, comes
-  with a later issue.
+  left out: they have no segments. Every record, points and polygon areas included, is
+  clipped as a whole geometry in ``tests/integration/test_peer_geometry.py``.
 
 That makes 188 of the 200 records: 45 line, 141 polygon, 2 empty collections.
 
-The comparison follows the peer-cases README: both empty, or Hausdorff distance (with
-``densify=0.01``) within 1e-9 and total length equal within ``1e-9 * max(1, length)``,
+The comparison follows ``tests/data/peer/README.md``: both empty, or Hausdorff distance
+(with ``densify=0.01``) within 1e-9 and total length equal within ``1e-9 * max(1, length)``,
 except that the distance bound is rnsca's own promise, ``1e-9 * max(1, window size)``:
 GEOS-RectangleIntersectionTest-208 has coordinates of 2e7, whose ulp (3.7e-9) is already
 more than 1e-9.
@@ -48,7 +48,7 @@ from tests.checks import assert_inside_window, lengths
 
 # A copy of the workplace's shared/peer-cases (with its README: sources and licences), kept
 # in the repository so a clean checkout on any machine has it.
-PEER_CASES = Path(__file__).resolve().parents[1] / "data" / "peer-cases"
+PEER_CASES = Path(__file__).resolve().parents[1] / "data" / "peer"
 TOLERANCE = 1e-9
 
 
@@ -128,7 +128,7 @@ def _allowed(record) -> float:
 def _fail_if_missing(record):
     if record == "missing":
         pytest.fail(f"no peer cases found: expected *.jsonl files in {PEER_CASES} "
-                    "(tests/data/peer-cases, copied from the workplace's shared/peer-cases)")
+                    "(tests/data/peer, copied from the workplace's shared/peer-cases)")
 
 
 @pytest.mark.parametrize("record", _records())

@@ -3,6 +3,7 @@
 The public API lives here; see README.md for a tour.
 """
 
+from rnsca.arrays import GeometryKind, Ragged
 from rnsca.clip import SegmentClipResult, clip_segments
 from rnsca.errors import (
     BackendUnavailableError,
@@ -14,7 +15,8 @@ from rnsca.errors import (
     RnscaError,
     UnsupportedGeometryError,
 )
-from rnsca.options import Backend, Method, Mode
+from rnsca.options import Backend, Boundary, Method, Mode
+from rnsca.ragged import RaggedClipResult, clip_ragged
 from rnsca.stats import ClipStats
 from rnsca.verify import Verification, verify
 from rnsca.window import Window
@@ -24,7 +26,9 @@ __version__ = "0.1.0"
 __all__ = [
     "Backend",
     "BackendUnavailableError",
+    "Boundary",
     "ClipStats",
+    "GeometryKind",
     "InvalidGeometryError",
     "InvalidOptionError",
     "InvalidWindowError",
@@ -32,11 +36,14 @@ __all__ = [
     "Method",
     "Mode",
     "ParseError",
+    "Ragged",
+    "RaggedClipResult",
     "RnscaError",
     "SegmentClipResult",
     "UnsupportedGeometryError",
     "Verification",
     "Window",
+    "clip_ragged",
     "clip_segments",
     "verify",
 ]

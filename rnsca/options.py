@@ -9,7 +9,8 @@ from enum import Enum
 from rnsca.errors import InvalidOptionError
 from rnsca.window import Window
 
-__all__ = ["Method", "Mode", "Backend", "SegmentOptions", "N_MIN", "N_MAX", "MAX_DEPTH_LIMIT"]
+__all__ = ["Method", "Mode", "Backend", "Boundary", "SegmentOptions", "N_MIN", "N_MAX",
+           "MAX_DEPTH_LIMIT"]
 
 N_MIN = 2
 N_MAX = 64
@@ -65,6 +66,15 @@ class Backend(_ChoiceEnum):
     """Numba-compiled, parallel over blocks of primitives (default)."""
     NUMPY = "numpy"
     """Vectorized NumPy reference; slow, written to be read, used as a second opinion."""
+
+
+class Boundary(_ChoiceEnum):
+    """Whether parts lying on the window's edge belong to the clip (lines and points)."""
+
+    CLOSED = "closed"
+    """Keep them, as ``shapely.intersection`` does (the window is a closed set)."""
+    INTERIOR = "interior"
+    """Drop parts that only run along or touch the edge, as GEOS ``clip_by_rect`` does."""
 
 
 @dataclass(frozen=True, slots=True)

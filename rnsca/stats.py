@@ -48,6 +48,24 @@ class ClipStats:
         Deepest subdivision level any fragment reached (0: the whole segment).
     decided_per_level : tuple of int
         Fragments decided (accepted, rejected, clipped or dropped) at each level 0..32.
+    geometries_in, geometries_out : int
+        Input geometries, and output geometries that are not empty (geometry clips).
+    vertices_in, vertices_out : int
+        Input and output coordinates (geometry clips).
+    runs_evaluated, runs_accepted, runs_rejected, runs_subdivided, runs_segmented : int
+        Runs of a line or ring whose bounding box was classified; those copied whole,
+        skipped whole, split into N runs, and clipped segment by segment.
+    runs_deepest_level : int
+        Deepest run level reached (0: whole parts and rings).
+    runs_decided_per_level : tuple of int
+        Runs decided (accepted, rejected or segmented) at each run level 0..32 (deeper
+        levels count in the last).
+    segments_decided_per_level : tuple of int
+        Segments decided by the run decided at each run level: pruning at level 0 or 1
+        means whole parts were accepted or rejected in one bounding-box test.
+    invalid_polygons : int
+        Polygons whose cut rings could not be closed consistently (invalid input:
+        self-intersecting or with stray holes); clipped ring by ring, not repaired.
     """
 
     segments_in: int
@@ -61,6 +79,19 @@ class ClipStats:
     intersections: int
     deepest_level: int
     decided_per_level: tuple[int, ...]
+    geometries_in: int = 0
+    geometries_out: int = 0
+    vertices_in: int = 0
+    vertices_out: int = 0
+    runs_evaluated: int = 0
+    runs_accepted: int = 0
+    runs_rejected: int = 0
+    runs_subdivided: int = 0
+    runs_segmented: int = 0
+    runs_deepest_level: int = 0
+    runs_decided_per_level: tuple[int, ...] = (0,) * C.N_LEVELS
+    segments_decided_per_level: tuple[int, ...] = (0,) * C.N_LEVELS
+    invalid_polygons: int = 0
 
     @property
     def decided_shallow_fraction(self) -> float:
@@ -69,8 +100,12 @@ class ClipStats:
         return 1.0 if total == 0 else sum(self.decided_per_level[:2]) / total
 
     @classmethod
-    def from_counters(cls, rows: np.ndarray, segments_in: int, pieces_out: int) -> ClipStats:
-        """Return the stats of per-block counter rows, shape (blocks, counters.WIDTH)."""
+    def from_counters(cls, rows: np.ndarray, segments_in: int, pieces_out: int,
+                      **geometry) -> ClipStats:
+        """Return the stats of per-block counter rows, shape (blocks, counters.WIDTH).
+
+        `geometry` holds the counts only the caller knows (``geometries_in``, ...).
+        """
         rows = np.asarray(rows, dtype=np.int64).reshape(-1, C.WIDTH)
         total = rows.sum(axis=0)
         deepest = int(rows[:, C.DEEPEST].max()) if rows.shape[0] else 0
@@ -86,11 +121,25 @@ class ClipStats:
             intersections=int(total[C.INTERSECTIONS]),
             deepest_level=deepest,
             decided_per_level=tuple(int(v) for v in total[C.LEVELS:C.LEVELS + C.N_LEVELS]),
+            runs_evaluated=int(total[C.RUNS_EVALUATED]),
+            runs_accepted=int(total[C.RUNS_ACCEPTED]),
+            runs_rejected=int(total[C.RUNS_REJECTED]),
+            runs_subdivided=int(total[C.RUNS_SUBDIVIDED]),
+            runs_segmented=int(total[C.RUNS_SEGMENTED]),
+            runs_deepest_level=int(rows[:, C.RUN_DEEPEST].max()) if rows.shape[0] else 0,
+            runs_decided_per_level=tuple(
+                int(v) for v in total[C.RUN_LEVELS:C.RUN_LEVELS + C.N_LEVELS]),
+            segments_decided_per_level=tuple(
+                int(v) for v in total[C.SEGMENT_LEVELS:C.SEGMENT_LEVELS + C.N_LEVELS]),
+            invalid_polygons=int(total[C.INVALID_POLYGONS]),
+            **geometry,
         )
 
     def to_dict(self) -> dict:
         """Return the stats as plain JSON-ready values, with the shallow fraction."""
         out = asdict(self)
-        out["decided_per_level"] = list(self.decided_per_level)
+        for name in ("decided_per_level", "runs_decided_per_level",
+                     "segments_decided_per_level"):
+            out[name] = list(out[name])
         out["decided_shallow_fraction"] = self.decided_shallow_fraction
         return out

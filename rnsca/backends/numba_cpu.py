@@ -5,6 +5,8 @@ from __future__ import annotations
 import numpy as np
 
 from rnsca.kernels import counters as C
+from rnsca.kernels import polygons as PG
+from rnsca.kernels import polylines as PL
 from rnsca.kernels import segments as K
 from rnsca.options import Backend, Method, Mode, SegmentOptions
 from rnsca.stats import ClipStats
@@ -55,6 +57,93 @@ class NumbaBackend:
                               np.empty(n_blocks, dtype=np.int64), np.zeros_like(counters))
         return pieces, source, t, ClipStats.from_counters(counters, n, m)
 
+    def clip_lines(self, xy, z, part_offsets, part_window, windows, options: SegmentOptions,
+                   drop_edge_runs: bool):
+        """Return ``(xy, z, chain_offsets, chains_per_part, counters)``.
+
+        See `ClipBackend.clip_lines`; count (bound), prefix sum, write, compact.
+        """
+        n_parts = part_offsets.shape[0] - 1
+        has_z = z.shape[0] > 0
+        block = _block_size(n_parts)
+        n_blocks = max(1, -(-n_parts // block))
+        counters = np.zeros((n_blocks, C.WIDTH), dtype=np.int64)
+        bound_v = np.empty(n_parts, dtype=np.int64)
+        bound_c = np.empty(n_parts, dtype=np.int64)
+        args = (xy, z, has_z, part_offsets, part_window, windows, _METHOD_ID[options.method],
+                options.n, options.max_depth, options.tolerance, options.auto_piece,
+                options.mode is Mode.EXACT, drop_edge_runs, block)
+        nothing_f = np.empty((0, 2))
+        nothing_i = np.empty(0, dtype=np.int64)
+        PL.clip_line_blocks(*args, False, nothing_i, nothing_i, nothing_f, np.empty(0),
+                            nothing_i, bound_v, bound_c, counters)
+        vertex_slot = _exclusive_sum(bound_v)
+        chain_slot = _exclusive_sum(bound_c)
+        slot_xy = np.empty((int(vertex_slot[-1]), 2))
+        slot_z = np.empty(int(vertex_slot[-1]) if has_z else 0)
+        slot_starts = np.empty(int(chain_slot[-1]), dtype=np.int64)
+        n_vertices = np.empty(n_parts, dtype=np.int64)
+        n_chains = np.empty(n_parts, dtype=np.int64)
+        PL.clip_line_blocks(*args, True, vertex_slot, chain_slot, slot_xy, slot_z, slot_starts,
+                            n_vertices, n_chains, counters)
+        vertex_start = _exclusive_sum(n_vertices)
+        chain_start = _exclusive_sum(n_chains)
+        out_xy = np.empty((int(vertex_start[-1]), 2))
+        out_z = np.empty(int(vertex_start[-1]) if has_z else 0)
+        chain_offsets = np.empty(int(chain_start[-1]) + 1, dtype=np.int64)
+        chain_offsets[-1] = out_xy.shape[0]
+        PL.compact_lines(vertex_slot, chain_slot, n_vertices, n_chains, slot_xy, slot_z, has_z,
+                         slot_starts, vertex_start, chain_start, out_xy, out_z, chain_offsets)
+        return out_xy, out_z, chain_offsets, n_chains, counters
+
+    def clip_polygons(self, xy, z, ring_offsets, polygon_offsets, polygon_window, windows,
+                      options: SegmentOptions):
+        """Return ``(xy, z, ring_offsets, rings_per_output, outputs_per_polygon, counters)``.
+
+        See `ClipBackend.clip_polygons`; bound, prefix sum, write, compact.
+        """
+        n_polygons = polygon_offsets.shape[0] - 1
+        has_z = z.shape[0] > 0
+        block = _block_size(n_polygons)
+        n_blocks = max(1, -(-n_polygons // block))
+        counters = np.zeros((n_blocks, C.WIDTH), dtype=np.int64)
+        bound_v = np.empty(n_polygons, dtype=np.int64)
+        bound_r = np.empty(n_polygons, dtype=np.int64)
+        bound_p = np.empty(n_polygons, dtype=np.int64)
+        scratch_v = np.empty(n_polygons, dtype=np.int64)
+        scratch_c = np.empty(n_polygons, dtype=np.int64)
+        args = (xy, z, has_z, ring_offsets, polygon_offsets, polygon_window, windows,
+                _METHOD_ID[options.method], options.n, options.max_depth, options.tolerance,
+                options.auto_piece, True, block)
+        nothing_i = np.empty(0, dtype=np.int64)
+        PG.clip_polygon_blocks(*args, False, nothing_i, nothing_i, np.empty((0, 2)),
+                               np.empty(0), nothing_i, nothing_i, bound_v, bound_r, bound_p,
+                               scratch_v, scratch_c, counters)
+        vertex_slot = _exclusive_sum(bound_v)
+        ring_slot = _exclusive_sum(bound_r)
+        slot_xy = np.empty((int(vertex_slot[-1]), 2))
+        slot_z = np.empty(int(vertex_slot[-1]) if has_z else 0)
+        slot_rings = np.empty(int(ring_slot[-1]), dtype=np.int64)
+        slot_poly_rings = np.empty(int(ring_slot[-1]), dtype=np.int64)
+        n_vertices = np.empty(n_polygons, dtype=np.int64)
+        n_rings = np.empty(n_polygons, dtype=np.int64)
+        n_polys = np.empty(n_polygons, dtype=np.int64)
+        PG.clip_polygon_blocks(*args, True, vertex_slot, ring_slot, slot_xy, slot_z, slot_rings,
+                               slot_poly_rings, n_vertices, n_rings, n_polys, scratch_v,
+                               scratch_c, counters)
+        vertex_start = _exclusive_sum(n_vertices)
+        ring_start = _exclusive_sum(n_rings)
+        poly_start = _exclusive_sum(n_polys)
+        out_xy = np.empty((int(vertex_start[-1]), 2))
+        out_z = np.empty(int(vertex_start[-1]) if has_z else 0)
+        out_rings = np.empty(int(ring_start[-1]) + 1, dtype=np.int64)
+        out_rings[-1] = out_xy.shape[0]
+        out_poly_rings = np.empty(int(poly_start[-1]), dtype=np.int64)
+        PG.compact_polygons(vertex_slot, ring_slot, n_vertices, n_rings, n_polys, slot_xy,
+                            slot_z, has_z, slot_rings, slot_poly_rings, vertex_start, ring_start,
+                            poly_start, out_xy, out_z, out_rings, out_poly_rings)
+        return out_xy, out_z, out_rings, out_poly_rings, n_polys, counters
+
     def warm_up(self) -> None:
         """Compile (or load from the cache) the kernels, so the first real call is fast."""
         window = Window(0.0, 0.0, 1.0, 1.0)
@@ -62,3 +151,15 @@ class NumbaBackend:
             segments = np.tile([[-1.0, 0.5, 2.0, 0.5]], (n, 1))
             for method in Method:
                 self.clip_segments(segments, window, SegmentOptions.resolve(window, method=method))
+
+
+def _block_size(n_items: int) -> int:
+    """Return items per prange block: about 64 blocks for load balance, 1..1024 items each."""
+    return max(1, min(1024, -(-n_items // 64)))
+
+
+def _exclusive_sum(counts: np.ndarray) -> np.ndarray:
+    """Return the exclusive prefix sum of `counts`, with the total appended."""
+    out = np.zeros(counts.shape[0] + 1, dtype=np.int64)
+    np.cumsum(counts, out=out[1:])
+    return out

@@ -1,0 +1,257 @@
+"""Ragged geometry arrays: flat coordinates plus offsets, the layout of GeoArrow.
+
+This is the layout ``shapely.to_ragged_array`` returns: ``coords`` (n, 2) or (n, 3),
+and int offset arrays innermost level first. For a polygon with a hole::
+
+    coords  = [shell: 0..4, hole: 5..9]        ring_offsets    = [0, 5, 10]
+                                               geometry_offsets = [0, 2]   (rings per polygon)
+
+`Ragged` validates that layout once; the clipping functions take its levels apart into
+the three shapes the kernels know: points, lines (parts) and polygons (rings).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from enum import Enum
+
+import numpy as np
+import shapely
+
+from rnsca.errors import InvalidGeometryError, UnsupportedGeometryError
+
+__all__ = ["GeometryKind", "Ragged", "OUTPUT_KIND"]
+
+
+class GeometryKind(str, Enum):
+    """A geometry type of a ragged array (names as Shapely and GeoJSON spell them)."""
+
+    POINT = "Point"
+    LINESTRING = "LineString"
+    POLYGON = "Polygon"
+    MULTIPOINT = "MultiPoint"
+    MULTILINESTRING = "MultiLineString"
+    MULTIPOLYGON = "MultiPolygon"
+
+    @classmethod
+    def of(cls, value) -> GeometryKind:
+        """Return the kind for a `GeometryKind`, a ``shapely.GeometryType`` or a name.
+
+        Names are case-insensitive (``"linestring"``, ``"MULTIPOLYGON"``).
+
+        Raises
+        ------
+        UnsupportedGeometryError
+            For a geometry collection, a linear ring or anything else.
+        """
+        if isinstance(value, cls):
+            return value
+        if isinstance(value, shapely.GeometryType):
+            value = value.name
+        if isinstance(value, str):
+            for member in cls:
+                if member.name == value.upper():
+                    return member
+        choices = ", ".join(m.value for m in cls)
+        raise UnsupportedGeometryError(f"geometry type must be one of {choices}, got {value!r}")
+
+    @property
+    def shapely_type(self) -> shapely.GeometryType:
+        """Return the matching ``shapely.GeometryType``."""
+        return shapely.GeometryType[self.name]
+
+    @property
+    def depth(self) -> int:
+        """Return how many offset arrays the kind has."""
+        return _DEPTH[self]
+
+    @property
+    def dimension(self) -> int:
+        """Return 0 for points, 1 for lines, 2 for polygons."""
+        return _DIMENSION[self]
+
+
+_DEPTH = {GeometryKind.POINT: 0, GeometryKind.LINESTRING: 1, GeometryKind.POLYGON: 2,
+          GeometryKind.MULTIPOINT: 1, GeometryKind.MULTILINESTRING: 2,
+          GeometryKind.MULTIPOLYGON: 3}
+_DIMENSION = {GeometryKind.POINT: 0, GeometryKind.LINESTRING: 1, GeometryKind.POLYGON: 2,
+              GeometryKind.MULTIPOINT: 0, GeometryKind.MULTILINESTRING: 1,
+              GeometryKind.MULTIPOLYGON: 2}
+
+#: What clipping one geometry of a kind can give: a line leaving and re-entering the
+#: window becomes two parts, a concave polygon several polygons.
+OUTPUT_KIND = {
+    GeometryKind.POINT: GeometryKind.POINT,
+    GeometryKind.LINESTRING: GeometryKind.MULTILINESTRING,
+    GeometryKind.POLYGON: GeometryKind.MULTIPOLYGON,
+    GeometryKind.MULTIPOINT: GeometryKind.MULTIPOINT,
+    GeometryKind.MULTILINESTRING: GeometryKind.MULTILINESTRING,
+    GeometryKind.MULTIPOLYGON: GeometryKind.MULTIPOLYGON,
+}
+
+
+def _offsets(array, name: str, length: int) -> np.ndarray:
+    """Return `array` as int64 offsets into a level of `length` items, or raise."""
+    try:
+        out = np.asarray(array)
+    except (TypeError, ValueError):
+        raise InvalidGeometryError(f"{name} must be an integer array") from None
+    if out.ndim != 1 or out.dtype.kind not in "iu" or out.shape[0] < 1:
+        raise InvalidGeometryError(
+            f"{name} must be a non-empty 1-d integer array, got shape {out.shape} "
+            f"of {out.dtype}")
+    out = np.ascontiguousarray(out, dtype=np.int64)
+    if out[0] != 0 or out[-1] != length:
+        raise InvalidGeometryError(
+            f"{name} must start at 0 and end at {length} (the length of the level below), "
+            f"got {out[0]} and {out[-1]}")
+    steps = np.diff(out)
+    if (steps < 0).any():
+        at = int(np.argmax(steps < 0))
+        raise InvalidGeometryError(f"{name} decreases at index {at + 1}")
+    return out
+
+
+@dataclass(frozen=True, slots=True)
+class Ragged:
+    """A validated ragged geometry array.
+
+    Attributes
+    ----------
+    kind : GeometryKind
+    coords : ndarray of float64, shape (n, 2) or (n, 3)
+        C-contiguous; finite (an all-NaN row is an empty POINT, as Shapely writes it).
+    offsets : tuple of ndarray of int64
+        Innermost level first, ``kind.depth`` arrays.
+    """
+
+    kind: GeometryKind
+    coords: np.ndarray
+    offsets: tuple
+
+    @classmethod
+    def of(cls, geometry_type, coords, offsets) -> Ragged:
+        """Return a validated `Ragged` from the triple ``shapely.to_ragged_array`` gives.
+
+        Raises
+        ------
+        InvalidGeometryError
+            Wrong shapes or dtypes, offsets that do not nest, rings not closed or of
+            fewer than four positions, lines of one position, or a non-finite
+            coordinate; the message names the geometry index.
+        UnsupportedGeometryError
+            For a geometry type that is not one of `GeometryKind`.
+        """
+        kind = GeometryKind.of(geometry_type)
+        try:
+            xy = np.asarray(coords)
+        except (TypeError, ValueError):
+            raise InvalidGeometryError("coords must be a numeric (n, 2) or (n, 3) array") \
+                from None
+        if xy.ndim != 2 or xy.shape[1] not in (2, 3) or xy.dtype.kind not in "iuf":
+            raise InvalidGeometryError(
+                f"coords must be a numeric (n, 2) or (n, 3) array, got shape {xy.shape} "
+                f"of {xy.dtype}")
+        xy = np.ascontiguousarray(xy, dtype=np.float64)
+        if not isinstance(offsets, (tuple, list)) or len(offsets) != kind.depth:
+            got = len(offsets) if isinstance(offsets, (tuple, list)) else type(offsets).__name__
+            raise InvalidGeometryError(
+                f"{kind.value} needs {kind.depth} offset arrays (innermost first), got {got}")
+        levels = []
+        length = xy.shape[0]
+        for depth, array in enumerate(offsets):
+            level = _offsets(array, f"offsets[{depth}]", length)
+            levels.append(level)
+            length = level.shape[0] - 1
+        ragged = cls(kind, xy, tuple(levels))
+        ragged._check_coordinates()
+        ragged._check_shapes()
+        return ragged
+
+    @classmethod
+    def from_shapely(cls, geometries, include_z: bool | None = None) -> Ragged:
+        """Return the ragged array of a Shapely geometry array (one geometry type).
+
+        Raises
+        ------
+        UnsupportedGeometryError
+            For mixed types, collections or non-geometries.
+        """
+        try:
+            kind, coords, offsets = shapely.to_ragged_array(geometries, include_z=include_z)
+        except (ValueError, TypeError) as exc:
+            raise UnsupportedGeometryError(f"cannot take these geometries apart: {exc}") \
+                from None
+        return cls.of(kind, coords, offsets)
+
+    @property
+    def count(self) -> int:
+        """Return the number of geometries."""
+        if self.kind.depth == 0:
+            return self.coords.shape[0]
+        return self.offsets[-1].shape[0] - 1
+
+    @property
+    def has_z(self) -> bool:
+        """Return whether coordinates carry Z."""
+        return self.coords.shape[1] == 3
+
+    def to_shapely(self) -> np.ndarray:
+        """Return the geometries as a Shapely array."""
+        return shapely.from_ragged_array(self.kind.shapely_type, self.coords, self.offsets)
+
+    def geometry_of_coordinate(self, index: int) -> int:
+        """Return the index of the geometry that holds coordinate row `index`."""
+        g = index
+        for level in self.offsets:
+            g = int(np.searchsorted(level, g, side="right")) - 1
+        return g
+
+    def _check_coordinates(self) -> None:
+        finite = np.isfinite(self.coords)
+        if finite.all():
+            return
+        rows = ~finite.all(axis=1)
+        if self.kind is GeometryKind.POINT:
+            rows &= ~np.isnan(self.coords).all(axis=1)  # an empty point
+            if not rows.any():
+                return
+        bad = int(np.argmax(rows))
+        raise InvalidGeometryError(
+            f"geometry {self.geometry_of_coordinate(bad)} has a non-finite coordinate "
+            f"(coords[{bad}] = {self.coords[bad].tolist()})")
+
+    def _check_shapes(self) -> None:
+        if self.kind.dimension == 0:
+            return
+        inner = self.offsets[0]
+        sizes = np.diff(inner)
+        if self.kind.dimension == 1:
+            short = (sizes == 1)
+            if short.any():
+                part = int(np.argmax(short))
+                raise InvalidGeometryError(
+                    f"geometry {self._geometry_of_level(0, part)}: line part {part} has one "
+                    f"position; a line needs at least two")
+            return
+        short = (sizes > 0) & (sizes < 4)
+        if short.any():
+            ring = int(np.argmax(short))
+            raise InvalidGeometryError(
+                f"geometry {self._geometry_of_level(0, ring)}: ring {ring} has "
+                f"{int(sizes[ring])} positions; a ring needs at least four")
+        used = sizes > 0
+        heads = self.coords[inner[:-1][used], :2]
+        tails = self.coords[inner[1:][used] - 1, :2]
+        open_rings = (heads != tails).any(axis=1)
+        if open_rings.any():
+            ring = int(np.flatnonzero(used)[np.argmax(open_rings)])
+            raise InvalidGeometryError(
+                f"geometry {self._geometry_of_level(0, ring)}: ring {ring} is not closed "
+                f"(its first and last positions differ)")
+
+    def _geometry_of_level(self, depth: int, index: int) -> int:
+        g = index
+        for level in self.offsets[depth + 1:]:
+            g = int(np.searchsorted(level, g, side="right")) - 1
+        return g

@@ -1,0 +1,332 @@
+"""RNSCA on runs of vertices: clip lines and rings into chains of visible vertices.
+
+A line (or ring) is a run of consecutive segments. RNSCA's idea applied to runs: give a
+run the Cohen–Sutherland outcodes of its bounding box's two corners. Both zero: the run
+lies in the window and is copied whole. The codes share a bit: the whole run lies
+beyond one edge and is skipped. Otherwise the run is ambiguous: split it into N runs of
+equal vertex count and recurse, until a run is short enough (`RUN_LEAF_SEGMENTS`) to be
+clipped segment by segment by the segment core (`rnsca_segment`, or a baseline). Long
+lines that lie mostly inside or mostly outside are decided in a few bounding boxes.
+
+The visible pieces are joined into *chains*: a piece continues the current chain when
+it starts exactly where the chain ends, at the shared input vertex; a cut end (a
+crossing) ends the chain. Chains therefore come out in input order and direction.
+
+With ``drop_edge_runs`` a piece lying along a window edge is not visible: that is the
+``boundary="interior"`` rule for lines, and how rings are cut for polygon clipping
+(a ring that runs along the window's edge is broken there; `polygons.py` closes the
+chains by walking the boundary).
+
+Stacks are explicit (no recursion), so the logic ports to OpenCL.
+"""
+
+import numpy as np
+from numba import prange
+
+from rnsca.kernels import counters as C
+from rnsca.kernels.jit import parallel, scalar
+from rnsca.kernels.outcode import outcode
+from rnsca.kernels.segments import (
+    RNSCA,
+    STACK_CAPACITY,
+    clip_one,
+    rnsca_segment,
+)
+
+__all__ = [
+    "RUN_LEAF_SEGMENTS",
+    "RUN_STACK_CAPACITY",
+    "RUN_N_AUTO",
+    "bound_chains",
+    "clip_chains",
+    "clip_line_blocks",
+    "compact_lines",
+]
+
+# Runs of at most this many segments are clipped segment by segment: below it, a
+# bounding box costs about as much as the segments' own outcode tests.
+RUN_LEAF_SEGMENTS = 16
+# ``n="auto"`` for runs: a bounding box pass costs the same whatever N is, so a larger
+# N decides more of the run per pass; 16 keeps the stack and the per-child overhead small.
+RUN_N_AUTO = 16
+# Depth-first: at most N - 1 pending siblings per level, and a run of 2**63 vertices
+# split in two (the smallest N) is down to a leaf within 63 levels.
+RUN_STACK_CAPACITY = 64 * 64
+
+
+@scalar
+def _edge_bits(x, y, xmin, ymin, xmax, ymax):
+    """Return which window edge lines the point lies on (LEFT, RIGHT, BOTTOM, TOP bits)."""
+    return ((x == xmin) * 1) | ((x == xmax) * 2) | ((y == ymin) * 4) | ((y == ymax) * 8)
+
+
+@scalar
+def on_one_edge(ax, ay, bx, by, xmin, ymin, xmax, ymax):
+    """Return whether the segment (a, b) of the closed window lies along one of its edges."""
+    return (_edge_bits(ax, ay, xmin, ymin, xmax, ymax)
+            & _edge_bits(bx, by, xmin, ymin, xmax, ymax)) != 0
+
+
+@scalar
+def bound_chains(xy, first, last, xmin, ymin, xmax, ymax):
+    """Return upper bounds (vertices, chains, crossings) for clipping ``xy[first..last]``.
+
+    A vertex inside the closed window is output at most once; a segment that is neither
+    inside nor beyond one edge (ambiguous) adds at most two cut points and one chain; a
+    segment along an edge may break a chain (``drop_edge_runs``). Crossings (ambiguous
+    segments plus segments along an edge) bound the chains' ends for polygon assembly.
+    One branch-free pass, so the write pass can be given a slot without a counting pass
+    that repeats the clipping.
+    """
+    vertices = 0
+    crossings = 0
+    cp = outcode(xy[first, 0], xy[first, 1], xmin, ymin, xmax, ymax)
+    bp = _edge_bits(xy[first, 0], xy[first, 1], xmin, ymin, xmax, ymax)
+    vertices += cp == 0
+    for i in range(first + 1, last + 1):
+        c = outcode(xy[i, 0], xy[i, 1], xmin, ymin, xmax, ymax)
+        b = _edge_bits(xy[i, 0], xy[i, 1], xmin, ymin, xmax, ymax)
+        vertices += c == 0
+        ambiguous = ((cp | c) != 0) & ((cp & c) == 0)
+        along = ((cp | c) == 0) & ((bp & b) != 0)
+        crossings += ambiguous | along
+        cp = c
+        bp = b
+    return vertices + 2 * crossings, crossings + 1, crossings
+
+
+@scalar
+def _append(out_xy, out_z, has_z, v, x, y, z):
+    out_xy[v, 0] = x
+    out_xy[v, 1] = y
+    if has_z:
+        out_z[v] = z
+    return v + 1
+
+
+@scalar
+def _emit_piece(xy, z, has_z, i, t0, t1, ax, ay, bx, by, out_xy, out_z, out_starts,
+                v, c, last_v):
+    """Add the piece [t0, t1] of segment i to the chains; return (v, c, last_v)."""
+    if not (last_v == i and ax == xy[i, 0] and ay == xy[i, 1]):
+        out_starts[c] = v
+        c += 1
+        za = 0.0
+        if has_z:
+            za = z[i] if t0 == 0.0 else z[i] + t0 * (z[i + 1] - z[i])
+        v = _append(out_xy, out_z, has_z, v, ax, ay, za)
+    end_is_vertex = bx == xy[i + 1, 0] and by == xy[i + 1, 1]
+    zb = 0.0
+    if has_z:
+        zb = z[i + 1] if end_is_vertex else z[i] + t1 * (z[i + 1] - z[i])
+    v = _append(out_xy, out_z, has_z, v, bx, by, zb)
+    return v, c, (i + 1) if end_is_vertex else -1
+
+
+@scalar
+def _emit_run(xy, z, has_z, a, b, out_xy, out_z, out_starts, v, c, last_v):
+    """Add the whole run of vertices a..b (inside the window); return (v, c, last_v)."""
+    start = a + 1
+    if last_v != a:
+        out_starts[c] = v
+        c += 1
+        start = a
+    for k in range(start, b + 1):
+        out_xy[v, 0] = xy[k, 0]
+        out_xy[v, 1] = xy[k, 1]
+        if has_z:
+            out_z[v] = z[k]
+        v += 1
+    return v, c, b
+
+
+@scalar
+def _clip_segments(xy, z, has_z, a, b, xmin, ymin, xmax, ymax, method, n_fixed, max_depth,
+                   tol, auto_piece, exact, drop_edge_runs, out_xy, out_z, out_starts,
+                   v, c, last_v, st, stack_f, stack_i):
+    """Clip segments a..b-1 one by one into the chains; return (v, c, last_v)."""
+    for i in range(a, b):
+        x0 = xy[i, 0]
+        y0 = xy[i, 1]
+        x1 = xy[i + 1, 0]
+        y1 = xy[i + 1, 1]
+        if method == RNSCA:
+            keep, t0, t1, ax, ay, bx, by = rnsca_segment(
+                x0, y0, x1, y1, xmin, ymin, xmax, ymax, n_fixed, max_depth, tol, auto_piece,
+                exact, st, stack_f, stack_i)
+        else:
+            keep, t0, t1, ax, ay, bx, by = clip_one(
+                method, x0, y0, x1, y1, xmin, ymin, xmax, ymax, max_depth, tol, exact, st)
+        if keep and not (drop_edge_runs and on_one_edge(ax, ay, bx, by, xmin, ymin, xmax, ymax)):
+            v, c, last_v = _emit_piece(xy, z, has_z, i, t0, t1, ax, ay, bx, by,
+                                       out_xy, out_z, out_starts, v, c, last_v)
+    return v, c, last_v
+
+
+@scalar
+def _run_box_codes(xy, a, b, xmin, ymin, xmax, ymax):
+    """Return the outcodes of the bounding box corners of vertices a..b, and strictness.
+
+    The third value says whether the box lies strictly inside the window (no vertex on
+    an edge line), which ``drop_edge_runs`` needs before accepting a run whole.
+    """
+    lo_x = xy[a, 0]
+    hi_x = lo_x
+    lo_y = xy[a, 1]
+    hi_y = lo_y
+    for k in range(a + 1, b + 1):
+        x = xy[k, 0]
+        y = xy[k, 1]
+        lo_x = min(lo_x, x)
+        hi_x = max(hi_x, x)
+        lo_y = min(lo_y, y)
+        hi_y = max(hi_y, y)
+    strict = (lo_x > xmin) & (hi_x < xmax) & (lo_y > ymin) & (hi_y < ymax)
+    return (outcode(lo_x, lo_y, xmin, ymin, xmax, ymax),
+            outcode(hi_x, hi_y, xmin, ymin, xmax, ymax), strict)
+
+
+@scalar
+def _level_slot(level):
+    return C.N_LEVELS - 1 if level >= C.N_LEVELS else level
+
+
+@scalar
+def clip_chains(xy, z, has_z, first, last, xmin, ymin, xmax, ymax, method, n_fixed, max_depth,
+                tol, auto_piece, exact, drop_edge_runs, out_xy, out_z, out_starts, v, c, st,
+                run_stack, stack_f, stack_i):
+    """Clip the line through vertices ``xy[first..last]`` into chains.
+
+    Writes the chains' vertices from ``out_xy[v]`` (and ``out_z``) on, and the start of
+    each chain at ``out_starts[c]`` on; the caller guarantees room (`bound_chains`).
+    Returns ``(v, c, starts_at_first, ends_at_last)``: the next free positions, whether
+    the first chain starts at vertex `first` itself and whether the last ends at vertex
+    `last` (a ring's chains across its closing vertex join there).
+
+    Runs are pruned only for ``method == RNSCA``; the baselines clip every segment.
+    """
+    c_begin = c
+    last_v = -1
+    if last <= first:
+        return v, c, False, False
+    if method != RNSCA:
+        v, c, last_v = _clip_segments(xy, z, has_z, first, last, xmin, ymin, xmax, ymax,
+                                      method, n_fixed, max_depth, tol, auto_piece, exact,
+                                      drop_edge_runs, out_xy, out_z, out_starts, v, c, last_v,
+                                      st, stack_f, stack_i)
+    else:
+        n_runs = n_fixed if n_fixed > 0 else RUN_N_AUTO
+        run_stack[0, 0] = first
+        run_stack[0, 1] = last
+        run_stack[0, 2] = 0
+        sp = 1
+        while sp > 0:
+            sp -= 1
+            a = run_stack[sp, 0]
+            b = run_stack[sp, 1]
+            level = run_stack[sp, 2]
+            slot = _level_slot(level)
+            if level > st[C.RUN_DEEPEST]:
+                st[C.RUN_DEEPEST] = level
+            st[C.RUNS_EVALUATED] += 1
+            lo, hi, strict = _run_box_codes(xy, a, b, xmin, ymin, xmax, ymax)
+            if (lo | hi) == 0 and (strict or not drop_edge_runs):
+                st[C.RUNS_ACCEPTED] += 1
+                st[C.RUN_LEVELS + slot] += 1
+                st[C.SEGMENT_LEVELS + slot] += b - a
+                v, c, last_v = _emit_run(xy, z, has_z, a, b, out_xy, out_z, out_starts,
+                                         v, c, last_v)
+            elif lo & hi:
+                st[C.RUNS_REJECTED] += 1
+                st[C.RUN_LEVELS + slot] += 1
+                st[C.SEGMENT_LEVELS + slot] += b - a
+            elif b - a <= RUN_LEAF_SEGMENTS or sp + n_runs > RUN_STACK_CAPACITY:
+                st[C.RUNS_SEGMENTED] += 1
+                st[C.RUN_LEVELS + slot] += 1
+                st[C.SEGMENT_LEVELS + slot] += b - a
+                v, c, last_v = _clip_segments(xy, z, has_z, a, b, xmin, ymin, xmax, ymax,
+                                              method, n_fixed, max_depth, tol, auto_piece,
+                                              exact, drop_edge_runs, out_xy, out_z,
+                                              out_starts, v, c, last_v, st, stack_f, stack_i)
+            else:
+                st[C.RUNS_SUBDIVIDED] += 1
+                # Children cover the segments a..b-1 in n (or fewer) runs of nearly equal
+                # length, pushed last first so they pop in input order.
+                k = min(n_runs, b - a)
+                for j in range(k, 0, -1):
+                    run_stack[sp, 0] = a + (b - a) * (j - 1) // k
+                    run_stack[sp, 1] = a + (b - a) * j // k
+                    run_stack[sp, 2] = level + 1
+                    sp += 1
+    if c == c_begin:
+        return v, c, False, False
+    starts_at_first = out_xy[out_starts[c_begin], 0] == xy[first, 0] and \
+        out_xy[out_starts[c_begin], 1] == xy[first, 1]
+    return v, c, starts_at_first, last_v == last
+
+
+@parallel
+def clip_line_blocks(xy, z, has_z, part_offsets, part_window, windows, method, n_fixed,
+                     max_depth, tol, auto_piece, exact, drop_edge_runs, block_size, write,
+                     vertex_slot, chain_slot, out_xy, out_z, out_starts, n_vertices, n_chains,
+                     counters):
+    """Bound (``write=False``) or clip (``write=True``) every part of a ragged line array.
+
+    Part ``p`` is ``xy[part_offsets[p]:part_offsets[p+1]]``, clipped against
+    ``windows[part_window[p]]``. The bound pass fills `n_vertices`, `n_chains` with
+    `bound_chains`; the write pass writes part p's chains from ``vertex_slot[p]`` and
+    ``chain_slot[p]`` on (exclusive sums of the bounds) and replaces the bounds with the
+    actual counts. One counter row per block.
+    """
+    n_parts = part_offsets.shape[0] - 1
+    n_blocks = counters.shape[0]
+    for blk in prange(n_blocks):
+        st = counters[blk]
+        run_stack = np.empty((RUN_STACK_CAPACITY, 3), dtype=np.int64)
+        stack_f = np.empty((STACK_CAPACITY, 6), dtype=np.float64)
+        stack_i = np.empty((STACK_CAPACITY, 3), dtype=np.int64)
+        for p in range(blk * block_size, min(n_parts, (blk + 1) * block_size)):
+            first = part_offsets[p]
+            last = part_offsets[p + 1] - 1
+            w = part_window[p]
+            xmin = windows[w, 0]
+            ymin = windows[w, 1]
+            xmax = windows[w, 2]
+            ymax = windows[w, 3]
+            if not write:
+                if last <= first:
+                    n_vertices[p] = 0
+                    n_chains[p] = 0
+                else:
+                    nv, nc, _ = bound_chains(xy, first, last, xmin, ymin, xmax, ymax)
+                    n_vertices[p] = nv
+                    n_chains[p] = nc
+                continue
+            v0 = vertex_slot[p]
+            c0 = chain_slot[p]
+            v, c, _, _ = clip_chains(xy, z, has_z, first, last, xmin, ymin, xmax, ymax, method,
+                                     n_fixed, max_depth, tol, auto_piece, exact, drop_edge_runs,
+                                     out_xy, out_z, out_starts, v0, c0, st, run_stack,
+                                     stack_f, stack_i)
+            n_vertices[p] = v - v0
+            n_chains[p] = c - c0
+
+
+@parallel
+def compact_lines(vertex_slot, chain_slot, n_vertices, n_chains, slot_xy, slot_z, has_z,
+                  slot_starts, vertex_start, chain_start, out_xy, out_z, out_offsets):
+    """Copy each part's chains from its slot to its final place, closing the gaps.
+
+    `vertex_start` and `chain_start` are exclusive sums of the actual counts; chain
+    offsets are rebased from slot positions to final positions.
+    """
+    for p in prange(n_vertices.shape[0]):
+        src = vertex_slot[p]
+        dst = vertex_start[p]
+        for k in range(n_vertices[p]):
+            out_xy[dst + k, 0] = slot_xy[src + k, 0]
+            out_xy[dst + k, 1] = slot_xy[src + k, 1]
+            if has_z:
+                out_z[dst + k] = slot_z[src + k]
+        for k in range(n_chains[p]):
+            out_offsets[chain_start[p] + k] = slot_starts[chain_slot[p] + k] - src + dst

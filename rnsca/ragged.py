@@ -1,0 +1,322 @@
+"""Clip ragged geometry arrays: take the levels apart, run the kernels, put them back.
+
+Every kind comes down to one of three kernels: points (a mask), lines (each part cut
+into chains, `kernels/polylines.py`) and polygons (rings cut and closed along the
+window, `kernels/polygons.py`). The kernels see parts, rings and polygons with the
+index of their window; this module maps geometries onto those and the results back
+onto geometries, with `source` saying which input each output geometry came from.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import shapely
+
+from rnsca.arrays import GeometryKind, Ragged
+from rnsca.backends.registry import get_backend
+from rnsca.errors import BackendUnavailableError, InvalidOptionError, InvalidWindowError
+from rnsca.kernels import counters as C
+from rnsca.options import Backend, Boundary, Mode, SegmentOptions
+from rnsca.stats import ClipStats
+from rnsca.window import Window
+
+__all__ = ["RaggedClipResult", "clip_ragged", "window_table"]
+
+
+@dataclass(frozen=True, slots=True)
+class RaggedClipResult:
+    """Clipped geometries as a ragged array, with where each came from.
+
+    Attributes
+    ----------
+    geometry_type : shapely.GeometryType
+        The output kind: as the input, except that LINESTRING and POLYGON become
+        MULTILINESTRING and MULTIPOLYGON when some geometry is cut into several parts.
+    coords : ndarray of float64, shape (m, 2) or (m, 3)
+    offsets : tuple of ndarray of int64
+        Innermost level first, as ``shapely.from_ragged_array`` takes them.
+    source : ndarray of int64
+        Index of the input geometry of each output geometry (increasing).
+    stats : ClipStats
+    """
+
+    geometry_type: shapely.GeometryType
+    coords: np.ndarray
+    offsets: tuple
+    source: np.ndarray
+    stats: ClipStats
+
+    def __len__(self) -> int:
+        return self.source.shape[0]
+
+    def __iter__(self):
+        """Unpack as ``geometry_type, coords, offsets, source, stats``."""
+        return iter((self.geometry_type, self.coords, self.offsets, self.source, self.stats))
+
+    def to_shapely(self) -> np.ndarray:
+        """Return the output geometries as a Shapely array."""
+        return shapely.from_ragged_array(self.geometry_type, self.coords, self.offsets)
+
+
+def window_table(window, count: int) -> tuple[np.ndarray, np.ndarray]:
+    """Return ``(windows (w, 4), index (count,))``: the window of each of `count` geometries.
+
+    `window` is a `Window`, four bounds, or an array of shape (count, 4) with one window
+    per geometry.
+
+    Raises
+    ------
+    InvalidWindowError
+        For a bound that is not finite, ``min >= max``, or a window array of the wrong
+        length; the message names the row.
+    """
+    if isinstance(window, Window):
+        single = window
+    else:
+        try:
+            array = np.asarray(window, dtype=np.float64)
+        except (TypeError, ValueError):
+            raise InvalidWindowError(
+                f"window must be [xmin, ymin, xmax, ymax] or an (n, 4) array, got {window!r}"
+            ) from None
+        if array.ndim == 2:
+            if array.shape != (count, 4):
+                raise InvalidWindowError(
+                    f"a window array needs one row [xmin, ymin, xmax, ymax] per geometry: "
+                    f"shape ({count}, 4), got {array.shape}")
+            good = (np.isfinite(array).all(axis=1) & (array[:, 0] < array[:, 2])
+                    & (array[:, 1] < array[:, 3])
+                    & np.isfinite(array[:, 2] - array[:, 0])
+                    & np.isfinite(array[:, 3] - array[:, 1]))
+            if not good.all():
+                row = int(np.argmax(~good))
+                try:
+                    Window(*array[row])
+                except InvalidWindowError as exc:
+                    raise InvalidWindowError(f"window {row}: {exc}") from None
+            return np.ascontiguousarray(array), np.arange(count, dtype=np.int64)
+        single = Window.of(window)
+    table = np.array([[single.xmin, single.ymin, single.xmax, single.ymax]])
+    return table, np.zeros(count, dtype=np.int64)
+
+
+def _reference_window(windows: np.ndarray) -> Window:
+    """Return the window whose size sets default tolerances: the smallest one."""
+    if windows.shape[0] == 0:
+        return Window(0.0, 0.0, 1.0, 1.0)
+    size = np.maximum(windows[:, 2] - windows[:, 0], windows[:, 3] - windows[:, 1])
+    return Window(*windows[int(np.argmin(size))])
+
+
+def _group(counts_per_item: np.ndarray, item_offsets: np.ndarray) -> np.ndarray:
+    """Return offsets of outputs per group, where group g owns items item_offsets[g]..[g+1]."""
+    cumulative = np.zeros(counts_per_item.shape[0] + 1, dtype=np.int64)
+    np.cumsum(counts_per_item, out=cumulative[1:])
+    return cumulative[item_offsets]
+
+
+def _with_z(xy: np.ndarray, z: np.ndarray, has_z: bool) -> np.ndarray:
+    if not has_z:
+        return xy
+    return np.ascontiguousarray(np.column_stack([xy, z]))
+
+
+def clip_ragged(geometry_type, coords, offsets, window, *, boundary="closed", keep_empty=False,
+                method="rnsca", n="auto", max_depth=None, tolerance=None, mode="exact",
+                backend="numba") -> RaggedClipResult:
+    """Return the geometries of a ragged array clipped to a rectangular window.
+
+    The columnar fast path: the triple ``shapely.to_ragged_array`` returns (and GeoArrow
+    stores) in, the same layout out.
+
+    Parameters
+    ----------
+    geometry_type : shapely.GeometryType, GeometryKind or str
+        POINT, LINESTRING, POLYGON or their MULTI kinds (names case-insensitive).
+    coords : array_like, shape (n, 2) or (n, 3)
+        Finite coordinates; Z is kept on input vertices and interpolated linearly on
+        new ones (along the boundary for the corners a polygon gains).
+    offsets : tuple of array_like of int
+        Innermost level first; polygon rings closed, with at least four positions.
+    window : Window, sequence of 4 floats, or array_like of shape (G, 4)
+        One window for all, or one per input geometry.
+    boundary : {"closed", "interior"}
+        "closed" keeps parts lying on the window's edge (``shapely.intersection``);
+        "interior" drops points on the edge and line parts that only run along it
+        (``shapely.clip_by_rect``). Polygon results are the same under both. Results
+        keep the input's dimension: a line touching the window at a point, or a polygon
+        sharing only an edge with it, gives nothing.
+    keep_empty : bool
+        Keep one output geometry per input (empty where nothing is left) instead of
+        dropping the empty ones.
+    method, n, max_depth, tolerance, mode
+        As for `clip_segments`; runs of vertices are pruned by RNSCA with N runs per
+        split (``n="auto"``: 16). Polygons need ``mode="exact"``.
+    backend : {"numba"}
+        Geometry clipping runs on the Numba backend.
+
+    Returns
+    -------
+    RaggedClipResult
+
+    Raises
+    ------
+    InvalidGeometryError, InvalidWindowError, InvalidOptionError
+        (ValueError) naming what is wrong and where.
+    UnsupportedGeometryError
+        For an unknown geometry type.
+    BackendUnavailableError
+        For a backend that does not clip geometry.
+
+    Examples
+    --------
+    >>> import shapely
+    >>> line = shapely.LineString([(-5, 1), (5, 1), (5, 20), (8, 20), (8, 5), (15, 5)])
+    >>> r = clip_ragged(*shapely.to_ragged_array([line]), (0, 0, 10, 10))
+    >>> r.to_shapely()[0].wkt
+    'MULTILINESTRING ((0 1, 5 1, 5 10), (8 10, 8 5, 10 5))'
+    """
+    ragged = Ragged.of(geometry_type, coords, offsets)
+    windows, window_index = window_table(window, ragged.count)
+    options = SegmentOptions.resolve(_reference_window(windows), method=method, n=n,
+                                     max_depth=max_depth, tolerance=tolerance, mode=mode)
+    side = Boundary(boundary)
+    engine = get_backend(backend)
+    if engine.kind is not Backend.NUMBA:
+        raise BackendUnavailableError(
+            f"backend {engine.kind.value!r} clips segments only; geometry runs on 'numba'")
+    if ragged.kind.dimension == 2 and options.mode is Mode.APPROX:
+        raise InvalidOptionError(
+            "mode='approx' cannot clip polygons: valid polygon output needs the exact "
+            "boundary crossings (use mode='exact')")
+    if ragged.kind.dimension == 0:
+        return _clip_points(ragged, windows, window_index, side, keep_empty)
+    if ragged.kind.dimension == 1:
+        return _clip_lines(engine, ragged, windows, window_index, options, side, keep_empty)
+    return _clip_polygons(engine, ragged, windows, window_index, options, keep_empty)
+
+
+def _stats(counters, segments_in, pieces_out, ragged: Ragged, vertices_out, geometries_out):
+    return ClipStats.from_counters(
+        counters, segments_in, pieces_out, geometries_in=ragged.count,
+        geometries_out=geometries_out, vertices_in=ragged.coords.shape[0],
+        vertices_out=vertices_out)
+
+
+def _clip_points(ragged: Ragged, windows, window_index, side: Boundary, keep_empty):
+    xy = ragged.coords
+    count = ragged.count
+    if ragged.kind is GeometryKind.POINT:
+        geometry_of_point = np.arange(count, dtype=np.int64)
+    else:
+        geometry_of_point = np.repeat(np.arange(count, dtype=np.int64),
+                                      np.diff(ragged.offsets[0]))
+    w = windows[window_index[geometry_of_point]]
+    x = xy[:, 0]
+    y = xy[:, 1]
+    if side is Boundary.CLOSED:
+        inside = (x >= w[:, 0]) & (x <= w[:, 2]) & (y >= w[:, 1]) & (y <= w[:, 3])
+    else:
+        inside = (x > w[:, 0]) & (x < w[:, 2]) & (y > w[:, 1]) & (y < w[:, 3])
+    per_geometry = np.bincount(geometry_of_point[inside], minlength=count).astype(np.int64)
+    kept = xy[inside]
+    stats = ClipStats.from_counters(
+        np.zeros((1, C.WIDTH), dtype=np.int64), 0, int(inside.sum()), geometries_in=count,
+        geometries_out=int((per_geometry > 0).sum()), vertices_in=xy.shape[0],
+        vertices_out=int(inside.sum()))
+    if ragged.kind is GeometryKind.POINT:
+        if keep_empty:
+            out = np.full_like(xy, np.nan)
+            out[inside] = xy[inside]
+            return RaggedClipResult(ragged.kind.shapely_type, out, (), np.arange(count), stats)
+        return RaggedClipResult(ragged.kind.shapely_type, np.ascontiguousarray(kept), (),
+                                np.flatnonzero(inside).astype(np.int64), stats)
+    offsets = np.concatenate([[0], np.cumsum(per_geometry)]).astype(np.int64)
+    source = np.arange(count, dtype=np.int64)
+    if not keep_empty:
+        source = np.flatnonzero(per_geometry > 0).astype(np.int64)
+        offsets = np.concatenate([[0], np.cumsum(per_geometry[source])]).astype(np.int64)
+    return RaggedClipResult(ragged.kind.shapely_type, np.ascontiguousarray(kept), (offsets,),
+                            source, stats)
+
+
+def _split_z(ragged: Ragged):
+    if ragged.has_z:
+        return (np.ascontiguousarray(ragged.coords[:, :2]),
+                np.ascontiguousarray(ragged.coords[:, 2]))
+    return ragged.coords, np.empty(0)
+
+
+def _clip_lines(engine, ragged, windows, window_index, options, side, keep_empty):
+    xy, z = _split_z(ragged)
+    if ragged.kind is GeometryKind.LINESTRING:
+        part_offsets = ragged.offsets[0]
+        geometry_parts = np.arange(ragged.count + 1, dtype=np.int64)
+    else:
+        part_offsets, geometry_parts = ragged.offsets
+    part_geometry = np.repeat(np.arange(ragged.count, dtype=np.int64), np.diff(geometry_parts))
+    part_window = np.ascontiguousarray(window_index[part_geometry])
+    out_xy, out_z, chain_offsets, chains_per_part, counters = engine.clip_lines(
+        xy, z, part_offsets, part_window, windows, options, side is Boundary.INTERIOR)
+    geometry_offsets = _group(chains_per_part, geometry_parts)
+    chains_per_geometry = np.diff(geometry_offsets)
+    segments_in = int(np.maximum(np.diff(part_offsets) - 1, 0).sum())
+    stats = _stats(counters, segments_in, chain_offsets.shape[0] - 1, ragged, out_xy.shape[0],
+                   int((chains_per_geometry > 0).sum()))
+    coords = _with_z(out_xy, out_z, ragged.has_z)
+    return _finish_lines(ragged.kind, coords, chain_offsets, geometry_offsets,
+                         chains_per_geometry, keep_empty, stats)
+
+
+def _finish_lines(kind, coords, part_offsets, geometry_offsets, parts_per_geometry, keep_empty,
+                  stats):
+    count = parts_per_geometry.shape[0]
+    source = np.arange(count, dtype=np.int64)
+    if not keep_empty:
+        source = np.flatnonzero(parts_per_geometry > 0).astype(np.int64)
+        # Dropped geometries own no part: the part offsets stay as they are.
+        geometry_offsets = np.concatenate([[0], np.cumsum(parts_per_geometry[source])])
+    geometry_offsets = np.asarray(geometry_offsets, dtype=np.int64)
+    if kind is GeometryKind.LINESTRING and (count == 0 or parts_per_geometry.max() <= 1):
+        # At most one part each: the part offsets, one per geometry (empty ones repeat).
+        starts = part_offsets[geometry_offsets]
+        return RaggedClipResult(kind.shapely_type, coords, (np.asarray(starts, np.int64),),
+                                source, stats)
+    return RaggedClipResult(GeometryKind.MULTILINESTRING.shapely_type, coords,
+                            (part_offsets, geometry_offsets), source, stats)
+
+
+def _clip_polygons(engine, ragged, windows, window_index, options, keep_empty):
+    xy, z = _split_z(ragged)
+    if ragged.kind is GeometryKind.POLYGON:
+        ring_offsets, polygon_rings = ragged.offsets
+        geometry_polygons = np.arange(ragged.count + 1, dtype=np.int64)
+    else:
+        ring_offsets, polygon_rings, geometry_polygons = ragged.offsets
+    polygon_geometry = np.repeat(np.arange(ragged.count, dtype=np.int64),
+                                 np.diff(geometry_polygons))
+    polygon_window = np.ascontiguousarray(window_index[polygon_geometry])
+    out_xy, out_z, out_rings, rings_per_output, outputs_per_polygon, counters = \
+        engine.clip_polygons(xy, z, ring_offsets, polygon_rings, polygon_window, windows,
+                             options)
+    output_ring_offsets = np.zeros(rings_per_output.shape[0] + 1, dtype=np.int64)
+    np.cumsum(rings_per_output, out=output_ring_offsets[1:])
+    geometry_offsets = _group(outputs_per_polygon, geometry_polygons)
+    per_geometry = np.diff(geometry_offsets)
+    segments_in = int(np.maximum(np.diff(ring_offsets) - 1, 0).sum())
+    stats = _stats(counters, segments_in, out_rings.shape[0] - 1, ragged, out_xy.shape[0],
+                   int((per_geometry > 0).sum()))
+    coords = _with_z(out_xy, out_z, ragged.has_z)
+    count = ragged.count
+    source = np.arange(count, dtype=np.int64)
+    if not keep_empty:
+        source = np.flatnonzero(per_geometry > 0).astype(np.int64)
+        geometry_offsets = np.concatenate([[0], np.cumsum(per_geometry[source])]).astype(np.int64)
+    if ragged.kind is GeometryKind.POLYGON and (count == 0 or per_geometry.max() <= 1):
+        return RaggedClipResult(ragged.kind.shapely_type, coords,
+                                (out_rings, output_ring_offsets[geometry_offsets]), source,
+                                stats)
+    return RaggedClipResult(GeometryKind.MULTIPOLYGON.shapely_type, coords,
+                            (out_rings, output_ring_offsets, geometry_offsets), source, stats)

@@ -22,7 +22,7 @@ from rnsca.options import Backend, Boundary, Mode, SegmentOptions
 from rnsca.stats import ClipStats
 from rnsca.window import Window
 
-__all__ = ["RaggedClipResult", "clip_ragged", "window_table"]
+__all__ = ["RaggedClipResult", "clip_ragged", "to_shapely", "window_table"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -57,7 +57,19 @@ class RaggedClipResult:
 
     def to_shapely(self) -> np.ndarray:
         """Return the output geometries as a Shapely array."""
-        return shapely.from_ragged_array(self.geometry_type, self.coords, self.offsets)
+        return to_shapely(self.geometry_type, self.coords, self.offsets)
+
+
+def to_shapely(geometry_type, coords, offsets) -> np.ndarray:
+    """Return ``shapely.from_ragged_array(...)``, also when there are no coordinates.
+
+    (Shapely 2.2 fails on line arrays whose geometries are all empty.)
+    """
+    if coords.shape[0] == 0:
+        count = offsets[-1].shape[0] - 1 if offsets else 0
+        empty = shapely.from_wkt(f"{shapely.GeometryType(geometry_type).name} EMPTY")
+        return np.full(count, empty, dtype=object)
+    return shapely.from_ragged_array(geometry_type, coords, offsets)
 
 
 def window_table(window, count: int) -> tuple[np.ndarray, np.ndarray]:

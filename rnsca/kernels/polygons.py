@@ -163,8 +163,56 @@ def _corner_position(edge, xmin, ymin, xmax, ymax):
 
 
 @scalar
-def _key_less(e1, s1, e2, s2):
-    return e1 < e2 or (e1 == e2 and s1 < s2)
+def _key_less(e1, s1, t1, e2, s2, t2):
+    """Return whether boundary event 1 comes before event 2: position, then angle."""
+    return e1 < e2 or (e1 == e2 and (s1 < s2 or (s1 == s2 and t1 < t2)))
+
+
+@scalar
+def _chain_length(lc, k):
+    return (lc[k, 1] - lc[k, 0]) + (lc[k, 3] - lc[k, 2])
+
+
+@scalar
+def _chain_vertex(lc, k, j):
+    """Return the scratch index of vertex j of logical chain k, in its oriented order.
+
+    A logical chain is range 1 then range 2 of the chain scratch (range 2 is the first
+    chain of a ring, continued across its closing vertex), read backwards if the ring
+    was reversed to orient it.
+    """
+    if lc[k, 4] != 0:
+        j = _chain_length(lc, k) - 1 - j
+    n1 = lc[k, 1] - lc[k, 0]
+    return lc[k, 0] + j if j < n1 else lc[k, 2] + (j - n1)
+
+
+@scalar
+def _event_angle(ch_xy, lc, k, at_start, edge, xmin, ymin, xmax, ymax):
+    """Return the angle of chain k's direction into the window at its start or end.
+
+    Measured from the boundary's counter-clockwise direction at the point (at a corner,
+    that of the edge that starts there) towards the inward normal, in [0, pi]. Chains
+    meeting at one boundary point are ordered by it.
+    """
+    length = _chain_length(lc, k)
+    here = _chain_vertex(lc, k, 0 if at_start else length - 1)
+    px = ch_xy[here, 0]
+    py = ch_xy[here, 1]
+    dx = 0.0
+    dy = 0.0
+    for step in range(1, length):
+        other = _chain_vertex(lc, k, step if at_start else length - 1 - step)
+        dx = ch_xy[other, 0] - px
+        dy = ch_xy[other, 1] - py
+        if dx != 0.0 or dy != 0.0:
+            break
+    cx, cy = _corner_after(edge, xmin, ymin, xmax, ymax)
+    if px == cx and py == cy:
+        edge = (edge + 1) % 4
+    ux = 1.0 if edge == _BOTTOM else (-1.0 if edge == _TOP else 0.0)
+    uy = 1.0 if edge == _RIGHT else (-1.0 if edge == _LEFT else 0.0)
+    return math.atan2(dy * ux - dx * uy, dx * ux + dy * uy)
 
 
 @scalar
@@ -180,103 +228,111 @@ def _put(out_xy, out_z, has_z, v, ring_start, x, y, z):
 
 
 @scalar
-def _put_range(src_xy, src_z, has_z, a, b, reverse, out_xy, out_z, v, ring_start):
-    """Append vertices src[a:b] (backwards if `reverse`); return the next position."""
-    for k in range(b - a):
-        i = b - 1 - k if reverse else a + k
-        v = _put(out_xy, out_z, has_z, v, ring_start, src_xy[i, 0], src_xy[i, 1], src_z[i]
-                 if has_z else 0.0)
-    return v
-
-
-@scalar
 def _put_chain(ch_xy, ch_z, has_z, lc, k, out_xy, out_z, v, ring_start):
-    """Append logical chain k: range 1 then range 2 (forwards), or both reversed."""
-    a1 = lc[k, 0]
-    b1 = lc[k, 1]
-    a2 = lc[k, 2]
-    b2 = lc[k, 3]
-    if lc[k, 4] == 0:
-        v = _put_range(ch_xy, ch_z, has_z, a1, b1, False, out_xy, out_z, v, ring_start)
-        v = _put_range(ch_xy, ch_z, has_z, a2, b2, False, out_xy, out_z, v, ring_start)
-    else:
-        v = _put_range(ch_xy, ch_z, has_z, a2, b2, True, out_xy, out_z, v, ring_start)
-        v = _put_range(ch_xy, ch_z, has_z, a1, b1, True, out_xy, out_z, v, ring_start)
+    """Append the vertices of logical chain k; return the next position."""
+    for j in range(_chain_length(lc, k)):
+        i = _chain_vertex(lc, k, j)
+        v = _put(out_xy, out_z, has_z, v, ring_start, ch_xy[i, 0], ch_xy[i, 1],
+                 ch_z[i] if has_z else 0.0)
     return v
 
 
 @scalar
-def _chain_end_index(lc, k, at_start):
-    """Return the scratch index of the first (`at_start`) or last vertex of logical chain k."""
-    head = lc[k, 0]
-    tail = lc[k, 3] - 1 if lc[k, 3] > lc[k, 2] else lc[k, 1] - 1
-    if lc[k, 4] == 0:
-        return head if at_start else tail
-    return tail if at_start else head
-
-
-@scalar
-def _close_ring(out_xy, out_z, has_z, v, ring_start):
-    """Close the ring (repeat its first vertex); return (v, twice its signed area)."""
-    if v - ring_start >= 1 and not (out_xy[v - 1, 0] == out_xy[ring_start, 0]
-                                    and out_xy[v - 1, 1] == out_xy[ring_start, 1]):
-        out_xy[v, 0] = out_xy[ring_start, 0]
-        out_xy[v, 1] = out_xy[ring_start, 1]
+def _put_ring(xy, z, has_z, first, last, reverse, out_xy, out_z, v):
+    """Copy the input ring ``xy[first..last]`` (backwards if `reverse`); return the end."""
+    for k in range(last - first + 1):
+        i = last - k if reverse else first + k
+        out_xy[v, 0] = xy[i, 0]
+        out_xy[v, 1] = xy[i, 1]
         if has_z:
-            out_z[v] = out_z[ring_start]
+            out_z[v] = z[i]
         v += 1
-    if v - ring_start < 4:
-        return v, 0.0
-    return v, signed_area(out_xy, ring_start, v - 1)
+    return v
 
 
 @scalar
-def _put_holes(xy, z, has_z, ring_state, ring_rev, ring_first, ring_last, r_begin, r_end,
-               hole_done, out_xy, out_z, out_ring_starts, v, n_rings, shell_start, shell_end,
-               only_shell):
-    """Append the uncut holes that lie in the shell out_xy[shell_start..shell_end]."""
-    for r in range(r_begin + 1, r_end):
-        if ring_state[r - r_begin] != _FULL or hole_done[r - r_begin]:
-            continue
-        first = ring_first[r - r_begin]
-        last = ring_last[r - r_begin]
-        inside = only_shell
-        if not inside:
-            where = 0
-            for k in range(first, last):
-                where = point_in_ring(xy[k, 0], xy[k, 1], out_xy, shell_start, shell_end)
-                if where != 0:
+def _copy_ring(src_xy, src_z, has_z, a, b, out_xy, out_z, v):
+    """Copy ``src[a:b]`` to ``out[v:]``; return the end."""
+    for i in range(a, b):
+        out_xy[v, 0] = src_xy[i, 0]
+        out_xy[v, 1] = src_xy[i, 1]
+        if has_z:
+            out_z[v] = src_z[i]
+        v += 1
+    return v
+
+
+@scalar
+def _add_ring(rg_xy, rg_z, has_z, rg_start, rg_sign, n_rg, src_xy, src_z, idx, count, close):
+    """Store the ring of ``src[idx[0..count-1]]`` (closed with its first vertex if `close`).
+
+    Returns the new ring count; a ring of fewer than three distinct vertices or no area
+    is not stored. Its sign (1 shell, -1 hole) comes from its orientation.
+    """
+    v = rg_start[n_rg]
+    start = v
+    for j in range(count):
+        i = idx[j]
+        v = _put(rg_xy, rg_z, has_z, v, start, src_xy[i, 0], src_xy[i, 1],
+                 src_z[i] if has_z else 0.0)
+    if close:
+        i = idx[0]
+        v = _put(rg_xy, rg_z, has_z, v, start, src_xy[i, 0], src_xy[i, 1],
+                 src_z[i] if has_z else 0.0)
+    if v - start < 4:
+        return n_rg
+    area = signed_area(rg_xy, start, v - 1)
+    if area == 0.0:
+        return n_rg
+    rg_sign[n_rg] = 1 if area > 0.0 else -1
+    rg_start[n_rg + 1] = v
+    return n_rg + 1
+
+
+@scalar
+def _split_loops(tmp_xy, tmp_z, has_z, m, xmin, ymin, xmax, ymax, stk, rg_xy, rg_z, rg_start,
+                 rg_sign, n_rg):
+    """Store the closed walk ring ``tmp[0..m-1]`` as simple rings; return the ring count.
+
+    The walk can pass a boundary point twice (a hole or a part of the ring touching the
+    window's edge there); a ring through one point twice is not valid, so it is cut
+    into loops at every repeated boundary point. Counter-clockwise loops are shells,
+    clockwise ones holes (touching their shell at that point, as valid polygons may).
+    """
+    top = 0
+    for i in range(m - 1):
+        x = tmp_xy[i, 0]
+        y = tmp_xy[i, 1]
+        if x == xmin or x == xmax or y == ymin or y == ymax:
+            q = -1
+            for t in range(top - 1, -1, -1):
+                if tmp_xy[stk[t], 0] == x and tmp_xy[stk[t], 1] == y:
+                    q = t
                     break
-            inside = where >= 0
-        if not inside:
-            continue
-        hole_done[r - r_begin] = True
-        out_ring_starts[n_rings] = v
-        n_rings += 1
-        reverse = ring_rev[r - r_begin]
-        for k in range(last - first + 1):
-            i = last - k if reverse else first + k
-            out_xy[v, 0] = xy[i, 0]
-            out_xy[v, 1] = xy[i, 1]
-            if has_z:
-                out_z[v] = z[i]
-            v += 1
-    return v, n_rings
+            if q >= 0:
+                n_rg = _add_ring(rg_xy, rg_z, has_z, rg_start, rg_sign, n_rg, tmp_xy, tmp_z,
+                                 stk[q:], top - q, True)
+                top = q + 1
+                continue
+        stk[top] = i
+        top += 1
+    return _add_ring(rg_xy, rg_z, has_z, rg_start, rg_sign, n_rg, tmp_xy, tmp_z, stk, top, True)
 
 
 @scalar
 def clip_polygon(xy, z, has_z, ring_offsets, r_begin, r_end, xmin, ymin, xmax, ymax, method,
                  n_fixed, max_depth, tol, auto_piece, exact, out_xy, out_z, out_ring_starts,
                  out_poly_rings, v, n_rings, n_polys, st, run_stack, stack_f, stack_i,
-                 ch_xy, ch_z, ch_starts, lc, keys, order, ring_state, ring_rev, ring_first,
-                 ring_last, hole_done):
+                 ch_xy, ch_z, ch_starts, lc, ev_key, ev_chain, order, ring_state, ring_rev,
+                 ring_first, ring_last, tmp_xy, tmp_z, stk, rg_xy, rg_z, rg_start, rg_sign,
+                 rg_done):
     """Clip the polygon of rings ``r_begin..r_end-1`` (shell first); write valid pieces.
 
     Output polygons are written from ``out_xy[v]``, their rings' starts from
     ``out_ring_starts[n_rings]`` and their ring counts from ``out_poly_rings[n_polys]``;
     shells counter-clockwise, holes clockwise. The remaining arguments are the caller's
     scratch, sized by the bounds of `bound_chains`. Returns ``(v, n_rings, n_polys, ok)``;
-    ``ok`` is False when the chains could not be closed consistently (invalid input).
+    ``ok`` is False when the rings could not be closed consistently (invalid input).
     """
     n_r = r_end - r_begin
     if n_r == 0:
@@ -292,14 +348,12 @@ def clip_polygon(xy, z, has_z, ring_offsets, r_begin, r_end, xmin, ymin, xmax, y
         j = r - r_begin
         ring_first[j] = first
         ring_last[j] = last
-        hole_done[j] = False
         area = signed_area(xy, first, last) if last > first else 0.0
-        want_ccw = r == r_begin
-        ring_rev[j] = (area < 0.0) if want_ccw else (area > 0.0)
+        ring_rev[j] = (area < 0.0) if j == 0 else (area > 0.0)
         c0 = c_ch
         v_ch, c_ch, at_first, at_last = clip_chains(
             xy, z, has_z, first, last, xmin, ymin, xmax, ymax, method, n_fixed, max_depth, tol,
-            auto_piece, exact, True, ch_xy, ch_z, ch_starts, v_ch, c_ch, st, run_stack,
+            auto_piece, exact, True, True, ch_xy, ch_z, ch_starts, v_ch, c_ch, st, run_stack,
             stack_f, stack_i)
         ch_starts[c_ch] = v_ch
         n_chains = c_ch - c0
@@ -325,167 +379,185 @@ def clip_polygon(xy, z, has_z, ring_offsets, r_begin, r_end, xmin, ymin, xmax, y
                 lc[n_lc, 3] = ch_starts[c0 + 1]
             lc[n_lc, 4] = 1 if ring_rev[j] else 0
             n_lc += 1
-    # 2. No chain: the window is inside the polygon or outside it.
-    if n_lc == 0:
-        shell_full = ring_state[0] == _FULL
-        ring_start = v
-        if shell_full:
-            reverse = ring_rev[0]
-            first = ring_first[0]
-            last = ring_last[0]
-            for k in range(last - first + 1):
-                i = last - k if reverse else first + k
-                out_xy[v, 0] = xy[i, 0]
-                out_xy[v, 1] = xy[i, 1]
-                if has_z:
-                    out_z[v] = z[i]
-                v += 1
-        else:
-            cx = 0.5 * xmin + 0.5 * xmax
-            cy = 0.5 * ymin + 0.5 * ymax
-            if ring_state[0] != _UNTOUCHED or n_r == 0 or point_in_ring(
-                    cx, cy, xy, ring_first[0], ring_last[0]) <= 0:
-                return v, n_rings, n_polys, ok
-            for j in range(1, n_r):
-                if ring_state[j] == _UNTOUCHED and point_in_ring(
-                        cx, cy, xy, ring_first[j], ring_last[j]) > 0:
-                    return v, n_rings, n_polys, ok
-            zc = 0.0
-            if has_z:
-                for k in range(ring_first[0], ring_last[0]):
-                    zc += z[k]
-                zc /= max(1, ring_last[0] - ring_first[0])
-            for corner in range(5):
-                x, y = _corner_after((corner + 3) % 4, xmin, ymin, xmax, ymax)
-                out_xy[v, 0] = x
-                out_xy[v, 1] = y
-                if has_z:
-                    out_z[v] = zc
-                v += 1
-        out_ring_starts[n_rings] = ring_start
-        rings_before = n_rings
-        n_rings += 1
-        v, n_rings = _put_holes(xy, z, has_z, ring_state, ring_rev, ring_first, ring_last,
-                                r_begin, r_end, hole_done, out_xy, out_z, out_ring_starts, v,
-                                n_rings, ring_start, v - 1, True)
-        out_poly_rings[n_polys] = n_rings - rings_before
-        n_polys += 1
-        return v, n_rings, n_polys, ok
-    # 3. The walk. keys: (start edge, start s, end edge, end s) per logical chain.
+    n_rg = 0
+    rg_start[0] = 0
+    # 2. The walk over boundary events (chain starts and ends), sorted counter-clockwise.
+    n_ev = 2 * n_lc
     for k in range(n_lc):
-        i = _chain_end_index(lc, k, True)
-        e, s = boundary_key(ch_xy[i, 0], ch_xy[i, 1], xmin, ymin, xmax, ymax)
-        keys[k, 0] = e
-        keys[k, 1] = s
-        i = _chain_end_index(lc, k, False)
-        e, s = boundary_key(ch_xy[i, 0], ch_xy[i, 1], xmin, ymin, xmax, ymax)
-        keys[k, 2] = e
-        keys[k, 3] = s
-        order[k] = k
-    # Insertion sort of the chains by start position (few chains per polygon).
-    for a in range(1, n_lc):
+        for end in range(2):
+            i = _chain_vertex(lc, k, 0 if end == 0 else _chain_length(lc, k) - 1)
+            e, s = boundary_key(ch_xy[i, 0], ch_xy[i, 1], xmin, ymin, xmax, ymax)
+            ev = 2 * k + end
+            ev_key[ev, 0] = e
+            ev_key[ev, 1] = s
+            ev_key[ev, 2] = _event_angle(ch_xy, lc, k, end == 0, e, xmin, ymin, xmax, ymax)
+            order[ev] = ev
+    for a in range(1, n_ev):  # insertion sort: few events per polygon
         item = order[a]
         b = a - 1
-        while b >= 0 and _key_less(keys[item, 0], keys[item, 1],
-                                   keys[order[b], 0], keys[order[b], 1]):
+        while b >= 0 and _key_less(ev_key[item, 0], ev_key[item, 1], ev_key[item, 2],
+                                   ev_key[order[b], 0], ev_key[order[b], 1],
+                                   ev_key[order[b], 2]):
             order[b + 1] = order[b]
             b -= 1
         order[b + 1] = item
+    for a in range(n_ev):
+        ev_chain[order[a]] = a  # position of each event in the sorted order
     visited = lc[:, 5]
     for k in range(n_lc):
         visited[k] = 0
     for k0 in range(n_lc):
         if visited[k0]:
             continue
-        ring_start = v
+        m = 0
         k = k0
         while True:
             visited[k] = 1
-            v = _put_chain(ch_xy, ch_z, has_z, lc, k, out_xy, out_z, v, ring_start)
-            # The next entry counter-clockwise from this exit (binary search, cyclic).
-            ee = keys[k, 2]
-            es = keys[k, 3]
-            lo = 0
-            hi = n_lc
-            while lo < hi:
-                mid = (lo + hi) // 2
-                if _key_less(keys[order[mid], 0], keys[order[mid], 1], ee, es):
-                    lo = mid + 1
-                else:
-                    hi = mid
-            nxt = order[lo % n_lc]
-            # Corners passed on the way from (ee, es) to the next entry.
-            se = keys[nxt, 0]
-            ss = keys[nxt, 1]
-            if not (se == ee and ss >= es):
-                z_from = 0.0
-                z_to = 0.0
-                p_from = 0.0
-                span = 1.0
-                if has_z:
-                    z_from = ch_z[_chain_end_index(lc, k, False)]
-                    z_to = ch_z[_chain_end_index(lc, nxt, True)]
-                    p_from = _perimeter_position(ee, es, xmin, ymin, xmax, ymax)
-                    perimeter = 2.0 * ((xmax - xmin) + (ymax - ymin))
-                    span = _perimeter_position(se, ss, xmin, ymin, xmax, ymax) - p_from
-                    if span <= 0.0:
-                        span += perimeter
-                e = ee
-                while True:
-                    x, y = _corner_after(e, xmin, ymin, xmax, ymax)
-                    zc = 0.0
-                    if has_z:
-                        d = _corner_position(e, xmin, ymin, xmax, ymax) - p_from
-                        if d < 0.0:
-                            d += 2.0 * ((xmax - xmin) + (ymax - ymin))
-                        zc = z_from + (z_to - z_from) * min(1.0, d / span)
-                    v = _put(out_xy, out_z, has_z, v, ring_start, x, y, zc)
-                    e = (e + 1) % 4
-                    if e == se:
+            m = _put_chain(ch_xy, ch_z, has_z, lc, k, tmp_xy, tmp_z, m, 0)
+            # Where the ring goes from chain k's end: the chain entering at the same point
+            # just clockwise of it (the polygon is pinched there), else the first entry
+            # counter-clockwise along the boundary, the most clockwise one at its point.
+            i = ev_chain[2 * k + 1]
+            ee = ev_key[order[i], 0]
+            es = ev_key[order[i], 1]
+            nxt = -1
+            direct = False
+            if i > 0 and ev_key[order[i - 1], 0] == ee and ev_key[order[i - 1], 1] == es \
+                    and order[i - 1] % 2 == 0:
+                nxt = order[i - 1] // 2
+                direct = True
+            else:
+                g = i + 1
+                while g < n_ev and ev_key[order[g], 0] == ee and ev_key[order[g], 1] == es:
+                    g += 1
+                for _ in range(n_ev):
+                    if g >= n_ev:
+                        g = 0
+                    g_end = g + 1
+                    while g_end < n_ev and ev_key[order[g_end], 0] == ev_key[order[g], 0] \
+                            and ev_key[order[g_end], 1] == ev_key[order[g], 1]:
+                        g_end += 1
+                    q = g_end - 1
+                    while q >= g and order[q] % 2 == 1:
+                        q -= 1
+                    if q >= g:
+                        nxt = order[q] // 2
                         break
+                    g = g_end
+            if nxt < 0:
+                ok = False
+                break
+            if not direct:
+                se = ev_key[2 * nxt, 0]
+                ss = ev_key[2 * nxt, 1]
+                if not (se == ee and ss > es):
+                    z_from = 0.0
+                    z_to = 0.0
+                    p_from = 0.0
+                    span = 1.0
+                    perimeter = 2.0 * ((xmax - xmin) + (ymax - ymin))
+                    if has_z:
+                        z_from = ch_z[_chain_vertex(lc, k, _chain_length(lc, k) - 1)]
+                        z_to = ch_z[_chain_vertex(lc, nxt, 0)]
+                        p_from = _perimeter_position(ee, es, xmin, ymin, xmax, ymax)
+                        span = _perimeter_position(se, ss, xmin, ymin, xmax, ymax) - p_from
+                        if span <= 0.0:
+                            span += perimeter
+                    e = int(ee)
+                    while True:
+                        x, y = _corner_after(e, xmin, ymin, xmax, ymax)
+                        zc = 0.0
+                        if has_z:
+                            d = _corner_position(e, xmin, ymin, xmax, ymax) - p_from
+                            if d < 0.0:
+                                d += perimeter
+                            zc = z_from + (z_to - z_from) * min(1.0, d / span)
+                        m = _put(tmp_xy, tmp_z, has_z, m, 0, x, y, zc)
+                        e = (e + 1) % 4
+                        if e == se:
+                            break
             if nxt == k0:
                 break
             if visited[nxt]:
                 ok = False  # inconsistent chains (invalid input): close what we have
                 break
             k = nxt
-        v, area = _close_ring(out_xy, out_z, has_z, v, ring_start)
-        if not area > 0.0:
-            if area < 0.0:
-                ok = False
-            v = ring_start  # a degenerate piece: no area inside the window
+        if m > 0 and not (tmp_xy[m - 1, 0] == tmp_xy[0, 0] and tmp_xy[m - 1, 1] == tmp_xy[0, 1]):
+            tmp_xy[m, 0] = tmp_xy[0, 0]
+            tmp_xy[m, 1] = tmp_xy[0, 1]
+            if has_z:
+                tmp_z[m] = tmp_z[0]
+            m += 1
+        if m >= 4:
+            n_rg = _split_loops(tmp_xy, tmp_z, has_z, m, xmin, ymin, xmax, ymax, stk, rg_xy,
+                                rg_z, rg_start, rg_sign, n_rg)
+    # 3. Rings never cut: inside the window whole. The shell of a cut polygon is never
+    # one of them unless the input is invalid.
+    for j in range(n_r):
+        if ring_state[j] != _FULL:
             continue
-        out_ring_starts[n_rings] = ring_start
-        rings_before = n_rings
+        if j == 0 and n_lc > 0:
+            ok = False
+        first = ring_first[j]
+        count = _put_ring(xy, z, has_z, first, ring_last[j], ring_rev[j], tmp_xy, tmp_z, 0)
+        for i in range(count):
+            stk[i] = i
+        n_rg = _add_ring(rg_xy, rg_z, has_z, rg_start, rg_sign, n_rg, tmp_xy, tmp_z, stk,
+                         count, False)
+    # 4. No chain and no uncut shell: the window lies inside the polygon or outside it.
+    if n_lc == 0 and ring_state[0] == _UNTOUCHED:
+        cx = 0.5 * xmin + 0.5 * xmax
+        cy = 0.5 * ymin + 0.5 * ymax
+        covered = point_in_ring(cx, cy, xy, ring_first[0], ring_last[0]) > 0
+        for j in range(1, n_r):
+            if covered and ring_state[j] == _UNTOUCHED and point_in_ring(
+                    cx, cy, xy, ring_first[j], ring_last[j]) > 0:
+                covered = False
+        if covered:
+            zc = 0.0
+            if has_z:
+                for k in range(ring_first[0], ring_last[0]):
+                    zc += z[k]
+                zc /= max(1, ring_last[0] - ring_first[0])
+            for corner in range(4):
+                x, y = _corner_after((corner + 3) % 4, xmin, ymin, xmax, ymax)
+                tmp_xy[corner, 0] = x
+                tmp_xy[corner, 1] = y
+                if has_z:
+                    tmp_z[corner] = zc
+                stk[corner] = corner
+            n_rg = _add_ring(rg_xy, rg_z, has_z, rg_start, rg_sign, n_rg, tmp_xy, tmp_z, stk,
+                             4, True)
+    # 5. Output: each shell, then the holes inside it.
+    for a in range(n_rg):
+        rg_done[a] = False
+    for a in range(n_rg):
+        if rg_sign[a] < 0:
+            continue
+        out_ring_starts[n_rings] = v
         n_rings += 1
-        v, n_rings = _put_holes(xy, z, has_z, ring_state, ring_rev, ring_first, ring_last,
-                                r_begin, r_end, hole_done, out_xy, out_z, out_ring_starts, v,
-                                n_rings, ring_start, v - 1, False)
+        rings_before = n_rings - 1
+        v = _copy_ring(rg_xy, rg_z, has_z, rg_start[a], rg_start[a + 1], out_xy, out_z, v)
+        shell_start = out_ring_starts[n_rings - 1]
+        for b in range(n_rg):
+            if rg_sign[b] > 0 or rg_done[b]:
+                continue
+            where = 0
+            for i in range(rg_start[b], rg_start[b + 1] - 1):
+                where = point_in_ring(rg_xy[i, 0], rg_xy[i, 1], out_xy, shell_start, v - 1)
+                if where != 0:
+                    break
+            if where < 0:
+                continue
+            rg_done[b] = True
+            out_ring_starts[n_rings] = v
+            n_rings += 1
+            v = _copy_ring(rg_xy, rg_z, has_z, rg_start[b], rg_start[b + 1], out_xy, out_z, v)
         out_poly_rings[n_polys] = n_rings - rings_before
         n_polys += 1
-    # An uncut ring left over means invalid input (a valid polygon's uncut holes all lie
-    # in some piece, and its shell is cut whenever any ring is): clipped ring by ring,
-    # an uncut shell is its own polygon; a stray hole has nothing to be a hole of.
-    for j in range(n_r):
-        if ring_state[j] != _FULL or hole_done[j]:
-            continue
-        ok = False
-        if j > 0:
-            continue
-        ring_start = v
-        first = ring_first[0]
-        last = ring_last[0]
-        for k in range(last - first + 1):
-            i = last - k if ring_rev[0] else first + k
-            out_xy[v, 0] = xy[i, 0]
-            out_xy[v, 1] = xy[i, 1]
-            if has_z:
-                out_z[v] = z[i]
-            v += 1
-        out_ring_starts[n_rings] = ring_start
-        n_rings += 1
-        out_poly_rings[n_polys] = 1
-        n_polys += 1
+    for b in range(n_rg):
+        if rg_sign[b] < 0 and not rg_done[b]:
+            ok = False  # a hole outside every piece: invalid input
     return v, n_rings, n_polys, ok
 
 
@@ -526,21 +598,24 @@ def clip_polygon_blocks(xy, z, has_z, ring_offsets, polygon_offsets, polygon_win
                     else:
                         sc += 1
                 n_r = polygon_offsets[p + 1] - polygon_offsets[p]
-                scratch_vertices[p] = sv
+                scratch_vertices[p] = sv + n_r
                 scratch_chains[p] = sc
-                # Chain vertices; up to four corners and a closing vertex per chain; the
-                # window's five; the uncut rings are counted in `sv` already.
-                n_vertices[p] = sv + 5 * sc + 6
-                n_rings[p] = sc + n_r + 1
-                n_polys[p] = sc + n_r + 1
+                # Chain vertices (uncut rings included); up to four corners, a closing
+                # vertex and a loop split per chain; the window's five.
+                bound = sv + 7 * sc + n_r + 6
+                n_vertices[p] = bound
+                n_rings[p] = bound // 4 + 1
+                n_polys[p] = bound // 4 + 1
             continue
         max_v = 1
         max_c = 1
         max_r = 1
+        max_out = 1
         for p in range(lo_p, hi_p):
             max_v = max(max_v, scratch_vertices[p])
             max_c = max(max_c, scratch_chains[p])
             max_r = max(max_r, polygon_offsets[p + 1] - polygon_offsets[p])
+            max_out = max(max_out, vertex_slot[p + 1] - vertex_slot[p])
         run_stack = np.empty((RUN_STACK_CAPACITY, 3), dtype=np.int64)
         stack_f = np.empty((STACK_CAPACITY, 6), dtype=np.float64)
         stack_i = np.empty((STACK_CAPACITY, 3), dtype=np.int64)
@@ -548,13 +623,21 @@ def clip_polygon_blocks(xy, z, has_z, ring_offsets, polygon_offsets, polygon_win
         ch_z = np.empty(max_v if has_z else 0, dtype=np.float64)
         ch_starts = np.empty(max_c + 1, dtype=np.int64)
         lc = np.empty((max_c, 6), dtype=np.int64)
-        keys = np.empty((max_c, 4), dtype=np.float64)
-        order = np.empty(max_c, dtype=np.int64)
+        ev_key = np.empty((2 * max_c, 3), dtype=np.float64)
+        ev_chain = np.empty(2 * max_c, dtype=np.int64)
+        order = np.empty(2 * max_c, dtype=np.int64)
         ring_state = np.empty(max_r, dtype=np.int64)
         ring_rev = np.empty(max_r, dtype=np.bool_)
         ring_first = np.empty(max_r, dtype=np.int64)
         ring_last = np.empty(max_r, dtype=np.int64)
-        hole_done = np.empty(max_r, dtype=np.bool_)
+        tmp_xy = np.empty((max_out, 2), dtype=np.float64)
+        tmp_z = np.empty(max_out if has_z else 0, dtype=np.float64)
+        stk = np.empty(max_out, dtype=np.int64)
+        rg_xy = np.empty((max_out, 2), dtype=np.float64)
+        rg_z = np.empty(max_out if has_z else 0, dtype=np.float64)
+        rg_start = np.empty(max_out // 4 + 2, dtype=np.int64)
+        rg_sign = np.empty(max_out // 4 + 2, dtype=np.int64)
+        rg_done = np.empty(max_out // 4 + 2, dtype=np.bool_)
         for p in range(lo_p, hi_p):
             w = polygon_window[p]
             v0 = vertex_slot[p]
@@ -564,8 +647,8 @@ def clip_polygon_blocks(xy, z, has_z, ring_offsets, polygon_offsets, polygon_win
                 windows[w, 0], windows[w, 1], windows[w, 2], windows[w, 3], method, n_fixed,
                 max_depth, tol, auto_piece, exact, out_xy, out_z, out_ring_starts,
                 out_poly_rings, v0, r0, r0, st, run_stack, stack_f, stack_i, ch_xy, ch_z,
-                ch_starts, lc, keys, order, ring_state, ring_rev, ring_first, ring_last,
-                hole_done)
+                ch_starts, lc, ev_key, ev_chain, order, ring_state, ring_rev, ring_first,
+                ring_last, tmp_xy, tmp_z, stk, rg_xy, rg_z, rg_start, rg_sign, rg_done)
             if not ok:
                 st[C.INVALID_POLYGONS] += 1
             n_vertices[p] = v - v0

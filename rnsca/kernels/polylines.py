@@ -71,18 +71,19 @@ def on_one_edge(ax, ay, bx, by, xmin, ymin, xmax, ymax):
 def bound_chains(xy, first, last, xmin, ymin, xmax, ymax):
     """Return upper bounds (vertices, chains, crossings) for clipping ``xy[first..last]``.
 
-    A vertex inside the closed window is output at most once; a segment that is neither
-    inside nor beyond one edge (ambiguous) adds at most two cut points and one chain; a
-    segment along an edge may break a chain (``drop_edge_runs``). Crossings (ambiguous
-    segments plus segments along an edge) bound the chains' ends for polygon assembly.
-    One branch-free pass, so the write pass can be given a slot without a counting pass
-    that repeats the clipping.
+    A vertex inside the closed window is output at most once, twice if it lies on the
+    boundary (rings break there); a segment that is neither inside nor beyond one edge
+    (ambiguous) adds at most two cut points and one chain; a segment along an edge or a
+    vertex on the boundary may break a chain. Crossings (all of those breaks) bound the
+    chains' ends for polygon assembly. One branch-free pass, so the write pass can be
+    given a slot without a counting pass that repeats the clipping.
     """
     vertices = 0
     crossings = 0
     cp = outcode(xy[first, 0], xy[first, 1], xmin, ymin, xmax, ymax)
     bp = _edge_bits(xy[first, 0], xy[first, 1], xmin, ymin, xmax, ymax)
     vertices += cp == 0
+    crossings += bp != 0
     for i in range(first + 1, last + 1):
         c = outcode(xy[i, 0], xy[i, 1], xmin, ymin, xmax, ymax)
         b = _edge_bits(xy[i, 0], xy[i, 1], xmin, ymin, xmax, ymax)
@@ -90,6 +91,7 @@ def bound_chains(xy, first, last, xmin, ymin, xmax, ymax):
         ambiguous = ((cp | c) != 0) & ((cp & c) == 0)
         along = ((cp | c) == 0) & ((bp & b) != 0)
         crossings += ambiguous | along
+        crossings += (b != 0) & (c == 0)
         cp = c
         bp = b
     return vertices + 2 * crossings, crossings + 1, crossings
@@ -106,9 +108,13 @@ def _append(out_xy, out_z, has_z, v, x, y, z):
 
 @scalar
 def _emit_piece(xy, z, has_z, i, t0, t1, ax, ay, bx, by, out_xy, out_z, out_starts,
-                v, c, last_v):
-    """Add the piece [t0, t1] of segment i to the chains; return (v, c, last_v)."""
-    if not (last_v == i and ax == xy[i, 0] and ay == xy[i, 1]):
+                v, c, last_v, breaks):
+    """Add the piece [t0, t1] of segment i to the chains; return (v, c, last_v).
+
+    The piece continues the chain if the chain ends at vertex i and the piece starts
+    there, unless `breaks` (rings break at a vertex on the boundary).
+    """
+    if breaks or not (last_v == i and ax == xy[i, 0] and ay == xy[i, 1]):
         out_starts[c] = v
         c += 1
         za = 0.0
@@ -142,9 +148,13 @@ def _emit_run(xy, z, has_z, a, b, out_xy, out_z, out_starts, v, c, last_v):
 
 @scalar
 def _clip_segments(xy, z, has_z, a, b, xmin, ymin, xmax, ymax, method, n_fixed, max_depth,
-                   tol, auto_piece, exact, drop_edge_runs, out_xy, out_z, out_starts,
-                   v, c, last_v, st, stack_f, stack_i):
-    """Clip segments a..b-1 one by one into the chains; return (v, c, last_v)."""
+                   tol, auto_piece, exact, drop_edge_runs, break_at_boundary, out_xy, out_z,
+                   out_starts, v, c, last_v, st, stack_f, stack_i):
+    """Clip segments a..b-1 one by one into the chains; return (v, c, last_v).
+
+    With `break_at_boundary` (rings) a chain also breaks at a vertex on the boundary,
+    so that a ring touching the window's edge from inside is cut there too.
+    """
     for i in range(a, b):
         x0 = xy[i, 0]
         y0 = xy[i, 1]
@@ -158,8 +168,9 @@ def _clip_segments(xy, z, has_z, a, b, xmin, ymin, xmax, ymax, method, n_fixed, 
             keep, t0, t1, ax, ay, bx, by = clip_one(
                 method, x0, y0, x1, y1, xmin, ymin, xmax, ymax, max_depth, tol, exact, st)
         if keep and not (drop_edge_runs and on_one_edge(ax, ay, bx, by, xmin, ymin, xmax, ymax)):
+            breaks = break_at_boundary and _edge_bits(x0, y0, xmin, ymin, xmax, ymax) != 0
             v, c, last_v = _emit_piece(xy, z, has_z, i, t0, t1, ax, ay, bx, by,
-                                       out_xy, out_z, out_starts, v, c, last_v)
+                                       out_xy, out_z, out_starts, v, c, last_v, breaks)
     return v, c, last_v
 
 
@@ -193,8 +204,8 @@ def _level_slot(level):
 
 @scalar
 def clip_chains(xy, z, has_z, first, last, xmin, ymin, xmax, ymax, method, n_fixed, max_depth,
-                tol, auto_piece, exact, drop_edge_runs, out_xy, out_z, out_starts, v, c, st,
-                run_stack, stack_f, stack_i):
+                tol, auto_piece, exact, drop_edge_runs, break_at_boundary, out_xy, out_z,
+                out_starts, v, c, st, run_stack, stack_f, stack_i):
     """Clip the line through vertices ``xy[first..last]`` into chains.
 
     Writes the chains' vertices from ``out_xy[v]`` (and ``out_z``) on, and the start of
@@ -212,8 +223,8 @@ def clip_chains(xy, z, has_z, first, last, xmin, ymin, xmax, ymax, method, n_fix
     if method != RNSCA:
         v, c, last_v = _clip_segments(xy, z, has_z, first, last, xmin, ymin, xmax, ymax,
                                       method, n_fixed, max_depth, tol, auto_piece, exact,
-                                      drop_edge_runs, out_xy, out_z, out_starts, v, c, last_v,
-                                      st, stack_f, stack_i)
+                                      drop_edge_runs, break_at_boundary, out_xy, out_z,
+                                      out_starts, v, c, last_v, st, stack_f, stack_i)
     else:
         n_runs = n_fixed if n_fixed > 0 else RUN_N_AUTO
         run_stack[0, 0] = first
@@ -246,8 +257,9 @@ def clip_chains(xy, z, has_z, first, last, xmin, ymin, xmax, ymax, method, n_fix
                 st[C.SEGMENT_LEVELS + slot] += b - a
                 v, c, last_v = _clip_segments(xy, z, has_z, a, b, xmin, ymin, xmax, ymax,
                                               method, n_fixed, max_depth, tol, auto_piece,
-                                              exact, drop_edge_runs, out_xy, out_z,
-                                              out_starts, v, c, last_v, st, stack_f, stack_i)
+                                              exact, drop_edge_runs, break_at_boundary,
+                                              out_xy, out_z, out_starts, v, c, last_v, st,
+                                              stack_f, stack_i)
             else:
                 st[C.RUNS_SUBDIVIDED] += 1
                 # Children cover the segments a..b-1 in n (or fewer) runs of nearly equal
@@ -262,6 +274,8 @@ def clip_chains(xy, z, has_z, first, last, xmin, ymin, xmax, ymax, method, n_fix
         return v, c, False, False
     starts_at_first = out_xy[out_starts[c_begin], 0] == xy[first, 0] and \
         out_xy[out_starts[c_begin], 1] == xy[first, 1]
+    if break_at_boundary and _edge_bits(xy[first, 0], xy[first, 1], xmin, ymin, xmax, ymax) != 0:
+        starts_at_first = False  # a ring breaks at its closing vertex on the boundary
     return v, c, starts_at_first, last_v == last
 
 
@@ -306,7 +320,7 @@ def clip_line_blocks(xy, z, has_z, part_offsets, part_window, windows, method, n
             c0 = chain_slot[p]
             v, c, _, _ = clip_chains(xy, z, has_z, first, last, xmin, ymin, xmax, ymax, method,
                                      n_fixed, max_depth, tol, auto_piece, exact, drop_edge_runs,
-                                     out_xy, out_z, out_starts, v0, c0, st, run_stack,
+                                     False, out_xy, out_z, out_starts, v0, c0, st, run_stack,
                                      stack_f, stack_i)
             n_vertices[p] = v - v0
             n_chains[p] = c - c0

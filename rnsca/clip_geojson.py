@@ -1,0 +1,125 @@
+"""Clip a GeoJSON document: read it into ragged arrays, clip each kind, write it back."""
+
+from __future__ import annotations
+
+from dataclasses import fields
+from itertools import zip_longest
+
+from rnsca.formats.geojson import from_geojson, to_geojson
+from rnsca.stats import ClipStats
+from rnsca.window import Window
+
+__all__ = ["clip_geojson", "combine_stats"]
+
+_KINDS = ("points", "lines", "polygons")
+
+
+def clip_geojson(obj, window, *, keep_empty: bool = False, max_vertices: int | None = None,
+                 arrays: bool = False, **options) -> tuple[dict, ClipStats]:
+    """Return a GeoJSON object clipped to a rectangular window, and the stats of the clip.
+
+    Every geometry is clipped as ``shapely.intersection`` with the window would, keeping
+    its dimension (see `rnsca.clip_ragged`). The document keeps its shape: Features keep
+    ``properties``, ``id`` and foreign members, ``bbox`` is recomputed where there was one,
+    and each geometry takes the type of what is left (a LineString cut in two becomes a
+    MultiLineString; a single part stays single; Multi* types stay Multi*).
+
+    Parameters
+    ----------
+    obj : dict or str or bytes
+        A GeoJSON Geometry, Feature or FeatureCollection, or JSON text holding one.
+    window : Window or sequence of 4 floats
+        ``[xmin, ymin, xmax, ymax]``, one window for the whole document.
+    keep_empty : bool
+        False (default): Features left empty (or with a null geometry) are dropped, and
+        so are empty members of GeometryCollections. True: they are kept, with an empty
+        ``coordinates`` array (null geometries stay null). The top-level object is
+        always returned.
+    max_vertices : int, optional
+        Refuse documents with more positions than this.
+    arrays : bool
+        Write coordinates as NumPy arrays instead of nested lists (faster for large
+        documents; serialize with `rnsca.formats.geojson.dumps`).
+    **options
+        ``boundary``, ``method``, ``n``, ``max_depth``, ``tolerance``, ``mode``,
+        ``backend``, as for `rnsca.clip_ragged`.
+
+    Returns
+    -------
+    dict
+        The clipped document (see `rnsca.formats.geojson.to_geojson`).
+    ClipStats
+        The stats of the up to three clips (points, lines, polygons) added up.
+
+    Raises
+    ------
+    ParseError
+        `obj` is text that is not JSON.
+    InvalidGeometryError
+        The GeoJSON is invalid; the message (and ``path`` attribute) names the JSON path
+        of the first problem, e.g. ``features[12].geometry.coordinates[0][3][1]``.
+    LimitExceededError
+        More than `max_vertices` positions.
+    InvalidWindowError, InvalidOptionError
+        A bad window or option.
+
+    Examples
+    --------
+    >>> line = {"type": "LineString", "coordinates": [[-5, 1], [5, 1], [5, 20], [8, 20],
+    ...                                                [8, 5], [15, 5]]}
+    >>> doc = {"type": "Feature", "id": 1, "properties": {"name": "a"}, "geometry": line}
+    >>> clipped, stats = clip_geojson(doc, [0, 0, 10, 10])
+    >>> clipped["geometry"]["type"]
+    'MultiLineString'
+    >>> for part in clipped["geometry"]["coordinates"]:
+    ...     print(part)
+    [[0.0, 1.0], [5.0, 1.0], [5.0, 10.0]]
+    [[8.0, 10.0], [8.0, 5.0], [10.0, 5.0]]
+    >>> clipped["id"], clipped["properties"], stats.geometries_in
+    (1, {'name': 'a'}, 1)
+    """
+    from rnsca.ragged import clip_ragged
+
+    window = Window.of(window)
+    layout = from_geojson(obj, max_vertices=max_vertices)
+    clipped, stats = {}, []
+    for kind in _KINDS:
+        if layout.geometry_count(kind) == 0:
+            continue
+        result = clip_ragged(*getattr(layout, kind), window, keep_empty=True, **options)
+        clipped[kind] = (result.geometry_type, result.coords, result.offsets)
+        stats.append(result.stats)
+    if not stats:
+        # Nothing to clip: still check the options, and report zero counts.
+        stats.append(clip_ragged(*layout.points, window, keep_empty=True, **options).stats)
+    document = to_geojson(layout, **clipped, keep_empty=keep_empty, arrays=arrays)
+    return document, combine_stats(stats)
+
+
+def combine_stats(stats) -> ClipStats:
+    """Return the stats of several clipping calls as those of one.
+
+    Counters and per-level tuples add up (tuples elementwise); the deepest levels are the
+    deepest of any call.
+
+    Examples
+    --------
+    >>> a = ClipStats(1, 1, 1, 1, 0, 0, 0, 0, 0, 0, (1,), runs_deepest_level=2)
+    >>> b = ClipStats(2, 0, 2, 0, 2, 0, 0, 0, 0, 0, (2, 1), runs_deepest_level=1)
+    >>> c = combine_stats([a, b])
+    >>> c.segments_in, c.decided_per_level, c.runs_deepest_level
+    (3, (3, 1), 2)
+    """
+    stats = list(stats)
+    if len(stats) == 1:
+        return stats[0]
+    values = {}
+    for field in fields(ClipStats):
+        parts = [getattr(s, field.name) for s in stats]
+        if field.name.endswith("deepest_level"):
+            values[field.name] = max(parts)
+        elif isinstance(parts[0], tuple):
+            values[field.name] = tuple(sum(level) for level in zip_longest(*parts, fillvalue=0))
+        else:
+            values[field.name] = sum(parts)
+    return ClipStats(**values)

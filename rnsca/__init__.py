@@ -4,7 +4,7 @@ The public API lives here; see README.md for a tour.
 """
 
 from rnsca.arrays import GeometryKind, Ragged
-from rnsca.clip import SegmentClipResult, clip_segments
+from rnsca.clip import SegmentClipResult, clip, clip_segments
 from rnsca.errors import (
     BackendUnavailableError,
     InvalidGeometryError,
@@ -43,6 +43,7 @@ __all__ = [
     "UnsupportedGeometryError",
     "Verification",
     "Window",
+    "clip",
     "clip_ragged",
     "clip_segments",
     "verify",

@@ -7,13 +7,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from rnsca.backends.registry import get_backend
-from rnsca.errors import InvalidGeometryError
+from rnsca.errors import InvalidGeometryError, UnsupportedGeometryError
 from rnsca.kernels.validate import first_invalid_segment
 from rnsca.options import Backend, Method, Mode, SegmentOptions
+from rnsca.ragged import clip_ragged, window_table
 from rnsca.stats import ClipStats
 from rnsca.window import Window
 
-__all__ = ["SegmentClipResult", "clip_segments", "as_segments"]
+__all__ = ["SegmentClipResult", "clip_segments", "as_segments", "clip"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -145,3 +146,103 @@ def clip_segments(segments, window, *, method="rnsca", n="auto", max_depth=None,
     pieces, source, t, stats = engine.clip_segments(array, window, options)
     return SegmentClipResult(pieces, source, t, stats, options.method, options.mode,
                              engine.kind, options)
+
+
+def clip(obj, window, **options):
+    """Return `obj` clipped to the window, in the form it came in.
+
+    Parameters
+    ----------
+    obj : shapely.Geometry, array_like of shapely.Geometry, GeoJSON dict or tuple
+        A Shapely geometry gives a Shapely geometry (a LineString cut in two becomes a
+        MultiLineString, as ``shapely.intersection`` gives it; nothing left gives an
+        empty geometry of the input's type). An array of geometries (types may mix;
+        collections are clipped member by member) gives an aligned array. A GeoJSON
+        dict (Geometry, Feature or FeatureCollection) gives a GeoJSON dict (see
+        `clip_geojson`, which also returns the stats). A ``(geometry_type, coords,
+        offsets)`` triple gives a `RaggedClipResult` (see `clip_ragged`).
+    window : Window, sequence of 4 floats, or array_like of shape (n, 4)
+        One window, or one per geometry of an array or triple.
+    **options
+        ``boundary``, ``method``, ``n``, ``max_depth``, ``tolerance``, ``mode``,
+        ``backend`` (see `clip_ragged`); ``keep_empty`` for GeoJSON and triples.
+
+    Returns
+    -------
+    Same kind as `obj`.
+
+    Raises
+    ------
+    UnsupportedGeometryError
+        For an object of another kind.
+
+    Examples
+    --------
+    >>> import shapely
+    >>> clip(shapely.LineString([(-5, 5), (15, 5)]), (0, 0, 10, 10)).wkt
+    'LINESTRING (0 5, 10 5)'
+    """
+    import shapely
+
+    if isinstance(obj, dict):
+        from rnsca.clip_geojson import clip_geojson
+
+        return clip_geojson(obj, window, **options)[0]
+    if isinstance(obj, tuple) and len(obj) == 3:
+        return clip_ragged(*obj, window, **options)
+    if isinstance(obj, shapely.Geometry):
+        return _clip_geometries(np.array([obj], dtype=object), window, options)[0]
+    try:
+        array = np.asarray(obj, dtype=object)
+    except (TypeError, ValueError):
+        array = None
+    if array is None or array.ndim != 1 or not all(
+            isinstance(g, shapely.Geometry) for g in array):
+        raise UnsupportedGeometryError(
+            "clip takes a Shapely geometry, a 1-d array of them, a GeoJSON dict or a "
+            f"(geometry_type, coords, offsets) triple, got {type(obj).__name__}")
+    return _clip_geometries(array, window, options)
+
+
+_SINGLE_OF_MULTI = {"MULTIPOINT": "POINT", "MULTILINESTRING": "LINESTRING",
+                    "MULTIPOLYGON": "POLYGON"}
+
+
+def _clip_geometries(geometries: np.ndarray, window, options: dict) -> np.ndarray:
+    """Clip a Shapely array, one `clip_ragged` call per geometry type present."""
+    import shapely
+
+    options = {k: v for k, v in options.items() if k != "keep_empty"}
+    count = geometries.shape[0]
+    windows, index = window_table(window, count)
+    out = np.empty(count, dtype=object)
+    type_ids = shapely.get_type_id(geometries)
+    collections = np.flatnonzero(type_ids == shapely.GeometryType.GEOMETRYCOLLECTION)
+    for i in collections:
+        members = shapely.get_parts(geometries[i])
+        clipped = _clip_geometries(np.asarray(members, dtype=object),
+                                   np.repeat(windows[index[i]][None, :], len(members), axis=0),
+                                   options) if len(members) else []
+        kept = [g for g in clipped if not g.is_empty]
+        out[i] = shapely.GeometryCollection(kept)
+    has_z = shapely.has_z(geometries)
+    # One call per (type, 2D or 3D): a ragged array has one type and one dimension.
+    groups = sorted({(int(t), bool(z)) for t, z in zip(type_ids, has_z, strict=True)})
+    for type_id, include_z in groups:
+        if type_id < 0 or type_id == shapely.GeometryType.GEOMETRYCOLLECTION:
+            continue  # None stays None; collections went member by member
+        rows = np.flatnonzero((type_ids == type_id) & (has_z == include_z))
+        subset = geometries[rows]
+        triple = shapely.to_ragged_array(subset, include_z=include_z)
+        result = clip_ragged(*triple, windows[index[rows]], keep_empty=True, **options)
+        clipped = result.to_shapely()
+        input_name = shapely.GeometryType(type_id).name
+        if _SINGLE_OF_MULTI.get(result.geometry_type.name) == input_name:
+            # A single-part input cut into one part stays single, as shapely gives it.
+            one = shapely.get_num_geometries(clipped) == 1
+            clipped[one] = shapely.get_geometry(clipped[one], 0)
+        empty = shapely.is_empty(clipped)
+        if empty.any():
+            clipped[empty] = shapely.from_wkt(f"{input_name} EMPTY")
+        out[rows] = clipped
+    return out

@@ -197,7 +197,7 @@ def clip(obj, window, **options):
     except (TypeError, ValueError):
         array = None
     if array is None or array.ndim != 1 or not all(
-            isinstance(g, shapely.Geometry) for g in array):
+            g is None or isinstance(g, shapely.Geometry) for g in array):
         raise UnsupportedGeometryError(
             "clip takes a Shapely geometry, a 1-d array of them, a GeoJSON dict or a "
             f"(geometry_type, coords, offsets) triple, got {type(obj).__name__}")

@@ -151,6 +151,17 @@ class NumbaBackend:
             segments = np.tile([[-1.0, 0.5, 2.0, 0.5]], (n, 1))
             for method in Method:
                 self.clip_segments(segments, window, SegmentOptions.resolve(window, method=method))
+        # Lines and polygons: one square ring crossing the window, 2D and 3D.
+        ring = np.array([[-1.0, 0.25], [2.0, 0.25], [2.0, 0.75], [-1.0, 0.75], [-1.0, 0.25]])
+        offsets = np.array([0, 5], dtype=np.int64)
+        windows = np.array([[0.0, 0.0, 1.0, 1.0]])
+        index = np.zeros(1, dtype=np.int64)
+        options = SegmentOptions.resolve(window)
+        for z in (np.empty(0), np.zeros(5)):
+            for drop in (False, True):
+                self.clip_lines(ring, z, offsets, index, windows, options, drop)
+            self.clip_polygons(ring, z, offsets, np.array([0, 1], dtype=np.int64), index,
+                               windows, options)
 
 
 def _block_size(n_items: int) -> int:

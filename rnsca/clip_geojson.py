@@ -6,6 +6,7 @@ from dataclasses import fields
 from itertools import zip_longest
 
 from rnsca.formats.geojson import from_geojson, to_geojson
+from rnsca.ragged import clip_ragged
 from rnsca.stats import ClipStats
 from rnsca.window import Window
 
@@ -78,8 +79,6 @@ def clip_geojson(obj, window, *, keep_empty: bool = False, max_vertices: int | N
     >>> clipped["id"], clipped["properties"], stats.geometries_in
     (1, {'name': 'a'}, 1)
     """
-    from rnsca.ragged import clip_ragged
-
     window = Window.of(window)
     layout = from_geojson(obj, max_vertices=max_vertices)
     clipped, stats = {}, []

@@ -5,6 +5,7 @@ The public API lives here; see README.md for a tour.
 
 from rnsca.arrays import GeometryKind, Ragged
 from rnsca.clip import SegmentClipResult, clip, clip_segments
+from rnsca.clip_geojson import clip_geojson
 from rnsca.errors import (
     BackendUnavailableError,
     InvalidGeometryError,
@@ -44,6 +45,7 @@ __all__ = [
     "Verification",
     "Window",
     "clip",
+    "clip_geojson",
     "clip_ragged",
     "clip_segments",
     "verify",

@@ -29,6 +29,7 @@ from rnsca.kernels.polylines import (
     RUN_STACK_CAPACITY,
     bound_chains,
     clip_chains,
+    run_box_codes,
 )
 from rnsca.kernels.segments import STACK_CAPACITY
 
@@ -337,6 +338,31 @@ def clip_polygon(xy, z, has_z, ring_offsets, r_begin, r_end, xmin, ymin, xmax, y
     n_r = r_end - r_begin
     if n_r == 0:
         return v, n_rings, n_polys, True
+    # 0. The shell's bounding box decides most polygons at once (the run test of
+    # `clip_chains` on the whole shell): beyond an edge, nothing; strictly inside the
+    # window, every ring as it is (holes lie inside their shell).
+    first = ring_offsets[r_begin]
+    last = ring_offsets[r_begin + 1] - 1
+    if last > first:
+        lo, hi, strict = run_box_codes(xy, first, last, xmin, ymin, xmax, ymax)
+        if (lo & hi) or strict:
+            st[C.RUNS_EVALUATED] += 1
+            st[C.RUN_LEVELS] += 1
+            st[C.SEGMENT_LEVELS] += ring_offsets[r_end] - ring_offsets[r_begin] - n_r
+            if lo & hi:
+                st[C.RUNS_REJECTED] += 1
+                return v, n_rings, n_polys, True
+            st[C.RUNS_ACCEPTED] += 1
+            for r in range(r_begin, r_end):
+                first = ring_offsets[r]
+                last = ring_offsets[r + 1] - 1
+                area = signed_area(xy, first, last) if last > first else 0.0
+                out_ring_starts[n_rings] = v
+                n_rings += 1
+                v = _put_ring(xy, z, has_z, first, last,
+                              (area < 0.0) if r == r_begin else (area > 0.0), out_xy, out_z, v)
+            out_poly_rings[n_polys] = n_r
+            return v, n_rings, n_polys + 1, True
     v_ch = 0
     c_ch = 0
     n_lc = 0

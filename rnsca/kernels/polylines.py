@@ -41,6 +41,7 @@ __all__ = [
     "clip_chains",
     "clip_line_blocks",
     "compact_lines",
+    "run_box_codes",
 ]
 
 # Runs of at most this many segments are clipped segment by segment: below it, a
@@ -175,7 +176,7 @@ def _clip_segments(xy, z, has_z, a, b, xmin, ymin, xmax, ymax, method, n_fixed, 
 
 
 @scalar
-def _run_box_codes(xy, a, b, xmin, ymin, xmax, ymax):
+def run_box_codes(xy, a, b, xmin, ymin, xmax, ymax):
     """Return the outcodes of the bounding box corners of vertices a..b, and strictness.
 
     The third value says whether the box lies strictly inside the window (no vertex on
@@ -240,7 +241,7 @@ def clip_chains(xy, z, has_z, first, last, xmin, ymin, xmax, ymax, method, n_fix
             if level > st[C.RUN_DEEPEST]:
                 st[C.RUN_DEEPEST] = level
             st[C.RUNS_EVALUATED] += 1
-            lo, hi, strict = _run_box_codes(xy, a, b, xmin, ymin, xmax, ymax)
+            lo, hi, strict = run_box_codes(xy, a, b, xmin, ymin, xmax, ymax)
             if (lo | hi) == 0 and (strict or not drop_edge_runs):
                 st[C.RUNS_ACCEPTED] += 1
                 st[C.RUN_LEVELS + slot] += 1

@@ -1,4 +1,4 @@
-"""The printed summary of a benchmark run (rich tables)."""
+"""The printed summaries of the benchmark suites (rich tables)."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ from rich.table import Table
 
 from benchmarks.bench_segments import SWEEP_N
 
-__all__ = ["make_console", "print_summary"]
+__all__ = ["make_console", "print_summary", "print_geometry_summary"]
 
 
 def make_console() -> Console:
@@ -134,8 +134,9 @@ def _startup_table(startup: dict) -> Table:
     return table
 
 
-def _targets_table(targets: list[dict]) -> Table:
-    table = Table(title="Issue targets (exact rnsca, numba)")
+def _targets_table(targets: list[dict], title: str = "Issue targets (exact rnsca, numba)"
+                   ) -> Table:
+    table = Table(title=title)
     for col in ("target", "workload", "value", "limit", "met"):
         table.add_column(col, justify="left" if col in ("target", "workload") else "right")
     for t in targets:
@@ -146,10 +147,16 @@ def _targets_table(targets: list[dict]) -> Table:
             shown = f"{value / 1e6:.1f}M/s"
         elif t["unit"] == "s":
             shown = f"{value:.2f} s"
+        elif t["unit"] == "count":
+            shown = f"{value:,}"
         else:
             shown = f"{value:.2f}x"
-        limit = (f"{t['op']} {t['limit'] / 1e6:.0f}M/s" if t["unit"] == "segments/s"
-                 else f"{t['op']} {t['limit']:g}{' s' if t['unit'] == 's' else 'x'}")
+        if t["unit"] == "segments/s":
+            limit = f"{t['op']} {t['limit'] / 1e6:.0f}M/s"
+        elif t["unit"] == "count":
+            limit = f"{t['op']} {t['limit']}"
+        else:
+            limit = f"{t['op']} {t['limit']:g}{' s' if t['unit'] == 's' else 'x'}"
         met = {True: "[green]met[/]", False: "[red]NOT met[/]", None: "n/a"}[t["met"]]
         table.add_row(t["description"] + (" *" if t.get("note") else ""), t["workload"],
                       shown, limit, met)
@@ -184,3 +191,111 @@ def print_summary(result: dict, console: Console | None = None) -> None:
         if t.get("note"):
             console.print(f"* {t['key']}: {t['note']}")
     console.print(f"Results: {result['paths']['json']}\nFigure:  {result['paths']['figure']}")
+
+
+# --------------------------------------------------------------------------- geometry suite
+
+
+def _faster(ratio: float | None) -> str:
+    """Return a speed-up (reference time / this time) from a time ratio (this / reference)."""
+    return "-" if not ratio else f"{1.0 / ratio:.2f}x"
+
+
+def _per_level(stats: dict | None) -> str:
+    levels = list((stats or {}).get("runs_decided_per_level") or ())
+    while levels and levels[-1] == 0:
+        levels.pop()
+    if not levels:
+        return "-"
+    shown = " ".join(f"{v:,}" for v in levels[:6])
+    return shown + (" ..." if len(levels) > 6 else "")
+
+
+def _geometry_table(w: dict, title: str) -> Table:
+    table = Table(title=title)
+    for col in ("contender", "time", "Mcoord/s", "vs clip_by_rect", "vs CS", "geoms out",
+                "coords out", "invalid", "measure vs ref", "runs decided per level"):
+        table.add_column(col, justify="left" if col in ("contender", "runs decided per level")
+                         else "right")
+    for r in w["runs"]:
+        out = r["output"]
+        rel = out["relative_difference"]
+        table.add_row(
+            r["label"], _seconds(r["seconds"]), _rate(r["coords_per_s"]),
+            _faster(r["time_ratio"]["shapely_clip_by_rect"]),
+            _faster(r["time_ratio"]["segments_cohen_sutherland"]),
+            f"{out['geometries']:,}", f"{out['coords']:,}",
+            "-" if out["invalid"] is None else f"{out['invalid']:,}",
+            "-" if rel is None else f"{rel:.1e} ({out['sources_differing']} differ)",
+            _per_level(r["stats"]))
+    return table
+
+
+def _geojson_table(g: dict) -> Table:
+    info = g["workload"]
+    table = Table(title=(f"{info['name']}: {info['bytes_in'] / 1e6:.1f} MB, "
+                         f"{info['features_in']:,} features, window {info['window']}; load "
+                         f"{info.get('load_average_before')} -> "
+                         f"{info.get('load_average_after')}"))
+    labels = list(g["pipelines"])
+    table.add_column("stage")
+    for label in labels:
+        table.add_column(f"{label}: time", justify="right")
+        table.add_column("MB/s", justify="right")
+        table.add_column("share", justify="right")
+    for stage in ("parse", "clip", "serialize"):
+        cells = []
+        for label in labels:
+            p = g["pipelines"][label]
+            s = p["stages"][stage]
+            cells += [_seconds(s["seconds"]), f"{s['mb_per_s']:.1f}",
+                      f"{s['seconds'] / p['total_seconds']:.0%}"]
+        table.add_row(stage, *cells)
+    steps = list(g["pipelines"][labels[0]]["clip_steps"])  # in the order they ran
+    for step in steps:
+        cells = []
+        for label in labels:
+            value = g["pipelines"][label]["clip_steps"].get(step)
+            cells += [_seconds(value), "", ""]
+        table.add_row(f"  clip step: {step}", *cells)
+    cells = []
+    for label in labels:
+        p = g["pipelines"][label]
+        cells += [_x(p["clip_over_parse_and_serialize"]),
+                  f"{p['features_out']:,} features out", f"{p['bytes_out'] / 1e6:.1f} MB"]
+    table.add_row("clip / (parse + serialize)", *cells)
+    return table
+
+
+def print_geometry_summary(result: dict, console: Console | None = None) -> None:
+    """Print the geometry suite: curves per window, polygons, GeoJSON stages, targets."""
+    console = console or make_console()
+    m = result["machine"]
+    console.print(f"[bold]rnsca geometry benchmarks[/] {result['created']}"
+                  f"{'  (QUICK)' if result['quick'] else ''}: {m['cpu_model']}, "
+                  f"{m['cpus_usable']} usable cores, numba {m['versions']['numba']} "
+                  f"({m['numba_threads']} threads, {m['numba_threading_layer']}), "
+                  f"load {m['load_average_at_start']} -> {result['load_average_at_end']}")
+    if result.get("rnsca_changed_during_run"):
+        console.print("[bold red]rnsca/ was edited during this run.[/]")
+    for w in result["curves"]:
+        info = w["workload"]
+        level0 = info["segments_level0"]
+        console.print(_geometry_table(w, (
+            f"{info['name']}: {info['geometries']} lines, {info['coords']:,} vertices, window "
+            f"{[round(v, 2) for v in info['window']]}; {info['vertices_inside']:.1%} of "
+            f"vertices inside; segments at level 0: {level0['inside']:.1%} inside, "
+            f"{level0['rejected']:.1%} rejected, {level0['ambiguous']:.1%} ambiguous; load "
+            f"{info.get('load_average_before')} -> {info.get('load_average_after')}")))
+    info = result["polygons"]["workload"]
+    bbox = info["bbox_level0"]
+    console.print(_geometry_table(result["polygons"], (
+        f"{info['name']}: {info['coords']:,} vertices in {info['rings']:,} rings, window "
+        f"{info['window']}; bounding boxes {bbox['inside']:.0%} inside, "
+        f"{bbox['outside']:.0%} outside, {bbox['crossing']:.0%} crossing; "
+        f"{info['input_invalid']} invalid inputs; load {info.get('load_average_before')} -> "
+        f"{info.get('load_average_after')}")))
+    console.print(_geojson_table(result["geojson"]))
+    console.print(_targets_table(result["targets"], "Issue 3 targets (rnsca.clip_ragged, "
+                                 "defaults; ratios from this run)"))
+    console.print(f"Results: {result['paths']['json']}")

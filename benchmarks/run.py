@@ -1,14 +1,17 @@
-"""Run the segment benchmarks; print a summary, write JSON and the Figure 5 plot.
+"""Run the benchmarks (segments, then geometry); print summaries, write JSON and a plot.
 
 Usage::
 
-    python -m benchmarks.run            # full run (several minutes; make bench)
-    python -m benchmarks.run --quick    # small sizes only, a smoke test (seconds)
+    python -m benchmarks.run                    # full run of both suites (make bench)
+    python -m benchmarks.run --quick            # small sizes only, a smoke test
+    python -m benchmarks.run --suite geometry   # one suite: segments or geometry
     RNSCA_BENCH_QUICK=1 python -m benchmarks.run
 
-Writes ``<out>/segments-<timestamp>.json`` and ``.png``, and copies both to
-``<out>/latest.json`` and ``latest.png``. A full run into the default directory also
-copies the plot to ``benchmarks/figure5.png`` (the copy the README shows).
+The segment suite writes ``<out>/segments-<timestamp>.json`` and ``.png``, and copies
+both to ``<out>/latest.json`` and ``latest.png``; a full run into the default directory
+also copies the plot to ``benchmarks/figure5.png`` (the copy the README shows). The
+geometry suite (issue 3: curves, polygons with holes, GeoJSON) writes
+``<out>/geometry-<timestamp>.json`` and copies it to ``<out>/latest-geometry.json``.
 """
 
 from __future__ import annotations
@@ -25,7 +28,7 @@ from pathlib import Path
 
 import numba
 
-from benchmarks import datasets
+from benchmarks import bench_geometry, datasets
 from benchmarks.bench_segments import (
     Plan,
     backend_unavailable_reason,
@@ -35,11 +38,13 @@ from benchmarks.bench_segments import (
 )
 from benchmarks.machine import describe_machine, load_average, source_digest
 from benchmarks.plot import draw_figure5
-from benchmarks.report import print_summary
+from benchmarks.report import print_geometry_summary, print_summary
 from benchmarks.startup import measure_startup
 from benchmarks.timing import Policy
 
 SCHEMA = "rnsca-bench-segments/1"
+GEOMETRY_SCHEMA = "rnsca-bench-geometry/1"
+SUITES = ("segments", "geometry")
 HERE = Path(__file__).resolve().parent
 PROJECT_ROOT = HERE.parent
 DEFAULT_OUT = HERE / "results"
@@ -89,7 +94,7 @@ def _json_default(obj):
 
 def run(quick: bool, out_dir: Path, sizes: list[int] | None = None,
         shapely_10m: str = "measure", copy_figure: bool = True) -> dict:
-    """Run every benchmark; write JSON and PNG into `out_dir`; return the result dict."""
+    """Run every segment benchmark; write JSON and PNG into `out_dir`; return the result."""
     started = time.monotonic()
     stamp = datetime.now(timezone.utc).strftime("%Y%m%dT%H%M%SZ")
     config = build_config(quick, sizes, shapely_10m)
@@ -176,6 +181,62 @@ def run(quick: bool, out_dir: Path, sizes: list[int] | None = None,
     return result
 
 
+def run_geometry(quick: bool, out_dir: Path) -> dict:
+    """Run the geometry benchmarks (issue 3); write JSON into `out_dir`; return the result."""
+    started = time.monotonic()
+    stamp = datetime.now(timezone.utc).strftime("%Y%m%dT%H%M%SZ")
+    plan = bench_geometry.QUICK_PLAN if quick else bench_geometry.FULL_PLAN
+    machine = describe_machine(PROJECT_ROOT)
+    curves = bench_geometry.run_curves(plan, log=_log)
+    gc.collect()
+    polygons = bench_geometry.run_polygons(plan, log=_log)
+    gc.collect()
+    geojson = bench_geometry.run_geojson(plan, log=_log)
+    gc.collect()
+    machine["numba_threading_layer"] = numba.threading_layer()
+
+    out_dir.mkdir(parents=True, exist_ok=True)
+    json_path = out_dir / f"geometry-{stamp}.json"
+    result = {
+        "schema": GEOMETRY_SCHEMA,
+        "created": stamp,
+        "quick": quick,
+        "machine": machine,
+        "load_average_at_end": load_average(),
+        "rnsca_source_sha256_at_end": source_digest(PROJECT_ROOT),
+        "rnsca_changed_during_run": (source_digest(PROJECT_ROOT)
+                                     != machine["git"]["rnsca_source_sha256"]),
+        "config": {
+            "n_curves": plan.n_curves,
+            "curve_vertices": list(datasets.CURVE_VERTICES),
+            "curve_windows": {k: list(v) for k, v in datasets.CURVE_WINDOWS.items()},
+            "n_polygons": plan.n_polygons,
+            "geojson_lines": plan.geojson_lines,
+            "geojson_polygons": plan.geojson_polygons,
+            "policy": vars(plan.policy),
+            "geojson_repeats": plan.geojson_repeats,
+            "timing": ("best (min) of repeats; contenders of a workload timed round-robin, "
+                       "each called once on the whole input before timing (compiles "
+                       "kernels); garbage collector paused during timed calls; GeoJSON "
+                       "stages timed in order per repeat, best of each stage"),
+            "time_ratio": "this contender's seconds / the reference's seconds, same workload",
+            "output": ("per contender, outside the timing: output geometries and coords, "
+                       "invalid polygons (shapely.is_valid), length or area against the "
+                       "reference with the same boundary semantics"),
+        },
+        "curves": curves,
+        "polygons": polygons,
+        "geojson": geojson,
+        "targets": bench_geometry.evaluate_geometry_targets(curves, polygons, geojson),
+        "elapsed_seconds": time.monotonic() - started,
+        "paths": {"json": str(json_path)},
+    }
+    text = json.dumps(result, indent=1, default=_json_default)
+    json_path.write_text(text)
+    (out_dir / "latest-geometry.json").write_text(text)
+    return result
+
+
 def main(argv: list[str] | None = None) -> int:
     """Parse the command line, run, print the summary."""
     parser = argparse.ArgumentParser(prog="python -m benchmarks.run", description=__doc__,
@@ -183,6 +244,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--quick", action="store_true",
                         default=os.environ.get("RNSCA_BENCH_QUICK", "") not in ("", "0"),
                         help="small sizes only (smoke test); also RNSCA_BENCH_QUICK=1")
+    parser.add_argument("--suite", choices=("all", *SUITES), default="all",
+                        help="run both suites (default) or only one")
     parser.add_argument("--out", type=Path, default=DEFAULT_OUT,
                         help=f"directory for the JSON and PNG (default {DEFAULT_OUT})")
     parser.add_argument("--sizes", type=lambda s: [int(v) for v in s.split(",")],
@@ -194,8 +257,10 @@ def main(argv: list[str] | None = None) -> int:
                         help="do not update benchmarks/figure5.png")
     args = parser.parse_args(argv)
     copy_figure = not args.no_figure_copy and args.out.resolve() == DEFAULT_OUT
-    result = run(args.quick, args.out, args.sizes, args.shapely_10m, copy_figure)
-    print_summary(result)
+    if args.suite in ("all", "segments"):
+        print_summary(run(args.quick, args.out, args.sizes, args.shapely_10m, copy_figure))
+    if args.suite in ("all", "geometry"):
+        print_geometry_summary(run_geometry(args.quick, args.out))
     return 0
 
 

@@ -1,7 +1,7 @@
 """The benchmark harness runs end to end in quick mode and writes well-formed results.
 
-No timing assertions: this only proves `make bench` will not crash and that the JSON
-keeps the structure benchmarks/README.md documents.
+No timing assertions: this only proves `make bench` will not crash and that the JSON of
+both suites (segments, geometry) keeps the structure benchmarks/README.md documents.
 """
 
 import json
@@ -26,13 +26,27 @@ RUN_KEYS = {
 }
 TARGETS = {"throughput", "copy_floor", "vs_shapely", "vs_cohen_sutherland", "peak_memory",
            "second_process"}
+GEOMETRY_LABELS = {
+    "rnsca:clip_ragged", "rnsca:clip_ragged:interior", "shapely:clip_by_rect",
+    "shapely:intersection", "objects:shapely:clip_by_rect", "objects:shapely:intersection",
+    "objects:rnsca:clip",
+}
+SEGMENT_LABELS = {"segments:cohen_sutherland", "segments:rnsca"}
+GEOMETRY_RUN_KEYS = {"label", "kind", "seconds", "seconds_median", "repeats", "number",
+                     "coords_per_s", "stats", "time_ratio", "output"}
+OUTPUT_KEYS = {"geometries", "coords", "invalid", "reference", "measure", "reference_measure",
+               "relative_difference", "max_abs_difference_per_source", "sources_differing"}
+GEOMETRY_TARGETS = {"curves_25_vs_shapely", "curves_10_vs_shapely", "curves_1_vs_shapely",
+                    "curves_10_vs_cohen_sutherland", "curves_1_vs_cohen_sutherland",
+                    "polygons_vs_shapely", "polygons_valid", "geojson_clip_share",
+                    "geojson_clip_share_arrays"}
 
 
 @pytest.fixture(scope="module")
 def quick_run(tmp_path_factory):
     out = tmp_path_factory.mktemp("bench")
     proc = subprocess.run([sys.executable, "-m", "benchmarks.run", "--quick", "--out", str(out)],
-                          cwd=ROOT, capture_output=True, text=True, timeout=120, check=False)
+                          cwd=ROOT, capture_output=True, text=True, timeout=300, check=False)
     assert proc.returncode == 0, proc.stderr[-3000:]
     return out, json.loads((out / "latest.json").read_text()), proc.stdout
 
@@ -95,3 +109,89 @@ def test_startup_and_targets_are_reported(quick_run):
     for t in targets.values():
         assert t["met"] in (True, False)
     assert "Issue targets" in stdout
+
+
+def test_geometry_suite_writes_its_json_and_latest_copy(quick_run):
+    out, _, stdout = quick_run
+    stamped = list(out.glob("geometry-*.json"))
+    assert len(stamped) == 1
+    result = json.loads((out / "latest-geometry.json").read_text())
+    assert json.loads(stamped[0].read_text()) == result
+    assert result["schema"] == "rnsca-bench-geometry/1"
+    assert result["quick"] is True
+    assert {"cpu_model", "cpu_count", "python", "numba_threads"} <= result["machine"].keys()
+    assert "Issue 3 targets" in stdout
+
+
+@pytest.fixture(scope="module")
+def geometry(quick_run):
+    out, _, _ = quick_run
+    return json.loads((out / "latest-geometry.json").read_text())
+
+
+def test_curves_run_at_three_centred_windows_with_every_contender(geometry):
+    names = [w["workload"]["name"] for w in geometry["curves"]]
+    assert names == ["curves-25%", "curves-10%", "curves-1%"]
+    assert geometry["curves"][0]["workload"]["window"] == [250.0, 250.0, 750.0, 750.0]
+    assert geometry["curves"][2]["workload"]["window"] == [450.0, 450.0, 550.0, 550.0]
+    for w in geometry["curves"]:
+        info = w["workload"]
+        assert info["geometries"] == 6
+        assert 2000 <= info["vertices_per_line"][0] <= info["vertices_per_line"][1] <= 5000
+        assert info["segments"] == info["coords"] - info["geometries"]
+        runs = {r["label"]: r for r in w["runs"]}
+        assert runs.keys() == GEOMETRY_LABELS | SEGMENT_LABELS
+        assert runs["segments:cohen_sutherland"]["time_ratio"]["segments_cohen_sutherland"] == 1
+
+
+def test_polygon_run_checks_validity_of_every_output(geometry):
+    info = geometry["polygons"]["workload"]
+    assert (info["geometries"], info["rings"], info["coords"]) == (2000, 4000, 2000 * 52)
+    assert info["input_invalid"] == 0
+    runs = {r["label"]: r for r in geometry["polygons"]["runs"]}
+    assert runs.keys() == GEOMETRY_LABELS
+    for r in runs.values():
+        assert isinstance(r["output"]["invalid"], int)
+
+
+def test_every_geometry_run_is_timed_compared_and_agrees_with_shapely(geometry):
+    for w in [*geometry["curves"], geometry["polygons"]]:
+        for r in w["runs"]:
+            assert GEOMETRY_RUN_KEYS <= r.keys()
+            assert OUTPUT_KEYS <= r["output"].keys()
+            assert r["seconds"] > 0
+            assert r["time_ratio"]["shapely_clip_by_rect"] > 0
+            # Random data never touches the window's edge: every method gives Shapely's
+            # length or area, per source geometry.
+            assert r["output"]["relative_difference"] < 1e-9
+            assert r["output"]["sources_differing"] == 0
+            if r["label"].startswith("rnsca:"):
+                assert r["stats"]["geometries_in"] == w["workload"]["geometries"]
+                assert sum(r["stats"]["runs_decided_per_level"]) > 0
+
+
+def test_geojson_pipelines_report_parse_clip_and_serialize_separately(geometry):
+    g = geometry["geojson"]
+    assert g["workload"]["features_in"] > 0
+    assert set(g["workload"]["geometry_kinds_in"]) == {"LineString", "MultiLineString",
+                                                       "Polygon", "MultiPolygon"}
+    assert set(g["pipelines"]) == {"lists", "arrays"}
+    for p in g["pipelines"].values():
+        assert set(p["stages"]) == {"parse", "clip", "serialize"}
+        for stage in p["stages"].values():
+            assert stage["seconds"] > 0
+        assert p["clip_over_parse_and_serialize"] == (
+            p["stages"]["clip"]["seconds"]
+            / (p["stages"]["parse"]["seconds"] + p["stages"]["serialize"]["seconds"]))
+        assert set(p["clip_steps"]) == {"read", "clip_ragged", "clip_ragged_lines",
+                                        "clip_ragged_polygons", "write"}
+        assert 0 < p["features_out"] < g["workload"]["features_in"]
+        assert p["stats"]["geometries_in"] == g["workload"]["features_in"]
+    assert g["pipelines"]["lists"]["bytes_out"] == g["pipelines"]["arrays"]["bytes_out"]
+
+
+def test_geometry_targets_are_all_evaluated(geometry):
+    targets = {t["key"]: t for t in geometry["targets"]}
+    assert targets.keys() == GEOMETRY_TARGETS
+    for t in targets.values():
+        assert t["met"] in (True, False)

@@ -338,31 +338,6 @@ def clip_polygon(xy, z, has_z, ring_offsets, r_begin, r_end, xmin, ymin, xmax, y
     n_r = r_end - r_begin
     if n_r == 0:
         return v, n_rings, n_polys, True
-    # 0. The shell's bounding box decides most polygons at once (the run test of
-    # `clip_chains` on the whole shell): beyond an edge, nothing; strictly inside the
-    # window, every ring as it is (holes lie inside their shell).
-    first = ring_offsets[r_begin]
-    last = ring_offsets[r_begin + 1] - 1
-    if last > first:
-        lo, hi, strict = run_box_codes(xy, first, last, xmin, ymin, xmax, ymax)
-        if (lo & hi) or strict:
-            st[C.RUNS_EVALUATED] += 1
-            st[C.RUN_LEVELS] += 1
-            st[C.SEGMENT_LEVELS] += ring_offsets[r_end] - ring_offsets[r_begin] - n_r
-            if lo & hi:
-                st[C.RUNS_REJECTED] += 1
-                return v, n_rings, n_polys, True
-            st[C.RUNS_ACCEPTED] += 1
-            for r in range(r_begin, r_end):
-                first = ring_offsets[r]
-                last = ring_offsets[r + 1] - 1
-                area = signed_area(xy, first, last) if last > first else 0.0
-                out_ring_starts[n_rings] = v
-                n_rings += 1
-                v = _put_ring(xy, z, has_z, first, last,
-                              (area < 0.0) if r == r_begin else (area > 0.0), out_xy, out_z, v)
-            out_poly_rings[n_polys] = n_r
-            return v, n_rings, n_polys + 1, True
     v_ch = 0
     c_ch = 0
     n_lc = 0
@@ -668,6 +643,48 @@ def clip_polygon_blocks(xy, z, has_z, ring_offsets, polygon_offsets, polygon_win
             w = polygon_window[p]
             v0 = vertex_slot[p]
             r0 = ring_slot[p]
+            r_begin = polygon_offsets[p]
+            r_end = polygon_offsets[p + 1]
+            # The shell's bounding box decides most polygons at once (the run test of
+            # `clip_chains` on the whole shell): beyond an edge, nothing; strictly
+            # inside the window, every ring as it is (holes lie inside their shell).
+            # Done here rather than in `clip_polygon`: a call passing its thirty
+            # arrays costs more than the test.
+            first = ring_offsets[r_begin]
+            last = ring_offsets[r_begin + 1] - 1
+            if r_end > r_begin and last > first:
+                lo, hi, strict = run_box_codes(xy, first, last, windows[w, 0], windows[w, 1],
+                                               windows[w, 2], windows[w, 3])
+                if (lo & hi) or strict:
+                    st[C.RUNS_EVALUATED] += 1
+                    st[C.RUN_LEVELS] += 1
+                    st[C.SEGMENT_LEVELS] += ring_offsets[r_end] - first - (r_end - r_begin)
+                    n_vertices[p] = 0
+                    n_rings[p] = 0
+                    n_polys[p] = 0
+                    if lo & hi:
+                        st[C.RUNS_REJECTED] += 1
+                        continue
+                    st[C.RUNS_ACCEPTED] += 1
+                    v = v0
+                    for r in range(r_begin, r_end):
+                        first = ring_offsets[r]
+                        last = ring_offsets[r + 1] - 1
+                        area = signed_area(xy, first, last) if last > first else 0.0
+                        out_ring_starts[r0 + r - r_begin] = v
+                        reverse = (area < 0.0) if r == r_begin else (area > 0.0)
+                        for k in range(last - first + 1):
+                            i = last - k if reverse else first + k
+                            out_xy[v, 0] = xy[i, 0]
+                            out_xy[v, 1] = xy[i, 1]
+                            if has_z:
+                                out_z[v] = z[i]
+                            v += 1
+                    out_poly_rings[r0] = r_end - r_begin
+                    n_vertices[p] = v - v0
+                    n_rings[p] = r_end - r_begin
+                    n_polys[p] = 1
+                    continue
             v, nr, npoly, ok = clip_polygon(
                 xy, z, has_z, ring_offsets, polygon_offsets[p], polygon_offsets[p + 1],
                 windows[w, 0], windows[w, 1], windows[w, 2], windows[w, 3], method, n_fixed,

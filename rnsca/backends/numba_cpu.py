@@ -100,37 +100,26 @@ class NumbaBackend:
                       options: SegmentOptions):
         """Return ``(xy, z, ring_offsets, rings_per_output, outputs_per_polygon, counters)``.
 
-        See `ClipBackend.clip_polygons`; bound, prefix sum, write, compact.
+        See `ClipBackend.clip_polygons`; count, prefix sum, write.
         """
         n_polygons = polygon_offsets.shape[0] - 1
         has_z = z.shape[0] > 0
         block = _block_size(n_polygons)
         n_blocks = max(1, -(-n_polygons // block))
         counters = np.zeros((n_blocks, C.WIDTH), dtype=np.int64)
-        bound_v = np.empty(n_polygons, dtype=np.int64)
-        bound_r = np.empty(n_polygons, dtype=np.int64)
-        bound_p = np.empty(n_polygons, dtype=np.int64)
-        scratch_v = np.empty(n_polygons, dtype=np.int64)
-        scratch_c = np.empty(n_polygons, dtype=np.int64)
+        polygon_class = np.empty(n_polygons, dtype=np.int8)
+        scratch_v = np.zeros(n_polygons, dtype=np.int64)
+        scratch_c = np.zeros(n_polygons, dtype=np.int64)
+        n_vertices = np.empty(n_polygons, dtype=np.int64)
+        n_rings = np.empty(n_polygons, dtype=np.int64)
+        n_polys = np.empty(n_polygons, dtype=np.int64)
         args = (xy, z, has_z, ring_offsets, polygon_offsets, polygon_window, windows,
                 _METHOD_ID[options.method], options.n, options.max_depth, options.tolerance,
                 options.auto_piece, True, block)
         nothing_i = np.empty(0, dtype=np.int64)
-        PG.clip_polygon_blocks(*args, False, nothing_i, nothing_i, np.empty((0, 2)),
-                               np.empty(0), nothing_i, nothing_i, bound_v, bound_r, bound_p,
-                               scratch_v, scratch_c, counters)
-        vertex_slot = _exclusive_sum(bound_v)
-        ring_slot = _exclusive_sum(bound_r)
-        slot_xy = np.empty((int(vertex_slot[-1]), 2))
-        slot_z = np.empty(int(vertex_slot[-1]) if has_z else 0)
-        slot_rings = np.empty(int(ring_slot[-1]), dtype=np.int64)
-        slot_poly_rings = np.empty(int(ring_slot[-1]), dtype=np.int64)
-        n_vertices = np.empty(n_polygons, dtype=np.int64)
-        n_rings = np.empty(n_polygons, dtype=np.int64)
-        n_polys = np.empty(n_polygons, dtype=np.int64)
-        PG.clip_polygon_blocks(*args, True, vertex_slot, ring_slot, slot_xy, slot_z, slot_rings,
-                               slot_poly_rings, n_vertices, n_rings, n_polys, scratch_v,
-                               scratch_c, counters)
+        PG.clip_polygon_blocks(*args, False, polygon_class, scratch_v, scratch_c, nothing_i,
+                               nothing_i, nothing_i, np.empty((0, 2)), np.empty(0), nothing_i,
+                               nothing_i, n_vertices, n_rings, n_polys, counters)
         vertex_start = _exclusive_sum(n_vertices)
         ring_start = _exclusive_sum(n_rings)
         poly_start = _exclusive_sum(n_polys)
@@ -139,9 +128,9 @@ class NumbaBackend:
         out_rings = np.empty(int(ring_start[-1]) + 1, dtype=np.int64)
         out_rings[-1] = out_xy.shape[0]
         out_poly_rings = np.empty(int(poly_start[-1]), dtype=np.int64)
-        PG.compact_polygons(vertex_slot, ring_slot, n_vertices, n_rings, n_polys, slot_xy,
-                            slot_z, has_z, slot_rings, slot_poly_rings, vertex_start, ring_start,
-                            poly_start, out_xy, out_z, out_rings, out_poly_rings)
+        PG.clip_polygon_blocks(*args, True, polygon_class, scratch_v, scratch_c, vertex_start,
+                               ring_start, poly_start, out_xy, out_z, out_rings, out_poly_rings,
+                               n_vertices, n_rings, n_polys, counters)
         return out_xy, out_z, out_rings, out_poly_rings, n_polys, counters
 
     def warm_up(self) -> None:

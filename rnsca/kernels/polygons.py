@@ -36,7 +36,6 @@ from rnsca.kernels.segments import STACK_CAPACITY
 __all__ = [
     "boundary_key",
     "clip_polygon_blocks",
-    "compact_polygons",
     "point_in_ring",
     "signed_area",
 ]
@@ -562,61 +561,97 @@ def clip_polygon(xy, z, has_z, ring_offsets, r_begin, r_end, xmin, ymin, xmax, y
     return v, n_rings, n_polys, ok
 
 
+_OUTSIDE, _INSIDE, _AMBIGUOUS = 0, 1, 2
+
+
+@scalar
+def _output_bound(scratch_vertices, scratch_chains, n_r):
+    """Return the output vertex bound of a polygon from its chain bounds.
+
+    Chain vertices (uncut rings included); up to four corners, a closing vertex and a
+    loop split per chain; the window's five.
+    """
+    return scratch_vertices + 7 * scratch_chains + n_r + 6
+
+
 @parallel
 def clip_polygon_blocks(xy, z, has_z, ring_offsets, polygon_offsets, polygon_window, windows,
                         method, n_fixed, max_depth, tol, auto_piece, exact, block_size, write,
-                        vertex_slot, ring_slot, out_xy, out_z, out_ring_starts, out_poly_rings,
-                        n_vertices, n_rings, n_polys, scratch_vertices, scratch_chains,
-                        counters):
-    """Bound (``write=False``) or clip (``write=True``) every polygon of a ragged array.
+                        polygon_class, scratch_vertices, scratch_chains, vertex_start,
+                        ring_start, poly_start, out_xy, out_z, out_ring_starts, out_poly_rings,
+                        n_vertices, n_rings, n_polys, counters):
+    """Count (``write=False``) or write (``write=True``) every polygon of a ragged array.
 
     Polygon ``p`` has rings ``polygon_offsets[p]..polygon_offsets[p+1]-1`` (the shell
-    first) of ``ring_offsets``, clipped against ``windows[polygon_window[p]]``. The bound
-    pass fills `n_vertices` and `n_rings` with output bounds (`n_polys` gets the ring
-    bound too) and the scratch sizes; the write pass writes polygon p from
-    ``vertex_slot[p]`` / ``ring_slot[p]`` (output polygons use the same ring slot) and
-    replaces the bounds with the actual counts.
+    first) of ``ring_offsets``, clipped against ``windows[polygon_window[p]]``.
+
+    The shell's bounding box classifies each polygon (the run test of `clip_chains` on
+    the whole shell): beyond an edge, nothing is left; strictly inside the window, every
+    ring is copied as it is (holes lie inside their shell); only the others are cut.
+    The count pass records the class and the exact output counts (`n_vertices`,
+    `n_rings`, `n_polys`), cutting the ambiguous polygons into scratch space; the write
+    pass writes polygon p at ``vertex_start[p]``, ``ring_start[p]`` and
+    ``poly_start[p]`` (exclusive sums of the counts), cutting the ambiguous ones again.
+    Ambiguous polygons are few where it matters, so cutting them twice costs less than
+    over-allocating every output and compacting it. Stats are counted in the write pass.
     """
     n_polygons = polygon_offsets.shape[0] - 1
     n_blocks = counters.shape[0]
     for blk in prange(n_blocks):
         st = counters[blk]
+        if not write:
+            st = np.zeros(C.WIDTH, dtype=np.int64)  # counted once, in the write pass
         lo_p = blk * block_size
         hi_p = min(n_polygons, (blk + 1) * block_size)
-        if not write:
-            for p in range(lo_p, hi_p):
-                w = polygon_window[p]
-                sv = 0
-                sc = 0
-                for r in range(polygon_offsets[p], polygon_offsets[p + 1]):
-                    first = ring_offsets[r]
-                    last = ring_offsets[r + 1] - 1
-                    if last > first:
-                        nv, nc, _ = bound_chains(xy, first, last, windows[w, 0], windows[w, 1],
-                                                 windows[w, 2], windows[w, 3])
-                        sv += nv
-                        sc += nc
-                    else:
-                        sc += 1
-                n_r = polygon_offsets[p + 1] - polygon_offsets[p]
-                scratch_vertices[p] = sv + n_r
-                scratch_chains[p] = sc
-                # Chain vertices (uncut rings included); up to four corners, a closing
-                # vertex and a loop split per chain; the window's five.
-                bound = sv + 7 * sc + n_r + 6
-                n_vertices[p] = bound
-                n_rings[p] = bound // 4 + 1
-                n_polys[p] = bound // 4 + 1
-            continue
         max_v = 1
         max_c = 1
         max_r = 1
         max_out = 1
         for p in range(lo_p, hi_p):
-            max_v = max(max_v, scratch_vertices[p])
-            max_c = max(max_c, scratch_chains[p])
-            max_r = max(max_r, polygon_offsets[p + 1] - polygon_offsets[p])
-            max_out = max(max_out, vertex_slot[p + 1] - vertex_slot[p])
+            r_begin = polygon_offsets[p]
+            r_end = polygon_offsets[p + 1]
+            n_r = r_end - r_begin
+            if not write:
+                w = polygon_window[p]
+                cls = _OUTSIDE
+                first = ring_offsets[r_begin] if n_r > 0 else 0
+                last = ring_offsets[r_begin + 1] - 1 if n_r > 0 else 0
+                if last > first:
+                    lo, hi, strict = run_box_codes(xy, first, last, windows[w, 0],
+                                                   windows[w, 1], windows[w, 2], windows[w, 3])
+                    cls = _OUTSIDE if lo & hi else (_INSIDE if strict else _AMBIGUOUS)
+                polygon_class[p] = cls
+                n_vertices[p] = 0
+                n_rings[p] = 0
+                n_polys[p] = 0
+                if cls == _INSIDE:
+                    n_vertices[p] = ring_offsets[r_end] - ring_offsets[r_begin]
+                    n_rings[p] = n_r
+                    n_polys[p] = 1
+                elif cls == _AMBIGUOUS:
+                    sv = n_r
+                    sc = 0
+                    for r in range(r_begin, r_end):
+                        first = ring_offsets[r]
+                        last = ring_offsets[r + 1] - 1
+                        if last > first:
+                            nv, nc, _ = bound_chains(xy, first, last, windows[w, 0],
+                                                     windows[w, 1], windows[w, 2],
+                                                     windows[w, 3])
+                            sv += nv
+                            sc += nc
+                        else:
+                            sc += 1
+                    scratch_vertices[p] = sv
+                    scratch_chains[p] = sc
+            if polygon_class[p] == _AMBIGUOUS:
+                max_v = max(max_v, scratch_vertices[p])
+                max_c = max(max_c, scratch_chains[p])
+                max_r = max(max_r, n_r)
+                max_out = max(max_out, _output_bound(scratch_vertices[p], scratch_chains[p],
+                                                     n_r))
+        if max_out == 1 and not write:
+            continue  # no ambiguous polygon in this block
         run_stack = np.empty((RUN_STACK_CAPACITY, 3), dtype=np.int64)
         stack_f = np.empty((STACK_CAPACITY, 6), dtype=np.float64)
         stack_i = np.empty((STACK_CAPACITY, 3), dtype=np.int64)
@@ -639,84 +674,61 @@ def clip_polygon_blocks(xy, z, has_z, ring_offsets, polygon_offsets, polygon_win
         rg_start = np.empty(max_out // 4 + 2, dtype=np.int64)
         rg_sign = np.empty(max_out // 4 + 2, dtype=np.int64)
         rg_done = np.empty(max_out // 4 + 2, dtype=np.bool_)
+        if write:
+            dst_xy = out_xy
+            dst_z = out_z
+            dst_rings = out_ring_starts
+            dst_polys = out_poly_rings
+        else:
+            dst_xy = np.empty((max_out, 2), dtype=np.float64)
+            dst_z = np.empty(max_out if has_z else 0, dtype=np.float64)
+            dst_rings = np.empty(max_out // 4 + 2, dtype=np.int64)
+            dst_polys = np.empty(max_out // 4 + 2, dtype=np.int64)
         for p in range(lo_p, hi_p):
-            w = polygon_window[p]
-            v0 = vertex_slot[p]
-            r0 = ring_slot[p]
+            cls = polygon_class[p]
             r_begin = polygon_offsets[p]
             r_end = polygon_offsets[p + 1]
-            # The shell's bounding box decides most polygons at once (the run test of
-            # `clip_chains` on the whole shell): beyond an edge, nothing; strictly
-            # inside the window, every ring as it is (holes lie inside their shell).
-            # Done here rather than in `clip_polygon`: a call passing its thirty
-            # arrays costs more than the test.
-            first = ring_offsets[r_begin]
-            last = ring_offsets[r_begin + 1] - 1
-            if r_end > r_begin and last > first:
-                lo, hi, strict = run_box_codes(xy, first, last, windows[w, 0], windows[w, 1],
-                                               windows[w, 2], windows[w, 3])
-                if (lo & hi) or strict:
-                    st[C.RUNS_EVALUATED] += 1
-                    st[C.RUN_LEVELS] += 1
-                    st[C.SEGMENT_LEVELS] += ring_offsets[r_end] - first - (r_end - r_begin)
-                    n_vertices[p] = 0
-                    n_rings[p] = 0
-                    n_polys[p] = 0
-                    if lo & hi:
-                        st[C.RUNS_REJECTED] += 1
-                        continue
-                    st[C.RUNS_ACCEPTED] += 1
-                    v = v0
-                    for r in range(r_begin, r_end):
-                        first = ring_offsets[r]
-                        last = ring_offsets[r + 1] - 1
-                        area = signed_area(xy, first, last) if last > first else 0.0
-                        out_ring_starts[r0 + r - r_begin] = v
-                        reverse = (area < 0.0) if r == r_begin else (area > 0.0)
-                        for k in range(last - first + 1):
-                            i = last - k if reverse else first + k
-                            out_xy[v, 0] = xy[i, 0]
-                            out_xy[v, 1] = xy[i, 1]
-                            if has_z:
-                                out_z[v] = z[i]
-                            v += 1
-                    out_poly_rings[r0] = r_end - r_begin
-                    n_vertices[p] = v - v0
-                    n_rings[p] = r_end - r_begin
-                    n_polys[p] = 1
+            n_segments = ring_offsets[r_end] - ring_offsets[r_begin] - (r_end - r_begin)
+            if cls != _AMBIGUOUS:
+                if not write:
                     continue
+                st[C.RUNS_EVALUATED] += 1
+                st[C.RUN_LEVELS] += 1
+                st[C.SEGMENT_LEVELS] += n_segments
+                if cls == _OUTSIDE:
+                    st[C.RUNS_REJECTED] += 1
+                    continue
+                st[C.RUNS_ACCEPTED] += 1
+                v = vertex_start[p]
+                for r in range(r_begin, r_end):
+                    first = ring_offsets[r]
+                    last = ring_offsets[r + 1] - 1
+                    area = signed_area(xy, first, last) if last > first else 0.0
+                    out_ring_starts[ring_start[p] + r - r_begin] = v
+                    reverse = (area < 0.0) if r == r_begin else (area > 0.0)
+                    for k in range(last - first + 1):
+                        i = last - k if reverse else first + k
+                        out_xy[v, 0] = xy[i, 0]
+                        out_xy[v, 1] = xy[i, 1]
+                        if has_z:
+                            out_z[v] = z[i]
+                        v += 1
+                out_poly_rings[poly_start[p]] = r_end - r_begin
+                continue
+            w = polygon_window[p]
+            v0 = vertex_start[p] if write else 0
+            r0 = ring_start[p] if write else 0
+            q0 = poly_start[p] if write else 0
             v, nr, npoly, ok = clip_polygon(
-                xy, z, has_z, ring_offsets, polygon_offsets[p], polygon_offsets[p + 1],
-                windows[w, 0], windows[w, 1], windows[w, 2], windows[w, 3], method, n_fixed,
-                max_depth, tol, auto_piece, exact, out_xy, out_z, out_ring_starts,
-                out_poly_rings, v0, r0, r0, st, run_stack, stack_f, stack_i, ch_xy, ch_z,
-                ch_starts, lc, ev_key, ev_chain, order, ring_state, ring_rev, ring_first,
-                ring_last, tmp_xy, tmp_z, stk, rg_xy, rg_z, rg_start, rg_sign, rg_done)
+                xy, z, has_z, ring_offsets, r_begin, r_end, windows[w, 0], windows[w, 1],
+                windows[w, 2], windows[w, 3], method, n_fixed, max_depth, tol, auto_piece,
+                exact, dst_xy, dst_z, dst_rings, dst_polys, v0, r0, q0, st, run_stack,
+                stack_f, stack_i, ch_xy, ch_z, ch_starts, lc, ev_key, ev_chain, order,
+                ring_state, ring_rev, ring_first, ring_last, tmp_xy, tmp_z, stk, rg_xy, rg_z,
+                rg_start, rg_sign, rg_done)
             if not ok:
                 st[C.INVALID_POLYGONS] += 1
-            n_vertices[p] = v - v0
-            n_rings[p] = nr - r0
-            n_polys[p] = npoly - r0
-
-
-@parallel
-def compact_polygons(vertex_slot, ring_slot, n_vertices, n_rings, n_polys, slot_xy, slot_z,
-                     has_z, slot_ring_starts, slot_poly_rings, vertex_start, ring_start,
-                     poly_start, out_xy, out_z, out_ring_offsets, out_poly_rings):
-    """Copy each polygon's output from its slot to its final place, closing the gaps.
-
-    Ring starts are rebased from slot positions to final positions; `out_poly_rings`
-    receives the ring count of each output polygon.
-    """
-    for p in prange(n_vertices.shape[0]):
-        src = vertex_slot[p]
-        dst = vertex_start[p]
-        for k in range(n_vertices[p]):
-            out_xy[dst + k, 0] = slot_xy[src + k, 0]
-            out_xy[dst + k, 1] = slot_xy[src + k, 1]
-            if has_z:
-                out_z[dst + k] = slot_z[src + k]
-        for k in range(n_rings[p]):
-            out_ring_offsets[ring_start[p] + k] = slot_ring_starts[ring_slot[p] + k] - src + dst
-        for k in range(n_polys[p]):
-            out_poly_rings[poly_start[p] + k] = slot_poly_rings[ring_slot[p] + k]
+            if not write:
+                n_vertices[p] = v - v0
+                n_rings[p] = nr - r0
+                n_polys[p] = npoly - q0

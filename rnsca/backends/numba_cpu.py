@@ -73,10 +73,13 @@ class NumbaBackend:
         args = (xy, z, has_z, part_offsets, part_window, windows, _METHOD_ID[options.method],
                 options.n, options.max_depth, options.tolerance, options.auto_piece,
                 options.mode is Mode.EXACT, drop_edge_runs, block)
+        segments = np.maximum(np.diff(part_offsets), 1) - 1
+        chunk_start = _exclusive_sum(-(-segments // PL.RUN_LEAF_SEGMENTS))
+        boxes = np.empty((int(chunk_start[-1]), 4))
         nothing_f = np.empty((0, 2))
         nothing_i = np.empty(0, dtype=np.int64)
-        PL.clip_line_blocks(*args, False, nothing_i, nothing_i, nothing_f, np.empty(0),
-                            nothing_i, bound_v, bound_c, counters)
+        PL.clip_line_blocks(*args, False, chunk_start, boxes, nothing_i, nothing_i, nothing_f,
+                            np.empty(0), nothing_i, bound_v, bound_c, counters)
         vertex_slot = _exclusive_sum(bound_v)
         chain_slot = _exclusive_sum(bound_c)
         slot_xy = np.empty((int(vertex_slot[-1]), 2))
@@ -84,8 +87,8 @@ class NumbaBackend:
         slot_starts = np.empty(int(chain_slot[-1]), dtype=np.int64)
         n_vertices = np.empty(n_parts, dtype=np.int64)
         n_chains = np.empty(n_parts, dtype=np.int64)
-        PL.clip_line_blocks(*args, True, vertex_slot, chain_slot, slot_xy, slot_z, slot_starts,
-                            n_vertices, n_chains, counters)
+        PL.clip_line_blocks(*args, True, chunk_start, boxes, vertex_slot, chain_slot, slot_xy,
+                            slot_z, slot_starts, n_vertices, n_chains, counters)
         vertex_start = _exclusive_sum(n_vertices)
         chain_start = _exclusive_sum(n_chains)
         out_xy = np.empty((int(vertex_start[-1]), 2))

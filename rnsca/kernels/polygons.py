@@ -294,16 +294,31 @@ def _split_loops(tmp_xy, tmp_z, has_z, m, xmin, ymin, xmax, ymax, stk, rg_xy, rg
                  rg_sign, n_rg):
     """Store the closed walk ring ``tmp[0..m-1]`` as simple rings; return the ring count.
 
-    The walk can pass a boundary point twice (a hole or a part of the ring touching the
-    window's edge there); a ring through one point twice is not valid, so it is cut
-    into loops at every repeated boundary point. Counter-clockwise loops are shells,
+    The walk can pass a point twice (a hole or a part of the ring touching the window's
+    edge, or a hole touching its shell at a vertex); a ring through one point twice is
+    not valid, so it is cut into loops at every repeated point. Counter-clockwise loops are shells,
     clockwise ones holes (touching their shell at that point, as valid polygons may).
     """
+    # Repeated vertices (sorted by x, then equal neighbours compared): a hole of the
+    # input touching its shell at a vertex inside the window pinches the walk there too.
+    repeated = np.zeros(m, dtype=np.bool_)
+    by_x = np.argsort(tmp_xy[:m - 1, 0], kind="mergesort")
+    g = 0
+    while g < m - 1:
+        h = g + 1
+        while h < m - 1 and tmp_xy[by_x[h], 0] == tmp_xy[by_x[g], 0]:
+            h += 1
+        for a in range(g, h):
+            for b in range(a + 1, h):
+                if tmp_xy[by_x[a], 1] == tmp_xy[by_x[b], 1]:
+                    repeated[by_x[a]] = True
+                    repeated[by_x[b]] = True
+        g = h
     top = 0
     for i in range(m - 1):
         x = tmp_xy[i, 0]
         y = tmp_xy[i, 1]
-        if x == xmin or x == xmax or y == ymin or y == ymax:
+        if repeated[i]:
             q = -1
             for t in range(top - 1, -1, -1):
                 if tmp_xy[stk[t], 0] == x and tmp_xy[stk[t], 1] == y:
@@ -337,6 +352,7 @@ def clip_polygon(xy, z, has_z, ring_offsets, r_begin, r_end, xmin, ymin, xmax, y
     n_r = r_end - r_begin
     if n_r == 0:
         return v, n_rings, n_polys, True
+    no_boxes = np.empty((0, 4), dtype=np.float64)  # rings are short: boxes from vertices
     v_ch = 0
     c_ch = 0
     n_lc = 0
@@ -354,7 +370,7 @@ def clip_polygon(xy, z, has_z, ring_offsets, r_begin, r_end, xmin, ymin, xmax, y
         v_ch, c_ch, at_first, at_last = clip_chains(
             xy, z, has_z, first, last, xmin, ymin, xmax, ymax, method, n_fixed, max_depth, tol,
             auto_piece, exact, True, True, ch_xy, ch_z, ch_starts, v_ch, c_ch, st, run_stack,
-            stack_f, stack_i)
+            stack_f, stack_i, no_boxes, 0)
         ch_starts[c_ch] = v_ch
         n_chains = c_ch - c0
         if n_chains == 0:

@@ -38,6 +38,8 @@ __all__ = [
     "RUN_STACK_CAPACITY",
     "RUN_N_AUTO",
     "bound_chains",
+    "box_chunks",
+    "chunk_count",
     "clip_chains",
     "clip_line_blocks",
     "compact_lines",
@@ -204,9 +206,80 @@ def _level_slot(level):
 
 
 @scalar
+def _range_box_codes(xy, first, last, boxes, box0, ca, cb, xmin, ymin, xmax, ymax):
+    """Return `run_box_codes` for the chunks ca..cb-1 of the line from vertex `first`.
+
+    With stored chunk boxes (``boxes[box0 + k]`` = [xmin, ymin, xmax, ymax] of chunk k)
+    the run's box is their union, so a level of the recursion costs one step per chunk,
+    not per vertex; without (``boxes`` empty: rings) the vertices are scanned.
+    """
+    if boxes.shape[0] == 0:
+        a = first + ca * RUN_LEAF_SEGMENTS
+        b = min(first + cb * RUN_LEAF_SEGMENTS, last)
+        return run_box_codes(xy, a, b, xmin, ymin, xmax, ymax)
+    lo_x = boxes[box0 + ca, 0]
+    lo_y = boxes[box0 + ca, 1]
+    hi_x = boxes[box0 + ca, 2]
+    hi_y = boxes[box0 + ca, 3]
+    for k in range(box0 + ca + 1, box0 + cb):
+        lo_x = min(lo_x, boxes[k, 0])
+        lo_y = min(lo_y, boxes[k, 1])
+        hi_x = max(hi_x, boxes[k, 2])
+        hi_y = max(hi_y, boxes[k, 3])
+    strict = (lo_x > xmin) & (hi_x < xmax) & (lo_y > ymin) & (hi_y < ymax)
+    return (outcode(lo_x, lo_y, xmin, ymin, xmax, ymax),
+            outcode(hi_x, hi_y, xmin, ymin, xmax, ymax), strict)
+
+
+@scalar
+def chunk_count(first, last):
+    """Return how many chunks of `RUN_LEAF_SEGMENTS` segments the line first..last has."""
+    return 0 if last <= first else (last - first + RUN_LEAF_SEGMENTS - 1) // RUN_LEAF_SEGMENTS
+
+
+@scalar
+def box_chunks(xy, first, last, boxes, box0, xmin, ymin, xmax, ymax, drop_edge_runs):
+    """Store the chunk boxes of the line first..last; return output bounds (vertices, chains).
+
+    A chunk inside the window bounds its vertices and one chain; one beyond an edge,
+    nothing; any other is bounded vertex by vertex (`bound_chains`). One pass over the
+    coordinates, which the write pass then need not scan again to prune runs.
+    """
+    vertices = 0
+    chains = 0
+    for k in range(chunk_count(first, last)):
+        a = first + k * RUN_LEAF_SEGMENTS
+        b = min(a + RUN_LEAF_SEGMENTS, last)
+        lo_x = xy[a, 0]
+        hi_x = lo_x
+        lo_y = xy[a, 1]
+        hi_y = lo_y
+        for i in range(a + 1, b + 1):
+            lo_x = min(lo_x, xy[i, 0])
+            hi_x = max(hi_x, xy[i, 0])
+            lo_y = min(lo_y, xy[i, 1])
+            hi_y = max(hi_y, xy[i, 1])
+        boxes[box0 + k, 0] = lo_x
+        boxes[box0 + k, 1] = lo_y
+        boxes[box0 + k, 2] = hi_x
+        boxes[box0 + k, 3] = hi_y
+        lo = outcode(lo_x, lo_y, xmin, ymin, xmax, ymax)
+        hi = outcode(hi_x, hi_y, xmin, ymin, xmax, ymax)
+        strict = (lo_x > xmin) & (hi_x < xmax) & (lo_y > ymin) & (hi_y < ymax)
+        if (lo | hi) == 0 and (strict or not drop_edge_runs):
+            vertices += b - a + 1
+            chains += 1
+        elif (lo & hi) == 0:
+            nv, nc, _ = bound_chains(xy, a, b, xmin, ymin, xmax, ymax)
+            vertices += nv
+            chains += nc
+    return vertices, chains
+
+
+@scalar
 def clip_chains(xy, z, has_z, first, last, xmin, ymin, xmax, ymax, method, n_fixed, max_depth,
                 tol, auto_piece, exact, drop_edge_runs, break_at_boundary, out_xy, out_z,
-                out_starts, v, c, st, run_stack, stack_f, stack_i):
+                out_starts, v, c, st, run_stack, stack_f, stack_i, boxes, box0):
     """Clip the line through vertices ``xy[first..last]`` into chains.
 
     Writes the chains' vertices from ``out_xy[v]`` (and ``out_z``) on, and the start of
@@ -215,7 +288,9 @@ def clip_chains(xy, z, has_z, first, last, xmin, ymin, xmax, ymax, method, n_fix
     the first chain starts at vertex `first` itself and whether the last ends at vertex
     `last` (a ring's chains across its closing vertex join there).
 
-    Runs are pruned only for ``method == RNSCA``; the baselines clip every segment.
+    Runs are whole chunks of `RUN_LEAF_SEGMENTS` segments; their boxes come from
+    `boxes` (see `box_chunks`) or, if it is empty, from the vertices. Runs are pruned
+    only for ``method == RNSCA``; the baselines clip every segment.
     """
     c_begin = c
     last_v = -1
@@ -228,20 +303,23 @@ def clip_chains(xy, z, has_z, first, last, xmin, ymin, xmax, ymax, method, n_fix
                                       out_starts, v, c, last_v, st, stack_f, stack_i)
     else:
         n_runs = n_fixed if n_fixed > 0 else RUN_N_AUTO
-        run_stack[0, 0] = first
-        run_stack[0, 1] = last
+        run_stack[0, 0] = 0
+        run_stack[0, 1] = chunk_count(first, last)
         run_stack[0, 2] = 0
         sp = 1
         while sp > 0:
             sp -= 1
-            a = run_stack[sp, 0]
-            b = run_stack[sp, 1]
+            ca = run_stack[sp, 0]
+            cb = run_stack[sp, 1]
             level = run_stack[sp, 2]
+            a = first + ca * RUN_LEAF_SEGMENTS
+            b = min(first + cb * RUN_LEAF_SEGMENTS, last)
             slot = _level_slot(level)
             if level > st[C.RUN_DEEPEST]:
                 st[C.RUN_DEEPEST] = level
             st[C.RUNS_EVALUATED] += 1
-            lo, hi, strict = run_box_codes(xy, a, b, xmin, ymin, xmax, ymax)
+            lo, hi, strict = _range_box_codes(xy, first, last, boxes, box0, ca, cb,
+                                              xmin, ymin, xmax, ymax)
             if (lo | hi) == 0 and (strict or not drop_edge_runs):
                 st[C.RUNS_ACCEPTED] += 1
                 st[C.RUN_LEVELS + slot] += 1
@@ -252,7 +330,7 @@ def clip_chains(xy, z, has_z, first, last, xmin, ymin, xmax, ymax, method, n_fix
                 st[C.RUNS_REJECTED] += 1
                 st[C.RUN_LEVELS + slot] += 1
                 st[C.SEGMENT_LEVELS + slot] += b - a
-            elif b - a <= RUN_LEAF_SEGMENTS or sp + n_runs > RUN_STACK_CAPACITY:
+            elif cb - ca <= 1 or sp + n_runs > RUN_STACK_CAPACITY:
                 st[C.RUNS_SEGMENTED] += 1
                 st[C.RUN_LEVELS + slot] += 1
                 st[C.SEGMENT_LEVELS + slot] += b - a
@@ -263,12 +341,12 @@ def clip_chains(xy, z, has_z, first, last, xmin, ymin, xmax, ymax, method, n_fix
                                               stack_f, stack_i)
             else:
                 st[C.RUNS_SUBDIVIDED] += 1
-                # Children cover the segments a..b-1 in n (or fewer) runs of nearly equal
+                # Children cover the chunks ca..cb-1 in n (or fewer) runs of nearly equal
                 # length, pushed last first so they pop in input order.
-                k = min(n_runs, b - a)
+                k = min(n_runs, cb - ca)
                 for j in range(k, 0, -1):
-                    run_stack[sp, 0] = a + (b - a) * (j - 1) // k
-                    run_stack[sp, 1] = a + (b - a) * j // k
+                    run_stack[sp, 0] = ca + (cb - ca) * (j - 1) // k
+                    run_stack[sp, 1] = ca + (cb - ca) * j // k
                     run_stack[sp, 2] = level + 1
                     sp += 1
     if c == c_begin:
@@ -283,23 +361,24 @@ def clip_chains(xy, z, has_z, first, last, xmin, ymin, xmax, ymax, method, n_fix
 @parallel
 def clip_line_blocks(xy, z, has_z, part_offsets, part_window, windows, method, n_fixed,
                      max_depth, tol, auto_piece, exact, drop_edge_runs, block_size, write,
-                     vertex_slot, chain_slot, out_xy, out_z, out_starts, n_vertices, n_chains,
-                     counters):
+                     chunk_start, boxes, vertex_slot, chain_slot, out_xy, out_z, out_starts,
+                     n_vertices, n_chains, counters):
     """Bound (``write=False``) or clip (``write=True``) every part of a ragged line array.
 
     Part ``p`` is ``xy[part_offsets[p]:part_offsets[p+1]]``, clipped against
-    ``windows[part_window[p]]``. The bound pass fills `n_vertices`, `n_chains` with
-    `bound_chains`; the write pass writes part p's chains from ``vertex_slot[p]`` and
-    ``chain_slot[p]`` on (exclusive sums of the bounds) and replaces the bounds with the
-    actual counts. One counter row per block.
+    ``windows[part_window[p]]``; its chunk boxes live at ``boxes[chunk_start[p]:]``. The
+    bound pass fills them and `n_vertices`, `n_chains` (`box_chunks`); the write pass
+    writes part p's chains from ``vertex_slot[p]`` and ``chain_slot[p]`` on (exclusive
+    sums of the bounds) and replaces the bounds with the actual counts. One counter row
+    per block.
     """
     n_parts = part_offsets.shape[0] - 1
     n_blocks = counters.shape[0]
     for blk in prange(n_blocks):
         st = counters[blk]
-        run_stack = np.empty((RUN_STACK_CAPACITY, 3), dtype=np.int64)
-        stack_f = np.empty((STACK_CAPACITY, 6), dtype=np.float64)
-        stack_i = np.empty((STACK_CAPACITY, 3), dtype=np.int64)
+        run_stack = np.empty((RUN_STACK_CAPACITY if write else 0, 3), dtype=np.int64)
+        stack_f = np.empty((STACK_CAPACITY if write else 0, 6), dtype=np.float64)
+        stack_i = np.empty((STACK_CAPACITY if write else 0, 3), dtype=np.int64)
         for p in range(blk * block_size, min(n_parts, (blk + 1) * block_size)):
             first = part_offsets[p]
             last = part_offsets[p + 1] - 1
@@ -309,20 +388,17 @@ def clip_line_blocks(xy, z, has_z, part_offsets, part_window, windows, method, n
             xmax = windows[w, 2]
             ymax = windows[w, 3]
             if not write:
-                if last <= first:
-                    n_vertices[p] = 0
-                    n_chains[p] = 0
-                else:
-                    nv, nc, _ = bound_chains(xy, first, last, xmin, ymin, xmax, ymax)
-                    n_vertices[p] = nv
-                    n_chains[p] = nc
+                nv, nc = box_chunks(xy, first, last, boxes, chunk_start[p], xmin, ymin, xmax,
+                                    ymax, drop_edge_runs)
+                n_vertices[p] = nv
+                n_chains[p] = nc
                 continue
             v0 = vertex_slot[p]
             c0 = chain_slot[p]
             v, c, _, _ = clip_chains(xy, z, has_z, first, last, xmin, ymin, xmax, ymax, method,
                                      n_fixed, max_depth, tol, auto_piece, exact, drop_edge_runs,
                                      False, out_xy, out_z, out_starts, v0, c0, st, run_stack,
-                                     stack_f, stack_i)
+                                     stack_f, stack_i, boxes, chunk_start[p])
             n_vertices[p] = v - v0
             n_chains[p] = c - c0
 

@@ -215,6 +215,11 @@ def _clip_geometries(geometries: np.ndarray, window, options: dict) -> np.ndarra
     options = {k: v for k, v in options.items() if k != "keep_empty"}
     count = geometries.shape[0]
     windows, index = window_table(window, count)
+    rings = shapely.get_type_id(geometries) == shapely.GeometryType.LINEARRING
+    if rings.any():
+        # A ring clipped is a line: its visible parts (GEOS gives line strings too).
+        geometries = geometries.copy()
+        geometries[rings] = [shapely.LineString(g.coords) for g in geometries[rings]]
     out = np.empty(count, dtype=object)
     type_ids = shapely.get_type_id(geometries)
     collections = np.flatnonzero(type_ids == shapely.GeometryType.GEOMETRYCOLLECTION)

@@ -32,8 +32,8 @@ class InvalidOptionError(RnscaError, ValueError):
     """A clipping option has an unknown or out-of-range value."""
 
 
-class UnsupportedGeometryError(RnscaError, TypeError):
-    """The operation does not accept this kind of geometry."""
+class UnsupportedGeometryError(RnscaError, TypeError, ValueError):
+    """The operation does not accept this kind of geometry (bad input: also a ValueError)."""
 
 
 class LimitExceededError(RnscaError):

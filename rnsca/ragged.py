@@ -9,7 +9,7 @@ onto geometries, with `source` saying which input each output geometry came from
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import shapely
@@ -136,8 +136,8 @@ def _with_z(xy: np.ndarray, z: np.ndarray, has_z: bool) -> np.ndarray:
 
 
 def clip_ragged(geometry_type, coords, offsets, window, *, boundary="closed", keep_empty=False,
-                method="rnsca", n="auto", max_depth=None, tolerance=None, mode="exact",
-                backend="numba") -> RaggedClipResult:
+                check_validity=False, method="rnsca", n="auto", max_depth=None, tolerance=None,
+                mode="exact", backend="numba") -> RaggedClipResult:
     """Return the geometries of a ragged array clipped to a rectangular window.
 
     The columnar fast path: the triple ``shapely.to_ragged_array`` returns (and GeoArrow
@@ -163,6 +163,12 @@ def clip_ragged(geometry_type, coords, offsets, window, *, boundary="closed", ke
     keep_empty : bool
         Keep one output geometry per input (empty where nothing is left) instead of
         dropping the empty ones.
+    check_validity : bool
+        Polygons: count invalid inputs in ``stats.invalid_polygons`` with GEOS
+        (``shapely.is_valid``, a full check that costs more than the clip). Without it,
+        the count holds what clipping meets: rings without area and rings that cannot
+        be closed consistently. Invalid polygons are clipped ring by ring either way,
+        never repaired.
     method, n, max_depth, tolerance, mode
         As for `clip_segments`; runs of vertices are pruned by RNSCA with N runs per
         split (``n="auto"``: 16). Polygons need ``mode="exact"``.
@@ -207,7 +213,11 @@ def clip_ragged(geometry_type, coords, offsets, window, *, boundary="closed", ke
         return _clip_points(ragged, windows, window_index, side, keep_empty)
     if ragged.kind.dimension == 1:
         return _clip_lines(engine, ragged, windows, window_index, options, side, keep_empty)
-    return _clip_polygons(engine, ragged, windows, window_index, options, keep_empty)
+    result = _clip_polygons(engine, ragged, windows, window_index, options, keep_empty)
+    if check_validity:
+        invalid = int((~shapely.is_valid(ragged.to_shapely())).sum())
+        result = replace(result, stats=replace(result.stats, invalid_polygons=invalid))
+    return result
 
 
 def _stats(counters, segments_in, pieces_out, ragged: Ragged, vertices_out, geometries_out):

@@ -373,6 +373,8 @@ def clip_polygon(xy, z, has_z, ring_offsets, r_begin, r_end, xmin, ymin, xmax, y
             stack_f, stack_i, no_boxes, 0)
         ch_starts[c_ch] = v_ch
         n_chains = c_ch - c0
+        if last > first and area == 0.0:
+            ok = False  # a ring without area: self-intersecting (or degenerate) input
         if n_chains == 0:
             ring_state[j] = _UNTOUCHED
             continue
@@ -716,10 +718,13 @@ def clip_polygon_blocks(xy, z, has_z, ring_offsets, polygon_offsets, polygon_win
                     continue
                 st[C.RUNS_ACCEPTED] += 1
                 v = vertex_start[p]
+                invalid = False
                 for r in range(r_begin, r_end):
                     first = ring_offsets[r]
                     last = ring_offsets[r + 1] - 1
                     area = signed_area(xy, first, last) if last > first else 0.0
+                    if area == 0.0:
+                        invalid = True
                     out_ring_starts[ring_start[p] + r - r_begin] = v
                     reverse = (area < 0.0) if r == r_begin else (area > 0.0)
                     for k in range(last - first + 1):
@@ -730,6 +735,8 @@ def clip_polygon_blocks(xy, z, has_z, ring_offsets, polygon_offsets, polygon_win
                             out_z[v] = z[i]
                         v += 1
                 out_poly_rings[poly_start[p]] = r_end - r_begin
+                if invalid:
+                    st[C.INVALID_POLYGONS] += 1  # a ring without area (a symmetric bow tie)
                 continue
             w = polygon_window[p]
             v0 = vertex_start[p] if write else 0

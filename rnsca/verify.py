@@ -69,7 +69,9 @@ class Verification:
     passed : bool
         Whether the result keeps its mode's promise: exact, deviation within
         ``allowed_deviation`` of every input, valid polygons and no false positive;
-        approx, no false positive, valid polygons and deviation within the bound.
+        approx, no false positive, valid polygons and deviation within the bound. An
+        input polygon that is itself invalid is clipped ring by ring, not repaired, so
+        its output need not be valid (see `invalid_inputs`).
     allowed_deviation : float
         Exact: 1e-9 of the window's size (of the largest window, when there is one per
         geometry). Approx: the bound (for segments without one given, the largest of
@@ -77,8 +79,10 @@ class Verification:
     mode : str
         The promise judged: ``"exact"`` or ``"approx"``.
     valid : bool
-        Whether every output polygon is valid (``shapely.is_valid``); True when there
-        are none.
+        Whether every output polygon is valid (``shapely.is_valid``, the polygons of one
+        output geometry taken together); True when there are none.
+    invalid_inputs : int
+        Input geometries whose polygons are not valid (self-intersecting rings, say).
     """
 
     max_deviation: float
@@ -88,6 +92,7 @@ class Verification:
     allowed_deviation: float
     mode: str
     valid: bool = True
+    invalid_inputs: int = 0
 
     def to_dict(self) -> dict:
         """Return the verification as plain JSON-ready values."""
@@ -164,7 +169,8 @@ def verify(original, clipped, window, *, mode=None, approx_bound=None,
     the window's size near 1: exact in floating point, and distances scale back
     exactly. An input polygon that is not valid is compared with the clip of
     ``shapely.make_valid`` of it (GEOS cannot intersect some invalid polygons); the
-    output's own validity is reported in ``valid``.
+    output's own validity is reported in ``valid``, and does not fail the verdict for
+    such an input.
 
     Examples
     --------
@@ -472,7 +478,8 @@ def _verify_geometries(originals, delivered, source, bounds, mode: Mode, approx_
     output_parts, output_piece = _atomic_parts(_scaled(delivered, scales[source]))
     output_index = source[output_piece]
     false_positives = _count_outside(_atomic_parts(delivered), source, bounds, margins)
-    valid = _polygons_valid(output_parts, output_piece)
+    output_valid = _polygons_valid(output_parts, output_piece, delivered.shape[0])
+    input_valid = _polygons_valid(input_parts, input_index, count)
     input_dims = _dimensions(input_parts)
     output_dims = _dimensions(output_parts)
 
@@ -504,9 +511,11 @@ def _verify_geometries(originals, delivered, source, bounds, mode: Mode, approx_
         allowed_deviation = float(margins.max()) if count else 0.0
         within = bool((deviation <= margins).all())
     max_deviation = float(np.max(deviation)) if count else 0.0
+    # An invalid input polygon is clipped ring by ring: its output need not be valid.
+    kept_promise = bool((output_valid | ~input_valid[source]).all())
     return Verification(max_deviation, false_positives, ratio,
-                        within and valid and false_positives == 0, allowed_deviation,
-                        mode.value, valid)
+                        within and kept_promise and false_positives == 0, allowed_deviation,
+                        mode.value, bool(output_valid.all()), int((~input_valid).sum()))
 
 
 def _check_finite(geometries: np.ndarray) -> None:
@@ -633,14 +642,15 @@ def _measure(parts, index, dim: int, count: int) -> np.ndarray:
     return np.bincount(index, weights=weights, minlength=count)
 
 
-def _polygons_valid(parts: np.ndarray, piece: np.ndarray) -> bool:
-    """Return whether the polygons of each delivered geometry form a valid (multi)polygon."""
+def _polygons_valid(parts: np.ndarray, index: np.ndarray, count: int) -> np.ndarray:
+    """Return, per geometry, whether its polygon parts form a valid (multi)polygon."""
+    valid = np.ones(count, dtype=bool)
     polygons = _dimensions(parts) == 2
-    if not polygons.any():
-        return True
-    collected = shapely.multipolygons(parts[polygons], indices=piece[polygons],
-                                      out=np.full(int(piece.max()) + 1, None, dtype=object))
-    return bool(shapely.is_valid(collected[collected != None]).all())  # noqa: E711
+    if polygons.any():
+        collected = _collect(parts[polygons], index[polygons], count, 2)
+        has = collected != None  # noqa: E711
+        valid[has] = shapely.is_valid(collected[has])
+    return valid
 
 
 def _deviation(a: np.ndarray, b: np.ndarray, dim: int, sizes: np.ndarray) -> np.ndarray:
@@ -650,13 +660,11 @@ def _deviation(a: np.ndarray, b: np.ndarray, dim: int, sizes: np.ndarray) -> np.
     deviation = np.zeros(a.shape[0])
     both = has_a & has_b
     if both.any():
-        if dim == 0:
-            deviation[both] = shapely.hausdorff_distance(a[both], b[both])
-        elif dim == 1:
-            deviation[both] = _lineal_hausdorff(a[both], b[both])
-        else:
-            deviation[both] = _lineal_hausdorff(shapely.boundary(a[both]),
-                                                shapely.boundary(b[both]))
+        if dim == 2:
+            # Between the boundaries, as GEOS measures polygons.
+            a, b = shapely.boundary(a), shapely.boundary(b)
+        deviation[both] = _hausdorff(a[both], b[both], dim > 0,
+                                     EXACT_RELATIVE_TOLERANCE * sizes[both])
     alone = has_a ^ has_b
     if alone.any():
         box = shapely.bounds(np.where(has_a, a, b)[alone])
@@ -665,53 +673,197 @@ def _deviation(a: np.ndarray, b: np.ndarray, dim: int, sizes: np.ndarray) -> np.
     return deviation
 
 
-def _positions(lines: np.ndarray):
-    """Return the vertices of (multi)line strings, their line index and distance along it.
-
-    The distance runs along the parts in order, as ``shapely.line_locate_point`` and
-    ``line_interpolate_point`` measure it on a MultiLineString.
-    """
-    parts, part_line = shapely.get_parts(lines, return_index=True)
-    coords, part = shapely.get_coordinates(parts, return_index=True)
-    step = np.zeros(coords.shape[0])
-    if coords.shape[0] > 1:
-        same = part[1:] == part[:-1]
-        step[1:] = np.where(same, np.hypot(*(coords[1:] - coords[:-1]).T), 0.0)
-    line = part_line[part]
-    along = np.cumsum(step)
-    first = np.ones(line.shape[0], dtype=bool)
-    first[1:] = line[1:] != line[:-1]
-    along -= np.maximum.accumulate(np.where(first, along, 0.0))
-    return coords, line, along
-
-
-def _lineal_hausdorff(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Return the Hausdorff distance between aligned (multi)line strings `a` and `b`.
+def _hausdorff(a: np.ndarray, b: np.ndarray, lineal: bool, radius: np.ndarray) -> np.ndarray:
+    """Return the Hausdorff distance between aligned point sets or (multi)line strings.
 
     GEOS's discrete Hausdorff distance measures only from vertices, so it misses a gap
     inside a straight stretch (two pieces with a hole between them against one piece:
-    every vertex of each lies on the other). Here each side is also sampled where the
-    other side's vertices project onto it and midway between consecutive such points,
-    which finds such a gap's middle exactly. Cost: vertices of one side times segments
-    of the other, per input.
+    every vertex of each lies on the other). Lines are therefore also sampled midway
+    between consecutive positions along them of their own vertices and of the points
+    where the other side's vertices project, which finds such a gap's middle exactly.
+    A stretch between the projections of the two ends of one segment of the other side
+    needs no sample: each of its points is within the larger of the two ends' distances
+    of that segment. Nearest segments come from exact vertex matches first (a clip
+    copies most vertices), then from a spatial index searched within `radius` of each
+    point (where a correct clip puts every vertex), then in growing circles.
     """
     deviation = np.zeros(a.shape[0])
-    for source, target in ((a, b), (b, a)):
-        coords, line, _ = _positions(source)
-        points = shapely.points(coords)
-        np.maximum.at(deviation, line, shapely.distance(points, target[line]))
-        _, target_line, target_along = _positions(target)
-        along = np.concatenate([target_along, shapely.line_locate_point(target[line], points)])
-        owner = np.concatenate([target_line, line])
-        order = np.lexsort((along, owner))
-        along, owner = along[order], owner[order]
-        between = (owner[1:] == owner[:-1]) & (along[1:] > along[:-1])
-        if between.any():
-            middle = 0.5 * (along[1:] + along[:-1])[between]
-            holder = owner[1:][between]
-            samples = shapely.line_interpolate_point(target[holder], middle)
-            np.maximum.at(deviation, holder, shapely.distance(samples, source[holder]))
+    with np.errstate(invalid="ignore"):  # a NaN output vertex gives a NaN deviation
+        sides = _Linework(a), _Linework(b)
+        for source, target in (sides, sides[::-1]):
+            _directed_hausdorff(source, target, lineal, radius, deviation)
     return deviation
+
+
+def _directed_hausdorff(source: _Linework, target: _Linework, lineal: bool,
+                        radius: np.ndarray, deviation: np.ndarray) -> None:
+    """Raise `deviation` to the distances from points of `source` to `target`, per owner."""
+    owner = source.vertex_owner
+    distance, segment, position = target.nearest(source.vertices, owner, radius[owner])
+    np.maximum.at(deviation, owner, distance)
+    if not lineal or not owner.size:
+        return
+    # Stretches of the target between the projections of a source segment's ends
+    # (on one part of the target: positions at a part's end and at the next one's
+    # start are equal, the points are not).
+    joined = np.flatnonzero(source.joined)
+    part = target.part[segment[joined]]
+    same = part == target.part[segment[joined + 1]]
+    spanned = _interval_keys(part[same], position[joined[same]],
+                             position[joined[same] + 1])
+    # Positions along the target: its vertices, and where the source's project.
+    along = np.concatenate([target.vertex_along, position])
+    segment = np.concatenate([target.vertex_segment, segment])
+    owner = np.concatenate([target.vertex_owner, owner])
+    # Ties sorted by segment: a stretch then starts in the segment of its lower end.
+    order = np.lexsort((segment, along, owner))
+    along, segment, owner = along[order], segment[order], owner[order]
+    gap = (owner[1:] == owner[:-1]) & (along[1:] > along[:-1])
+    middle = 0.5 * (along[1:] + along[:-1])[gap]
+    holder = target.segment_at(segment[:-1][gap], middle)
+    sampled = ~np.isin(_interval_keys(target.part[holder], along[:-1][gap],
+                                      along[1:][gap]), spanned)
+    if sampled.any():
+        owner = owner[1:][gap][sampled]
+        samples = target.point_at(holder[sampled], middle[sampled])
+        distance, _, _ = source.nearest(samples, owner, radius[owner])
+        np.maximum.at(deviation, owner, distance)
+
+
+def _keys(group: np.ndarray, first: np.ndarray, second: np.ndarray) -> np.ndarray:
+    """Return (group, first, second) rows as opaque values that compare by their bytes."""
+    rows = np.empty(group.shape[0], dtype=[("group", "<i8"), ("first", "<f8"),
+                                           ("second", "<f8")])
+    rows["group"] = group
+    rows["first"] = first + 0.0  # -0.0 becomes 0.0: equal values, equal bytes
+    rows["second"] = second + 0.0
+    return rows.view("V24")
+
+
+def _interval_keys(group, one, other) -> np.ndarray:
+    return _keys(group, np.minimum(one, other), np.maximum(one, other))
+
+
+class _Linework:
+    """The segments of an array of point sets or (multi)line strings, spatially indexed.
+
+    Consecutive vertices of a part make a segment; a part of one vertex (a point) is a
+    segment of zero length. ``along`` positions run along each geometry's parts in
+    order, restarting at 0 for each geometry.
+    """
+
+    def __init__(self, geometries: np.ndarray) -> None:
+        parts, part_owner = shapely.get_parts(geometries, return_index=True)
+        coords, part = shapely.get_coordinates(parts, return_index=True)
+        count = coords.shape[0]
+        owner = part_owner[part]
+        joined = np.zeros(count, dtype=bool)  # vertex k and k + 1 are in the same part
+        joined[:-1] = part[1:] == part[:-1]
+        single = ~joined & np.r_[True, ~joined[:-1]]  # a part of one vertex
+        step = np.zeros(count)
+        step[1:] = np.where(joined[:-1], np.hypot(*(coords[1:] - coords[:-1]).T), 0.0)
+        along = np.cumsum(step)
+        first = np.r_[True, owner[1:] != owner[:-1]] if count else np.zeros(0, dtype=bool)
+        along -= np.maximum.accumulate(np.where(first, along, 0.0))
+
+        starts = np.flatnonzero(joined | single)
+        ends = np.where(joined[starts], starts + 1, starts)
+        self.vertices, self.vertex_owner, self.vertex_along = coords, owner, along
+        self.joined = joined
+        self.starts = starts
+        self.start, self.end = coords[starts], coords[ends]
+        self.owner = owner[starts]
+        self.part = part[starts]
+        self.along = along[starts]
+        self.length = along[ends] - along[starts]
+        # The segment a vertex starts, or for a part's last vertex the one it ends.
+        self.vertex_segment = np.searchsorted(starts, np.arange(count), side="right") - 1
+        self.box = shapely.bounds(geometries)
+        self.tree = shapely.STRtree(shapely.linestrings(np.stack([self.start, self.end], 1)))
+
+    def nearest(self, points: np.ndarray, owner: np.ndarray, radius: np.ndarray):
+        """Return, per point, the distance to its owner's segments, the nearest and where.
+
+        Returns ``(distance, segment, along)``: the nearest point to ``points[i]`` lies on
+        ``segment[i]`` at position ``along[i]``. A non-finite point gets a NaN distance.
+        """
+        count = points.shape[0]
+        distance = np.full(count, np.nan)
+        segment = np.zeros(count, dtype=np.int64)
+        along = np.zeros(count)
+        # A point equal to one of its owner's vertices is on it.
+        keys = _keys(owner, points[:, 0], points[:, 1])
+        mine = _keys(self.vertex_owner, self.vertices[:, 0], self.vertices[:, 1])
+        unique, inverse = np.unique(np.concatenate([mine, keys]), return_inverse=True)
+        vertex_of = np.full(unique.shape[0], -1)
+        vertex_of[inverse[:mine.shape[0]]] = np.arange(mine.shape[0])
+        vertex = vertex_of[inverse[mine.shape[0]:]]
+        on_vertex = vertex >= 0
+        distance[on_vertex] = 0.0
+        segment[on_vertex] = self.vertex_segment[vertex[on_vertex]]
+        along[on_vertex] = self.vertex_along[vertex[on_vertex]]
+
+        # The farthest corner of the owner's bounding box: every segment lies within it.
+        box = self.box[owner]
+        reach = np.hypot(np.maximum(np.abs(points[:, 0] - box[:, 0]),
+                                    np.abs(points[:, 0] - box[:, 2])),
+                         np.maximum(np.abs(points[:, 1] - box[:, 1]),
+                                    np.abs(points[:, 1] - box[:, 3])))
+        reach = reach * (1 + 1e-9) + np.finfo(float).tiny
+        todo = np.flatnonzero(~on_vertex & np.isfinite(points).all(axis=1))
+        radius = np.minimum(np.maximum(radius, np.finfo(float).tiny), reach)
+        geometries = shapely.points(points[todo])
+        where = np.full(count, -1)
+        where[todo] = np.arange(todo.shape[0])
+        while todo.size:
+            last = radius[todo] >= reach[todo]
+            hit, seg = self.tree.query(geometries[where[todo]], predicate="dwithin",
+                                       distance=radius[todo])
+            point = todo[hit]
+            keep = self.owner[seg] == owner[point]
+            point, seg = point[keep], seg[keep]
+            d, t = _point_segment(points[point], self.start[seg], self.end[seg])
+            order = np.lexsort((d, point))
+            best = order[np.r_[True, point[order][1:] != point[order][:-1]]] if order.size \
+                else order
+            point, seg = point[best], seg[best]
+            distance[point], segment[point] = d[best], seg
+            along[point] = self.along[seg] + t[best] * self.length[seg]
+            # A point not found within its owner's reach has no segment to be near.
+            todo = todo[np.isnan(distance[todo]) & ~last]
+            radius[todo] = np.minimum(radius[todo] * 16.0, reach[todo])
+        return distance, segment, along
+
+    def segment_at(self, segment: np.ndarray, along: np.ndarray) -> np.ndarray:
+        """Return the segment holding each position `along`, searching on from `segment`."""
+        segment = segment.copy()
+        last = self.start.shape[0] - 1
+        while True:
+            nxt = np.minimum(segment + 1, last)
+            beyond = ((along > self.along[segment] + self.length[segment]) & (segment < last)
+                      & (self.owner[nxt] == self.owner[segment]))
+            if not beyond.any():
+                return segment
+            segment[beyond] += 1
+
+    def point_at(self, segment: np.ndarray, along: np.ndarray) -> np.ndarray:
+        """Return the points at positions `along`, each on the given segment."""
+        length = self.length[segment]
+        with np.errstate(invalid="ignore", divide="ignore"):
+            t = np.where(length > 0, (along - self.along[segment]) / length, 0.0)
+        t = np.clip(t, 0.0, 1.0)[:, None]
+        return self.start[segment] + t * (self.end[segment] - self.start[segment])
+
+
+def _point_segment(points, start, end) -> tuple[np.ndarray, np.ndarray]:
+    """Return the distance from each point to its segment, and the nearest point's t."""
+    direction = end - start
+    squared = (direction ** 2).sum(axis=1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        t = np.where(squared > 0, ((points - start) * direction).sum(axis=1) / squared, 0.0)
+    t = np.clip(t, 0.0, 1.0)
+    nearest = start + t[:, None] * direction
+    return np.hypot(*(points - nearest).T), t
 
 
 def _count_outside(parts_and_piece, source: np.ndarray, bounds: np.ndarray,

@@ -8,6 +8,7 @@ import pytest
 
 from rnsca import (
     InvalidGeometryError,
+    InvalidOptionError,
     UnsupportedGeometryError,
     Verification,
     clip_segments,
@@ -151,7 +152,8 @@ def test_to_dict_is_json_ready():
     r = clip_segments(SEGS, W10)
     d = json.loads(json.dumps(verify(SEGS, r, W10).to_dict()))
     assert d == {"max_deviation": 0.0, "false_positives": 0, "ratio": 1.0, "passed": True,
-                 "allowed_deviation": 1e-8, "mode": "exact"}
+                 "allowed_deviation": 1e-8, "mode": "exact", "valid": True,
+                 "invalid_inputs": 0}
 
 
 def test_approx_leaf_bound_is_the_tolerance_or_one_deepest_leaf():
@@ -163,3 +165,22 @@ def test_approx_leaf_bound_is_the_tolerance_or_one_deepest_leaf():
 def test_approx_leaf_bound_with_auto_n_assumes_bisection():
     r = clip_segments(SEGS, W10, mode="approx", max_depth=2, tolerance=1e-3)
     np.testing.assert_allclose(approx_leaf_bound(np.array([8.0]), r), [2.0])
+
+
+def test_explicit_approx_bound_replaces_the_leaf_bound():
+    r = clip_segments(SEGS, W10, mode="approx", n=3, max_depth=2)
+    v = verify(SEGS, r, W10, approx_bound=1e-12)
+    assert not v.passed and v.allowed_deviation == 1e-12 and v.mode == "approx"
+    assert verify(SEGS, r, W10, approx_bound=5.0).passed
+
+
+def test_explicit_mode_overrides_the_results_mode():
+    r = clip_segments(SEGS, W10, mode="approx", n=3, max_depth=2)
+    v = verify(SEGS, r, W10, mode="exact")
+    assert not v.passed and v.mode == "exact" and v.allowed_deviation == 1e-8
+
+
+def test_segments_refuse_the_interior_boundary():
+    r = clip_segments(SEGS, W10)
+    with pytest.raises(InvalidOptionError, match="boundary='closed'"):
+        verify(SEGS, r, W10, boundary="interior")

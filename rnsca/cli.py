@@ -1,17 +1,50 @@
-"""The ``rnsca`` command line."""
+"""The ``rnsca`` command line.
+
+Commands: ``clip`` (GeoJSON documents), ``segments`` (.npy arrays of segments),
+``backends`` and ``warm-up``. Errors print one line, ``error: <what and where>``, on
+stderr and exit with 2 for a wrong command line (options, window, the kind of input) or
+1 for input that cannot be clipped (not JSON, invalid GeoJSON, unreadable files).
+"""
 
 from __future__ import annotations
 
 import json
+import re
+import sys
+from contextlib import contextmanager
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, BinaryIO
 
 import numpy as np
 import typer
 
 import rnsca
 from rnsca.backends.registry import available_backends, get_backend
-from rnsca.errors import RnscaError
+from rnsca.errors import (
+    BackendUnavailableError,
+    InvalidOptionError,
+    InvalidWindowError,
+    RnscaError,
+)
+from rnsca.formats.geojson import dumps, loads
+from rnsca.options import Mode
+
+__all__ = ["app", "PROGRESS_MIN_BYTES"]
+
+#: Exit status for input that cannot be clipped.
+EXIT_DATA = 1
+#: Exit status for a wrong command line (as Typer uses for its own usage errors).
+EXIT_USAGE = 2
+#: File name endings read as GeoJSON (compared case-insensitively).
+GEOJSON_SUFFIXES = (".geojson", ".json")
+#: With stderr on a terminal, inputs of at least this many bytes get a progress bar.
+PROGRESS_MIN_BYTES = 8 * 2**20
+# Files are read and written in blocks of this size, so that the bar moves.
+_BLOCK = 2**20
+# Errors that mean the command line, not the input, is wrong.
+_USAGE_ERRORS = (InvalidOptionError, InvalidWindowError, BackendUnavailableError)
+# The first byte that is not JSON whitespace.
+_NON_SPACE = re.compile(rb"[^ \t\r\n]")
 
 app = typer.Typer(help="Clip geometry against a rectangular window.", no_args_is_help=True)
 
@@ -63,6 +96,278 @@ def segments(
     if verify:
         report["verification"] = rnsca.verify(data, result, window).to_dict()
     typer.echo(json.dumps(report, indent=2))
+
+
+@app.command()
+def clip(
+    source: Annotated[str | None, typer.Argument(
+        metavar="INPUT", show_default=False,
+        help="GeoJSON file (.geojson or .json); - or nothing reads stdin")] = None,
+    window: Annotated[str, typer.Option(
+        "--window", "-w", show_default=False,
+        help="xmin,ymin,xmax,ymax (for negative bounds write --window=-10,-10,10,10 "
+             "or --window -10,-10,10,10)")] = ...,
+    output: Annotated[str | None, typer.Option(
+        "--output", "-o", show_default=False,
+        help="file to write the clipped GeoJSON to; default (or -): stdout")] = None,
+    stats: Annotated[Path | None, typer.Option(
+        "--stats", show_default=False,
+        help="write the statistics (and verification) JSON to this file instead of "
+             "stderr")] = None,
+    verify: Annotated[bool, typer.Option(
+        help="compare the clip with Shapely's intersection; exit 1 if it fails")] = False,
+    method: Annotated[str, typer.Option(help="rnsca, cohen_sutherland, liang_barsky, "
+                                             "nicholl_lee_nicholl or midpoint")] = "rnsca",
+    n: Annotated[str, typer.Option(help="pieces (runs) per split, 2..64 or auto")] = "auto",
+    max_depth: Annotated[int | None, typer.Option(help="0..32")] = None,
+    tolerance: Annotated[float | None, typer.Option(help="leaf length")] = None,
+    mode: Annotated[str, typer.Option(help="exact or approx (lines and points only)")] = "exact",
+    backend: Annotated[str, typer.Option(help="numba")] = "numba",
+    boundary: Annotated[str, typer.Option(
+        help="closed keeps parts on the window's edge (as shapely.intersection); interior "
+             "drops them (as shapely.clip_by_rect)")] = "closed",
+    keep_empty: Annotated[bool, typer.Option(
+        help="keep features left empty (with empty coordinates) instead of dropping them")
+    ] = False,
+    approx_bound: Annotated[float | None, typer.Option(
+        help="with --verify --mode approx: the largest deviation to accept")] = None,
+    indent: Annotated[bool, typer.Option(help="indent the output JSON by 2 spaces")] = False,
+    progress: Annotated[bool | None, typer.Option(
+        "--progress/--no-progress", show_default=False,
+        help="show a progress bar on stderr (default: for inputs of 8 MiB or more when "
+             "stderr is a terminal)")] = None,
+) -> None:
+    """Clip a GeoJSON document to a window and write the clipped GeoJSON.
+
+    Geometry, Feature and FeatureCollection documents are accepted; properties, ids and
+    foreign members are kept, bbox members recomputed. The statistics go to stderr as
+    JSON (or to --stats FILE), with the comparison with Shapely under --verify.
+    """
+    bounds = _window_bounds(window)
+    options = dict(boundary=boundary, method=method, n=int(n) if n.isdigit() else n,
+                   max_depth=max_depth, tolerance=tolerance, mode=mode, backend=backend)
+    with _reporting(EXIT_USAGE):
+        _check_options(bounds, options)
+        if verify and Mode(mode) is Mode.APPROX and approx_bound is None:
+            raise InvalidOptionError(
+                "--verify with --mode approx needs --approx-bound (the largest deviation "
+                "to accept)")
+    name, path = _input(source)
+    bar = _ProgressBar(progress)
+    try:
+        with _reporting(EXIT_DATA):
+            data = _json_text(_read(path, bar), name)
+            bar.phase(f"clipping {name}")
+            document = loads(data)
+            clipped, clip_stats = rnsca.clip_geojson(
+                document, bounds, keep_empty=keep_empty, arrays=True, **options)
+            report = {"stats": clip_stats.to_dict()}
+            if verify:
+                bar.phase(f"verifying {name}")
+                verification = rnsca.verify(document, clipped, bounds, mode=mode,
+                                            approx_bound=approx_bound, boundary=boundary)
+                report["verification"] = verification.to_dict()
+            text = dumps(clipped, indent=indent) + b"\n"
+            _write(output, text, bar)
+    finally:
+        bar.close()
+    with _reporting(EXIT_DATA):
+        _write_report(report, stats)
+    if verify and not verification.passed:
+        _fail(f"verification failed: max_deviation={verification.max_deviation!r} "
+              f"(allowed {verification.allowed_deviation!r}), false_positives="
+              f"{verification.false_positives}, valid={verification.valid}", EXIT_DATA)
+
+
+def _fail(message, code: int):
+    """Print ``error: message`` on one line of stderr and exit with `code`."""
+    text = " ".join(str(message).split())
+    typer.echo(f"error: {text}", err=True)
+    raise typer.Exit(code)
+
+
+@contextmanager
+def _reporting(code: int):
+    """Turn library and I/O errors into one line on stderr and an exit status.
+
+    Options, windows and backends are the command line's fault (exit 2); anything else
+    the library rejects, and failed reads and writes, exit with `code`.
+    """
+    try:
+        yield
+    except _USAGE_ERRORS as error:
+        _fail(error, EXIT_USAGE)
+    except (RnscaError, ValueError) as error:
+        _fail(error, code)
+    except OSError as error:
+        _fail(f"{error.strerror}: {error.filename}" if error.filename and error.strerror
+              else error, code)
+
+
+def _window_bounds(text: str) -> tuple[float, float, float, float]:
+    """Return the bounds of ``--window xmin,ymin,xmax,ymax``, or exit 2."""
+    parts = text.split(",")
+    try:
+        if len(parts) != 4:
+            raise ValueError
+        bounds = tuple(float(part) for part in parts)
+    except ValueError:
+        _fail(f"--window needs four comma-separated numbers xmin,ymin,xmax,ymax, "
+              f"got {text!r}", EXIT_USAGE)
+    with _reporting(EXIT_USAGE):
+        rnsca.Window(*bounds)
+    return bounds
+
+
+def _check_options(bounds, options: dict) -> None:
+    """Raise the library's error for a bad option before any input is read.
+
+    Clipping no geometry runs every check that does not depend on the input (whether
+    approx mode meets a polygon is found when clipping).
+    """
+    rnsca.clip_ragged("Point", np.empty((0, 2)), (), bounds, **options)
+
+
+def _input(source: str | None) -> tuple[str, Path | None]:
+    """Return the name to report and the path of the input (None: stdin), or exit 2."""
+    if source is None and sys.stdin.isatty():
+        _fail("no INPUT: name a GeoJSON file, or pipe GeoJSON to stdin", EXIT_USAGE)
+    if source is None or source == "-":
+        return "<stdin>", None
+    path = Path(source)
+    if path.suffix and path.suffix.lower() not in GEOJSON_SUFFIXES:
+        _fail(f"{source}: only GeoJSON input is accepted (a .geojson or .json file, or "
+              f"GeoJSON on stdin), got a {path.suffix} file", EXIT_USAGE)
+    if not path.is_file():
+        _fail(f"{source}: no such file" if not path.exists() else f"{source}: not a file",
+              EXIT_USAGE)
+    return source, path
+
+
+def _read(path: Path | None, bar: _ProgressBar) -> memoryview:
+    """Return the bytes of the input file (stdin for None), in blocks for the bar."""
+    if path is None:
+        stream: BinaryIO = sys.stdin.buffer
+        return _read_blocks(stream, None, "<stdin>", bar)
+    with open(path, "rb") as stream:
+        return _read_blocks(stream, path.stat().st_size, str(path), bar)
+
+
+def _read_blocks(stream: BinaryIO, size: int | None, name: str, bar: _ProgressBar):
+    bar.phase(f"reading {name}", size)
+    buffer = bytearray()
+    while block := stream.read(_BLOCK):
+        buffer += block
+        bar.advance(len(block), read=len(buffer))
+    return memoryview(buffer)
+
+
+def _json_text(data: memoryview, name: str) -> memoryview:
+    """Return `data` without a byte order mark; exit unless it starts with a JSON object.
+
+    GeoJSON is the one input kind: anything else (SVG, a shapefile...) is refused here,
+    before parsing, with a message that says so.
+    """
+    if data[:3] == b"\xef\xbb\xbf":  # a UTF-8 byte order mark, which RFC 8259 allows
+        data = data[3:]
+    first = _NON_SPACE.search(data)
+    if first is None:
+        _fail(f"{name} is empty: expected a GeoJSON object", EXIT_DATA)
+    if first.group() != b"{":
+        start = bytes(data[first.start():first.start() + 16])
+        _fail(f"{name}: only GeoJSON input is accepted (a JSON object: Geometry, Feature "
+              f"or FeatureCollection), but it starts with {start!r}", EXIT_USAGE)
+    return data
+
+
+def _write(output: str | None, text: bytes, bar: _ProgressBar) -> None:
+    """Write `text` to the output file, or to stdout for None or ``-``."""
+    if output is None or output == "-":
+        _write_blocks(sys.stdout.buffer, text, "<stdout>", bar)
+        sys.stdout.buffer.flush()
+        return
+    with open(output, "wb") as stream:
+        _write_blocks(stream, text, output, bar)
+
+
+def _write_blocks(stream: BinaryIO, text: bytes, name: str, bar: _ProgressBar) -> None:
+    bar.phase(f"writing {name}", len(text))
+    view = memoryview(text)
+    for start in range(0, len(view), _BLOCK):
+        block = view[start:start + _BLOCK]
+        stream.write(block)
+        bar.advance(len(block))
+
+
+def _write_report(report: dict, path: Path | None) -> None:
+    text = json.dumps(report, separators=(",", ":"))
+    if path is None:
+        typer.echo(text, err=True)
+    else:
+        path.write_text(text + "\n")
+
+
+class _ProgressBar:
+    """A progress bar on stderr, through the phases of a command (rich, via Typer).
+
+    `enabled` True shows it, False never; None shows it once the input is known to hold
+    at least `PROGRESS_MIN_BYTES` and only when stderr is a terminal. It is transient:
+    it leaves nothing behind on the terminal.
+    """
+
+    def __init__(self, enabled: bool | None) -> None:
+        self.enabled = enabled
+        self._progress = None
+        self._task = None
+        self._phase: tuple[str, int | None] = ("", None)
+
+    def phase(self, description: str, total: int | None = None) -> None:
+        """Start a phase: its description, and its size in bytes if it has one."""
+        self._phase = (description, total)
+        if total is not None:
+            self._start_if(total)
+        if self._progress is not None:
+            self._progress.update(self._task, description=description, total=total,
+                                  completed=0)
+
+    def advance(self, amount: int, *, read: int = 0) -> None:
+        """Count `amount` bytes of the phase done; `read` is the input read so far."""
+        if self._progress is None and read:
+            self._start_if(read)
+            if self._progress is not None:
+                self._progress.update(self._task, completed=read)
+                return
+        if self._progress is not None:
+            self._progress.advance(self._task, amount)
+
+    def close(self) -> None:
+        """Remove the bar."""
+        if self._progress is not None:
+            self._progress.stop()
+            self._progress = None
+
+    def _start_if(self, size: int) -> None:
+        if self._progress is not None or self.enabled is False:
+            return
+        if self.enabled is None and not (size >= PROGRESS_MIN_BYTES and sys.stderr.isatty()):
+            return
+        from rich.console import Console
+        from rich.progress import (
+            BarColumn,
+            DownloadColumn,
+            Progress,
+            SpinnerColumn,
+            TextColumn,
+            TimeElapsedColumn,
+        )
+
+        self._progress = Progress(
+            SpinnerColumn(), TextColumn("{task.description}"), BarColumn(),
+            DownloadColumn(), TimeElapsedColumn(),
+            console=Console(stderr=True), transient=True)
+        self._progress.start()
+        description, total = self._phase
+        self._task = self._progress.add_task(description, total=total)
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -45,6 +45,9 @@ from benchmarks.timing import Policy
 SCHEMA = "rnsca-bench-segments/1"
 GEOMETRY_SCHEMA = "rnsca-bench-geometry/1"
 SUITES = ("segments", "geometry")
+#: Environment variables that change how Numba's parallel kernels behave under load.
+THREADING_ENV = ("NUMBA_NUM_THREADS", "NUMBA_THREADING_LAYER", "OMP_NUM_THREADS",
+                 "OMP_WAIT_POLICY")
 HERE = Path(__file__).resolve().parent
 PROJECT_ROOT = HERE.parent
 DEFAULT_OUT = HERE / "results"
@@ -215,6 +218,7 @@ def run_geometry(quick: bool, out_dir: Path) -> dict:
             "geojson_polygons": plan.geojson_polygons,
             "policy": vars(plan.policy),
             "geojson_repeats": plan.geojson_repeats,
+            "environment": {name: os.environ.get(name) for name in THREADING_ENV},
             "timing": ("best (min) of repeats; contenders of a workload timed round-robin, "
                        "each called once on the whole input before timing (compiles "
                        "kernels); garbage collector paused during timed calls; GeoJSON "

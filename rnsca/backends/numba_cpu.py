@@ -61,42 +61,33 @@ class NumbaBackend:
                    drop_edge_runs: bool):
         """Return ``(xy, z, chain_offsets, chains_per_part, counters)``.
 
-        See `ClipBackend.clip_lines`; count (bound), prefix sum, write, compact.
+        See `ClipBackend.clip_lines`; count, prefix sum, write.
         """
         n_parts = part_offsets.shape[0] - 1
         has_z = z.shape[0] > 0
         block = _block_size(n_parts)
         n_blocks = max(1, -(-n_parts // block))
         counters = np.zeros((n_blocks, C.WIDTH), dtype=np.int64)
-        bound_v = np.empty(n_parts, dtype=np.int64)
-        bound_c = np.empty(n_parts, dtype=np.int64)
+        n_vertices = np.empty(n_parts, dtype=np.int64)
+        n_chains = np.empty(n_parts, dtype=np.int64)
         args = (xy, z, has_z, part_offsets, part_window, windows, _METHOD_ID[options.method],
                 options.n, options.max_depth, options.tolerance, options.auto_piece,
                 options.mode is Mode.EXACT, drop_edge_runs, block)
         segments = np.maximum(np.diff(part_offsets), 1) - 1
         chunk_start = _exclusive_sum(-(-segments // PL.RUN_LEAF_SEGMENTS))
         boxes = np.empty((int(chunk_start[-1]), 4))
-        nothing_f = np.empty((0, 2))
         nothing_i = np.empty(0, dtype=np.int64)
-        PL.clip_line_blocks(*args, False, chunk_start, boxes, nothing_i, nothing_i, nothing_f,
-                            np.empty(0), nothing_i, bound_v, bound_c, counters)
-        vertex_slot = _exclusive_sum(bound_v)
-        chain_slot = _exclusive_sum(bound_c)
-        slot_xy = np.empty((int(vertex_slot[-1]), 2))
-        slot_z = np.empty(int(vertex_slot[-1]) if has_z else 0)
-        slot_starts = np.empty(int(chain_slot[-1]), dtype=np.int64)
-        n_vertices = np.empty(n_parts, dtype=np.int64)
-        n_chains = np.empty(n_parts, dtype=np.int64)
-        PL.clip_line_blocks(*args, True, chunk_start, boxes, vertex_slot, chain_slot, slot_xy,
-                            slot_z, slot_starts, n_vertices, n_chains, counters)
+        PL.clip_line_blocks(*args, False, chunk_start, boxes, nothing_i, nothing_i,
+                            np.empty((0, 2)), np.empty(0), nothing_i, n_vertices, n_chains,
+                            counters)
         vertex_start = _exclusive_sum(n_vertices)
         chain_start = _exclusive_sum(n_chains)
         out_xy = np.empty((int(vertex_start[-1]), 2))
         out_z = np.empty(int(vertex_start[-1]) if has_z else 0)
         chain_offsets = np.empty(int(chain_start[-1]) + 1, dtype=np.int64)
         chain_offsets[-1] = out_xy.shape[0]
-        PL.compact_lines(vertex_slot, chain_slot, n_vertices, n_chains, slot_xy, slot_z, has_z,
-                         slot_starts, vertex_start, chain_start, out_xy, out_z, chain_offsets)
+        PL.clip_line_blocks(*args, True, chunk_start, boxes, vertex_start, chain_start, out_xy,
+                            out_z, chain_offsets, n_vertices, n_chains, counters)
         return out_xy, out_z, chain_offsets, n_chains, counters
 
     def clip_polygons(self, xy, z, ring_offsets, polygon_offsets, polygon_window, windows,

@@ -368,8 +368,8 @@ def clip_polygon(xy, z, has_z, ring_offsets, r_begin, r_end, xmin, ymin, xmax, y
         ring_rev[j] = (area < 0.0) if j == 0 else (area > 0.0)
         c0 = c_ch
         v_ch, c_ch, at_first, at_last = clip_chains(
-            xy, z, has_z, first, last, xmin, ymin, xmax, ymax, method, n_fixed, max_depth, tol,
-            auto_piece, exact, True, True, ch_xy, ch_z, ch_starts, v_ch, c_ch, st, run_stack,
+            xy, z, has_z, True, first, last, xmin, ymin, xmax, ymax, method, n_fixed, max_depth,
+            tol, auto_piece, exact, True, True, ch_xy, ch_z, ch_starts, v_ch, c_ch, st, run_stack,
             stack_f, stack_i, no_boxes, 0)
         ch_starts[c_ch] = v_ch
         n_chains = c_ch - c0

@@ -42,7 +42,6 @@ __all__ = [
     "chunk_count",
     "clip_chains",
     "clip_line_blocks",
-    "compact_lines",
     "run_box_codes",
 ]
 
@@ -101,45 +100,51 @@ def bound_chains(xy, first, last, xmin, ymin, xmax, ymax):
 
 
 @scalar
-def _append(out_xy, out_z, has_z, v, x, y, z):
-    out_xy[v, 0] = x
-    out_xy[v, 1] = y
-    if has_z:
-        out_z[v] = z
+def _append(out_xy, out_z, has_z, write, v, x, y, z):
+    if write:
+        out_xy[v, 0] = x
+        out_xy[v, 1] = y
+        if has_z:
+            out_z[v] = z
     return v + 1
 
 
 @scalar
-def _emit_piece(xy, z, has_z, i, t0, t1, ax, ay, bx, by, out_xy, out_z, out_starts,
+def _emit_piece(xy, z, has_z, write, i, t0, t1, ax, ay, bx, by, out_xy, out_z, out_starts,
                 v, c, last_v, breaks):
     """Add the piece [t0, t1] of segment i to the chains; return (v, c, last_v).
 
     The piece continues the chain if the chain ends at vertex i and the piece starts
-    there, unless `breaks` (rings break at a vertex on the boundary).
+    there, unless `breaks` (rings break at a vertex on the boundary). Without `write`
+    only the positions advance (the counting pass).
     """
     if breaks or not (last_v == i and ax == xy[i, 0] and ay == xy[i, 1]):
-        out_starts[c] = v
+        if write:
+            out_starts[c] = v
         c += 1
         za = 0.0
         if has_z:
             za = z[i] if t0 == 0.0 else z[i] + t0 * (z[i + 1] - z[i])
-        v = _append(out_xy, out_z, has_z, v, ax, ay, za)
+        v = _append(out_xy, out_z, has_z, write, v, ax, ay, za)
     end_is_vertex = bx == xy[i + 1, 0] and by == xy[i + 1, 1]
     zb = 0.0
     if has_z:
         zb = z[i + 1] if end_is_vertex else z[i] + t1 * (z[i + 1] - z[i])
-    v = _append(out_xy, out_z, has_z, v, bx, by, zb)
+    v = _append(out_xy, out_z, has_z, write, v, bx, by, zb)
     return v, c, (i + 1) if end_is_vertex else -1
 
 
 @scalar
-def _emit_run(xy, z, has_z, a, b, out_xy, out_z, out_starts, v, c, last_v):
+def _emit_run(xy, z, has_z, write, a, b, out_xy, out_z, out_starts, v, c, last_v):
     """Add the whole run of vertices a..b (inside the window); return (v, c, last_v)."""
     start = a + 1
     if last_v != a:
-        out_starts[c] = v
+        if write:
+            out_starts[c] = v
         c += 1
         start = a
+    if not write:
+        return v + b + 1 - start, c, b
     for k in range(start, b + 1):
         out_xy[v, 0] = xy[k, 0]
         out_xy[v, 1] = xy[k, 1]
@@ -150,9 +155,9 @@ def _emit_run(xy, z, has_z, a, b, out_xy, out_z, out_starts, v, c, last_v):
 
 
 @scalar
-def _clip_segments(xy, z, has_z, a, b, xmin, ymin, xmax, ymax, method, n_fixed, max_depth,
-                   tol, auto_piece, exact, drop_edge_runs, break_at_boundary, out_xy, out_z,
-                   out_starts, v, c, last_v, st, stack_f, stack_i):
+def _clip_segments(xy, z, has_z, write, a, b, xmin, ymin, xmax, ymax, method, n_fixed,
+                   max_depth, tol, auto_piece, exact, drop_edge_runs, break_at_boundary, out_xy,
+                   out_z, out_starts, v, c, last_v, st, stack_f, stack_i):
     """Clip segments a..b-1 one by one into the chains; return (v, c, last_v).
 
     With `break_at_boundary` (rings) a chain also breaks at a vertex on the boundary,
@@ -164,15 +169,28 @@ def _clip_segments(xy, z, has_z, a, b, xmin, ymin, xmax, ymax, method, n_fixed, 
         x1 = xy[i + 1, 0]
         y1 = xy[i + 1, 1]
         if method == RNSCA:
-            keep, t0, t1, ax, ay, bx, by = rnsca_segment(
-                x0, y0, x1, y1, xmin, ymin, xmax, ymax, n_fixed, max_depth, tol, auto_piece,
-                exact, st, stack_f, stack_i)
+            # RNSCA's level 0, here rather than in the call (which passes three arrays,
+            # each reference-counted): most segments of a leaf run are decided by it.
+            c0 = outcode(x0, y0, xmin, ymin, xmax, ymax)
+            c1 = outcode(x1, y1, xmin, ymin, xmax, ymax)
+            if (c0 | c1) == 0 or (c0 & c1) != 0:
+                st[C.EVALUATED] += 1
+                st[C.LEVELS] += 1
+                if c0 & c1:
+                    st[C.REJECTED] += 1
+                    continue
+                st[C.ACCEPTED] += 1
+                keep, t0, t1, ax, ay, bx, by = True, 0.0, 1.0, x0, y0, x1, y1
+            else:
+                keep, t0, t1, ax, ay, bx, by = rnsca_segment(
+                    x0, y0, x1, y1, xmin, ymin, xmax, ymax, n_fixed, max_depth, tol,
+                    auto_piece, exact, st, stack_f, stack_i)
         else:
             keep, t0, t1, ax, ay, bx, by = clip_one(
                 method, x0, y0, x1, y1, xmin, ymin, xmax, ymax, max_depth, tol, exact, st)
         if keep and not (drop_edge_runs and on_one_edge(ax, ay, bx, by, xmin, ymin, xmax, ymax)):
             breaks = break_at_boundary and _edge_bits(x0, y0, xmin, ymin, xmax, ymax) != 0
-            v, c, last_v = _emit_piece(xy, z, has_z, i, t0, t1, ax, ay, bx, by,
+            v, c, last_v = _emit_piece(xy, z, has_z, write, i, t0, t1, ax, ay, bx, by,
                                        out_xy, out_z, out_starts, v, c, last_v, breaks)
     return v, c, last_v
 
@@ -239,14 +257,11 @@ def chunk_count(first, last):
 
 @scalar
 def box_chunks(xy, first, last, boxes, box0, xmin, ymin, xmax, ymax, drop_edge_runs):
-    """Store the chunk boxes of the line first..last; return output bounds (vertices, chains).
+    """Store the bounding box of each chunk of the line first..last at ``boxes[box0:]``.
 
-    A chunk inside the window bounds its vertices and one chain; one beyond an edge,
-    nothing; any other is bounded vertex by vertex (`bound_chains`). One pass over the
-    coordinates, which the write pass then need not scan again to prune runs.
+    One pass over the coordinates; the recursion then prunes runs by the union of their
+    chunks' boxes without scanning vertices again.
     """
-    vertices = 0
-    chains = 0
     for k in range(chunk_count(first, last)):
         a = first + k * RUN_LEAF_SEGMENTS
         b = min(a + RUN_LEAF_SEGMENTS, last)
@@ -263,23 +278,12 @@ def box_chunks(xy, first, last, boxes, box0, xmin, ymin, xmax, ymax, drop_edge_r
         boxes[box0 + k, 1] = lo_y
         boxes[box0 + k, 2] = hi_x
         boxes[box0 + k, 3] = hi_y
-        lo = outcode(lo_x, lo_y, xmin, ymin, xmax, ymax)
-        hi = outcode(hi_x, hi_y, xmin, ymin, xmax, ymax)
-        strict = (lo_x > xmin) & (hi_x < xmax) & (lo_y > ymin) & (hi_y < ymax)
-        if (lo | hi) == 0 and (strict or not drop_edge_runs):
-            vertices += b - a + 1
-            chains += 1
-        elif (lo & hi) == 0:
-            nv, nc, _ = bound_chains(xy, a, b, xmin, ymin, xmax, ymax)
-            vertices += nv
-            chains += nc
-    return vertices, chains
 
 
 @scalar
-def clip_chains(xy, z, has_z, first, last, xmin, ymin, xmax, ymax, method, n_fixed, max_depth,
-                tol, auto_piece, exact, drop_edge_runs, break_at_boundary, out_xy, out_z,
-                out_starts, v, c, st, run_stack, stack_f, stack_i, boxes, box0):
+def clip_chains(xy, z, has_z, write, first, last, xmin, ymin, xmax, ymax, method, n_fixed,
+                max_depth, tol, auto_piece, exact, drop_edge_runs, break_at_boundary, out_xy,
+                out_z, out_starts, v, c, st, run_stack, stack_f, stack_i, boxes, box0):
     """Clip the line through vertices ``xy[first..last]`` into chains.
 
     Writes the chains' vertices from ``out_xy[v]`` (and ``out_z``) on, and the start of
@@ -290,14 +294,15 @@ def clip_chains(xy, z, has_z, first, last, xmin, ymin, xmax, ymax, method, n_fix
 
     Runs are whole chunks of `RUN_LEAF_SEGMENTS` segments; their boxes come from
     `boxes` (see `box_chunks`) or, if it is empty, from the vertices. Runs are pruned
-    only for ``method == RNSCA``; the baselines clip every segment.
+    only for ``method == RNSCA``; the baselines clip every segment. Without `write`
+    nothing is written and only the counts come back (the exact counting pass).
     """
     c_begin = c
     last_v = -1
     if last <= first:
         return v, c, False, False
     if method != RNSCA:
-        v, c, last_v = _clip_segments(xy, z, has_z, first, last, xmin, ymin, xmax, ymax,
+        v, c, last_v = _clip_segments(xy, z, has_z, write, first, last, xmin, ymin, xmax, ymax,
                                       method, n_fixed, max_depth, tol, auto_piece, exact,
                                       drop_edge_runs, break_at_boundary, out_xy, out_z,
                                       out_starts, v, c, last_v, st, stack_f, stack_i)
@@ -324,8 +329,8 @@ def clip_chains(xy, z, has_z, first, last, xmin, ymin, xmax, ymax, method, n_fix
                 st[C.RUNS_ACCEPTED] += 1
                 st[C.RUN_LEVELS + slot] += 1
                 st[C.SEGMENT_LEVELS + slot] += b - a
-                v, c, last_v = _emit_run(xy, z, has_z, a, b, out_xy, out_z, out_starts,
-                                         v, c, last_v)
+                v, c, last_v = _emit_run(xy, z, has_z, write, a, b, out_xy, out_z,
+                                         out_starts, v, c, last_v)
             elif lo & hi:
                 st[C.RUNS_REJECTED] += 1
                 st[C.RUN_LEVELS + slot] += 1
@@ -334,8 +339,8 @@ def clip_chains(xy, z, has_z, first, last, xmin, ymin, xmax, ymax, method, n_fix
                 st[C.RUNS_SEGMENTED] += 1
                 st[C.RUN_LEVELS + slot] += 1
                 st[C.SEGMENT_LEVELS + slot] += b - a
-                v, c, last_v = _clip_segments(xy, z, has_z, a, b, xmin, ymin, xmax, ymax,
-                                              method, n_fixed, max_depth, tol, auto_piece,
+                v, c, last_v = _clip_segments(xy, z, has_z, write, a, b, xmin, ymin, xmax,
+                                              ymax, method, n_fixed, max_depth, tol, auto_piece,
                                               exact, drop_edge_runs, break_at_boundary,
                                               out_xy, out_z, out_starts, v, c, last_v, st,
                                               stack_f, stack_i)
@@ -349,7 +354,7 @@ def clip_chains(xy, z, has_z, first, last, xmin, ymin, xmax, ymax, method, n_fix
                     run_stack[sp, 1] = ca + (cb - ca) * j // k
                     run_stack[sp, 2] = level + 1
                     sp += 1
-    if c == c_begin:
+    if c == c_begin or not write:
         return v, c, False, False
     starts_at_first = out_xy[out_starts[c_begin], 0] == xy[first, 0] and \
         out_xy[out_starts[c_begin], 1] == xy[first, 1]
@@ -361,24 +366,25 @@ def clip_chains(xy, z, has_z, first, last, xmin, ymin, xmax, ymax, method, n_fix
 @parallel
 def clip_line_blocks(xy, z, has_z, part_offsets, part_window, windows, method, n_fixed,
                      max_depth, tol, auto_piece, exact, drop_edge_runs, block_size, write,
-                     chunk_start, boxes, vertex_slot, chain_slot, out_xy, out_z, out_starts,
+                     chunk_start, boxes, vertex_start, chain_start, out_xy, out_z, out_starts,
                      n_vertices, n_chains, counters):
-    """Bound (``write=False``) or clip (``write=True``) every part of a ragged line array.
+    """Count (``write=False``) or write (``write=True``) every part of a ragged line array.
 
     Part ``p`` is ``xy[part_offsets[p]:part_offsets[p+1]]``, clipped against
-    ``windows[part_window[p]]``; its chunk boxes live at ``boxes[chunk_start[p]:]``. The
-    bound pass fills them and `n_vertices`, `n_chains` (`box_chunks`); the write pass
-    writes part p's chains from ``vertex_slot[p]`` and ``chain_slot[p]`` on (exclusive
-    sums of the bounds) and replaces the bounds with the actual counts. One counter row
-    per block.
+    ``windows[part_window[p]]``; its chunk boxes live at ``boxes[chunk_start[p]:]``.
+    The count pass stores the boxes (`box_chunks`) and counts each part's output exactly
+    (`clip_chains` without writing: only ambiguous chunks do any work twice); the write
+    pass writes part p's chains from ``vertex_start[p]`` and ``chain_start[p]`` (the
+    exclusive sums of the counts), so the output is allocated once, at its size. Stats
+    are counted in the write pass, one counter row per block.
     """
     n_parts = part_offsets.shape[0] - 1
     n_blocks = counters.shape[0]
     for blk in prange(n_blocks):
-        st = counters[blk]
-        run_stack = np.empty((RUN_STACK_CAPACITY if write else 0, 3), dtype=np.int64)
-        stack_f = np.empty((STACK_CAPACITY if write else 0, 6), dtype=np.float64)
-        stack_i = np.empty((STACK_CAPACITY if write else 0, 3), dtype=np.int64)
+        st = counters[blk] if write else np.zeros(C.WIDTH, dtype=np.int64)
+        run_stack = np.empty((RUN_STACK_CAPACITY, 3), dtype=np.int64)
+        stack_f = np.empty((STACK_CAPACITY, 6), dtype=np.float64)
+        stack_i = np.empty((STACK_CAPACITY, 3), dtype=np.int64)
         for p in range(blk * block_size, min(n_parts, (blk + 1) * block_size)):
             first = part_offsets[p]
             last = part_offsets[p + 1] - 1
@@ -387,37 +393,18 @@ def clip_line_blocks(xy, z, has_z, part_offsets, part_window, windows, method, n
             ymin = windows[w, 1]
             xmax = windows[w, 2]
             ymax = windows[w, 3]
+            v0 = 0
+            c0 = 0
+            if write:
+                v0 = vertex_start[p]
+                c0 = chain_start[p]
+            else:
+                box_chunks(xy, first, last, boxes, chunk_start[p], xmin, ymin, xmax, ymax,
+                           drop_edge_runs)
+            v, c, _, _ = clip_chains(xy, z, has_z, write, first, last, xmin, ymin, xmax, ymax,
+                                     method, n_fixed, max_depth, tol, auto_piece, exact,
+                                     drop_edge_runs, False, out_xy, out_z, out_starts, v0, c0,
+                                     st, run_stack, stack_f, stack_i, boxes, chunk_start[p])
             if not write:
-                nv, nc = box_chunks(xy, first, last, boxes, chunk_start[p], xmin, ymin, xmax,
-                                    ymax, drop_edge_runs)
-                n_vertices[p] = nv
-                n_chains[p] = nc
-                continue
-            v0 = vertex_slot[p]
-            c0 = chain_slot[p]
-            v, c, _, _ = clip_chains(xy, z, has_z, first, last, xmin, ymin, xmax, ymax, method,
-                                     n_fixed, max_depth, tol, auto_piece, exact, drop_edge_runs,
-                                     False, out_xy, out_z, out_starts, v0, c0, st, run_stack,
-                                     stack_f, stack_i, boxes, chunk_start[p])
-            n_vertices[p] = v - v0
-            n_chains[p] = c - c0
-
-
-@parallel
-def compact_lines(vertex_slot, chain_slot, n_vertices, n_chains, slot_xy, slot_z, has_z,
-                  slot_starts, vertex_start, chain_start, out_xy, out_z, out_offsets):
-    """Copy each part's chains from its slot to its final place, closing the gaps.
-
-    `vertex_start` and `chain_start` are exclusive sums of the actual counts; chain
-    offsets are rebased from slot positions to final positions.
-    """
-    for p in prange(n_vertices.shape[0]):
-        src = vertex_slot[p]
-        dst = vertex_start[p]
-        for k in range(n_vertices[p]):
-            out_xy[dst + k, 0] = slot_xy[src + k, 0]
-            out_xy[dst + k, 1] = slot_xy[src + k, 1]
-            if has_z:
-                out_z[dst + k] = slot_z[src + k]
-        for k in range(n_chains[p]):
-            out_offsets[chain_start[p] + k] = slot_starts[chain_slot[p] + k] - src + dst
+                n_vertices[p] = v
+                n_chains[p] = c

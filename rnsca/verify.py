@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass
+from functools import cached_property
 
 import numpy as np
 import shapely
@@ -779,7 +780,11 @@ class _Linework:
         # The segment a vertex starts, or for a part's last vertex the one it ends.
         self.vertex_segment = np.searchsorted(starts, np.arange(count), side="right") - 1
         self.box = shapely.bounds(geometries)
-        self.tree = shapely.STRtree(shapely.linestrings(np.stack([self.start, self.end], 1)))
+
+    @cached_property
+    def tree(self) -> shapely.STRtree:
+        """Return a spatial index of the segments (built when a point is not a vertex)."""
+        return shapely.STRtree(shapely.linestrings(np.stack([self.start, self.end], 1)))
 
     def nearest(self, points: np.ndarray, owner: np.ndarray, radius: np.ndarray):
         """Return, per point, the distance to its owner's segments, the nearest and where.

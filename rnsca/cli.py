@@ -129,6 +129,9 @@ def clip(
     keep_empty: Annotated[bool, typer.Option(
         help="keep features left empty (with empty coordinates) instead of dropping them")
     ] = False,
+    check_validity: Annotated[bool, typer.Option(
+        help="count invalid input polygons in the stats with GEOS (costs more than the "
+             "clip; invalid polygons are clipped ring by ring either way)")] = False,
     approx_bound: Annotated[float | None, typer.Option(
         help="with --verify --mode approx: the largest deviation to accept")] = None,
     indent: Annotated[bool, typer.Option(help="indent the output JSON by 2 spaces")] = False,
@@ -145,7 +148,8 @@ def clip(
     """
     bounds = _window_bounds(window)
     options = dict(boundary=boundary, method=method, n=int(n) if n.isdigit() else n,
-                   max_depth=max_depth, tolerance=tolerance, mode=mode, backend=backend)
+                   max_depth=max_depth, tolerance=tolerance, mode=mode, backend=backend,
+                   check_validity=check_validity)
     with _reporting(EXIT_USAGE):
         _check_options(bounds, options)
         if verify and Mode(mode) is Mode.APPROX and approx_bound is None:

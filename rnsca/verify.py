@@ -71,8 +71,10 @@ class Verification:
         Whether the result keeps its mode's promise: exact, deviation within
         ``allowed_deviation`` of every input, valid polygons and no false positive;
         approx, no false positive, valid polygons and deviation within the bound. An
-        input polygon that is itself invalid is clipped ring by ring, not repaired, so
-        its output need not be valid (see `invalid_inputs`).
+        input whose polygons are invalid has no oracle: it is clipped ring by ring, not
+        repaired, so neither its output's validity nor its deviation from the clip of
+        ``shapely.make_valid`` of it (still reported in `max_deviation`, `valid` and
+        `ratio`) decides the verdict (see `invalid_inputs`).
     allowed_deviation : float
         Exact: 1e-9 of the window's size (of the largest window, when there is one per
         geometry). Approx: the bound (for segments without one given, the largest of
@@ -168,10 +170,9 @@ def verify(original, clipped, window, *, mode=None, approx_bound=None,
     Shapely (GEOS) loses whole pieces far from 1 (from about 1e+-110 on), so it sees
     tiny and huge windows, with their geometry, scaled by a power of two that brings
     the window's size near 1: exact in floating point, and distances scale back
-    exactly. An input polygon that is not valid is compared with the clip of
-    ``shapely.make_valid`` of it (GEOS cannot intersect some invalid polygons); the
-    output's own validity is reported in ``valid``, and does not fail the verdict for
-    such an input.
+    exactly. An input polygon that is not valid has no oracle: it is compared with the
+    clip of ``shapely.make_valid`` of it (GEOS cannot intersect some invalid polygons),
+    and reported, but does not decide ``passed`` (see `Verification`).
 
     Examples
     --------
@@ -507,12 +508,13 @@ def _verify_geometries(originals, delivered, source, bounds, mode: Mode, approx_
                    int(dims.max()) if dims.size else 0)
     if mode is Mode.APPROX:
         allowed_deviation = approx_bound
-        within = bool((deviation <= approx_bound).all())
+        within = bool((deviation <= approx_bound)[input_valid].all())
     else:
         allowed_deviation = float(margins.max()) if count else 0.0
-        within = bool((deviation <= margins).all())
+        within = bool((deviation <= margins)[input_valid].all())
     max_deviation = float(np.max(deviation)) if count else 0.0
-    # An invalid input polygon is clipped ring by ring: its output need not be valid.
+    # An invalid input polygon is clipped ring by ring: its output need not be valid, and
+    # it has no oracle to be within the allowed deviation of.
     kept_promise = bool((output_valid | ~input_valid[source]).all())
     return Verification(max_deviation, false_positives, ratio,
                         within and kept_promise and false_positives == 0, allowed_deviation,

@@ -164,6 +164,18 @@ def test_clip_passes_the_clipping_options_on(runner):
     assert 0.0 <= x0 <= 1.0 and 9.0 <= x1 <= 10.0
 
 
+def test_clip_check_validity_counts_invalid_input_polygons(runner):
+    bowtie = {"type": "Polygon", "coordinates": [[[0, 0], [10, 10], [10, 0], [0, 10], [0, 0]]]}
+    result = run(runner, "--window", "1,1,9,9", "--check-validity", "--verify",
+                 stdin=json.dumps(bowtie))
+    assert result.exit_code == 0, result.output
+    report = report_of(result)
+    assert report["stats"]["invalid_polygons"] == 1
+    # No oracle for an invalid input: verify reports it and does not fail on it.
+    assert report["verification"]["invalid_inputs"] == 1
+    assert report["verification"]["passed"] is True
+
+
 def test_clip_keeps_z_and_indents_on_request(runner):
     line = {"type": "LineString", "coordinates": [[-5, 5, 0], [15, 5, 20]]}
     result = run(runner, *WINDOW, "--indent", stdin=json.dumps(line))

@@ -213,6 +213,19 @@ def test_invalid_input_polygon_excuses_its_invalid_output():
     assert v.passed and v.max_deviation < 1e-12
 
 
+def test_invalid_input_polygon_does_not_decide_the_verdict_by_its_deviation():
+    bowtie = wkt("POLYGON ((0 0, 10 10, 10 0, 0 10, 0 0))")
+    # Two overlapping triangles, against make_valid's left and right ones.
+    ours = wkt("MULTIPOLYGON (((1 1, 9 9, 1 9, 1 1)), ((9 1, 1 9, 1 1, 9 1)))")
+    v = verify([bowtie, CROSSING], [ours, wkt("LINESTRING (1 5, 9 5)")], (1, 1, 9, 9))
+    assert v.invalid_inputs == 1 and v.valid is False
+    assert v.max_deviation == pytest.approx(2 * math.sqrt(2))
+    assert v.passed
+    # The valid inputs still decide it.
+    wrong = verify([bowtie, CROSSING], [ours, wkt("LINESTRING (1 5, 8 5)")], (1, 1, 9, 9))
+    assert not wrong.passed
+
+
 def test_nan_output_vertex_is_a_false_positive_and_fails():
     with np.errstate(invalid="ignore"):
         broken = shapely.LineString([(0, 5), (math.nan, 5)])

@@ -490,7 +490,7 @@ def _verify_geometries(originals, delivered, source, bounds, mode: Mode, approx_
     for dim in (0, 1, 2):
         expected, expected_index = _expected_parts(
             input_parts[input_dims == dim], input_index[input_dims == dim], scaled_bounds,
-            dim, boundary)
+            dim, boundary, input_valid)
         ours, ours_index = _grouped(output_parts[output_dims == dim],
                                     output_index[output_dims == dim])
         if not (expected.size or ours.size):
@@ -597,8 +597,12 @@ def _dimensions(parts: np.ndarray) -> np.ndarray:
     return dims
 
 
-def _expected_parts(parts, index, bounds: np.ndarray, dim: int, boundary: Boundary):
-    """Return Shapely's clip of input parts of one dimension, keeping that dimension."""
+def _expected_parts(parts, index, bounds: np.ndarray, dim: int, boundary: Boundary,
+                    valid: np.ndarray):
+    """Return Shapely's clip of input parts of one dimension, keeping that dimension.
+
+    `valid` says per input whether its polygons are valid (`_polygons_valid`).
+    """
     if not parts.size:
         return parts, index
     xmin, ymin, xmax, ymax = bounds[index].T
@@ -612,7 +616,7 @@ def _expected_parts(parts, index, bounds: np.ndarray, dim: int, boundary: Bounda
         return parts[inside], index[inside]
     if dim == 2:
         # GEOS cannot intersect some invalid polygons; their oracle is the valid reading.
-        invalid = ~shapely.is_valid(parts)
+        invalid = ~valid[index]
         if invalid.any():
             parts = parts.copy()
             parts[invalid] = shapely.make_valid(parts[invalid])
@@ -662,11 +666,16 @@ def _deviation(a: np.ndarray, b: np.ndarray, dim: int, sizes: np.ndarray) -> np.
     has_b = b != None  # noqa: E711
     deviation = np.zeros(a.shape[0])
     both = has_a & has_b
+    # Identical once normalized (a part accepted whole, say): no deviation to measure.
+    with np.errstate(invalid="ignore"):  # NaN output vertices are measured below
+        both[both] = ~shapely.equals_exact(shapely.normalize(a[both]),
+                                          shapely.normalize(b[both]), tolerance=0.0)
     if both.any():
+        measured_a, measured_b = a[both], b[both]
         if dim == 2:
             # Between the boundaries, as GEOS measures polygons.
-            a, b = shapely.boundary(a), shapely.boundary(b)
-        deviation[both] = _hausdorff(a[both], b[both], dim > 0,
+            measured_a, measured_b = shapely.boundary(measured_a), shapely.boundary(measured_b)
+        deviation[both] = _hausdorff(measured_a, measured_b, dim > 0,
                                      EXACT_RELATIVE_TOLERANCE * sizes[both])
     alone = has_a ^ has_b
     if alone.any():
@@ -920,9 +929,10 @@ def _clip_is_not_empty(originals, bounds: np.ndarray, boundary: Boundary) -> np.
                           np.empty(0, dtype=np.int64))
     parts, index = _atomic_parts(_scaled(originals, scales))
     dims = _dimensions(parts)
+    valid = _polygons_valid(parts, index, count)
     kept = np.zeros(count, dtype=bool)
     for dim in (0, 1, 2):
         _, expected_index = _expected_parts(parts[dims == dim], index[dims == dim],
-                                            bounds * scales[:, None], dim, boundary)
+                                            bounds * scales[:, None], dim, boundary, valid)
         kept[expected_index] = True
     return kept

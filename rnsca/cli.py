@@ -105,8 +105,7 @@ def clip(
         help="GeoJSON file (.geojson or .json); - or nothing reads stdin")] = None,
     window: Annotated[str, typer.Option(
         "--window", "-w", show_default=False,
-        help="xmin,ymin,xmax,ymax (for negative bounds write --window=-10,-10,10,10 "
-             "or --window -10,-10,10,10)")] = ...,
+        help="xmin,ymin,xmax,ymax, e.g. 0,0,10,10 or -10,-10,10,10")] = ...,
     output: Annotated[str | None, typer.Option(
         "--output", "-o", show_default=False,
         help="file to write the clipped GeoJSON to; default (or -): stdout")] = None,

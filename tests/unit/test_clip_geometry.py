@@ -200,6 +200,32 @@ def test_every_hole_inside_the_window_is_kept():
     assert r.stats.invalid_polygons == 0
 
 
+def test_every_hole_inside_a_cut_polygon_is_kept():
+    r = ragged("POLYGON ((0 0, 10 0, 10 10, 0 10, 0 0), (2 2, 3 2, 3 3, 2 2), "
+               "(3 6, 4 6, 4 7, 3 6))", (-1, -1, 5, 11))
+    assert_same_polygons(geometries_of(r)[0], "POLYGON ((0 0, 5 0, 5 10, 0 10, 0 0), "
+                                              "(2 2, 3 2, 3 3, 2 2), (3 6, 4 6, 4 7, 3 6))")
+    assert r.stats.invalid_polygons == 0
+
+
+def test_every_hole_of_a_polygon_touching_the_window_edges_is_kept():
+    # The diamond's corners touch the window's edges: the rings go through the walk.
+    r = ragged("POLYGON ((4 0, 0 4, -4 0, 0 -4, 4 0), (2 1, 1 0, 2 -1, 2 1), "
+               "(0 0, -2 1, -2 -1, 0 0))", (-4, -4, 4, 4))
+    assert_same_polygons(geometries_of(r)[0], "POLYGON ((4 0, 0 4, -4 0, 0 -4, 4 0), "
+                                              "(2 1, 1 0, 2 -1, 2 1), (0 0, -2 1, -2 -1, 0 0))")
+    assert r.stats.invalid_polygons == 0
+
+
+def test_hole_touching_the_shell_on_the_window_edge_keeps_the_other_holes():
+    # The first hole touches the shell at (2 0), on the window's right edge.
+    polygon = ("POLYGON ((2 0, 2 3, -4 3, -4 -3, 2 -3, 2 0), (2 0, 1 1, 1 -1, 2 0), "
+               "(0 0, -1 1, -1 -1, 0 0))")
+    r = ragged(polygon, (-5, -4, 2, 4))
+    assert_same_polygons(geometries_of(r)[0], polygon)
+    assert r.stats.invalid_polygons == 0
+
+
 def test_hole_containing_the_window_gives_nothing():
     # GEOS's RectangleIntersectionTest 135.
     assert clip_wkt("POLYGON ((-2 -2, -2 12, 12 12, 12 -2, -2 -2), "
@@ -251,6 +277,17 @@ def test_polygon_with_z_gets_z_on_the_window_corners_it_gains():
     xyz = shapely.get_coordinates(got, include_z=True)
     assert len(xyz) == 5
     np.testing.assert_array_equal(xyz[:, 2], 100.0)
+
+
+def test_polygon_edges_on_the_window_boundary_keep_the_z_of_the_input():
+    # The shell's corner (0 0) is a window corner and its edges x = 0, y = 0 run along
+    # window edges: (0 0) keeps its Z, (0 2) is interpolated along the edge x = 0.
+    got = clip_wkt("POLYGON Z ((0 0 10, 3 0 20, 3 3 30, 0 3 40, 0 0 10))", (0, 0, 4, 2))
+    z_at = {(x, y): z for x, y, z in shapely.get_coordinates(got, include_z=True)}
+    assert set(z_at) == {(0, 0), (3, 0), (3, 2), (0, 2)}
+    assert z_at[0, 0] == 10 and z_at[3, 0] == 20
+    assert z_at[3, 2] == pytest.approx(20 + 10 * 2 / 3, rel=1e-15)
+    assert z_at[0, 2] == pytest.approx(30, rel=1e-15)
 
 
 def test_self_intersecting_polygon_is_clipped_ring_by_ring_and_counted():

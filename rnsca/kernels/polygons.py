@@ -557,12 +557,14 @@ def clip_polygon(xy, z, has_z, ring_offsets, r_begin, r_end, xmin, ymin, xmax, y
         rings_before = n_rings - 1
         v = _copy_ring(rg_xy, rg_z, has_z, rg_start[a], rg_start[a + 1], out_xy, out_z, v)
         shell_start = out_ring_starts[n_rings - 1]
+        shell_last = v - 1
         for b in range(n_rg):
             if rg_sign[b] > 0 or rg_done[b]:
                 continue
             where = 0
             for i in range(rg_start[b], rg_start[b + 1] - 1):
-                where = point_in_ring(rg_xy[i, 0], rg_xy[i, 1], out_xy, shell_start, v - 1)
+                where = point_in_ring(rg_xy[i, 0], rg_xy[i, 1], out_xy, shell_start,
+                                      shell_last)
                 if where != 0:
                     break
             if where < 0:

@@ -8,7 +8,15 @@ Python-style zero check (every division in the kernels is guarded where it matte
 Under ``NUMBA_DISABLE_JIT=1`` both become the plain Python function.
 """
 
-import numba
+import os
+
+# Numba's OpenMP layer spins its idle threads by default; on a loaded machine (the
+# service beside other work, CI) that made parallel calls 5x slower than one thread
+# (measured: 23.8 ms vs 4.8 ms, see benchmarks/README.md). Passive waiting costs nothing
+# measurable on an idle machine. A value the user set is kept. Must precede OpenMP's start.
+os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
+
+import numba  # noqa: E402
 
 __all__ = ["scalar", "parallel"]
 

@@ -397,6 +397,31 @@ def clip_polygon(xy, z, has_z, ring_offsets, r_begin, r_end, xmin, ymin, xmax, y
                 lc[n_lc, 3] = ch_starts[c0 + 1]
             lc[n_lc, 4] = 1 if ring_rev[j] else 0
             n_lc += 1
+    # Z of the window's corners that lie on an input segment (the walk passes corners;
+    # one on an input edge takes that edge's Z rather than one interpolated along the
+    # boundary).
+    corner_z = np.zeros(4)
+    corner_z_known = np.zeros(4, dtype=np.bool_)
+    if has_z:
+        for r in range(r_begin, r_end):
+            for i in range(ring_offsets[r], ring_offsets[r + 1] - 1):
+                for e in range(4):
+                    if corner_z_known[e]:
+                        continue
+                    cx, cy = _corner_after(e, xmin, ymin, xmax, ymax)
+                    x0 = xy[i, 0]
+                    y0 = xy[i, 1]
+                    x1 = xy[i + 1, 0]
+                    y1 = xy[i + 1, 1]
+                    # An input segment through the corner runs along a window edge.
+                    if x0 == cx and x1 == cx and min(y0, y1) <= cy <= max(y0, y1):
+                        t = 0.0 if y1 == y0 else (cy - y0) / (y1 - y0)
+                    elif y0 == cy and y1 == cy and min(x0, x1) <= cx <= max(x0, x1):
+                        t = 0.0 if x1 == x0 else (cx - x0) / (x1 - x0)
+                    else:
+                        continue
+                    corner_z[e] = z[i] + t * (z[i + 1] - z[i])
+                    corner_z_known[e] = True
     n_rg = 0
     rg_start[0] = 0
     # 2. The walk over boundary events (chain starts and ends), sorted counter-clockwise.
@@ -490,6 +515,8 @@ def clip_polygon(xy, z, has_z, ring_offsets, r_begin, r_end, xmin, ymin, xmax, y
                             if d < 0.0:
                                 d += perimeter
                             zc = z_from + (z_to - z_from) * min(1.0, d / span)
+                            if corner_z_known[e]:
+                                zc = corner_z[e]
                         m = _put(tmp_xy, tmp_z, has_z, m, 0, x, y, zc)
                         e = (e + 1) % 4
                         if e == se:
@@ -542,7 +569,8 @@ def clip_polygon(xy, z, has_z, ring_offsets, r_begin, r_end, xmin, ymin, xmax, y
                 tmp_xy[corner, 0] = x
                 tmp_xy[corner, 1] = y
                 if has_z:
-                    tmp_z[corner] = zc
+                    tmp_z[corner] = corner_z[(corner + 3) % 4] if corner_z_known[
+                        (corner + 3) % 4] else zc
                 stk[corner] = corner
             n_rg = _add_ring(rg_xy, rg_z, has_z, rg_start, rg_sign, n_rg, tmp_xy, tmp_z, stk,
                              4, True)

@@ -215,6 +215,9 @@ def _clip_geometries(geometries: np.ndarray, window, options: dict) -> np.ndarra
     options = {k: v for k, v in options.items() if k != "keep_empty"}
     count = geometries.shape[0]
     windows, index = window_table(window, count)
+    # Options are checked even if every geometry is decided by its bounding box.
+    clip_ragged("Point", np.empty((0, 2)), (), tuple(windows[0]) if count else (0, 0, 1, 1),
+                **options)
     rings = shapely.get_type_id(geometries) == shapely.GeometryType.LINEARRING
     if rings.any():
         # A ring clipped is a line: its visible parts (GEOS gives line strings too).
@@ -237,17 +240,32 @@ def _clip_geometries(geometries: np.ndarray, window, options: dict) -> np.ndarra
         if type_id < 0 or type_id == shapely.GeometryType.GEOMETRYCOLLECTION:
             continue  # None stays None; collections went member by member
         rows = np.flatnonzero((type_ids == type_id) & (has_z == include_z))
+        input_name = shapely.GeometryType(type_id).name
+        empty_geometry = shapely.from_wkt(f"{input_name} EMPTY")
+        # Bounding boxes first: geometries beyond the window or strictly inside it need
+        # no conversion to ragged arrays (most of the cost for Shapely objects).
+        box = shapely.bounds(geometries[rows])
+        win = windows[index[rows]]
+        finite = np.isfinite(box).all(axis=1)  # the others go on, to be checked there
+        outside = finite & ((box[:, 2] < win[:, 0]) | (box[:, 0] > win[:, 2])
+                            | (box[:, 3] < win[:, 1]) | (box[:, 1] > win[:, 3]))
+        inside = finite & ((box[:, 0] > win[:, 0]) & (box[:, 2] < win[:, 2])
+                           & (box[:, 1] > win[:, 1]) & (box[:, 3] < win[:, 3]))
+        out[rows[outside]] = empty_geometry
+        out[rows[inside]] = geometries[rows[inside]]
+        rows = rows[~outside & ~inside]
+        if rows.shape[0] == 0:
+            continue
         subset = geometries[rows]
         triple = shapely.to_ragged_array(subset, include_z=include_z)
         result = clip_ragged(*triple, windows[index[rows]], keep_empty=True, **options)
         clipped = result.to_shapely()
-        input_name = shapely.GeometryType(type_id).name
         if _SINGLE_OF_MULTI.get(result.geometry_type.name) == input_name:
             # A single-part input cut into one part stays single, as shapely gives it.
             one = shapely.get_num_geometries(clipped) == 1
             clipped[one] = shapely.get_geometry(clipped[one], 0)
         empty = shapely.is_empty(clipped)
         if empty.any():
-            clipped[empty] = shapely.from_wkt(f"{input_name} EMPTY")
+            clipped[empty] = empty_geometry
         out[rows] = clipped
     return out

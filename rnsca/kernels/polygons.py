@@ -25,6 +25,7 @@ from numba import prange
 
 from rnsca.kernels import counters as C
 from rnsca.kernels.jit import parallel, scalar
+from rnsca.kernels.outcode import line_coordinate
 from rnsca.kernels.polylines import (
     RUN_STACK_CAPACITY,
     bound_chains,
@@ -38,6 +39,7 @@ __all__ = [
     "clip_polygon_blocks",
     "point_in_ring",
     "signed_area",
+    "sutherland_hodgman",
 ]
 
 # Edges in counter-clockwise order, starting at (xmin, ymin).
@@ -335,19 +337,126 @@ def _split_loops(tmp_xy, tmp_z, has_z, m, xmin, ymin, xmax, ymax, stk, rg_xy, rg
 
 
 @scalar
+def _inside_edge(x, y, edge, xmin, ymin, xmax, ymax):
+    if edge == _LEFT:
+        return x >= xmin
+    if edge == _RIGHT:
+        return x <= xmax
+    if edge == _BOTTOM:
+        return y >= ymin
+    return y <= ymax
+
+
+@scalar
+def _cross_edge(x0, y0, z0, x1, y1, z1, edge, xmin, ymin, xmax, ymax):
+    """Return the point (x, y, z) where segment 0-1 crosses the line of `edge`."""
+    if edge == _LEFT or edge == _RIGHT:
+        e = xmin if edge == _LEFT else xmax
+        t = (e - x0) / (x1 - x0)
+        return e, line_coordinate(e, x0, y0, x1, y1), z0 + t * (z1 - z0)
+    e = ymin if edge == _BOTTOM else ymax
+    t = (e - y0) / (y1 - y0)
+    return line_coordinate(e, y0, x0, y1, x1), e, z0 + t * (z1 - z0)
+
+
+@scalar
+def sutherland_hodgman(xy, z, has_z, first, last, reverse, xmin, ymin, xmax, ymax):
+    """Return ``(ring (m, 3), m)``: the ring ``xy[first..last]`` clipped by Sutherland–Hodgman.
+
+    The fallback for invalid polygons, clipped ring by ring (Sutherland & Hodgman 1974:
+    one pass per window edge, keeping inside vertices and adding the crossings). The
+    result is closed, may run along the window's edge and is not repaired. Each pass at
+    most doubles the vertex count, hence the buffers.
+    """
+    n = last - first  # without the closing vertex
+    size = 16 * n + 16
+    a = np.empty((size, 3), dtype=np.float64)
+    b = np.empty((size, 3), dtype=np.float64)
+    for k in range(n):
+        i = last - k if reverse else first + k
+        a[k, 0] = xy[i, 0]
+        a[k, 1] = xy[i, 1]
+        a[k, 2] = z[i] if has_z else 0.0
+    for edge in range(4):
+        m = 0
+        for k in range(n):
+            j = k - 1 if k > 0 else n - 1
+            cur_in = _inside_edge(a[k, 0], a[k, 1], edge, xmin, ymin, xmax, ymax)
+            prev_in = _inside_edge(a[j, 0], a[j, 1], edge, xmin, ymin, xmax, ymax)
+            if cur_in != prev_in:
+                b[m, 0], b[m, 1], b[m, 2] = _cross_edge(a[j, 0], a[j, 1], a[j, 2], a[k, 0],
+                                                        a[k, 1], a[k, 2], edge, xmin, ymin,
+                                                        xmax, ymax)
+                m += 1
+            if cur_in:
+                b[m, 0] = a[k, 0]
+                b[m, 1] = a[k, 1]
+                b[m, 2] = a[k, 2]
+                m += 1
+        a, b = b, a
+        n = m
+    if n < 3:
+        return a, 0
+    a[n, 0] = a[0, 0]
+    a[n, 1] = a[0, 1]
+    a[n, 2] = a[0, 2]
+    return a, n + 1
+
+
+@scalar
+def _clip_rings_alone(xy, z, has_z, ring_offsets, r_begin, r_end, ring_rev, xmin, ymin, xmax,
+                      ymax, write, out_xy, out_z, out_ring_starts, out_poly_rings, v, n_rings,
+                      n_polys):
+    """Write an invalid polygon clipped ring by ring: one polygon, its shell then its holes.
+
+    Without `write` only the counts advance. A shell clipped to nothing drops the polygon.
+    """
+    rings_before = n_rings
+    for r in range(r_begin, r_end):
+        first = ring_offsets[r]
+        last = ring_offsets[r + 1] - 1
+        if last - first < 3:
+            continue
+        ring, m = sutherland_hodgman(xy, z, has_z, first, last, ring_rev[r - r_begin],
+                                     xmin, ymin, xmax, ymax)
+        if m == 0:
+            if r == r_begin:
+                return v, n_rings, n_polys
+            continue
+        if write:
+            out_ring_starts[n_rings] = v
+            for k in range(m):
+                out_xy[v + k, 0] = ring[k, 0]
+                out_xy[v + k, 1] = ring[k, 1]
+                if has_z:
+                    out_z[v + k] = ring[k, 2]
+        v += m
+        n_rings += 1
+    if n_rings > rings_before:
+        if write:
+            out_poly_rings[n_polys] = n_rings - rings_before
+        n_polys += 1
+    return v, n_rings, n_polys
+
+
+@scalar
 def clip_polygon(xy, z, has_z, ring_offsets, r_begin, r_end, xmin, ymin, xmax, ymax, method,
                  n_fixed, max_depth, tol, auto_piece, exact, out_xy, out_z, out_ring_starts,
                  out_poly_rings, v, n_rings, n_polys, st, run_stack, stack_f, stack_i,
                  ch_xy, ch_z, ch_starts, lc, ev_key, ev_chain, order, ring_state, ring_rev,
                  ring_first, ring_last, tmp_xy, tmp_z, stk, rg_xy, rg_z, rg_start, rg_sign,
-                 rg_done):
+                 rg_done, write):
     """Clip the polygon of rings ``r_begin..r_end-1`` (shell first); write valid pieces.
 
     Output polygons are written from ``out_xy[v]``, their rings' starts from
     ``out_ring_starts[n_rings]`` and their ring counts from ``out_poly_rings[n_polys]``;
     shells counter-clockwise, holes clockwise. The remaining arguments are the caller's
     scratch, sized by the bounds of `bound_chains`. Returns ``(v, n_rings, n_polys, ok)``;
-    ``ok`` is False when the rings could not be closed consistently (invalid input).
+    ``ok`` is False when the input is found invalid: a cut ring without area, or chains
+    whose entries and exits do not alternate along the boundary (the rings cross); the
+    polygon is then clipped ring by ring (`sutherland_hodgman`), not repaired. `write`
+    is False in the counting pass (the fallback then only counts; the rest writes to
+    the caller's scratch).
     """
     n_r = r_end - r_begin
     if n_r == 0:
@@ -449,6 +558,30 @@ def clip_polygon(xy, z, has_z, ring_offsets, r_begin, r_end, xmin, ymin, xmax, y
         order[b + 1] = item
     for a in range(n_ev):
         ev_chain[order[a]] = a  # position of each event in the sorted order
+    # Along the boundary, exits and entries alternate: two exits (or entries) in a row
+    # mean rings that cross, or a hole outside its shell. Events at one point (a ring
+    # touching the edge there) count as one, by their balance, which must be -1, 0 or 1.
+    # (Every chain has one exit and one entry, so alternating balances also close up
+    # cyclically.)
+    previous = 0
+    a = 0
+    while a < n_ev:
+        b = a
+        net = 0
+        while b < n_ev and ev_key[order[b], 0] == ev_key[order[a], 0] \
+                and ev_key[order[b], 1] == ev_key[order[a], 1]:
+            net += 1 if order[b] % 2 == 1 else -1
+            b += 1
+        if net > 1 or net < -1 or (net != 0 and net == previous):
+            ok = False
+        if net != 0:
+            previous = net
+        a = b
+    if not ok:
+        v, n_rings, n_polys = _clip_rings_alone(
+            xy, z, has_z, ring_offsets, r_begin, r_end, ring_rev, xmin, ymin, xmax, ymax,
+            write, out_xy, out_z, out_ring_starts, out_poly_rings, v, n_rings, n_polys)
+        return v, n_rings, n_polys, False
     visited = lc[:, 5]
     for k in range(n_lc):
         visited[k] = 0
@@ -781,7 +914,7 @@ def clip_polygon_blocks(xy, z, has_z, ring_offsets, polygon_offsets, polygon_win
                 exact, dst_xy, dst_z, dst_rings, dst_polys, v0, r0, q0, st, run_stack,
                 stack_f, stack_i, ch_xy, ch_z, ch_starts, lc, ev_key, ev_chain, order,
                 ring_state, ring_rev, ring_first, ring_last, tmp_xy, tmp_z, stk, rg_xy, rg_z,
-                rg_start, rg_sign, rg_done)
+                rg_start, rg_sign, rg_done, write)
             if not ok:
                 st[C.INVALID_POLYGONS] += 1
             if not write:

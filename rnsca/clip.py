@@ -252,7 +252,10 @@ def _clip_geometries(geometries: np.ndarray, window, options: dict) -> np.ndarra
         inside = finite & ((box[:, 0] > win[:, 0]) & (box[:, 2] < win[:, 2])
                            & (box[:, 1] > win[:, 1]) & (box[:, 3] < win[:, 3]))
         out[rows[outside]] = empty_geometry
-        out[rows[inside]] = geometries[rows[inside]]
+        kept = geometries[rows[inside]]
+        if "POLYGON" in input_name:
+            kept = shapely.orient_polygons(kept)  # shells CCW, holes CW, as clipped ones
+        out[rows[inside]] = kept
         rows = rows[~outside & ~inside]
         if rows.shape[0] == 0:
             continue

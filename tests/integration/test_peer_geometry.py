@@ -110,13 +110,6 @@ DIFFERENCES = (
         "parts reaching the window's y-limits. Ring by ring, flagged, as above.",
         "ring_by_ring"),
     Difference(
-        ("geojson-vt-clips-polygons-geom1",),
-        "expected",
-        "Invalid (self-intersecting) input and expected ring (geojson-vt's "
-        "Sutherland-Hodgman keeps the self-intersection and a bridge along x=10). Ring by "
-        "ring, flagged, as above; the clipped input linework is the same.",
-        "ring_by_ring"),
-    Difference(
         _geos(15, 16, 17, 18, 19, 20, 21, 22, 23, 24, 25, 27, 28, 29, 30, 31, 32, 33, 34, 35,
               36, 37, 38, 39, 40, 41, 42, 43, 44, 58, 59, 60, 61, 62, 63, 64, 65, 66, 67, 68,
               69, 70, 71, 72, 73, 75),

@@ -291,16 +291,109 @@ def _add_ring(rg_xy, rg_z, has_z, rg_start, rg_sign, n_rg, src_xy, src_z, idx, c
     return n_rg + 1
 
 
+# Walk rings up to this many vertices are checked for a vertex lying inside another of
+# their edges (a hole of the input touching its shell in the middle of a shell edge);
+# the check is quadratic, so larger rings skip it (README, "Limits").
+TOUCH_CHECK_LIMIT = 4096
+
+
 @scalar
-def _split_loops(tmp_xy, tmp_z, has_z, m, xmin, ymin, xmax, ymax, stk, rg_xy, rg_z, rg_start,
-                 rg_sign, n_rg):
+def _node_touches(ring_xy, ring_z, has_z, m):
+    """Return ``(xy, z, m)``: the ring, noded where a vertex lies inside another edge.
+
+    A vertex of the closed ring that lies inside one of its other edges (exactly
+    collinear) is inserted into that edge; without any, the ring itself comes back.
+    """
+    n = m - 1
+    hits_edge = np.empty(0, dtype=np.int64)
+    hits_vertex = np.empty(0, dtype=np.int64)
+    count = 0
+    for i in range(n):
+        px = ring_xy[i, 0]
+        py = ring_xy[i, 1]
+        for j in range(n):
+            if j == i or j + 1 == i or (i == 0 and j == n - 1):
+                continue
+            ax = ring_xy[j, 0]
+            ay = ring_xy[j, 1]
+            bx = ring_xy[j + 1, 0]
+            by = ring_xy[j + 1, 1]
+            if px < min(ax, bx) or px > max(ax, bx) or py < min(ay, by) or py > max(ay, by):
+                continue
+            if (px == ax and py == ay) or (px == bx and py == by):
+                continue
+            if (bx - ax) * (py - ay) - (by - ay) * (px - ax) != 0.0:
+                continue
+            if count == hits_edge.shape[0]:
+                grown_e = np.empty(2 * count + 4, dtype=np.int64)
+                grown_v = np.empty(2 * count + 4, dtype=np.int64)
+                grown_e[:count] = hits_edge[:count]
+                grown_v[:count] = hits_vertex[:count]
+                hits_edge = grown_e
+                hits_vertex = grown_v
+            hits_edge[count] = j
+            hits_vertex[count] = i
+            count += 1
+    if count == 0:
+        return ring_xy, ring_z, m
+    out_xy = np.empty((m + count, 2), dtype=np.float64)
+    out_z = np.empty(m + count if has_z else 0, dtype=np.float64)
+    used = np.zeros(count, dtype=np.bool_)
+    k = 0
+    for j in range(n):
+        out_xy[k, 0] = ring_xy[j, 0]
+        out_xy[k, 1] = ring_xy[j, 1]
+        if has_z:
+            out_z[k] = ring_z[j]
+        k += 1
+        ax = ring_xy[j, 0]
+        ay = ring_xy[j, 1]
+        while True:  # the points on edge j, nearest to its start first
+            best = -1
+            best_d = 0.0
+            for h in range(count):
+                if used[h] or hits_edge[h] != j:
+                    continue
+                i = hits_vertex[h]
+                d = abs(ring_xy[i, 0] - ax) + abs(ring_xy[i, 1] - ay)
+                if best < 0 or d < best_d:
+                    best = h
+                    best_d = d
+            if best < 0:
+                break
+            used[best] = True
+            i = hits_vertex[best]
+            out_xy[k, 0] = ring_xy[i, 0]
+            out_xy[k, 1] = ring_xy[i, 1]
+            if has_z:
+                bz = ring_z[j + 1]
+                az = ring_z[j]
+                span = abs(ring_xy[j + 1, 0] - ax) + abs(ring_xy[j + 1, 1] - ay)
+                out_z[k] = az + (bz - az) * (best_d / span if span > 0.0 else 0.0)
+            k += 1
+    out_xy[k, 0] = out_xy[0, 0]
+    out_xy[k, 1] = out_xy[0, 1]
+    if has_z:
+        out_z[k] = out_z[0]
+    return out_xy, out_z, k + 1
+
+
+@scalar
+def _split_loops(tmp_xy, tmp_z, has_z, m, node, stk, rg_xy, rg_z, rg_start, rg_sign, n_rg):
     """Store the closed walk ring ``tmp[0..m-1]`` as simple rings; return the ring count.
 
     The walk can pass a point twice (a hole or a part of the ring touching the window's
     edge, or a hole touching its shell at a vertex); a ring through one point twice is
-    not valid, so it is cut into loops at every repeated point. Counter-clockwise loops are shells,
-    clockwise ones holes (touching their shell at that point, as valid polygons may).
+    not valid, so it is cut into loops at every repeated point. Counter-clockwise loops
+    are shells, clockwise ones holes (touching their shell at that point, as valid
+    polygons may). With `node`, a vertex lying inside another edge of the ring (a hole
+    touching its shell mid-edge) is first made a vertex of that edge too.
     """
+    if node and m - 1 <= TOUCH_CHECK_LIMIT:
+        tmp_xy, tmp_z, noded = _node_touches(tmp_xy, tmp_z, has_z, m)
+        if noded != m:
+            m = noded
+            stk = np.empty(m, dtype=np.int64)
     # Repeated vertices (sorted by x, then equal neighbours compared): a hole of the
     # input touching its shell at a vertex inside the window pinches the walk there too.
     repeated = np.zeros(m, dtype=np.bool_)
@@ -670,8 +763,8 @@ def clip_polygon(xy, z, has_z, ring_offsets, r_begin, r_end, xmin, ymin, xmax, y
                 tmp_z[m] = tmp_z[0]
             m += 1
         if m >= 4:
-            n_rg = _split_loops(tmp_xy, tmp_z, has_z, m, xmin, ymin, xmax, ymax, stk, rg_xy,
-                                rg_z, rg_start, rg_sign, n_rg)
+            n_rg = _split_loops(tmp_xy, tmp_z, has_z, m, n_r > 1, stk, rg_xy, rg_z, rg_start,
+                                rg_sign, n_rg)
     # 3. Rings never cut: inside the window whole. The shell of a cut polygon is never
     # one of them unless the input is invalid.
     for j in range(n_r):

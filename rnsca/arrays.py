@@ -20,7 +20,7 @@ import shapely
 
 from rnsca.errors import InvalidGeometryError, UnsupportedGeometryError
 
-__all__ = ["GeometryKind", "Ragged", "OUTPUT_KIND"]
+__all__ = ["GeometryKind", "Ragged", "OUTPUT_KIND", "geometry_error"]
 
 
 class GeometryKind(str, Enum):
@@ -110,6 +110,17 @@ def _offsets(array, name: str, length: int) -> np.ndarray:
         at = int(np.argmax(steps < 0))
         raise InvalidGeometryError(f"{name} decreases at index {at + 1}")
     return out
+
+
+def geometry_error(index: int, detail: str) -> InvalidGeometryError:
+    """Return the error "geometry <index><detail>", carrying `geometry` and `detail`.
+
+    Callers that clip a subset of their geometries re-raise it with their own index.
+    """
+    error = InvalidGeometryError(f"geometry {index}{detail}")
+    error.geometry = index
+    error.detail = detail
+    return error
 
 
 @dataclass(frozen=True, slots=True)
@@ -217,9 +228,9 @@ class Ragged:
             if not rows.any():
                 return
         bad = int(np.argmax(rows))
-        raise InvalidGeometryError(
-            f"geometry {self.geometry_of_coordinate(bad)} has a non-finite coordinate "
-            f"(coords[{bad}] = {self.coords[bad].tolist()})")
+        raise geometry_error(self.geometry_of_coordinate(bad),
+                             f" has a non-finite coordinate (coords[{bad}] = "
+                             f"{self.coords[bad].tolist()})")
 
     def _check_shapes(self) -> None:
         if self.kind.dimension == 0:
@@ -230,25 +241,25 @@ class Ragged:
             short = (sizes == 1)
             if short.any():
                 part = int(np.argmax(short))
-                raise InvalidGeometryError(
-                    f"geometry {self._geometry_of_level(0, part)}: line part {part} has one "
-                    f"position; a line needs at least two")
+                raise geometry_error(self._geometry_of_level(0, part),
+                                     f": line part {part} has one position; a line needs "
+                                     f"at least two")
             return
         short = (sizes > 0) & (sizes < 4)
         if short.any():
             ring = int(np.argmax(short))
-            raise InvalidGeometryError(
-                f"geometry {self._geometry_of_level(0, ring)}: ring {ring} has "
-                f"{int(sizes[ring])} positions; a ring needs at least four")
+            raise geometry_error(self._geometry_of_level(0, ring),
+                                 f": ring {ring} has {int(sizes[ring])} positions; a ring "
+                                 f"needs at least four")
         used = sizes > 0
         heads = self.coords[inner[:-1][used], :2]
         tails = self.coords[inner[1:][used] - 1, :2]
         open_rings = (heads != tails).any(axis=1)
         if open_rings.any():
             ring = int(np.flatnonzero(used)[np.argmax(open_rings)])
-            raise InvalidGeometryError(
-                f"geometry {self._geometry_of_level(0, ring)}: ring {ring} is not closed "
-                f"(its first and last positions differ)")
+            raise geometry_error(self._geometry_of_level(0, ring),
+                                 f": ring {ring} is not closed (its first and last "
+                                 f"positions differ)")
 
     def _geometry_of_level(self, depth: int, index: int) -> int:
         g = index

@@ -6,6 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from rnsca.arrays import geometry_error
 from rnsca.backends.registry import get_backend
 from rnsca.errors import InvalidGeometryError, UnsupportedGeometryError
 from rnsca.kernels.validate import first_invalid_segment
@@ -261,7 +262,12 @@ def _clip_geometries(geometries: np.ndarray, window, options: dict) -> np.ndarra
             continue
         subset = geometries[rows]
         triple = shapely.to_ragged_array(subset, include_z=include_z)
-        result = clip_ragged(*triple, windows[index[rows]], keep_empty=True, **options)
+        try:
+            result = clip_ragged(*triple, windows[index[rows]], keep_empty=True, **options)
+        except InvalidGeometryError as exc:
+            if getattr(exc, "geometry", None) is None:
+                raise
+            raise geometry_error(int(rows[exc.geometry]), exc.detail) from None
         clipped = result.to_shapely()
         if _SINGLE_OF_MULTI.get(result.geometry_type.name) == input_name:
             # A single-part input cut into one part stays single, as shapely gives it.

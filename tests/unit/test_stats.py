@@ -214,4 +214,10 @@ def test_to_dict_is_json_ready_and_complete(backend):
     assert d["decided_shallow_fraction"] == 1.0
     assert set(d) == {"segments_in", "pieces_out", "fragments_evaluated", "accepted",
                       "rejected", "subdivided", "clipped", "dropped", "intersections",
-                      "deepest_level", "decided_per_level", "decided_shallow_fraction"}
+                      "deepest_level", "decided_per_level", "decided_shallow_fraction",
+                      "geometries_in", "geometries_out", "vertices_in", "vertices_out",
+                      "runs_evaluated", "runs_accepted", "runs_rejected", "runs_subdivided",
+                      "runs_segmented", "runs_deepest_level", "runs_decided_per_level",
+                      "segments_decided_per_level", "invalid_polygons"}
+    # Segment clips leave the geometry counters at zero.
+    assert d["runs_evaluated"] == 0 and d["runs_decided_per_level"] == [0] * 33

@@ -38,6 +38,7 @@ import shapely
 from shapely import GeometryType
 
 from rnsca import Window
+from tests.cases import exact_clip
 
 __all__ = [
     "TOLERANCE",
@@ -49,9 +50,11 @@ __all__ = [
     "assert_valid_polygons",
     "assert_z_on_input",
     "dimension_of_type",
+    "exact_line_clip",
     "flat_parts",
     "geometries_of",
     "parts_of_dimension",
+    "shapely_can_judge",
     "shapely_clip",
 ]
 
@@ -131,6 +134,64 @@ def shapely_clip(geometry, window, boundary: str):
         return shapely.intersection(geometry, shapely.box(*bounds))
     assert boundary == "interior", boundary
     return shapely.clip_by_rect(geometry, *bounds)
+
+
+def _segments_of(geometry) -> np.ndarray:
+    """Return every segment ``[x0, y0, x1, y1]`` of the lines and rings of `geometry`."""
+    rows = []
+    for part in flat_parts(geometry):
+        lines = shapely.get_rings(part) if dimension_of_type(part) == 2 else [part]
+        for line in lines:
+            c = shapely.get_coordinates(line)
+            if len(c) > 1:
+                rows.append(np.hstack([c[:-1], c[1:]]))
+    return np.concatenate(rows) if rows else np.empty((0, 4))
+
+
+def shapely_can_judge(geometries, window) -> bool:
+    """Return whether GEOS computes the cut points of `geometries` to within 1e-9.
+
+    GEOS cuts a segment at an edge line in double precision, y = y0 + (c - x0) dy/dx:
+    a few ulps of the coordinates, times the segment's steepness against that edge. For
+    a segment nearly parallel to an edge (|dy/dx| of 1e7 and more) that passes the
+    1e-9 * window size the comparison allows; rnsca's cut points are exact (double-double
+    from the nearer end) and `exact_line_clip` judges them there instead.
+    """
+    w = Window.of(window)
+    segments = np.concatenate([_segments_of(g) for g in geometries] + [np.empty((0, 4))])
+    if segments.shape[0] == 0:
+        return True
+    dx = np.abs(segments[:, 2] - segments[:, 0])
+    dy = np.abs(segments[:, 3] - segments[:, 1])
+    sloped = (dx > 0) & (dy > 0)
+    if not sloped.any():
+        return True
+    steep = float(np.max(np.maximum(dx, dy)[sloped] / np.minimum(dx, dy)[sloped]))
+    scale = max(float(np.abs(segments).max()), *(abs(b) for b in w.bounds))
+    eps = float(np.finfo(np.float64).eps)
+    return 16 * eps * scale * steep <= 0.1 * TOLERANCE * w.size
+
+
+def exact_line_clip(geometry, window, boundary: str):
+    """Return the clip of a (multi)line in exact rational arithmetic, as a MULTILINESTRING.
+
+    Segment by segment (`tests.cases.exact_clip`, rounded to the nearest floats): a
+    point of contact is no piece; with ``boundary="interior"`` a piece lying on an edge
+    line is dropped too. Pieces are not joined: compare geometrically.
+    """
+    w = Window.of(window)
+    pieces = []
+    for segment in _segments_of(geometry):
+        clipped = exact_clip(segment, w.bounds)
+        if clipped is None:
+            continue
+        x0, y0, x1, y1 = clipped[0]
+        on_edge = ((x0 == x1 and x0 in (w.xmin, w.xmax))
+                   or (y0 == y1 and y0 in (w.ymin, w.ymax)))
+        if boundary == "interior" and on_edge:
+            continue
+        pieces.append([(x0, y0), (x1, y1)])
+    return shapely.MultiLineString(pieces)
 
 
 def _extent(geometry) -> float:

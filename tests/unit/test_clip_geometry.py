@@ -132,6 +132,15 @@ def test_line_outside_gives_nothing_and_is_dropped_unless_keep_empty():
     assert geometries_of(kept)[0].is_empty
 
 
+def test_cut_point_of_a_steep_line_is_exact_where_geos_is_off():
+    # x runs from 2 + 2**-24 to 2 - 2**-24 while y climbs 1.375: the line crosses x = 2
+    # at exactly (2, 1). shapely.clip_by_rect gives (2, 1.0000000017074246).
+    got = clip_wkt("LINESTRING (2.0000000596046448 0.3125, 1.9999999403953552 1.6875)",
+                   (2, 0.75, 2.25, 1.6875))
+    np.testing.assert_array_equal(shapely.get_coordinates(got),
+                                  [[2.0000000216744165, 0.75], [2.0, 1.0]])
+
+
 def test_z_is_kept_on_vertices_and_interpolated_on_cut_points():
     # GEOS's GEOSClipByRectTest 20, plus a kept vertex.
     got = clip_wkt("LINESTRING Z (0 15 0, 15 15 50, 100 15 100)", (10, 10, 20, 20))

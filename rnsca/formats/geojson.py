@@ -11,9 +11,11 @@ Reading is strict. The first problem, in document order, raises `InvalidGeometry
 (a ValueError) whose message and ``path`` attribute name its JSON path, for example
 ``features[12].geometry.coordinates[0][3][1]``. To stay fast on large documents the
 reader does no per-coordinate Python work on valid input: it collects the coordinate
-arrays of every line and ring, converts them to float64 in one NumPy call and checks
-types, finiteness, sizes and ring closure in bulk. Only when a bulk check fails does a
-second, slow walk run to find the exact path of the first problem.
+arrays of every geometry and converts their positions a chunk at a time, in C: pickle
+writes each list of numbers as opcodes that name the type of each number, which NumPy
+checks and decodes for the whole chunk (see `_read_pickled`). Sizes, finiteness and ring
+closure are checked in bulk too. Only when a bulk check fails does a second, slow walk
+run to find the exact path of the first problem.
 
 Rules (where RFC 7946 leaves a choice, the choice is stated):
 
@@ -35,6 +37,7 @@ from __future__ import annotations
 
 import gc
 import math
+import pickle
 from contextlib import contextmanager
 from dataclasses import dataclass
 from itertools import chain
@@ -223,11 +226,11 @@ def from_geojson(obj, *, max_vertices: int | None = None) -> GeoJSONLayout:
     reader = _Reader()
     try:
         reader.document(document)
+        return reader.layout(document, max_vertices)
     except _Fallback:
         _Validator(max_vertices).document(document)
         raise AssertionError("GeoJSON reader and validator disagree on the structure") \
             from None
-    return reader.layout(document, max_vertices)
 
 
 def to_geojson(layout: GeoJSONLayout, points=None, lines=None, polygons=None, *,
@@ -396,43 +399,43 @@ class _Reader:
             self.line_counts.append(count)
         elif kind == "Polygon":
             if coordinates:
-                self.polygon(coordinates)
-            self.polygon_counts.append(1 if coordinates else 0)
+                self.rings.extend(coordinates)  # rings are checked in bulk in `layout`
+                self.ring_counts.append(len(coordinates))
+                self.polygon_counts.append(1)
+            else:
+                self.polygon_counts.append(0)
         elif kind == "MultiPolygon":
             count = 0
             for polygon in coordinates:
                 if not isinstance(polygon, _ARRAY):
                     raise _Fallback
                 if polygon:
-                    self.polygon(polygon)
+                    self.rings.extend(polygon)
+                    self.ring_counts.append(len(polygon))
                     count += 1
             self.polygon_counts.append(count)
         else:
             raise _Fallback
 
-    def polygon(self, rings) -> None:
-        for ring in rings:
-            if not isinstance(ring, _ARRAY):
-                raise _Fallback
-        self.rings.extend(rings)
-        self.ring_counts.append(len(rings))
-
     def layout(self, document, max_vertices: int | None) -> GeoJSONLayout:
         """Return the layout, checking positions and shapes in bulk."""
+        if not set(map(type, self.rings)) <= _ARRAY_TYPES and not all(
+                isinstance(ring, _ARRAY) for ring in self.rings):
+            raise _Fallback
         arrays = self.point_arrays + self.line_parts + self.rings
         sizes = np.fromiter(map(len, arrays), np.int64, len(arrays))
         total = int(sizes.sum())
         if max_vertices is not None and total > max_vertices:
             raise LimitExceededError(
                 f"GeoJSON has {total} positions, more than max_vertices={max_vertices}")
-        positions = list(chain.from_iterable(arrays))
-        coords = _fast_coordinates(positions)
+        coords = _coordinates(arrays, sizes)
         if coords is None:
             # A check failed, or a number is of a type the fast path does not take
             # (a NumPy scalar): the validator names the problem or vouches for the data.
             validator = _Validator(max_vertices)
             validator.document(document)
-            coords = _checked_coordinates(positions, validator.dim or 2)
+            coords = _checked_coordinates(list(chain.from_iterable(arrays)),
+                                          validator.dim or 2)
         n_points = len(self.point_arrays)
         n_parts = len(self.line_parts)
         point_sizes = sizes[:n_points]
@@ -461,6 +464,206 @@ def _offsets(sizes) -> np.ndarray:
     out[0] = 0
     np.cumsum(sizes, out=out[1:])
     return out
+
+
+#: About how many positions are converted per step: the objects of a chunk stay in cache
+#: from listing them to pickling them to releasing the list (listing all positions at
+#: once is ~25% slower).
+_CHUNK = 1 << 15
+
+
+def _coordinates(arrays: list, sizes: np.ndarray) -> np.ndarray | None:
+    """Return the positions of `arrays` (lists of positions) as float64 (n, 2) or (n, 3).
+
+    `sizes` holds the length of each array. Returns None if any check fails: then
+    `_Validator` names the problem, or, for numbers of a type only it takes (NumPy
+    scalars), vouches for the data.
+    """
+    starts = _offsets(sizes)
+    total = int(starts[-1])
+    if total == 0:
+        return np.empty((0, 2), dtype=np.float64)
+    first = next(chain.from_iterable(arrays), None)
+    if type(first) not in _ARRAY_TYPES or len(first) < 2:
+        return None
+    out = np.empty((total, 3 if len(first) >= 3 else 2), dtype=np.float64)
+    # Chunks of whole arrays: extending a list by each array is faster than slicing a
+    # chain of all positions.
+    cuts = np.searchsorted(starts, np.arange(_CHUNK, total, _CHUNK), side="right")
+    bounds = np.unique(np.concatenate(([0], cuts, [len(arrays)]))).tolist()
+    for lo, hi in zip(bounds[:-1], bounds[1:], strict=True):
+        chunk = []
+        for array in arrays[lo:hi]:
+            chunk += array
+        rows = out[starts[lo]:starts[hi]]
+        if len(chunk) != rows.shape[0]:  # an array subclass whose len() lies
+            return None
+        if chunk and not _read_pickled(chunk, rows):
+            values = _fast_coordinates(chunk)
+            if values is None or values.shape != rows.shape:
+                return None
+            rows[:] = values
+    return out
+
+
+class _BuiltinPickler(pickle.Pickler):
+    """A pickler that refuses every object of a type it has no built-in opcode for.
+
+    ``reducer_override`` is only consulted for such objects, so no ``__reduce__`` of user
+    code runs: pickling a position list either writes plain opcodes or raises.
+    """
+
+    def reducer_override(self, obj):
+        raise _Fallback
+
+
+class _Sink:
+    """A file that keeps the bytes objects written to it, without copying them.
+
+    Below protocol 4 the pickler writes its whole output in one call at the end, so the
+    stream is the one bytes object the pickler built (``io.BytesIO`` would copy it).
+    """
+
+    __slots__ = ("parts",)
+
+    def __init__(self) -> None:
+        self.parts = []
+
+    def write(self, data) -> None:
+        self.parts.append(data)
+
+
+# The pickle opcodes (protocol 2) of a list of positions: PROTO 2, then EMPTY_LIST and its
+# items in batches of 1000, each batch MARK ... APPENDS, then STOP. A position is a list
+# too: EMPTY_LIST MARK <numbers> APPENDS. A float is BINFLOAT and 8 bytes (big-endian
+# double); an int is BININT1 (1 byte, unsigned), BININT2 (2, unsigned) or BININT (4,
+# signed) if it fits in 32 bits. Anything else (a bool, None, a string, a larger int, a
+# tuple, a nested list, a float subclass) is written with other opcodes.
+_EMPTY_LIST, _MARK, _APPENDS, _BINFLOAT = b"](eG"
+_PICKLE_BATCH = 1000
+_NUMBER_OPCODES = {_BINFLOAT: np.dtype(">f8"), b"K"[0]: np.dtype("u1"),
+                   b"M"[0]: np.dtype("<u2"), b"J"[0]: np.dtype("<i4")}
+_ARGUMENT_SIZE = np.zeros(256, dtype=np.int64)  # bytes after each number opcode, else 0
+_ARGUMENT_SIZE[list(_NUMBER_OPCODES)] = [dtype.itemsize for dtype in _NUMBER_OPCODES.values()]
+#: The (offset, opcode) pairs of the record of a list of 2 or of 3 floats.
+_FLOAT_RECORD = {
+    2: ((0, _EMPTY_LIST), (1, _MARK), (2, _BINFLOAT), (11, _BINFLOAT), (20, _APPENDS)),
+    3: ((0, _EMPTY_LIST), (1, _MARK), (2, _BINFLOAT), (11, _BINFLOAT), (20, _BINFLOAT),
+        (29, _APPENDS)),
+}
+
+
+def _read_pickled(positions: list, out: np.ndarray) -> bool:
+    """Fill `out` (n, dim) from `positions` if they are lists of `dim` finite numbers.
+
+    Returns False, with `out` partly written, for anything else (`_fast_coordinates` or
+    the validator take it): numbers of another type than int or float (bools, NumPy
+    scalars), ints beyond 32 bits, tuples, other sizes, non-finite values. What passes
+    is a subset of what `_Validator` accepts, and is what orjson gives for a document
+    of moderate numbers.
+
+    The type checks and the conversion are one C pass: `positions` is pickled (fast
+    mode: no memo), which writes each list of numbers as opcodes that say their type,
+    and anything else as other opcodes. The opcodes are checked and the numbers read
+    with NumPy (`_read_floats`, `_read_numbers`), never one at a time.
+    """
+    if out.shape[0] < 2:  # a one-item list is pickled without MARK ... APPENDS
+        return False
+    sink = _Sink()
+    pickler = _BuiltinPickler(sink, protocol=2)
+    pickler.fast = True
+    try:
+        pickler.dump(positions)
+    except (_Fallback, RecursionError, ValueError, pickle.PicklingError):
+        return False  # an object pickle has no opcode for, or a cycle
+    stream = b"".join(sink.parts) if len(sink.parts) != 1 else sink.parts[0]
+    if stream[:4] != b"\x80\x02](" or stream[-2:] != b"e.":
+        return False
+    return (_read_floats(stream, out) or _read_numbers(stream, out)) and bool(
+        np.isfinite(out).all())
+
+
+def _read_floats(stream: bytes, out: np.ndarray) -> bool:
+    """Fill `out` from the pickled `stream` of a list of lists of `dim` floats, or return False.
+
+    All such lists are pickled as records of one size, so the stream has a known length
+    and each opcode a known place. Pickle opcodes are self-delimiting: a stream with
+    every expected opcode in its place is the expected stream. Each opcode, and each
+    coordinate, is read for all records at once through a strided view.
+    """
+    n, dim = out.shape
+    width = 3 + 9 * dim
+    full, rest = divmod(n, _PICKLE_BATCH)
+    batches = [(count, per) for count, per in ((full, _PICKLE_BATCH), (1, rest)) if count and per]
+    if len(stream) != 3 + sum(count * (per * width + 2) for count, per in batches) + 1:
+        return False
+    start, first = 3, 0
+    for count, per in batches:
+        stride = per * width + 2
+        framing = np.ndarray((count, 2), np.uint8, stream, start, (stride, stride - 1))
+        if not ((framing[:, 0] == _MARK) & (framing[:, 1] == _APPENDS)).all():
+            return False
+        # One (count, per) view per byte position, with long inner loops: several
+        # times faster than one 3D view whose inner axis is the few bytes of a record.
+        records = start + 1
+        for offset, opcode in _FLOAT_RECORD[dim]:
+            if not (np.ndarray((count, per), np.uint8, stream, records + offset,
+                               (stride, width)) == opcode).all():
+                return False
+        rows = out[first:first + count * per].reshape(count, per, dim)
+        for axis in range(dim):
+            rows[:, :, axis] = np.ndarray((count, per), ">f8", stream,
+                                          records + 3 + 9 * axis, (stride, width))
+        start += count * stride
+        first += count * per
+    return True
+
+
+def _read_numbers(stream: bytes, out: np.ndarray) -> bool:
+    """Fill `out` from the pickled `stream` of a list of lists of `dim` ints or floats.
+
+    Returns False if the stream holds anything else. Records now differ in size, so
+    their starts are found rather than computed: every record starts with EMPTY_LIST
+    MARK, and so, by chance, may a few places inside the 8 bytes of a float. Each such
+    candidate is read as a record (a number opcode, its argument, ... APPENDS); the
+    stream is accepted only if exactly `n` candidates read as records and each of them
+    ends where the next begins (past the MARK ... APPENDS framing between batches), the
+    first just after the list's own MARK and the last just before its APPENDS and STOP.
+    That chain is the sequential parse of the stream, so a candidate inside a float,
+    which lies within a record, cannot be part of it.
+    """
+    n, dim = out.shape
+    data = np.frombuffer(stream + bytes(32), np.uint8)  # reads from a false start stay inside
+    starts = np.flatnonzero((data[:-1] == _EMPTY_LIST) & (data[1:] == _MARK))
+    at = starts + 2
+    valid = np.ones(starts.shape[0], dtype=bool)
+    numbers = []  # (argument offset, opcode) of each coordinate
+    for _ in range(dim):
+        opcode = data[at]
+        size = _ARGUMENT_SIZE[opcode]
+        valid &= size > 0
+        numbers.append((at + 1, opcode))
+        at = at + 1 + size
+    valid &= data[at] == _APPENDS
+    if np.count_nonzero(valid) != n:
+        return False
+    starts, ends = starts[valid], at[valid] + 1
+    between = np.arange(_PICKLE_BATCH - 1, n - 1, _PICKLE_BATCH)  # last record of a batch
+    framing = ends[between]
+    if not ((data[framing] == _APPENDS) & (data[framing + 1] == _MARK)).all():
+        return False
+    ends[between] += 2
+    if starts[0] != 4 or ends[-1] != len(stream) - 2 or not (ends[:-1] == starts[1:]).all():
+        return False
+    for axis, (offset, opcode) in enumerate(numbers):
+        offset, opcode = offset[valid], opcode[valid]
+        column = out[:, axis]
+        for code, dtype in _NUMBER_OPCODES.items():
+            pick = opcode == code
+            if pick.any():
+                view = np.ndarray((data.shape[0] - 7,), dtype, data, 0, (1,))
+                column[pick] = view[offset[pick]]
+    return True
 
 
 def _fast_coordinates(positions: list) -> np.ndarray | None:
@@ -706,6 +909,15 @@ class _Writer:
         self.coords = [coords for coords, _ in ragged]
         self.values = [coords if arrays else coords.tolist() for coords in self.coords]
         self.offsets = [offsets for _, offsets in ragged]
+        # Every line part and polygon written once, up front: a slice per part, ring and
+        # polygon in three comprehensions costs less than nested ones per geometry.
+        parts, _ = self.offsets[_LINES]
+        self.parts = _split(self.values[_LINES], parts)
+        rings, polygons, _ = self.offsets[_POLYGONS]
+        self.polygons = _split(_split(self.values[_POLYGONS], rings), polygons)
+        # The positions of geometry i are bounds[i]:bounds[i + 1] in its array.
+        (points,), (_, lines), (_, _, shapes) = self.offsets
+        self.bounds = [points, [parts[k] for k in lines], [rings[polygons[k]] for k in shapes]]
         self.next = [0, 0, 0]
         self.keep_empty = keep_empty
         self.dim = dim
@@ -758,70 +970,60 @@ class _Writer:
         index = _KIND[kind]
         i = self.next[index]
         self.next[index] = i + 1
-        kind, coordinates, lo, hi = _WRITE[index](self, kind, i)
+        lo, hi = self.bounds[index][i], self.bounds[index][i + 1]
         if hi == lo:
             if not keep:
                 return None, None, True
-            kind, coordinates, box = geometry["type"], [], None
+            coordinates, box = [], None
         else:
+            kind, coordinates = _WRITE[index](self, kind, i)
             box = None
             if want:
                 rows = self.coords[index][lo:hi]
                 box = (rows.min(axis=0), rows.max(axis=0))
-        out = {}
-        for key, value in geometry.items():
-            if key == "type":
-                out[key] = kind
-            elif key == "coordinates":
-                out[key] = coordinates
-            elif key == "bbox":
-                if box is not None:
-                    out[key] = self.bbox(box, value)
-            else:
-                out[key] = value
+        out = dict(geometry)  # members keep their order when set again
+        out["type"] = kind
+        out["coordinates"] = coordinates
+        if "bbox" in out:  # then `want` is true: `box` is None only if the geometry is empty
+            self.set_bbox(out, box)
         return out, box, hi == lo
+
+    # The type and coordinates of non-empty geometry i of each array, given its input type.
 
     def points(self, kind: str, i: int):
         (offsets,) = self.offsets[_POINTS]
         lo, hi = offsets[i], offsets[i + 1]
         values = self.values[_POINTS]
-        if kind == "Point":
-            return kind, (values[lo] if hi > lo else []), lo, hi
-        return kind, values[lo:hi], lo, hi
+        return kind, (values[lo] if kind == "Point" else values[lo:hi])
 
     def lines(self, kind: str, i: int):
-        parts, geometries = self.offsets[_LINES]
+        _, geometries = self.offsets[_LINES]
         first, last = geometries[i], geometries[i + 1]
-        lo, hi = parts[first], parts[last]
-        values = self.values[_LINES]
         if kind == "LineString" and last - first == 1:
-            return kind, values[lo:hi], lo, hi
-        return ("MultiLineString",
-                [values[parts[p]:parts[p + 1]] for p in range(first, last)], lo, hi)
+            return kind, self.parts[first]
+        return "MultiLineString", self.parts[first:last]
 
     def polygons(self, kind: str, i: int):
-        rings, polygons, geometries = self.offsets[_POLYGONS]
+        _, _, geometries = self.offsets[_POLYGONS]
         first, last = geometries[i], geometries[i + 1]
-        lo, hi = rings[polygons[first]], rings[polygons[last]]
-        values = self.values[_POLYGONS]
-        written = [[values[rings[r]:rings[r + 1]] for r in range(polygons[q], polygons[q + 1])]
-                   for q in range(first, last)]
         if kind == "Polygon" and last - first == 1:
-            return kind, written[0], lo, hi
-        return "MultiPolygon", written, lo, hi
+            return kind, self.polygons[first]
+        return "MultiPolygon", self.polygons[first:last]
 
     def replace(self, obj: dict, name: str, value, box) -> dict:
         """Return a copy of `obj` with member `name` set and its bbox recomputed."""
-        out = {}
-        for key, old in obj.items():
-            if key == name:
-                out[key] = value
-            elif key == "bbox":
-                if box is not None:
-                    out[key] = self.bbox(box, old)
-            else:
-                out[key] = old
+        out = dict(obj)  # members keep their order when set again
+        out[name] = value
+        if "bbox" in out:
+            self.set_bbox(out, box)
         return out
+
+    def set_bbox(self, out: dict, box) -> None:
+        """Recompute the ``bbox`` member of `out` from `box`, or drop it if `box` is None."""
+        if box is None:
+            del out["bbox"]
+        else:
+            out["bbox"] = self.bbox(box, out["bbox"])
 
     def bbox(self, box, old) -> list:
         """Return ``[min..., max...]``, 3D only if the document and the old bbox are."""
@@ -830,6 +1032,11 @@ class _Writer:
 
 
 _WRITE = (_Writer.points, _Writer.lines, _Writer.polygons)
+
+
+def _split(items, offsets: list) -> list:
+    """Return ``[items[offsets[k]:offsets[k + 1]] for each k]``."""
+    return [items[lo:hi] for lo, hi in zip(offsets[:-1], offsets[1:], strict=True)]
 
 
 def _union(box, other):

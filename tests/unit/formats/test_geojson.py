@@ -2,6 +2,7 @@
 
 import copy
 import gc
+import struct
 
 import numpy as np
 import orjson
@@ -15,6 +16,7 @@ from rnsca.errors import (
     LimitExceededError,
     ParseError,
 )
+from rnsca.formats import geojson as geojson_module
 from rnsca.formats.geojson import (
     MAX_COLLECTION_DEPTH,
     dumps,
@@ -400,6 +402,289 @@ def test_max_vertices_is_checked_while_validating_a_slow_document():
 def test_max_vertices_must_be_a_non_negative_int(value):
     with pytest.raises(InvalidOptionError, match="max_vertices"):
         from_geojson({"type": "Point", "coordinates": [1, 2]}, max_vertices=value)
+
+
+# --------------------------------------------------------------------------- large documents
+# Large documents are read in bulk, a chunk of whole coordinate arrays at a time (see
+# `_coordinates`, `_read_pickled`). The `small_chunks` fixture makes chunks end after the
+# array holding position 4096, 8192, ..., so that the 100 lines of 100 positions of
+# `make_lines` make three chunks (positions 0-4099, 4100-8199, 8200-9999), and these tests
+# put every kind of value at places the bulk reader treats differently: first and last
+# positions of chunks, of batches of 1000 and of the document.
+
+LINES, LINE_LENGTH = 100, 100
+PLACES = [0, 1, 999, 1000, 4099, 4100, 6543, 8200, LINES * LINE_LENGTH - 1]
+
+
+@pytest.fixture
+def small_chunks(monkeypatch):
+    monkeypatch.setattr(geojson_module, "_CHUNK", 4096)
+
+
+@pytest.fixture
+def make_lines(small_chunks, rng):
+    """Return a function of dim giving (document, coords): lines of random floats."""
+
+    def make(dim=2):
+        coords = rng.uniform(-1000, 1000, (LINES * LINE_LENGTH, dim))
+        features = [feature(line(*coords[k * LINE_LENGTH:(k + 1) * LINE_LENGTH].tolist()))
+                    for k in range(LINES)]
+        return collection(*features), coords
+
+    return make
+
+
+def position_at(doc, index):
+    """Return (the position list, the JSON path of position `index` of `make_lines`)."""
+    k, i = divmod(index, LINE_LENGTH)
+    path = f"features[{k}].geometry.coordinates[{i}]"
+    return doc["features"][k]["geometry"]["coordinates"][i], path
+
+
+def test_a_large_document_of_floats_is_read_exactly(make_lines):
+    doc, coords = make_lines()
+    layout = from_geojson(doc)
+    np.testing.assert_array_equal(layout.lines[1], coords)
+    assert layout.lines[2][0].tolist() == list(range(0, LINES * LINE_LENGTH + 1, LINE_LENGTH))
+    np.testing.assert_array_equal(from_geojson(orjson.dumps(doc)).lines[1], coords)
+
+
+def test_a_large_3d_document_is_read_exactly(make_lines):
+    doc, coords = make_lines(3)
+    layout = from_geojson(doc)
+    assert layout.has_z
+    np.testing.assert_array_equal(layout.lines[1], coords)
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_a_large_document_of_every_kind_matches_shapely(small_chunks, rng, dim):
+    polygons = [shapely.Polygon(rng.uniform(0, 1, (40, dim)) + k) for k in range(200)]
+    points = shapely.points(rng.uniform(0, 100, (2000, dim)))
+    lines = [shapely.LineString(rng.uniform(0, 100, (5000, dim)))]  # more than a chunk
+    empty = [shapely.MultiPoint(), shapely.Polygon()]
+    doc = collection(*(feature(mapping(g)) for g in [*polygons, *lines, *points, *empty]))
+    doc = orjson.loads(orjson.dumps(doc))  # lists, as a parsed document has
+    layout = from_geojson(doc)
+    np.testing.assert_array_equal(layout.polygons[1],
+                                  shapely.to_ragged_array(polygons, include_z=dim == 3)[1])
+    z = dim == 3
+    np.testing.assert_array_equal(layout.lines[1], shapely.get_coordinates(lines, include_z=z))
+    np.testing.assert_array_equal(layout.points[1], shapely.get_coordinates(points, include_z=z))
+    assert layout.geometry_count("points") == 2001 and layout.geometry_count("polygons") == 201
+
+
+#: Ints of every size pickle writes differently: 1, 2 and 4 bytes, then beyond 32 bits.
+INTS = [0, 7, 255, 256, 65_535, 65_536, -1, -300, 2 ** 31 - 1, -(2 ** 31)]
+BIG_INTS = [2 ** 31, -(2 ** 40), 2 ** 47, 2 ** 53]  # 2 ** 47 is pickled in 9 bytes, as a float
+
+
+@pytest.mark.parametrize("count", [1, 40, 2000])
+@pytest.mark.parametrize("ints", [INTS, INTS + BIG_INTS])
+def test_ints_among_floats_are_read_as_floats(make_lines, rng, count, ints):
+    doc, coords = make_lines()
+    for index in rng.choice(coords.shape[0], count, replace=False):
+        position, _ = position_at(doc, index)
+        axis = rng.integers(2)
+        value = ints[rng.integers(len(ints))]
+        position[axis] = value
+        coords[index, axis] = value
+    np.testing.assert_array_equal(from_geojson(doc).lines[1], coords)
+
+
+def test_a_document_of_ints_only_is_read(small_chunks, rng):
+    coords = rng.integers(-100_000, 100_000, (10_000, 3))
+    layout = from_geojson(line(*coords.tolist()))
+    np.testing.assert_array_equal(layout.lines[1], coords.astype(np.float64))
+
+
+def test_floats_whose_bytes_look_like_opcodes_are_read(make_lines, rng):
+    """Bytes of a pickled float that read as EMPTY_LIST MARK and a number do not confuse it."""
+    tricky = [struct.unpack(">d", bytes(b))[0] for b in (
+        b"@](K\x01e](", b"@](G@](e", b"@](J\x00\x00\x00\x00", b"@e](M\x01\x02e")]
+    assert all(np.isfinite(tricky))
+    doc, coords = make_lines()
+    for n, index in enumerate(rng.choice(coords.shape[0], 1500, replace=False)):
+        position, _ = position_at(doc, index)
+        value = tricky[n % len(tricky)] if n % 3 else INTS[n % len(INTS)]
+        position[n % 2] = value
+        coords[index, n % 2] = value
+    np.testing.assert_array_equal(from_geojson(doc).lines[1], coords)
+
+
+@pytest.mark.parametrize("place", PLACES)
+def test_a_string_whose_bytes_end_like_a_position_is_refused(make_lines, place):
+    """A string may hold the pickled bytes of a position, ending where its own record does.
+
+    Pickled, ``[1.5, "](K\\x01K\\x02"]`` ends with the bytes of the position [1, 2]: only
+    reading the records in sequence tells them apart.
+    """
+    doc, _ = make_lines()
+    position, path = position_at(doc, place)
+    position[1] = "](K\x01K\x02"
+    found, message = error_path(doc)
+    assert found == f"{path}[1]"
+    assert "expected a number, got string" in message
+
+
+class Number:
+    """Not a number type of ours; pickling it would run `__reduce_ex__`."""
+
+    reduced = 0
+
+    def __float__(self):
+        return 1.5
+
+    def __reduce_ex__(self, protocol):
+        Number.reduced += 1
+        return (float, (1.5,))
+
+
+@pytest.mark.parametrize("value, reason", [
+    (True, "expected a number, got boolean True"),
+    (False, "expected a number, got boolean False"),
+    (np.bool_(True), "expected a number, got boolean True"),
+    (None, "expected a number, got null"),
+    ("1.5", "expected a number, got string '1.5'"),
+    ("1.25", "expected a number, got string '1.25'"),  # pickled in 9 bytes, as a float
+    ([1.5], "expected a number, got an array of 1"),
+    ({}, "expected a number, got an object"),
+    (float("nan"), "expected a finite number, got nan"),
+    (float("-inf"), "expected a finite number, got -inf"),
+    (10 ** 400, "expected a finite number"),
+    (Number(), "expected a number, got Number"),
+])
+@pytest.mark.parametrize("place", PLACES)
+def test_a_bad_number_in_a_large_document_is_named(make_lines, value, reason, place):
+    doc, _ = make_lines()
+    position, path = position_at(doc, place)
+    position[1] = value
+    found, message = error_path(doc)
+    assert found == f"{path}[1]"
+    assert reason in message
+    assert Number.reduced == 0
+
+
+@pytest.mark.parametrize("value, path_end, reason", [
+    ([1.5], "", "a position needs at least 2 numbers, got 1"),
+    ([1.5, 2.5, 3.5], "", "a 3D position in a document whose first position is 2D"),
+    ("xy", "", "expected a position (an array of 2 or 3 numbers), got string 'xy'"),
+    (5.0, "", "expected a position"),
+])
+@pytest.mark.parametrize("place", [PLACES[1], PLACES[4], PLACES[-1]])
+def test_a_bad_position_in_a_large_document_is_named(make_lines, value, path_end, reason, place):
+    doc, _ = make_lines()
+    k, i = divmod(place, LINE_LENGTH)
+    doc["features"][k]["geometry"]["coordinates"][i] = value
+    found, message = error_path(doc)
+    assert found == f"features[{k}].geometry.coordinates[{i}]{path_end}"
+    assert reason in message
+
+
+def test_a_position_holding_itself_is_refused(make_lines):
+    doc, _ = make_lines()
+    position, path = position_at(doc, PLACES[5])
+    position[1] = position
+    found, message = error_path(doc)
+    assert found == f"{path}[1]"
+    assert "expected a number, got an array of 2" in message
+
+
+@pytest.mark.parametrize("value", [np.float64(2.5), np.float32(2.5), np.int64(-3),
+                                   np.uint8(200)])
+def test_numpy_scalars_in_a_large_document_are_numbers(make_lines, value):
+    doc, coords = make_lines()
+    for place in PLACES:
+        position, _ = position_at(doc, place)
+        position[0] = value
+        coords[place, 0] = float(value)
+    np.testing.assert_array_equal(from_geojson(doc).lines[1], coords)
+
+
+class Position(list):
+    """A list subclass: read like a list, pickled otherwise."""
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_tuples_list_subclasses_and_long_positions_in_a_large_document(make_lines, dim):
+    doc, coords = make_lines(dim)
+    for n, place in enumerate(PLACES):
+        position, _ = position_at(doc, place)
+        k, i = divmod(place, LINE_LENGTH)
+        kinds = (tuple(position), Position(position), [*position, 9.5, 8.5])
+        doc["features"][k]["geometry"]["coordinates"][i] = kinds[n % (3 if dim == 3 else 2)]
+    np.testing.assert_array_equal(from_geojson(doc).lines[1], coords)
+
+
+def test_bulk_reading_takes_lists_of_ints_and_floats_and_nothing_else():
+    """What `_read_pickled` takes, so that documents of such numbers stay fast."""
+    def read(positions):
+        out = np.empty((len(positions), len(positions[0])))
+        return geojson_module._read_pickled(positions, out) and out.tolist() == positions
+
+    floats = [[0.5 + k, -1.5 * k] for k in range(2500)]
+    assert read(floats) and read([[*p, 3.25] for p in floats])
+    assert read([[k, 1.5] for k in range(-70_000, 70_000, 7)])
+    assert read([[k, 2 ** 31 - 1] for k in range(1001)]) and read([[0.5, 1.5], [2, 3]])
+    for value in (True, None, "1", np.float64(1.5), np.int64(1), 2 ** 31, float("nan"), [1]):
+        assert not read([*floats[:1500], [1.5, value], *floats[1500:]])
+    assert not read([*floats[:10], (1.5, 2.5)]) and not read([*floats[:10], Position([1.5, 2.5])])
+    assert not read([*floats[:10], [1.5]]) and not read([*floats[:10], [1.5, 2.5, 3.5]])
+    assert not read([[0.5, 1.5]])  # one position: the slower paths take it
+
+
+NUMBER_REPLACEMENTS = [0, 255, 65_536, -7, 2 ** 40, 1.5, "1.25", None, True, np.float64(2.5),
+                       np.int32(3), float("inf"), [], [1.5], Position([1.5])]
+POSITION_REPLACEMENTS = [[1.5], [1.5, 2.5, 3.5], (1.5, 2.5), Position([1.5, 2.5]), "ab", None,
+                         [0, 1], [True, 1.5]]
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_random_corruptions_of_a_large_document_are_judged_like_the_validator(
+        make_lines, rng, dim):
+    """The bulk reader accepts what the slow validator accepts, with the same numbers."""
+    refused = 0
+    for _ in range(25):
+        doc, _ = make_lines(dim)
+        for index in rng.choice(LINES * LINE_LENGTH, rng.integers(1, 4), replace=False):
+            position, _ = position_at(doc, index)
+            k, i = divmod(index, LINE_LENGTH)
+            if rng.random() < 0.3:
+                replacement = POSITION_REPLACEMENTS[rng.integers(len(POSITION_REPLACEMENTS))]
+                doc["features"][k]["geometry"]["coordinates"][i] = copy.copy(replacement)
+            else:
+                replacement = NUMBER_REPLACEMENTS[rng.integers(len(NUMBER_REPLACEMENTS))]
+                position[rng.integers(dim)] = copy.copy(replacement)
+        validator = geojson_module._Validator(None)
+        try:
+            validator.document(doc)
+        except InvalidGeometryError as expected:
+            refused += 1
+            assert error_path(doc)[0] == expected.path
+            continue
+        positions = [p for f in doc["features"] for p in f["geometry"]["coordinates"]]
+        np.testing.assert_array_equal(
+            from_geojson(doc).lines[1],
+            geojson_module._checked_coordinates(positions, validator.dim))
+    assert 0 < refused < 25
+
+
+@pytest.mark.parametrize("first, rest", [(3, 2), (2, 3)])
+def test_a_whole_chunk_of_another_dimension_is_named(make_lines, first, rest):
+    doc, _ = make_lines(first)
+    for k in range(41, LINES):  # the second and third chunks
+        doc["features"][k] = feature(line(*make_lines(rest)[1][:LINE_LENGTH].tolist()))
+    found, message = error_path(doc)
+    assert found == "features[41].geometry.coordinates[0]"
+    assert f"a {rest}D position in a document whose first position is {first}D" in message
+
+
+def test_a_2d_position_late_in_a_large_3d_document_is_named(make_lines):
+    doc, _ = make_lines(3)
+    position, path = position_at(doc, PLACES[6])
+    del position[2]
+    found, message = error_path(doc)
+    assert found == path
+    assert "a 2D position in a document whose first position is 3D" in message
 
 
 # --------------------------------------------------------------------------- writing

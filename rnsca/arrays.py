@@ -19,6 +19,7 @@ import numpy as np
 import shapely
 
 from rnsca.errors import InvalidGeometryError, UnsupportedGeometryError
+from rnsca.kernels.validate import first_open_ring
 
 __all__ = ["GeometryKind", "Ragged", "OUTPUT_KIND", "geometry_error"]
 
@@ -251,12 +252,8 @@ class Ragged:
             raise geometry_error(self._geometry_of_level(0, ring),
                                  f": ring {ring} has {int(sizes[ring])} positions; a ring "
                                  f"needs at least four")
-        used = sizes > 0
-        heads = self.coords[inner[:-1][used], :2]
-        tails = self.coords[inner[1:][used] - 1, :2]
-        open_rings = (heads != tails).any(axis=1)
-        if open_rings.any():
-            ring = int(np.flatnonzero(used)[np.argmax(open_rings)])
+        ring = int(first_open_ring(self.coords, inner))
+        if ring >= 0:
             raise geometry_error(self._geometry_of_level(0, ring),
                                  f": ring {ring} is not closed (its first and last "
                                  f"positions differ)")

@@ -50,3 +50,26 @@ def first_invalid_segment(segments):
     if segments.shape[0] <= BLOCK_SIZE:
         return _first_invalid_in(segments, 0, segments.shape[0])
     return _first_invalid_parallel(segments)
+
+
+@parallel
+def first_open_ring(coords, ring_offsets):
+    """Return the first non-empty ring whose first and last positions differ (x, y), or -1.
+
+    One parallel pass over the rings (two rows each), in blocks; the caller has checked
+    the ring sizes.
+    """
+    n = ring_offsets.shape[0] - 1
+    n_blocks = (n + BLOCK_SIZE - 1) // BLOCK_SIZE
+    first_bad = np.full(n_blocks, -1, dtype=np.int64)
+    for blk in prange(n_blocks):
+        for r in range(blk * BLOCK_SIZE, min((blk + 1) * BLOCK_SIZE, n)):
+            a = ring_offsets[r]
+            b = ring_offsets[r + 1] - 1
+            if b > a and (coords[a, 0] != coords[b, 0] or coords[a, 1] != coords[b, 1]):
+                first_bad[blk] = r
+                break
+    for blk in range(n_blocks):
+        if first_bad[blk] >= 0:
+            return first_bad[blk]
+    return -1

@@ -308,17 +308,23 @@ def _node_touches(ring_xy, ring_z, has_z, m):
     hits_edge = np.empty(0, dtype=np.int64)
     hits_vertex = np.empty(0, dtype=np.int64)
     count = 0
-    for i in range(n):
-        px = ring_xy[i, 0]
-        py = ring_xy[i, 1]
-        for j in range(n):
+    # Vertices sorted by x: each edge looks only at those within its x-extent.
+    by_x = np.argsort(ring_xy[:n, 0], kind="mergesort")
+    xs = ring_xy[by_x, 0]
+    for j in range(n):
+        ax = ring_xy[j, 0]
+        ay = ring_xy[j, 1]
+        bx = ring_xy[j + 1, 0]
+        by = ring_xy[j + 1, 1]
+        lo = np.searchsorted(xs, min(ax, bx), side="left")
+        hi = np.searchsorted(xs, max(ax, bx), side="right")
+        for k in range(lo, hi):
+            i = by_x[k]
             if j == i or j + 1 == i or (i == 0 and j == n - 1):
                 continue
-            ax = ring_xy[j, 0]
-            ay = ring_xy[j, 1]
-            bx = ring_xy[j + 1, 0]
-            by = ring_xy[j + 1, 1]
-            if px < min(ax, bx) or px > max(ax, bx) or py < min(ay, by) or py > max(ay, by):
+            px = ring_xy[i, 0]
+            py = ring_xy[i, 1]
+            if py < min(ay, by) or py > max(ay, by):
                 continue
             if (px == ax and py == ay) or (px == bx and py == by):
                 continue

@@ -253,18 +253,6 @@ def _put_ring(xy, z, has_z, first, last, reverse, out_xy, out_z, v):
 
 
 @scalar
-def _copy_ring(src_xy, src_z, has_z, a, b, out_xy, out_z, v):
-    """Copy ``src[a:b]`` to ``out[v:]``; return the end."""
-    for i in range(a, b):
-        out_xy[v, 0] = src_xy[i, 0]
-        out_xy[v, 1] = src_xy[i, 1]
-        if has_z:
-            out_z[v] = src_z[i]
-        v += 1
-    return v
-
-
-@scalar
 def _add_ring(rg_xy, rg_z, has_z, rg_start, rg_sign, n_rg, src_xy, src_z, idx, count, close):
     """Store the ring of ``src[idx[0..count-1]]`` (closed with its first vertex if `close`).
 
@@ -818,7 +806,8 @@ def clip_polygon(xy, z, has_z, ring_offsets, r_begin, r_end, xmin, ymin, xmax, y
         out_ring_starts[n_rings] = v
         n_rings += 1
         rings_before = n_rings - 1
-        v = _copy_ring(rg_xy, rg_z, has_z, rg_start[a], rg_start[a + 1], out_xy, out_z, v)
+        v = _put_ring(rg_xy, rg_z, has_z, rg_start[a], rg_start[a + 1] - 1, False, out_xy,
+                      out_z, v)
         shell_start = out_ring_starts[n_rings - 1]
         shell_last = v - 1
         for b in range(n_rg):
@@ -835,7 +824,8 @@ def clip_polygon(xy, z, has_z, ring_offsets, r_begin, r_end, xmin, ymin, xmax, y
             rg_done[b] = True
             out_ring_starts[n_rings] = v
             n_rings += 1
-            v = _copy_ring(rg_xy, rg_z, has_z, rg_start[b], rg_start[b + 1], out_xy, out_z, v)
+            v = _put_ring(rg_xy, rg_z, has_z, rg_start[b], rg_start[b + 1] - 1, False,
+                          out_xy, out_z, v)
         out_poly_rings[n_polys] = n_rings - rings_before
         n_polys += 1
     for b in range(n_rg):

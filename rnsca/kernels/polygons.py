@@ -609,14 +609,15 @@ def clip_polygon(xy, z, has_z, ring_offsets, r_begin, r_end, xmin, ymin, xmax, y
                     y0 = xy[i, 1]
                     x1 = xy[i + 1, 0]
                     y1 = xy[i + 1, 1]
-                    # An input vertex at the corner, or a segment through it (which
-                    # then runs along a window edge).
+                    # An input vertex at the corner, or a segment through it (exactly).
                     if x0 == cx and y0 == cy:
                         t = 0.0
-                    elif x0 == cx and x1 == cx and min(y0, y1) <= cy <= max(y0, y1):
-                        t = 0.0 if y1 == y0 else (cy - y0) / (y1 - y0)
-                    elif y0 == cy and y1 == cy and min(x0, x1) <= cx <= max(x0, x1):
-                        t = 0.0 if x1 == x0 else (cx - x0) / (x1 - x0)
+                    elif (min(x0, x1) <= cx <= max(x0, x1) and min(y0, y1) <= cy <= max(y0, y1)
+                          and (x1 - x0) * (cy - y0) == (y1 - y0) * (cx - x0)):
+                        if abs(x1 - x0) >= abs(y1 - y0):
+                            t = (cx - x0) / (x1 - x0)
+                        else:
+                            t = (cy - y0) / (y1 - y0)
                     else:
                         continue
                     corner_z[e] = z[i] + t * (z[i + 1] - z[i])

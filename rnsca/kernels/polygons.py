@@ -609,16 +609,17 @@ def clip_polygon(xy, z, has_z, ring_offsets, r_begin, r_end, xmin, ymin, xmax, y
                     y0 = xy[i, 1]
                     x1 = xy[i + 1, 0]
                     y1 = xy[i + 1, 1]
-                    # An input vertex at the corner, or a segment through it (exactly).
-                    if x0 == cx and y0 == cy:
-                        t = 0.0
-                    elif (min(x0, x1) <= cx <= max(x0, x1) and min(y0, y1) <= cy <= max(y0, y1)
-                          and (x1 - x0) * (cy - y0) == (y1 - y0) * (cx - x0)):
-                        if abs(x1 - x0) >= abs(y1 - y0):
-                            t = (cx - x0) / (x1 - x0)
-                        else:
-                            t = (cy - y0) / (y1 - y0)
-                    else:
+                    # An input vertex at the corner, or a segment through it: within the
+                    # accuracy promise (1e-9 of the window's size) of the corner.
+                    dx = x1 - x0
+                    dy = y1 - y0
+                    dd = dx * dx + dy * dy
+                    t = 0.0
+                    if dd > 0.0:
+                        t = min(1.0, max(0.0, ((cx - x0) * dx + (cy - y0) * dy) / dd))
+                    near = math.hypot(x0 + t * dx - cx, y0 + t * dy - cy) <= 1e-9 * max(
+                        xmax - xmin, ymax - ymin)
+                    if not near:
                         continue
                     corner_z[e] = z[i] + t * (z[i + 1] - z[i])
                     corner_z_known[e] = True

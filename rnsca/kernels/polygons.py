@@ -983,14 +983,9 @@ def clip_polygon_blocks(xy, z, has_z, ring_offsets, polygon_offsets, polygon_win
                     if area == 0.0:
                         invalid = True
                     out_ring_starts[ring_start[p] + r - r_begin] = v
-                    reverse = (area < 0.0) if r == r_begin else (area > 0.0)
-                    for k in range(last - first + 1):
-                        i = last - k if reverse else first + k
-                        out_xy[v, 0] = xy[i, 0]
-                        out_xy[v, 1] = xy[i, 1]
-                        if has_z:
-                            out_z[v] = z[i]
-                        v += 1
+                    v = _put_ring(xy, z, has_z, first, last,
+                                  (area < 0.0) if r == r_begin else (area > 0.0),
+                                  out_xy, out_z, v)
                 out_poly_rings[poly_start[p]] = r_end - r_begin
                 if invalid:
                     st[C.INVALID_POLYGONS] += 1  # a ring without area (a symmetric bow tie)

@@ -256,7 +256,7 @@ def chunk_count(first, last):
 
 
 @scalar
-def box_chunks(xy, first, last, boxes, box0, xmin, ymin, xmax, ymax, drop_edge_runs):
+def box_chunks(xy, first, last, boxes, box0):
     """Store the bounding box of each chunk of the line first..last at ``boxes[box0:]``.
 
     One pass over the coordinates; the recursion then prunes runs by the union of their
@@ -399,8 +399,7 @@ def clip_line_blocks(xy, z, has_z, part_offsets, part_window, windows, method, n
                 v0 = vertex_start[p]
                 c0 = chain_start[p]
             else:
-                box_chunks(xy, first, last, boxes, chunk_start[p], xmin, ymin, xmax, ymax,
-                           drop_edge_runs)
+                box_chunks(xy, first, last, boxes, chunk_start[p])
             v, c, _, _ = clip_chains(xy, z, has_z, write, first, last, xmin, ymin, xmax, ymax,
                                      method, n_fixed, max_depth, tol, auto_piece, exact,
                                      drop_edge_runs, False, out_xy, out_z, out_starts, v0, c0,

@@ -6,12 +6,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rnsca.arrays import geometry_error
+from rnsca.arrays import GeometryKind, geometry_error
 from rnsca.backends.registry import get_backend
 from rnsca.errors import InvalidGeometryError, UnsupportedGeometryError
 from rnsca.kernels.validate import first_invalid_segment
 from rnsca.options import Backend, Method, Mode, SegmentOptions
-from rnsca.ragged import clip_ragged, window_table
+from rnsca.ragged import clip_ragged, resolve_geometry_options, window_table
 from rnsca.stats import ClipStats
 from rnsca.window import Window
 
@@ -216,9 +216,6 @@ def _clip_geometries(geometries: np.ndarray, window, options: dict) -> np.ndarra
     options = {k: v for k, v in options.items() if k != "keep_empty"}
     count = geometries.shape[0]
     windows, index = window_table(window, count)
-    # Options are checked even if every geometry is decided by its bounding box.
-    clip_ragged("Point", np.empty((0, 2)), (), tuple(windows[0]) if count else (0, 0, 1, 1),
-                **options)
     rings = shapely.get_type_id(geometries) == shapely.GeometryType.LINEARRING
     if rings.any():
         # A ring clipped is a line: its visible parts (GEOS gives line strings too).
@@ -242,6 +239,9 @@ def _clip_geometries(geometries: np.ndarray, window, options: dict) -> np.ndarra
             continue  # None stays None; collections went member by member
         rows = np.flatnonzero((type_ids == type_id) & (has_z == include_z))
         input_name = shapely.GeometryType(type_id).name
+        # Options are checked even if every geometry is decided by its bounding box.
+        resolve_geometry_options(windows, GeometryKind.of(input_name).dimension,
+                                 **{k: v for k, v in options.items() if k != "check_validity"})
         empty_geometry = shapely.from_wkt(f"{input_name} EMPTY")
         # Bounding boxes first: geometries beyond the window or strictly inside it need
         # no conversion to ragged arrays (most of the cost for Shapely objects).

@@ -22,7 +22,8 @@ from rnsca.options import Backend, Boundary, Mode, SegmentOptions
 from rnsca.stats import ClipStats
 from rnsca.window import Window
 
-__all__ = ["RaggedClipResult", "clip_ragged", "to_shapely", "window_table"]
+__all__ = ["RaggedClipResult", "clip_ragged", "resolve_geometry_options", "to_shapely",
+           "window_table"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -135,6 +136,34 @@ def _with_z(xy: np.ndarray, z: np.ndarray, has_z: bool) -> np.ndarray:
     return np.ascontiguousarray(np.column_stack([xy, z]))
 
 
+def resolve_geometry_options(windows: np.ndarray, dimension: int, *, boundary="closed",
+                             method="rnsca", n="auto", max_depth=None, tolerance=None,
+                             mode="exact", backend="numba"):
+    """Return ``(SegmentOptions, Boundary, backend)`` for clipping geometry of `dimension`.
+
+    Default tolerances follow the smallest of `windows` (w, 4).
+
+    Raises
+    ------
+    InvalidOptionError
+        For a bad option, or ``mode="approx"`` with polygons (dimension 2).
+    BackendUnavailableError
+        For a backend that does not clip geometry.
+    """
+    options = SegmentOptions.resolve(_reference_window(windows), method=method, n=n,
+                                     max_depth=max_depth, tolerance=tolerance, mode=mode)
+    side = Boundary(boundary)
+    engine = get_backend(backend)
+    if engine.kind is not Backend.NUMBA:
+        raise BackendUnavailableError(
+            f"backend {engine.kind.value!r} clips segments only; geometry runs on 'numba'")
+    if dimension == 2 and options.mode is Mode.APPROX:
+        raise InvalidOptionError(
+            "mode='approx' cannot clip polygons: valid polygon output needs the exact "
+            "boundary crossings (use mode='exact')")
+    return options, side, engine
+
+
 def clip_ragged(geometry_type, coords, offsets, window, *, boundary="closed", keep_empty=False,
                 check_validity=False, method="rnsca", n="auto", max_depth=None, tolerance=None,
                 mode="exact", backend="numba") -> RaggedClipResult:
@@ -198,17 +227,9 @@ def clip_ragged(geometry_type, coords, offsets, window, *, boundary="closed", ke
     """
     ragged = Ragged.of(geometry_type, coords, offsets)
     windows, window_index = window_table(window, ragged.count)
-    options = SegmentOptions.resolve(_reference_window(windows), method=method, n=n,
-                                     max_depth=max_depth, tolerance=tolerance, mode=mode)
-    side = Boundary(boundary)
-    engine = get_backend(backend)
-    if engine.kind is not Backend.NUMBA:
-        raise BackendUnavailableError(
-            f"backend {engine.kind.value!r} clips segments only; geometry runs on 'numba'")
-    if ragged.kind.dimension == 2 and options.mode is Mode.APPROX:
-        raise InvalidOptionError(
-            "mode='approx' cannot clip polygons: valid polygon output needs the exact "
-            "boundary crossings (use mode='exact')")
+    options, side, engine = resolve_geometry_options(
+        windows, ragged.kind.dimension, boundary=boundary, method=method, n=n,
+        max_depth=max_depth, tolerance=tolerance, mode=mode, backend=backend)
     if ragged.kind.dimension == 0:
         return _clip_points(ragged, windows, window_index, side, keep_empty)
     if ragged.kind.dimension == 1:

@@ -19,7 +19,7 @@ import numpy as np
 import shapely
 
 from rnsca.errors import InvalidGeometryError, UnsupportedGeometryError
-from rnsca.kernels.validate import first_open_ring
+from rnsca.kernels.validate import all_finite, first_open_ring
 
 __all__ = ["GeometryKind", "Ragged", "OUTPUT_KIND", "geometry_error"]
 
@@ -220,9 +220,9 @@ class Ragged:
         return g
 
     def _check_coordinates(self) -> None:
-        finite = np.isfinite(self.coords)
-        if finite.all():
+        if all_finite(self.coords):
             return
+        finite = np.isfinite(self.coords)
         rows = ~finite.all(axis=1)
         if self.kind is GeometryKind.POINT:
             rows &= ~np.isnan(self.coords).all(axis=1)  # an empty point

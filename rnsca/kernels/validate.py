@@ -1,5 +1,6 @@
 """Input checks that must be fast on 10^7 rows: one parallel pass, no temporaries."""
 
+import numba
 import numpy as np
 from numba import prange
 
@@ -10,17 +11,25 @@ BLOCK_SIZE = 65536
 
 
 @scalar
-def _first_invalid_in(segments, first, last):
-    """Return the first row in ``first:last`` with a non-finite span, or -1.
+def _has_invalid(segments):
+    """Return whether a row of `segments` has a non-finite span.
 
     ``x1 - x0`` is finite exactly when both coordinates are finite and their difference
-    does not overflow, so two tests per segment cover NaN, infinity and overflow.
+    does not overflow, so two tests per segment cover NaN, infinity and overflow. The
+    loop is branch-free and runs from 0 (callers pass a view): with an arbitrary start,
+    Numba's negative-index handling keeps LLVM from vectorizing it (5x slower).
     """
     bad = False
-    for i in range(first, last):  # branch-free, so it vectorizes
+    for i in range(segments.shape[0]):
         bad |= not (np.isfinite(segments[i, 2] - segments[i, 0])
                     & np.isfinite(segments[i, 3] - segments[i, 1]))
-    if bad:
+    return bad
+
+
+@scalar
+def _first_invalid_in(segments, first, last):
+    """Return the first row in ``first:last`` with a non-finite span, or -1."""
+    if _has_invalid(segments[first:last]):
         for i in range(first, last):
             if not (np.isfinite(segments[i, 2] - segments[i, 0])
                     and np.isfinite(segments[i, 3] - segments[i, 1])):
@@ -50,6 +59,37 @@ def first_invalid_segment(segments):
     if segments.shape[0] <= BLOCK_SIZE:
         return _first_invalid_in(segments, 0, segments.shape[0])
     return _first_invalid_parallel(segments)
+
+
+# Reassociation only: lets LLVM vectorize the sum below. No other fast-math flag, so
+# NaN and infinity keep their IEEE meaning.
+_reassociating = numba.njit(cache=True, nogil=True, error_model="numpy",
+                            fastmath={"reassoc"})
+
+
+@_reassociating
+def _nonfinite_in(values):
+    """Return whether the 1-D array `values` holds a NaN or an infinity.
+
+    ``x * 0`` is 0 for finite x and NaN otherwise, so the sum is NaN exactly when a value
+    is not finite, in any order of summation (and it cannot overflow). The loop runs
+    from 0 over a view: with an arbitrary start, Numba's negative-index handling keeps
+    LLVM from vectorizing it (10x slower).
+    """
+    total = 0.0
+    for i in range(values.shape[0]):
+        total += values[i] * 0.0
+    return total != 0.0
+
+
+def all_finite(coords):
+    """Return whether every value of `coords` (float64, C-contiguous) is finite.
+
+    One vectorized pass without temporaries: about twice as fast as
+    ``np.isfinite(coords).all()``, which allocates a mask (and faster on one thread than
+    in parallel blocks, as it runs at memory speed).
+    """
+    return not _nonfinite_in(coords.reshape(-1))
 
 
 @parallel

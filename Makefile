@@ -3,20 +3,35 @@ PYTHON ?= python3
 VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
+SERVE_STAMP := $(VENV)/.installed-service
+HOST ?= 127.0.0.1
+PORT ?= 8000
 
-.PHONY: test bench lint clean
+.PHONY: serve test bench lint clean
 
 $(STAMP): pyproject.toml
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
-	$(PY) -m pip install --quiet -e '.[dev,bench]'
+	$(PY) -m pip install --quiet -e '.[dev,bench,service]'
 	touch $(STAMP)
+
+# The service alone needs only the `service` extra (a full dev install also satisfies it).
+$(SERVE_STAMP): pyproject.toml
+	test -x $(PY) || $(PYTHON) -m venv $(VENV)
+	$(PY) -m pip install --quiet --upgrade pip
+	$(PY) -m pip install --quiet -e '.[service]'
+	touch $(SERVE_STAMP)
+
+# The HTTP service on http://$(HOST):$(PORT) (docs at /docs); Ctrl-C stops it gracefully.
+serve: $(SERVE_STAMP)
+	$(VENV)/bin/rnsca serve --host $(HOST) --port $(PORT)
 
 lint: $(STAMP)
 	$(VENV)/bin/ruff check .
 
-# Lint, the whole suite (doctests included), then the kernel unit tests once more in
-# pure Python (NUMBA_DISABLE_JIT=1) so every kernel line also runs uncompiled.
+# Lint, the whole suite (doctests and the service's live-server tests included), then the
+# kernel unit tests once more in pure Python (NUMBA_DISABLE_JIT=1) so every kernel line
+# also runs uncompiled.
 test: $(STAMP) lint
 	$(PY) -m pytest -n 2 -q
 	NUMBA_DISABLE_JIT=1 $(PY) -m pytest -n 2 -q tests/unit -k "not slow"

@@ -1,0 +1,597 @@
+"""SVG path data (the ``d`` attribute) to columnar Bézier segments and back.
+
+`parse_paths` reads many path strings at once into one `PathArrays`; `parse_path` reads
+one. `write_paths` and `write_path` write them back as compact path data. The module
+knows nothing of clipping; the Bézier kernels consume `PathArrays` directly.
+
+Reading follows SVG 2 (section 9.3, "Path data"), with these choices:
+
+- The whole grammar: ``M m L l H h V v C c S s Q q T t A a Z z``, implicit repetition
+  (pairs after a moveto are linetos), numbers such as ``-.5.5e-3`` (two numbers) or
+  ``1.`` and ``1e+2``, separators only where needed, arc flags without separators
+  (``a1 1 0 00 1 1``). A comma may separate numbers, once; it may not follow a command
+  letter, precede one, or be doubled. Empty or whitespace-only data is a valid path
+  with no subpaths (SVG: rendering disabled).
+- Strict: where SVG renders a path up to its first error, we raise `ParseError` with
+  the path's index (bulk reads), the 0-based character position, the character found
+  and what was expected. Numbers are read exactly as Python's ``float()`` reads them;
+  one beyond float64's range is an error ("number out of range"), and so is a
+  coordinate that becomes infinite (relative steps summing past 1.8e308;
+  `InvalidGeometryError`).
+- ``Z`` closes the subpath: `PathArrays.closed` is set and no closing segment is
+  added; the edge back to the subpath's start is implicit. A command after ``Z`` other
+  than a moveto starts a new subpath at the same start point. A moveto with no drawing
+  command (``"M1 2"``, ``"M1 2 Z"``, ``"M1 2 M3 4"``) is a subpath with no segments.
+- Arcs follow SVG 2's "Elliptical arc implementation notes": the ends coincide: no
+  segment; a zero radius: a straight line; radii too small to reach the end: scaled up;
+  negative radii: their absolute value; the rotation: modulo 360 degrees. Each arc
+  becomes cubic Béziers of at most 90 degrees each, as many as keep every point of the
+  cubics within `tolerance` of the ellipse.
+
+Writing is the inverse (see `write_paths`): absolute coordinates, ``H``/``V`` for axis
+parallel lines, ``S``/``T`` where a control point is the reflection the reader would
+compute, no repeated command letters, no separator a reader does not need.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Sequence
+from dataclasses import dataclass
+from itertools import pairwise
+
+import numpy as np
+
+from rnsca.errors import InvalidGeometryError, InvalidOptionError, ParseError
+from rnsca.kernels import svgparse, svgwrite
+from rnsca.kernels.validate import all_finite
+
+__all__ = [
+    "ARC_RELATIVE_TOLERANCE",
+    "MAX_PRECISION",
+    "PathArrays",
+    "parse_path",
+    "parse_paths",
+    "write_path",
+    "write_paths",
+]
+
+#: The default arc tolerance, relative to each arc's larger radius: with
+#: ``tolerance=None`` the cubics of an arc stay within ``1e-9 * max(rx, ry)`` of it
+#: (eight pieces per quarter ellipse).
+ARC_RELATIVE_TOLERANCE = 1e-9
+
+#: The largest `precision` of the writer: 17 significant digits identify every float64.
+MAX_PRECISION = 17
+
+# Fallback numbers up to this many bytes are converted by NumPy in one call (its
+# string-to-double conversion is Python's correctly rounded one); longer ones one by one.
+_VECTOR_NUMBER_BYTES = 32
+
+# A number of the path grammar, to quote one in an error message.
+_NUMBER = re.compile(r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")
+
+
+@dataclass(frozen=True, eq=False, kw_only=True)
+class PathArrays:
+    """Many SVG paths as columnar arrays of Bézier segments.
+
+    Path ``i`` is subpaths ``path_offsets[i]:path_offsets[i + 1]``; subpath ``s`` is
+    segments ``subpath_offsets[s]:subpath_offsets[s + 1]``, each starting where the
+    previous one ends, the first at ``start[s]``.
+
+    Attributes
+    ----------
+    controls : ndarray of float64, shape (m, 4, 2)
+        Control points of each segment from its start point: degree 1 uses rows 0-1,
+        degree 2 rows 0-2, degree 3 rows 0-3. Unused rows repeat the end point, so row
+        3 is always the end point and a bounding box may take all four rows.
+    degree : ndarray of int8, shape (m,)
+        1 (line), 2 (quadratic) or 3 (cubic).
+    subpath_offsets : ndarray of int64, shape (k + 1,)
+        Segment offsets of the subpaths.
+    closed : ndarray of bool, shape (k,)
+        Whether the subpath ended with Z: its closing edge, from the end of its last
+        segment back to `start`, is implicit (never a segment).
+    start : ndarray of float64, shape (k, 2)
+        Each subpath's start point (a subpath may have no segments: ``"M1 2"``).
+    path_offsets : ndarray of int64, shape (n + 1,)
+        Subpath offsets of the paths.
+
+    Raises
+    ------
+    InvalidGeometryError
+        On construction, if a shape, an offset array (must start at 0, never decrease
+        and end at the length of what it indexes), a degree, the continuity of segments
+        or the repetition of unused control rows is wrong, or a coordinate is not
+        finite. The message and the ``path_index`` attribute name the path when one is
+        at fault.
+
+    Notes
+    -----
+    Arrays are converted to the dtypes above and made C-contiguous (a copy only when
+    needed). ``==`` compares every array exactly.
+    """
+
+    controls: np.ndarray
+    degree: np.ndarray
+    subpath_offsets: np.ndarray
+    closed: np.ndarray
+    start: np.ndarray
+    path_offsets: np.ndarray
+
+    def __post_init__(self) -> None:
+        controls = _as_array(self.controls, np.float64, "controls")
+        m = controls.shape[0] if controls.ndim == 3 else -1
+        if controls.shape[1:] != (4, 2):
+            raise InvalidGeometryError(f"controls must have shape (m, 4, 2), "
+                                       f"not {controls.shape}")
+        degree = _small_ints(self.degree, np.int8, "degree", (1, 2, 3))
+        if degree.shape != (m,):
+            raise InvalidGeometryError(f"degree must have shape ({m},) like controls, "
+                                       f"not {degree.shape}")
+        subpath_offsets = _offsets(self.subpath_offsets, "subpath_offsets", m, "segments")
+        k = subpath_offsets.shape[0] - 1
+        closed = _small_ints(self.closed, np.bool_, "closed", (0, 1))
+        if closed.shape != (k,):
+            raise InvalidGeometryError(f"closed must have shape ({k},), one per subpath, "
+                                       f"not {closed.shape}")
+        start = _as_array(self.start, np.float64, "start")
+        if start.shape != (k, 2):
+            raise InvalidGeometryError(f"start must have shape ({k}, 2), one per subpath, "
+                                       f"not {start.shape}")
+        path_offsets = _offsets(self.path_offsets, "path_offsets", k, "subpaths")
+        for name, value in (("controls", controls), ("degree", degree),
+                            ("subpath_offsets", subpath_offsets), ("closed", closed),
+                            ("start", start), ("path_offsets", path_offsets)):
+            object.__setattr__(self, name, value)
+        self._check_geometry()
+
+    def _check_geometry(self) -> None:
+        controls, start = self.controls, self.start
+        if not all_finite(controls):
+            seg = int(np.flatnonzero(~np.isfinite(controls).all(axis=(1, 2)))[0])
+            self._fail_segment(seg, "coordinates must be finite")
+        if not all_finite(start):
+            sub = int(np.flatnonzero(~np.isfinite(start).all(axis=1))[0])
+            self._fail_subpath(sub, "coordinates must be finite")
+        # Unused rows repeat the end point: rows d..3 all equal row 3.
+        rows = np.arange(4)
+        unused = rows[None, :] >= self.degree[:, None].astype(np.int64)
+        bad = unused & (controls != controls[:, 3:4, :]).any(axis=2)
+        if bad.any():
+            seg = int(np.flatnonzero(bad.any(axis=1))[0])
+            self._fail_segment(seg, "unused control points must repeat the end point")
+        # Each segment starts where the previous one of its subpath ends, the first at
+        # the subpath's start.
+        expected = np.empty((controls.shape[0], 2))
+        expected[1:] = controls[:-1, 3]
+        counts = np.diff(self.subpath_offsets)
+        firsts = self.subpath_offsets[:-1][counts > 0]
+        expected[firsts] = start[counts > 0]
+        bad = (controls[:, 0] != expected).any(axis=1)
+        if bad.any():
+            self._fail_segment(int(np.flatnonzero(bad)[0]),
+                               "segments must start where the previous one ends (the "
+                               "first at the subpath's start)")
+
+    def _fail_subpath(self, sub: int, message: str):
+        path = int(np.searchsorted(self.path_offsets, sub, side="right") - 1)
+        error = InvalidGeometryError(f"path {path}: {message}")
+        error.path_index = path
+        raise error
+
+    def _fail_segment(self, seg: int, message: str):
+        sub = int(np.searchsorted(self.subpath_offsets, seg, side="right") - 1)
+        self._fail_subpath(sub, f"{message} (segment {seg})")
+
+    @classmethod
+    def empty(cls) -> PathArrays:
+        """Return a `PathArrays` of no paths."""
+        return cls(controls=np.empty((0, 4, 2)), degree=np.empty(0, np.int8),
+                   subpath_offsets=np.zeros(1, np.int64), closed=np.empty(0, bool),
+                   start=np.empty((0, 2)), path_offsets=np.zeros(1, np.int64))
+
+    def __len__(self) -> int:
+        """Return the number of paths."""
+        return self.path_offsets.shape[0] - 1
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, PathArrays):
+            return NotImplemented
+        return all(np.array_equal(getattr(self, name), getattr(other, name))
+                   for name in ("controls", "degree", "subpath_offsets", "closed", "start",
+                                "path_offsets"))
+
+    __hash__ = None
+
+    def path(self, index: int) -> PathArrays:
+        """Return path `index` (negative counts from the end) as a `PathArrays` of one."""
+        n = len(self)
+        if not -n <= index < n:
+            raise IndexError(f"path index {index} out of range for {n} paths")
+        index %= n
+        s0, s1 = int(self.path_offsets[index]), int(self.path_offsets[index + 1])
+        g0, g1 = int(self.subpath_offsets[s0]), int(self.subpath_offsets[s1])
+        return PathArrays(controls=self.controls[g0:g1], degree=self.degree[g0:g1],
+                          subpath_offsets=self.subpath_offsets[s0:s1 + 1] - g0,
+                          closed=self.closed[s0:s1], start=self.start[s0:s1],
+                          path_offsets=np.array([0, s1 - s0], dtype=np.int64))
+
+
+def _as_array(value, dtype, name: str) -> np.ndarray:
+    try:
+        return np.ascontiguousarray(value, dtype=dtype)
+    except (TypeError, ValueError) as exc:
+        raise InvalidGeometryError(f"{name} must be convertible to {np.dtype(dtype)}: "
+                                   f"{exc}") from None
+
+
+def _small_ints(value, dtype, name: str, allowed: tuple[int, ...]) -> np.ndarray:
+    """Return `value` as `dtype` after checking its values (a cast must not wrap)."""
+    array = np.asarray(value)
+    if array.dtype != dtype:
+        if array.dtype.kind not in "biu" or not np.isin(array, allowed).all():
+            raise InvalidGeometryError(f"{name} values must be in {allowed}")
+    elif array.dtype != np.bool_ and not np.isin(array, allowed).all():
+        raise InvalidGeometryError(f"{name} values must be in {allowed}")
+    return np.ascontiguousarray(array, dtype=dtype)
+
+
+def _offsets(value, name: str, total: int, of: str) -> np.ndarray:
+    array = np.asarray(value)
+    if array.ndim != 1 or array.shape[0] < 1 or (array.size and array.dtype.kind not in "iu"):
+        raise InvalidGeometryError(f"{name} must be a 1-d integer array of at least one "
+                                   f"offset")
+    array = np.ascontiguousarray(array, dtype=np.int64)
+    if array[0] != 0 or array[-1] != total or (np.diff(array) < 0).any():
+        raise InvalidGeometryError(f"{name} must start at 0, never decrease and end at "
+                                   f"{total} (the number of {of})")
+    return array
+
+
+# --------------------------------------------------------------------------- reading
+
+def parse_path(d: str, *, tolerance: float | None = None) -> PathArrays:
+    """Return the segments of one SVG path data string as a `PathArrays` of one path.
+
+    Parameters
+    ----------
+    d : str
+        Path data, as in the ``d`` attribute.
+    tolerance : float, optional
+        Largest distance (user units) from an arc to its cubic Béziers. The default,
+        None, is `ARC_RELATIVE_TOLERANCE` times each arc's larger radius.
+
+    Returns
+    -------
+    PathArrays
+        One path.
+
+    Raises
+    ------
+    ParseError
+        `d` breaks the grammar; the message gives the 0-based character position, the
+        character found and what was expected; so do the ``position`` and
+        ``path_index`` (0) attributes.
+    InvalidGeometryError
+        A coordinate overflows float64 (relative steps, arcs of huge radius).
+    InvalidOptionError
+        `tolerance` is not a positive finite number.
+
+    Examples
+    --------
+    >>> p = parse_path("M0,0 L10,10 Q 20,0 30,10 Z")
+    >>> p.degree.tolist(), p.closed.tolist()
+    ([1, 2], [True])
+    >>> p.controls[1].tolist()
+    [[10.0, 10.0], [20.0, 0.0], [30.0, 10.0], [30.0, 10.0]]
+    >>> parse_path("M0 0 L1 x")
+    Traceback (most recent call last):
+    ...
+    rnsca.errors.ParseError: position 8: expected a number, found 'x'
+    """
+    if not isinstance(d, str):
+        raise TypeError(f"path data must be a str, not {type(d).__name__}")
+    return _parse([d], tolerance, bulk=False)
+
+
+def parse_paths(ds: Sequence[str], *, tolerance: float | None = None) -> PathArrays:
+    """Return the segments of many SVG path data strings, path ``i`` from ``ds[i]``.
+
+    The fast form: all strings are parsed in one parallel pass over their bytes.
+
+    Parameters
+    ----------
+    ds : sequence of str
+        Path data strings.
+    tolerance : float, optional
+        As for `parse_path`.
+
+    Returns
+    -------
+    PathArrays
+        ``len(ds)`` paths.
+
+    Raises
+    ------
+    ParseError
+        For the first string (lowest index) that breaks the grammar; the message starts
+        with ``path <index>, position <character>:`` and the exception has the
+        ``path_index`` and ``position`` attributes.
+    InvalidGeometryError
+        A coordinate overflows float64; the message names the path.
+    InvalidOptionError
+        `tolerance` is not a positive finite number.
+
+    Examples
+    --------
+    >>> p = parse_paths(["M1 2", "m1 2 3 4", "M0 0 H5 V5 Z"])
+    >>> len(p), p.path_offsets.tolist(), p.subpath_offsets.tolist()
+    (3, [0, 1, 2, 3], [0, 0, 1, 3])
+    >>> p.controls[0, :2].tolist()   # m1 2 3 4: a moveto, then a relative lineto
+    [[1.0, 2.0], [4.0, 6.0]]
+    """
+    if isinstance(ds, (str, bytes)):
+        raise TypeError("parse_paths takes a sequence of strings; use parse_path for one")
+    return _parse(ds, tolerance, bulk=True)
+
+
+def _arc_tolerance(tolerance) -> tuple[float, float]:
+    """Return the kernel's (absolute, relative) tolerance pair; one of them is 0."""
+    if tolerance is None:
+        return 0.0, ARC_RELATIVE_TOLERANCE
+    try:
+        value = float(tolerance)
+    except (TypeError, ValueError):
+        value = math.nan
+    if isinstance(tolerance, bool) or not (math.isfinite(value) and value > 0.0):
+        raise InvalidOptionError(f"tolerance must be a positive finite number or None, "
+                                 f"not {tolerance!r}")
+    return value, 0.0
+
+
+def _parse(ds: Sequence[str], tolerance, bulk: bool) -> PathArrays:
+    tol_abs, tol_rel = _arc_tolerance(tolerance)
+    data, path_bytes = _encode(ds)
+    buf = np.frombuffer(data, dtype=np.uint8)
+    counts = svgparse.count_tokens(buf, path_bytes)
+    bad = np.flatnonzero(counts[:, svgparse.ERROR])
+    if bad.size:
+        p = int(bad[0])
+        raise _parse_error(ds, p, int(counts[p, svgparse.ERROR_AT] - path_bytes[p]),
+                           int(counts[p, svgparse.ERROR]), bulk)
+    num_offsets = _prefix_sum(counts[:, svgparse.NUMBERS])
+    cmd_offsets = _prefix_sum(counts[:, svgparse.GROUPS])
+    fallback_offsets = _prefix_sum(counts[:, svgparse.FALLBACKS])
+    nums, cmds, fallback = svgparse.write_tokens(buf, path_bytes, num_offsets, cmd_offsets,
+                                                 fallback_offsets)
+    if fallback.shape[0]:
+        _convert_fallback(ds, data, buf, path_bytes, fallback, nums, bulk)
+    sizes = svgparse.count_segments(nums, num_offsets, cmds, cmd_offsets, tol_abs, tol_rel)
+    seg_offsets = _prefix_sum(sizes[:, 0])
+    sub_offsets = _prefix_sum(sizes[:, 1])
+    controls, degree, start, closed, subpath_offsets = svgparse.write_segments(
+        nums, num_offsets, cmds, cmd_offsets, tol_abs, tol_rel, seg_offsets, sub_offsets)
+    return PathArrays(controls=controls, degree=degree, subpath_offsets=subpath_offsets,
+                      closed=closed, start=start, path_offsets=sub_offsets)
+
+
+def _prefix_sum(counts: np.ndarray) -> np.ndarray:
+    out = np.zeros(counts.shape[0] + 1, dtype=np.int64)
+    np.cumsum(counts, out=out[1:])
+    return out
+
+
+def _encode(ds: Sequence[str]) -> tuple[bytes, np.ndarray]:
+    """Return the UTF-8 bytes of all strings laid end to end, and each one's offsets."""
+    text = "".join(ds)   # TypeError naming the item for a non-str
+    # Lone surrogates pass through: like any non-ASCII character they are a parse error,
+    # reported at their position.
+    data = text.encode("utf-8", "surrogatepass")
+    n = len(ds)
+    if len(data) == len(text):   # ASCII: bytes are characters
+        lengths = np.fromiter(map(len, ds), dtype=np.int64, count=n)
+    else:
+        lengths = np.fromiter((len(s.encode("utf-8", "surrogatepass")) for s in ds),
+                              dtype=np.int64, count=n)
+    return data, _prefix_sum(lengths)
+
+
+def _parse_error(ds, p: int, position: int, code: int, bulk: bool) -> ParseError:
+    """Return the ParseError for `code` at byte `position` of path `p`.
+
+    Every byte before the error was accepted by the grammar, hence ASCII, so the byte
+    position is also the character position.
+    """
+    d = ds[p]
+    if code == svgparse.OUT_OF_RANGE:
+        number = _NUMBER.match(d, position).group()
+        found = f"found {number if len(number) <= 40 else number[:37] + '...'!r}"
+    elif position < len(d):
+        found = f"found {d[position]!r}"
+    else:
+        found = "found the end of the path"
+    where = f"path {p}, position {position}" if bulk else f"position {position}"
+    error = ParseError(f"{where}: {svgparse.ERROR_MESSAGES[code]}, {found}")
+    error.position = position
+    error.path_index = p
+    return error
+
+
+def _convert_fallback(ds, data: bytes, buf: np.ndarray, path_bytes: np.ndarray,
+                      fallback: np.ndarray, nums: np.ndarray, bulk: bool) -> None:
+    """Convert the numbers off Clinger's fast path with Python's parser, into `nums`."""
+    first, end, where = fallback[:, 0], fallback[:, 1], fallback[:, 2]
+    length = end - first
+    short = length <= _VECTOR_NUMBER_BYTES
+    if short.any():
+        # Gather the short numbers into fixed-width, NUL-padded rows and let NumPy parse
+        # the lot (bytes to float64 is CPython's correctly rounded strtod).
+        width = np.arange(_VECTOR_NUMBER_BYTES)
+        index = first[short, None] + width
+        rows = np.where(width < length[short, None],
+                        buf[np.minimum(index, buf.shape[0] - 1)], 0).astype(np.uint8)
+        nums[where[short]] = rows.view(f"S{_VECTOR_NUMBER_BYTES}").ravel().astype(np.float64)
+    for k in np.flatnonzero(~short).tolist():
+        nums[where[k]] = float(data[first[k]:end[k]])
+    overflow = ~np.isfinite(nums[where])
+    if overflow.any():
+        k = int(np.flatnonzero(overflow)[0])
+        p = int(np.searchsorted(path_bytes, first[k], side="right") - 1)
+        raise _parse_error(ds, p, int(first[k] - path_bytes[p]), svgparse.OUT_OF_RANGE, bulk)
+
+
+# --------------------------------------------------------------------------- writing
+
+def write_path(p: PathArrays, index: int = 0, *, precision: int | None = 6) -> str:
+    """Return path `index` of `p` as compact SVG path data.
+
+    Parameters
+    ----------
+    p : PathArrays
+        The paths.
+    index : int
+        Which path (negative counts from the end).
+    precision : int or None
+        As for `write_paths`.
+
+    Returns
+    -------
+    str
+        Path data; ``""`` for a path with no subpaths.
+
+    Examples
+    --------
+    >>> write_path(parse_path("M 0 0 L 10 0 L 10 -10.5 C 0.5 0, 1 1, 2 2 Z"))
+    'M0 0H10V-10.5C.5 0 1 1 2 2Z'
+    """
+    return write_paths(p.path(index), precision=precision)[0]
+
+
+def write_paths(p: PathArrays, *, precision: int | None = 6) -> list[str]:
+    """Return every path of `p` as compact SVG path data.
+
+    Parameters
+    ----------
+    p : PathArrays
+        The paths.
+    precision : int or None
+        Significant digits of each number (1 to `MAX_PRECISION`), rounded as ``'%.*g'``
+        rounds: each written number is within ``0.5 * 10**(1 - precision)`` of its value,
+        relative. None writes the shortest decimal that reads back as the same float64
+        (``repr``), so ``parse_paths(write_paths(p, precision=None)) == p`` exactly
+        (arcs excepted: they were already cubics).
+
+    Returns
+    -------
+    list of str
+        One string per path.
+
+    Raises
+    ------
+    InvalidOptionError
+        `precision` is not None or an int from 1 to `MAX_PRECISION`.
+
+    Notes
+    -----
+    Coordinates are absolute. A line is ``H``/``V`` when its end shares its start's y/x,
+    ``L`` otherwise; a quadratic is ``T`` and a cubic ``S`` when its first control point
+    is the one the reader infers (the reflection of the previous control point computed
+    as ``2 * current - previous``, or the current point), ``Q``/``C`` otherwise. A
+    command letter is left out when it repeats the previous one (``L`` also after
+    ``M``), and ``M`` after ``Z`` when the new subpath starts at the closed one's start.
+    Numbers drop leading and trailing zeros (``.5``, ``2``), use an exponent when that
+    is shorter (``1e6``, ``12e-7``), and are separated by a space only where neither a
+    minus sign nor a second decimal point separates them (``1-2``, ``.5.5``). With a
+    finite precision the reflections and the points that ``H``, ``V`` and an omitted
+    ``M`` take from the current point are computed by the reader from rounded numbers,
+    so they are within a few roundings of the original.
+
+    Examples
+    --------
+    >>> write_paths(parse_paths(["M0 0 l 1 -2 l -0.5 -0.5", "M1 1 Z L 2 2"]))
+    ['M0 0 1-2 .5-2.5', 'M1 1ZL2 2']
+    >>> write_paths(parse_paths(["M0 0 L 0.1 0.2"]), precision=None)
+    ['M0 0 .1.2']
+    """
+    if precision is not None and (not isinstance(precision, (int, np.integer))
+                                  or isinstance(precision, bool)
+                                  or not 1 <= precision <= MAX_PRECISION):
+        raise InvalidOptionError(f"precision must be None or an int from 1 to "
+                                 f"{MAX_PRECISION}, not {precision!r}")
+    if len(p) == 0:
+        return []
+    kind, with_moveto = svgwrite.classify(p.controls, p.degree, p.subpath_offsets, p.closed,
+                                          p.start, p.path_offsets)
+    m = kind.shape[0]
+    values = np.concatenate([p.controls.reshape(m, 8)[svgwrite.COLUMNS[kind]],
+                             p.start[with_moveto].reshape(-1)])
+    unique, inverse = np.unique(values, return_inverse=True)
+    table, table_offsets, flags = _number_table(unique.tolist(), precision)
+    n_seg_values = int(svgwrite.NUMBER_COUNT[kind].sum())
+    seg_value_offsets = _prefix_sum(svgwrite.NUMBER_COUNT[kind])
+    start_value_offsets = _prefix_sum(with_moveto.astype(np.int64) * 2)
+    inverse = inverse.reshape(-1).astype(np.int64)
+    text, path_chars = svgwrite.write(kind, with_moveto, p.subpath_offsets, p.closed,
+                                      p.path_offsets, inverse[:n_seg_values],
+                                      seg_value_offsets, inverse[n_seg_values:],
+                                      start_value_offsets, table, table_offsets, flags)
+    out = text.tobytes().decode("ascii")
+    return [out[a:b] for a, b in pairwise(path_chars.tolist())]
+
+
+def _number_table(values: list[float], precision: int | None):
+    """Return the compact text of each value: bytes, offsets and separator flags."""
+    if precision is None:
+        texts = [_compact(repr(v)) for v in values]
+    else:
+        spec = f"%.{precision}g"
+        texts = [_compact(spec % v) for v in values]
+    joined = "".join(texts).encode("ascii")
+    table = np.frombuffer(joined, dtype=np.uint8)
+    lengths = np.fromiter(map(len, texts), dtype=np.int64, count=len(texts))
+    offsets = _prefix_sum(lengths)
+    flags = np.zeros(len(texts), dtype=np.uint8)
+    if texts:
+        heads = table[offsets[:-1]]
+        flags |= np.where(heads == ord("-"), svgwrite.STARTS_WITH_MINUS, 0).astype(np.uint8)
+        flags |= np.where(heads == ord("."), svgwrite.STARTS_WITH_DOT, 0).astype(np.uint8)
+        dots = np.add.reduceat((table == ord(".")).astype(np.int64), offsets[:-1])
+        exps = np.add.reduceat((table == ord("e")).astype(np.int64), offsets[:-1])
+        # A following ".5" is a new number only after one that has a '.' and no
+        # exponent ("1.5.5"); after "1e5" we keep the space, as some readers require.
+        flags |= np.where((dots > 0) & (exps == 0), svgwrite.ENDS_IN_FRACTION,
+                          0).astype(np.uint8)
+    return table, offsets, flags
+
+
+def _compact(text: str) -> str:
+    """Return the shortest spelling of the decimal `text` (from repr or ``%g``).
+
+    >>> [_compact(t) for t in ("0.5", "-0.25", "100000.0", "1e-05", "1.5e+20", "-0.0")]
+    ['.5', '-.25', '1e5', '1e-5', '15e19', '0']
+    """
+    sign = ""
+    if text[0] == "-":
+        sign, text = "-", text[1:]
+    mantissa, _, exponent = text.partition("e")
+    whole, _, fraction = mantissa.partition(".")
+    digits = (whole + fraction).lstrip("0")
+    if not digits:
+        return "0"
+    # value = int(digits) * 10**q once trailing zeros are moved into q.
+    q = (int(exponent) if exponent else 0) - len(fraction)
+    stripped = digits.rstrip("0")
+    q += len(digits) - len(stripped)
+    digits = stripped
+    n = len(digits)
+    if q >= 0:
+        positional = digits + "0" * q
+    elif -q < n:
+        positional = f"{digits[:n + q]}.{digits[n + q:]}"
+    else:
+        positional = "." + "0" * (-q - n) + digits
+    scientific = f"{digits}e{q}"
+    return sign + (positional if len(positional) <= len(scientific) else scientific)

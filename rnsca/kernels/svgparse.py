@@ -1,0 +1,707 @@
+"""SVG path data to Bézier segments: tokenize, convert numbers, build segments.
+
+The input is the UTF-8 bytes of many path strings laid end to end, with
+``path_bytes[i]:path_bytes[i + 1]`` the bytes of path i. Every path is parsed on its
+own, so the drivers run one path per ``prange`` iteration. Variable-size outputs use two
+passes with one body and a ``write`` flag (count, prefix sum in the caller, write):
+
+1. `count_tokens` / `write_tokens`: check the grammar of SVG 2 (section 9.3.9, "The
+   grammar for path data") and split each path into argument groups (one command letter
+   per group, implicit repetition spelled out: the pairs after ``M`` become ``L``) and
+   numbers (arc flags included, as 0.0 or 1.0). A number is converted in the kernel when
+   Clinger's fast path applies (below); any other is written as 0.0 and its byte span
+   recorded for the caller, who converts it with Python's correctly rounded parser.
+2. `count_segments` / `write_segments`: interpret the groups as SVG does (relative
+   coordinates, ``H``/``V``, the reflected control points of ``S``/``T``, ``Z``, arcs
+   converted to cubic Béziers) into the columnar layout of
+   `rnsca.formats.svgpath.PathArrays`.
+
+Number conversion (Clinger 1990, "How to read floating point numbers accurately"): a
+decimal ``m * 10**e`` whose integer mantissa ``m`` is below 2**53 and with
+``|e| <= 22`` is one IEEE multiplication or division of two exact doubles (10**22 is the
+largest exact power of ten), hence correctly rounded, bit for bit what Python's
+``float()`` gives. Realistic path data (fonts, icons: a few digits) always takes this
+path; 16- and 17-digit numbers (``repr`` output) and large exponents fall back.
+"""
+
+import math
+
+import numpy as np
+from numba import prange
+
+from rnsca.kernels.jit import parallel, scalar
+
+__all__ = [
+    "ERROR_MESSAGES",
+    "OUT_OF_RANGE",
+    "count_tokens",
+    "write_tokens",
+    "count_segments",
+    "write_segments",
+    "arc_error",
+]
+
+# Error codes of the tokenizer (0: no error); `ERROR_MESSAGES` says what was expected.
+EXPECTED_MOVETO = 1
+EXPECTED_NUMBER = 2
+EXPECTED_DIGIT = 3
+EXPECTED_EXPONENT_DIGIT = 4
+EXPECTED_FLAG = 5
+EXPECTED_NUMBER_OR_COMMAND = 6
+EXPECTED_COMMAND = 7
+OUT_OF_RANGE = 8
+
+ERROR_MESSAGES = {
+    EXPECTED_MOVETO: "expected a moveto command ('M' or 'm')",
+    EXPECTED_NUMBER: "expected a number",
+    EXPECTED_DIGIT: "expected a digit",
+    EXPECTED_EXPONENT_DIGIT: "expected a digit in the exponent",
+    EXPECTED_FLAG: "expected an arc flag ('0' or '1')",
+    EXPECTED_NUMBER_OR_COMMAND: "expected a number, a command letter or the end of the path",
+    EXPECTED_COMMAND: "expected a command letter or the end of the path",
+    OUT_OF_RANGE: "number out of range",
+}
+
+# Columns of the per-path rows `count_tokens` returns.
+NUMBERS, GROUPS, FALLBACKS, ERROR, ERROR_AT = 0, 1, 2, 3, 4
+
+# Character classes, one byte per character code; bytes >= 0x80 (non-ASCII) are in no
+# class, so they stop the tokenizer with an error like any other stray character.
+_WSP = 1       # SVG 2 wsp: tab, line feed, form feed, carriage return, space
+_DIGIT = 2
+_NUMBER = 4    # may start a number: digit, sign, '.'
+_CLASS = np.zeros(256, dtype=np.uint8)
+for _c in b"\t\n\x0c\r ":
+    _CLASS[_c] = _WSP
+for _c in b"0123456789":
+    _CLASS[_c] = _DIGIT | _NUMBER
+for _c in b"+-.":
+    _CLASS[_c] = _NUMBER
+
+# Arguments per command letter; -1 for a byte that is no command.
+_ARGS = np.full(256, -1, dtype=np.int8)
+for _letters, _n in ((b"Zz", 0), (b"HhVv", 1), (b"MmLlTt", 2), (b"SsQq", 4), (b"Cc", 6),
+                     (b"Aa", 7)):
+    for _c in _letters:
+        _ARGS[_c] = _n
+
+# The exact powers of ten in float64 (10**22 is the largest; 10**23 is not a double).
+_POW10 = np.array([10.0**k for k in range(23)])
+# The fast path needs an integer mantissa that is exact in float64.
+_TWO_53 = 2**53
+# Significant digits kept in the int64 mantissa; more digits mean the fallback (such a
+# mantissa is >= 10**17 > 2**53, outside the fast path anyway), and no overflow.
+_MAX_DIGITS = 18
+# Decimal exponents are accumulated only up to this magnitude (larger ones overflow or
+# underflow any double anyway), so no digit string can overflow the int64 exponent.
+_EXPONENT_CAP = 100_000
+
+_COMMA = 44
+_DOT = 46
+_MINUS = 45
+_PLUS = 43
+_LOWER_E = 101
+_UPPER_E = 69
+_ZERO = 48
+_ONE = 49
+_CASE_BIT = 32  # ASCII lower case = upper case | 32
+
+
+@scalar
+def _skip_wsp(buf, i, last):
+    while i < last and _CLASS[buf[i]] == _WSP:
+        i += 1
+    return i
+
+
+@scalar
+def _skip_comma_wsp(buf, i, last):
+    """Skip the optional ``comma_wsp`` of the grammar: ``wsp* (',' wsp*)?``."""
+    i = _skip_wsp(buf, i, last)
+    if i < last and buf[i] == _COMMA:
+        i = _skip_wsp(buf, i + 1, last)
+    return i
+
+
+@scalar
+def _scan_number(buf, i, last):
+    """Scan the number starting at ``buf[i]`` (a digit, sign or '.').
+
+    Returns ``(end, error, value, exact)``: the index after the number, an error code
+    (0, or a code with ``end`` the offending index), the value, and whether the value is
+    the correctly rounded one (Clinger's fast path). Grammar (SVG 1.1 / CSS numbers):
+    ``sign? (digits ('.' digits?)? | '.' digits) ([eE] sign? digits)?``.
+    """
+    negative = buf[i] == _MINUS
+    if buf[i] == _MINUS or buf[i] == _PLUS:
+        i += 1
+    mantissa = 0
+    n_kept = 0        # significant digits in `mantissa` (leading zeros are not kept)
+    exponent = 0      # value = mantissa * 10**exponent
+    dropped = False   # a significant digit did not fit in `mantissa`
+    n_digits = 0
+    while i < last and _CLASS[buf[i]] & _DIGIT:
+        d = buf[i] - _ZERO
+        if n_kept < _MAX_DIGITS:
+            if n_kept > 0 or d != 0:
+                mantissa = mantissa * 10 + d
+                n_kept += 1
+        else:
+            dropped = True
+            exponent += 1
+        n_digits += 1
+        i += 1
+    if i < last and buf[i] == _DOT:
+        i += 1
+        while i < last and _CLASS[buf[i]] & _DIGIT:
+            d = buf[i] - _ZERO
+            if n_kept < _MAX_DIGITS:
+                if n_kept > 0 or d != 0:
+                    mantissa = mantissa * 10 + d
+                    n_kept += 1
+                exponent -= 1
+            else:
+                dropped = True
+            n_digits += 1
+            i += 1
+    if n_digits == 0:
+        return i, EXPECTED_DIGIT, 0.0, False
+    if i < last and (buf[i] == _LOWER_E or buf[i] == _UPPER_E):
+        i += 1
+        exponent_negative = False
+        if i < last and (buf[i] == _MINUS or buf[i] == _PLUS):
+            exponent_negative = buf[i] == _MINUS
+            i += 1
+        if i >= last or not _CLASS[buf[i]] & _DIGIT:
+            return i, EXPECTED_EXPONENT_DIGIT, 0.0, False
+        e = 0
+        while i < last and _CLASS[buf[i]] & _DIGIT:
+            if e < _EXPONENT_CAP:
+                e = e * 10 + (buf[i] - _ZERO)
+            i += 1
+        exponent += -e if exponent_negative else e
+    if mantissa == 0:
+        # Zero with any exponent ("0e999"); `dropped` is impossible without a kept digit.
+        return i, 0, -0.0 if negative else 0.0, True
+    # The value is at least 10**(n_kept - 1 + exponent); from 10**309 on it is certainly
+    # beyond the largest double (1.797e308). Values just below are left to the fallback.
+    if n_kept - 1 + exponent >= 309:
+        return i, OUT_OF_RANGE, 0.0, False
+    value = 0.0
+    exact = False
+    if not dropped and mantissa < _TWO_53:
+        if 0 <= exponent <= 22:
+            value = float(mantissa) * _POW10[exponent]
+            exact = True
+        elif -22 <= exponent < 0:
+            value = float(mantissa) / _POW10[-exponent]
+            exact = True
+        elif 22 < exponent <= 22 + 15:
+            # Clinger's extension: move the excess power of ten into the mantissa
+            # while it stays an exact integer ("1234e25" = 1234000 * 1e22).
+            scaled = mantissa
+            k = exponent - 22
+            while k > 0 and scaled < _TWO_53:
+                scaled *= 10
+                k -= 1
+            if scaled < _TWO_53:
+                value = float(scaled) * _POW10[22]
+                exact = True
+    if negative:
+        value = -value
+    return i, 0, value, exact
+
+
+@scalar
+def _tokenize(buf, first, last, write, nums, num_at, cmds, cmd_at, fallback, fallback_at):
+    """Check and split the path ``buf[first:last]`` into argument groups and numbers.
+
+    Returns ``(n_numbers, n_groups, n_fallbacks, error, error_at)``. With `write`, the
+    numbers go to ``nums[num_at:]``, the group letters to ``cmds[cmd_at:]`` and the rows
+    ``(start, end, number index)`` of numbers the caller must convert to
+    ``fallback[fallback_at:]``; without it, nothing is written (the arrays may be empty).
+    Every step advances ``i`` or returns, so no input can make it loop forever.
+    """
+    n_nums = 0
+    n_cmds = 0
+    n_fb = 0
+    i = _skip_wsp(buf, first, last)
+    if i == last:
+        return 0, 0, 0, 0, 0   # empty path data: valid, renders nothing
+    if buf[i] != 77 and buf[i] != 109:   # 'M', 'm'
+        return 0, 0, 0, EXPECTED_MOVETO, i
+    while True:
+        cmd = buf[i]                      # a command letter (checked by the caller)
+        n_args = _ARGS[cmd]
+        i += 1
+        if n_args == 0:                   # Z or z: no arguments, no repetition
+            if write:
+                cmds[cmd_at + n_cmds] = cmd
+            n_cmds += 1
+            i = _skip_wsp(buf, i, last)
+            if i == last:
+                break
+            if _ARGS[buf[i]] < 0:
+                return n_nums, n_cmds, n_fb, EXPECTED_COMMAND, i
+            continue
+        i = _skip_wsp(buf, i, last)
+        group = cmd
+        is_arc = (cmd | _CASE_BIT) == 97  # 'a'
+        while True:                       # one argument group per iteration
+            if write:
+                cmds[cmd_at + n_cmds] = group
+            n_cmds += 1
+            for a in range(n_args):
+                if a > 0:
+                    i = _skip_comma_wsp(buf, i, last)
+                if is_arc and (a == 3 or a == 4):
+                    # Flags are single characters, so "a1 1 0 00 1 1" reads two flags.
+                    if i < last and (buf[i] == _ZERO or buf[i] == _ONE):
+                        if write:
+                            nums[num_at + n_nums] = float(buf[i] - _ZERO)
+                        n_nums += 1
+                        i += 1
+                        continue
+                    return n_nums, n_cmds, n_fb, EXPECTED_FLAG, i
+                if i >= last or not _CLASS[buf[i]] & _NUMBER:
+                    return n_nums, n_cmds, n_fb, EXPECTED_NUMBER, i
+                end, error, value, exact = _scan_number(buf, i, last)
+                if error != 0:
+                    return n_nums, n_cmds, n_fb, error, (i if error == OUT_OF_RANGE else end)
+                if write:
+                    nums[num_at + n_nums] = value
+                    if not exact:
+                        row = fallback_at + n_fb
+                        fallback[row, 0] = i
+                        fallback[row, 1] = end
+                        fallback[row, 2] = num_at + n_nums
+                if not exact:
+                    n_fb += 1
+                n_nums += 1
+                i = end
+            # After a group: another group (implicit repetition), a command, or the end.
+            j = _skip_wsp(buf, i, last)
+            comma = j < last and buf[j] == _COMMA
+            if comma:
+                j = _skip_wsp(buf, j + 1, last)
+            if j < last and _CLASS[buf[j]] & _NUMBER:
+                i = j
+                if group == 77:           # after "M x y" more pairs are "L"
+                    group = 76
+                elif group == 109:        # and after "m x y", "l"
+                    group = 108
+                continue
+            if comma:                     # a comma must be followed by a number
+                return n_nums, n_cmds, n_fb, EXPECTED_NUMBER, j
+            if j == last:
+                return n_nums, n_cmds, n_fb, 0, 0
+            if _ARGS[buf[j]] >= 0:
+                i = j
+                break
+            return n_nums, n_cmds, n_fb, EXPECTED_NUMBER_OR_COMMAND, j
+    return n_nums, n_cmds, n_fb, 0, 0
+
+
+@parallel
+def count_tokens(buf, path_bytes):
+    """Return int64 (n, 5) rows: numbers, groups, fallbacks, error code, error byte.
+
+    `buf` is uint8; path i is ``buf[path_bytes[i]:path_bytes[i + 1]]``. The error byte
+    is an index into `buf` (0 when the error code is 0).
+    """
+    n = path_bytes.shape[0] - 1
+    out = np.zeros((n, 5), dtype=np.int64)
+    no_nums = np.empty(0, dtype=np.float64)
+    no_cmds = np.empty(0, dtype=np.uint8)
+    no_fallback = np.empty((0, 3), dtype=np.int64)
+    for p in prange(n):
+        n_nums, n_cmds, n_fb, error, at = _tokenize(
+            buf, path_bytes[p], path_bytes[p + 1], False, no_nums, 0, no_cmds, 0,
+            no_fallback, 0)
+        out[p, NUMBERS] = n_nums
+        out[p, GROUPS] = n_cmds
+        out[p, FALLBACKS] = n_fb
+        out[p, ERROR] = error
+        out[p, ERROR_AT] = at
+    return out
+
+
+@parallel
+def write_tokens(buf, path_bytes, num_offsets, cmd_offsets, fallback_offsets):
+    """Return ``(nums, cmds, fallback)`` for paths that `count_tokens` passed.
+
+    The offsets (int64, n + 1) are the prefix sums of `count_tokens`' columns.
+    `fallback` rows are ``(start byte, end byte, index into nums)``.
+    """
+    n = path_bytes.shape[0] - 1
+    nums = np.empty(num_offsets[n], dtype=np.float64)
+    cmds = np.empty(cmd_offsets[n], dtype=np.uint8)
+    fallback = np.empty((fallback_offsets[n], 3), dtype=np.int64)
+    for p in prange(n):
+        _tokenize(buf, path_bytes[p], path_bytes[p + 1], True, nums, num_offsets[p], cmds,
+                  cmd_offsets[p], fallback, fallback_offsets[p])
+    return nums, cmds, fallback
+
+
+# --------------------------------------------------------------------------- arcs
+
+@scalar
+def arc_error(angle):
+    """Return the largest radial distance from a unit-circle arc to its cubic.
+
+    The cubic through the arc's ends with tangent lengths ``4/3 tan(angle / 4)``
+    deviates from the circle by at most ``2/27 sin(angle/4)**6 / cos(angle/4)**2``
+    (Goldapp 1991, "Approximation of circular arcs by cubic polynomials"), 2.7e-4 for a
+    quarter circle.
+    """
+    s = math.sin(0.25 * angle)
+    c = math.cos(0.25 * angle)
+    return (2.0 / 27.0) * s**6 / (c * c)
+
+
+# An arc is split into pieces of at most 90 degrees, fewer than 1 + 1e-12 quarter
+# turns counting as one, so a quarter circle whose angle rounds up is one piece.
+_QUARTER = 0.5 * math.pi * (1.0 + 1e-12)
+# Tolerances below a few ulps of the radius ask for pieces that cannot be more accurate
+# than the float64 coordinates of their control points; capping them bounds the piece
+# count (about 340 for a full circle) whatever the caller asks.
+_MIN_RELATIVE_TOLERANCE = 4.0 * 2.220446049250313e-16
+
+
+@scalar
+def _arc_setup(x0, y0, rx, ry, angle, large, sweep, x, y):
+    """Return the centre parameterisation of an SVG arc, per the SVG 2 notes.
+
+    Returns ``(kind, cx, cy, rx, ry, cos_phi, sin_phi, theta, delta)``: kind 0 (the ends
+    coincide: no segment), 1 (a radius is zero, or the chord is negligible against the
+    radii: a straight line) or 2 (an arc of the ellipse centred at (cx, cy) with the
+    radii and rotation given, from angle `theta` through `delta` radians). Implements
+    SVG 2, appendix "Elliptical arc implementation notes": out-of-range radii are
+    scaled up (B.2.5), the rotation is taken modulo 360 degrees and the flags choose
+    the centre and the direction (B.2.4).
+    """
+    if x0 == x and y0 == y:
+        return 0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0
+    rx = abs(rx)
+    ry = abs(ry)
+    if rx == 0.0 or ry == 0.0:
+        return 1, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0
+    phi = math.radians(np.fmod(angle, 360.0))
+    cos_phi = math.cos(phi)
+    sin_phi = math.sin(phi)
+    hx = 0.5 * (x0 - x)
+    hy = 0.5 * (y0 - y)
+    # The start relative to the chord's midpoint, in the frame where the ellipse is
+    # the unit circle (rotated by -phi, scaled by 1/rx, 1/ry): (ux, uy); the end is at
+    # (-ux, -uy). Working here avoids the rx**2 * ry**2 products of the notes (F.6.5),
+    # which overflow for radii beyond 1e77.
+    ux = (cos_phi * hx + sin_phi * hy) / rx
+    uy = (-sin_phi * hx + cos_phi * hy) / ry
+    lam = ux * ux + uy * uy
+    if lam == 0.0 or not math.isfinite(lam):
+        # The half chord underflows against the radii (or overflows): at float64
+        # precision the arc is its chord.
+        return 1, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0
+    if lam >= 1.0:
+        # Radii too small to reach: scale them up until they just do (B.2.5); the
+        # centre is then the chord's midpoint and the arc a half ellipse.
+        scale = math.sqrt(lam)
+        rx *= scale
+        ry *= scale
+        ux /= scale
+        uy /= scale
+        coef = 0.0
+    else:
+        # Distance of the centre from the midpoint, in units of the half chord (F.6.5.2).
+        coef = math.sqrt((1.0 - lam) / lam)
+        if large == sweep:
+            coef = -coef
+    # Centre in the unit frame (F.6.5.2: cx' = coef rx y1'/ry, cy' = -coef ry x1'/rx).
+    vx = coef * uy
+    vy = -coef * ux
+    cx = cos_phi * (rx * vx) - sin_phi * (ry * vy) + 0.5 * (x0 + x)
+    cy = sin_phi * (rx * vx) + cos_phi * (ry * vy) + 0.5 * (y0 + y)
+    theta = math.atan2(uy - vy, ux - vx)
+    delta = math.atan2(-uy - vy, -ux - vx) - theta
+    # F.6.5.6: the sweep flag picks the direction of travel.
+    if sweep and delta < 0.0:
+        delta += 2.0 * math.pi
+    elif not sweep and delta > 0.0:
+        delta -= 2.0 * math.pi
+    return 2, cx, cy, rx, ry, cos_phi, sin_phi, theta, delta
+
+
+@scalar
+def _arc_pieces(rx, ry, delta, tol_abs, tol_rel):
+    """Return how many cubic pieces keep the arc within tolerance (each <= 90 degrees).
+
+    The cubics approximate the unit circle within `arc_error` of the piece angle; the
+    affine map to the ellipse stretches distances by at most max(rx, ry).
+    """
+    radius = max(rx, ry)
+    tol = tol_abs if tol_abs > 0.0 else tol_rel * radius
+    tol = max(tol, _MIN_RELATIVE_TOLERANCE * radius)
+    sweep = abs(delta)
+    n = max(1, int(math.ceil(sweep / _QUARTER)))
+    # arc_error(a) <= a**6 / 47198 for a <= 90 degrees, so this n is nearly right;
+    # the loop corrects the estimate upwards.
+    estimate = int(math.ceil(sweep / (47198.0 * tol / radius) ** (1.0 / 6.0)))
+    n = max(n, estimate - 1)
+    while radius * arc_error(sweep / n) > tol:
+        n += 1
+    return n
+
+
+@scalar
+def _put(controls, degree, at, deg, x0, y0, x1, y1, x2, y2, x3, y3):
+    """Write one segment; unused control rows repeat the end point (never NaN)."""
+    controls[at, 0, 0] = x0
+    controls[at, 0, 1] = y0
+    controls[at, 1, 0] = x1
+    controls[at, 1, 1] = y1
+    controls[at, 2, 0] = x2
+    controls[at, 2, 1] = y2
+    controls[at, 3, 0] = x3
+    controls[at, 3, 1] = y3
+    degree[at] = deg
+
+
+@scalar
+def _arc(x0, y0, rx, ry, angle, large, sweep, x, y, tol_abs, tol_rel, write, controls,
+         degree, at):
+    """Return the number of segments of one SVG arc; with `write`, write them at `at`."""
+    kind, cx, cy, rx, ry, cos_phi, sin_phi, theta, delta = _arc_setup(
+        x0, y0, rx, ry, angle, large, sweep, x, y)
+    if kind == 0:
+        return 0
+    if kind == 1:
+        if write:
+            _put(controls, degree, at, 1, x0, y0, x, y, x, y, x, y)
+        return 1
+    n = _arc_pieces(rx, ry, delta, tol_abs, tol_rel)
+    if not write:
+        return n
+    step = delta / n
+    k = (4.0 / 3.0) * math.tan(0.25 * step)
+    # Point and tangent (d/dtheta) at theta = ellipse frame mapped by rotation phi.
+    ax = x0
+    ay = y0
+    c = math.cos(theta)
+    s = math.sin(theta)
+    for j in range(n):
+        t = theta + (j + 1) * step
+        c1 = math.cos(t)
+        s1 = math.sin(t)
+        if j == n - 1:
+            bx = x        # the last piece ends exactly at the arc's given end
+            by = y
+        else:
+            bx = cx + cos_phi * (rx * c1) - sin_phi * (ry * s1)
+            by = cy + sin_phi * (rx * c1) + cos_phi * (ry * s1)
+        # Tangents at both ends: derivative of the ellipse point, times k.
+        dax = k * (-cos_phi * (rx * s) - sin_phi * (ry * c))
+        day = k * (-sin_phi * (rx * s) + cos_phi * (ry * c))
+        dbx = k * (-cos_phi * (rx * s1) - sin_phi * (ry * c1))
+        dby = k * (-sin_phi * (rx * s1) + cos_phi * (ry * c1))
+        _put(controls, degree, at + j, 3, ax, ay, ax + dax, ay + day, bx - dbx, by - dby,
+             bx, by)
+        ax = bx
+        ay = by
+        c = c1
+        s = s1
+    return n
+
+
+# --------------------------------------------------------------------------- segments
+
+@scalar
+def _build(nums, num_at, cmds, cmd_first, cmd_last, tol_abs, tol_rel, write, controls,
+           degree, seg_at, start, closed, sub_offsets, sub_at):
+    """Interpret one path's groups as segments and subpaths (SVG 2, section 9.3).
+
+    Returns ``(n_segments, n_subpaths)``. With `write`, segment rows go to
+    ``controls[seg_at:]`` and ``degree[seg_at:]``, subpath rows to ``start[sub_at:]``,
+    ``closed[sub_at:]`` and ``sub_offsets[sub_at:]`` (the global index of each
+    subpath's first segment). The first group is a moveto (checked by the tokenizer).
+    """
+    q = num_at
+    n_seg = 0
+    n_sub = 0
+    cx = 0.0          # current point
+    cy = 0.0
+    sx = 0.0          # start of the current subpath
+    sy = 0.0
+    is_open = False   # a subpath is open (False before the first M and after Z)
+    # The previous command, for the reflections of S and T: 3 after C/S, 2 after Q/T,
+    # 0 otherwise; (px, py) its last control point before the end point.
+    prev = 0
+    px = 0.0
+    py = 0.0
+    for g in range(cmd_first, cmd_last):
+        cmd = cmds[g]
+        upper = cmd & ~_CASE_BIT
+        ox = cx if cmd & _CASE_BIT else 0.0   # origin of relative coordinates
+        oy = cy if cmd & _CASE_BIT else 0.0
+        if upper == 77:                       # M: a new subpath
+            cx = nums[q] + ox
+            cy = nums[q + 1] + oy
+            q += 2
+            sx = cx
+            sy = cy
+            if write:
+                start[sub_at + n_sub, 0] = cx
+                start[sub_at + n_sub, 1] = cy
+                closed[sub_at + n_sub] = False
+                sub_offsets[sub_at + n_sub] = seg_at + n_seg
+            n_sub += 1
+            is_open = True
+            prev = 0
+            continue
+        if not is_open:
+            # A command after Z (other than M) starts a new subpath at the same
+            # initial point as the closed one (SVG 2, 9.3.4).
+            if write:
+                start[sub_at + n_sub, 0] = sx
+                start[sub_at + n_sub, 1] = sy
+                closed[sub_at + n_sub] = False
+                sub_offsets[sub_at + n_sub] = seg_at + n_seg
+            n_sub += 1
+            is_open = True
+        at = seg_at + n_seg
+        if upper == 90:                       # Z: close; the closing edge is implicit
+            if write:
+                closed[sub_at + n_sub - 1] = True
+            cx = sx
+            cy = sy
+            is_open = False
+            prev = 0
+        elif upper == 76:                     # L
+            x = nums[q] + ox
+            y = nums[q + 1] + oy
+            q += 2
+            if write:
+                _put(controls, degree, at, 1, cx, cy, x, y, x, y, x, y)
+            n_seg += 1
+            cx = x
+            cy = y
+            prev = 0
+        elif upper == 72 or upper == 86:      # H, V
+            x = cx
+            y = cy
+            if upper == 72:
+                x = nums[q] + ox
+            else:
+                y = nums[q] + oy
+            q += 1
+            if write:
+                _put(controls, degree, at, 1, cx, cy, x, y, x, y, x, y)
+            n_seg += 1
+            cx = x
+            cy = y
+            prev = 0
+        elif upper == 67 or upper == 83:      # C, S
+            if upper == 67:
+                x1 = nums[q] + ox
+                y1 = nums[q + 1] + oy
+                q += 2
+            elif prev == 3:
+                # Reflection of the previous second control point about the current
+                # point; the writer tests for S with this same expression.
+                x1 = 2.0 * cx - px
+                y1 = 2.0 * cy - py
+            else:
+                x1 = cx
+                y1 = cy
+            x2 = nums[q] + ox
+            y2 = nums[q + 1] + oy
+            x = nums[q + 2] + ox
+            y = nums[q + 3] + oy
+            q += 4
+            if write:
+                _put(controls, degree, at, 3, cx, cy, x1, y1, x2, y2, x, y)
+            n_seg += 1
+            cx = x
+            cy = y
+            prev = 3
+            px = x2
+            py = y2
+        elif upper == 81 or upper == 84:      # Q, T
+            if upper == 81:
+                x1 = nums[q] + ox
+                y1 = nums[q + 1] + oy
+                q += 2
+            elif prev == 2:
+                x1 = 2.0 * cx - px
+                y1 = 2.0 * cy - py
+            else:
+                x1 = cx
+                y1 = cy
+            x = nums[q] + ox
+            y = nums[q + 1] + oy
+            q += 2
+            if write:
+                _put(controls, degree, at, 2, cx, cy, x1, y1, x, y, x, y)
+            n_seg += 1
+            cx = x
+            cy = y
+            prev = 2
+            px = x1
+            py = y1
+        else:                                 # A
+            x = nums[q + 5] + ox
+            y = nums[q + 6] + oy
+            n_seg += _arc(cx, cy, nums[q], nums[q + 1], nums[q + 2], nums[q + 3] != 0.0,
+                          nums[q + 4] != 0.0, x, y, tol_abs, tol_rel, write, controls,
+                          degree, at)
+            q += 7
+            cx = x
+            cy = y
+            prev = 0
+    return n_seg, n_sub
+
+
+@parallel
+def count_segments(nums, num_offsets, cmds, cmd_offsets, tol_abs, tol_rel):
+    """Return int64 (n, 2) rows: segments and subpaths of each path.
+
+    `tol_abs` > 0 is the arc tolerance in user units; otherwise each arc's tolerance
+    is ``tol_rel * max(rx, ry)``.
+    """
+    n = num_offsets.shape[0] - 1
+    out = np.zeros((n, 2), dtype=np.int64)
+    no_controls = np.empty((0, 4, 2), dtype=np.float64)
+    no_degree = np.empty(0, dtype=np.int8)
+    no_start = np.empty((0, 2), dtype=np.float64)
+    no_closed = np.empty(0, dtype=np.bool_)
+    no_offsets = np.empty(0, dtype=np.int64)
+    for p in prange(n):
+        n_seg, n_sub = _build(nums, num_offsets[p], cmds, cmd_offsets[p], cmd_offsets[p + 1],
+                              tol_abs, tol_rel, False, no_controls, no_degree, 0, no_start,
+                              no_closed, no_offsets, 0)
+        out[p, 0] = n_seg
+        out[p, 1] = n_sub
+    return out
+
+
+@parallel
+def write_segments(nums, num_offsets, cmds, cmd_offsets, tol_abs, tol_rel, seg_offsets,
+                   sub_offsets):
+    """Return ``(controls, degree, start, closed, subpath_offsets)`` of every path.
+
+    `seg_offsets` and `sub_offsets` (int64, n + 1) are the prefix sums of
+    `count_segments`; the arrays returned have the layout of `PathArrays`.
+    """
+    n = num_offsets.shape[0] - 1
+    m = seg_offsets[n]
+    k = sub_offsets[n]
+    controls = np.empty((m, 4, 2), dtype=np.float64)
+    degree = np.empty(m, dtype=np.int8)
+    start = np.empty((k, 2), dtype=np.float64)
+    closed = np.empty(k, dtype=np.bool_)
+    subpath_offsets = np.empty(k + 1, dtype=np.int64)
+    subpath_offsets[k] = m
+    for p in prange(n):
+        _build(nums, num_offsets[p], cmds, cmd_offsets[p], cmd_offsets[p + 1], tol_abs,
+               tol_rel, True, controls, degree, seg_offsets[p], start, closed,
+               subpath_offsets, sub_offsets[p])
+    return controls, degree, start, closed, subpath_offsets

@@ -1,0 +1,807 @@
+"""RNSCA for Bézier paths: clip lines, quadratics and cubics, keeping curves as curves.
+
+A segment of degree d (1, 2 or 3) is given by its control points; a *piece* is the
+segment restricted to a parameter interval [a, b], whose control points come from the
+blossom (`piece_values`). RNSCA's test for a piece uses the outcodes of its control
+points (the curve lies in their convex hull): all zero, accept the piece whole; AND
+non-zero, reject it whole; otherwise split it into N pieces of equal parameter length
+and recurse, with an explicit stack. What happens at an undecided leaf:
+
+- exact (``curves="preserve"``): find where the piece crosses the four edge lines,
+  root by root on monotone stretches (`edge_breaks`), and keep the stretches between
+  crossings whose middle is in the window. Visible stretches are output as pieces of
+  the same degree, their cut ends snapped onto the edge they cross;
+- approx: drop the leaf (no root is ever computed; the output stays in the window);
+- flatten (``curves="flatten"``): subdivide until a piece is flat within `tolerance`,
+  then clip its chord as a line; accepted pieces are flattened into lines.
+
+Open paths (strokes) give their visible parts as separate subpaths. Filled paths
+(``fill``) give closed subpaths whose fill inside the window is the input's: each part
+outside is replaced by its projection onto the window's boundary (the clamped curve).
+Moving a point outside the window to its clamp never passes through the window's
+interior, so the winding number of every interior point is unchanged; both fill rules
+see the same shape. A part outside that stays beyond one edge projects onto that edge,
+a contractible segment, so it is replaced by the straight line between its clamped
+ends, and consecutive such lines along one edge are merged.
+
+Two passes (count, write) over one body per subpath, `prange` over blocks of subpaths.
+"""
+
+import numpy as np
+from numba import prange
+
+from rnsca.kernels import counters as C
+from rnsca.kernels.jit import parallel, scalar
+from rnsca.kernels.outcode import BOTTOM, LEFT, RIGHT, TOP, clamp, outcode
+
+__all__ = [
+    "BREAK_CAPACITY",
+    "CURVE_N_AUTO",
+    "EXACT_LEAF_DEPTH",
+    "clip_path_blocks",
+    "edge_breaks",
+    "flatten_count",
+    "piece_values",
+    "point_value",
+]
+
+# n="auto" for curves: a piece's test costs a blossom of its control points, the same
+# for any N; 4 halves the ambiguous parameter range twice per level.
+CURVE_N_AUTO = 4
+# Exact mode: ambiguous pieces are split this deep (at most) before their edge
+# crossings are solved; the pruning leaves short pieces, on which roots converge fast.
+EXACT_LEAF_DEPTH = 2
+# Break points of one leaf: its two ends and at most 3 crossings with each edge line.
+BREAK_CAPACITY = 16
+# Depth-first stack: at most N - 1 pending siblings per level, 33 levels, N <= 64.
+CURVE_STACK_CAPACITY = 64 * 34
+
+# Float state of the subpath being clipped (see `_emit_piece`, `_clamp_to`).
+_CUR_X = 0        # current point: the end of the output so far
+_CUR_Y = 1
+_RUN_X = 2        # start of the last boundary line (fill), which may be extended
+_RUN_Y = 3
+_AREA = 4         # twice the signed area swept by the boundary lines (fill)
+_PEND_A = 5       # pending visible parameter interval of the current segment
+_PEND_B = 6
+_START_X = 7      # the input subpath's start point
+_START_Y = 8
+_FLOAT_STATE_WIDTH = 9
+# Integer state.
+_V = 0            # next output segment
+_S = 1            # next output subpath
+_OPEN = 2         # a chain is open: the next piece may continue it
+_LAST_RUN = 3     # the last output segment is a boundary line (fill)
+_VISIBLE = 4      # some part of the input subpath is visible
+_BROKEN = 5       # some part of the input subpath is not visible (strokes)
+_PEND = 6         # a visible interval is pending
+_PEND_EA = 7      # edges the pending interval's ends were cut at (bit masks)
+_PEND_EB = 8
+_FIRST_AT_START = 9  # the subpath's first chain starts at its start point (strokes)
+_INT_STATE_WIDTH = 10
+
+
+@scalar
+def _lerp(a, b, t):
+    # Exact at both ends: t = 0 gives a, t = 1 gives b.
+    return (1.0 - t) * a + t * b
+
+
+@scalar
+def _blossom(degree, a0, a1, a2, a3, u1, u2, u3):
+    """Return the blossom of the 1-D Bézier (a0..a_degree) at (u1, .., u_degree)."""
+    if degree == 1:
+        return _lerp(a0, a1, u1)
+    if degree == 2:
+        return _lerp(_lerp(a0, a1, u1), _lerp(a1, a2, u1), u2)
+    b0 = _lerp(a0, a1, u1)
+    b1 = _lerp(a1, a2, u1)
+    b2 = _lerp(a2, a3, u1)
+    return _lerp(_lerp(b0, b1, u2), _lerp(b1, b2, u2), u3)
+
+
+@scalar
+def point_value(degree, a0, a1, a2, a3, t):
+    """Return the 1-D Bézier (a0..a_degree) at parameter t (de Casteljau)."""
+    return _blossom(degree, a0, a1, a2, a3, t, t, t)
+
+
+@scalar
+def piece_values(degree, a0, a1, a2, a3, s, t):
+    """Return the 1-D control values of the piece [s, t]; unused slots repeat the end.
+
+    Control value i is the blossom at (s, .., s, t, .., t) with i times t, so the ends
+    are the curve's points at s and t, exactly as `point_value` gives them.
+    """
+    if degree == 1:
+        q1 = _blossom(1, a0, a1, a2, a3, t, t, t)
+        return _blossom(1, a0, a1, a2, a3, s, s, s), q1, q1, q1
+    if degree == 2:
+        q2 = _blossom(2, a0, a1, a2, a3, t, t, t)
+        return (_blossom(2, a0, a1, a2, a3, s, s, s), _blossom(2, a0, a1, a2, a3, s, t, t),
+                q2, q2)
+    return (_blossom(3, a0, a1, a2, a3, s, s, s), _blossom(3, a0, a1, a2, a3, s, s, t),
+            _blossom(3, a0, a1, a2, a3, s, t, t), _blossom(3, a0, a1, a2, a3, t, t, t))
+
+
+@scalar
+def _hull_codes(degree, x0, x1, x2, x3, y0, y1, y2, y3, xmin, ymin, xmax, ymax):
+    """Return (OR, AND) of the outcodes of the control points."""
+    c0 = outcode(x0, y0, xmin, ymin, xmax, ymax)
+    c1 = outcode(x1, y1, xmin, ymin, xmax, ymax)
+    c_or = c0 | c1
+    c_and = c0 & c1
+    if degree >= 2:
+        c2 = outcode(x2, y2, xmin, ymin, xmax, ymax)
+        c_or |= c2
+        c_and &= c2
+    if degree == 3:
+        c3 = outcode(x3, y3, xmin, ymin, xmax, ymax)
+        c_or |= c3
+        c_and &= c3
+    return c_or, c_and
+
+
+@scalar
+def flatten_count(degree, x0, x1, x2, x3, y0, y1, y2, y3, tol):
+    """Return how many equal parameter steps flatten the curve within `tol`.
+
+    Uniform subdivision into n chords deviates from the curve by at most
+    ``d (d - 1) / 8 * max |second difference of the control points| / n**2``.
+    """
+    if degree == 1:
+        return 1
+    if degree == 2:
+        m = np.hypot(x0 - 2.0 * x1 + x2, y0 - 2.0 * y1 + y2) * 0.25
+    else:
+        m = 0.75 * max(np.hypot(x0 - 2.0 * x1 + x2, y0 - 2.0 * y1 + y2),
+                       np.hypot(x1 - 2.0 * x2 + x3, y1 - 2.0 * y2 + y3))
+    if not (m > tol):
+        return 1
+    n = np.ceil(np.sqrt(m / tol))
+    return int(min(n, 1.0e6))
+
+
+@scalar
+def _critical_points(degree, a0, a1, a2, a3):
+    """Return up to two parameters in (0, 1) where the 1-D Bézier's derivative is 0.
+
+    Missing ones are -1; the two are in increasing order.
+    """
+    if degree == 1:
+        return -1.0, -1.0
+    if degree == 2:
+        den = (a1 - a0) - (a2 - a1)
+        if den == 0.0:
+            return -1.0, -1.0
+        t = (a1 - a0) / den
+        return (t if 0.0 < t < 1.0 else -1.0), -1.0
+    # Derivative / 3 = d0 (1-t)^2 + 2 d1 t (1-t) + d2 t^2 = A t^2 + B t + C.
+    d0 = a1 - a0
+    d1 = a2 - a1
+    d2 = a3 - a2
+    qa = d0 - 2.0 * d1 + d2
+    qb = 2.0 * (d1 - d0)
+    qc = d0
+    r0 = -1.0
+    r1 = -1.0
+    if qa == 0.0:
+        if qb != 0.0:
+            r0 = -qc / qb
+    else:
+        disc = qb * qb - 4.0 * qa * qc
+        if disc >= 0.0:
+            # The stable pair: no cancellation between -b and the root.
+            q = -0.5 * (qb + np.copysign(np.sqrt(disc), qb))
+            r0 = q / qa
+            r1 = qc / q if q != 0.0 else -1.0
+    if not (0.0 < r0 < 1.0):
+        r0 = -1.0
+    if not (0.0 < r1 < 1.0):
+        r1 = -1.0
+    if r0 < 0.0 or (r1 >= 0.0 and r1 < r0):
+        r0, r1 = r1, r0
+    return r0, r1
+
+
+@scalar
+def _solve_monotone(degree, a0, a1, a2, a3, level, u, v, gu, gv, st):
+    """Return the root of ``B(t) = level`` in [u, v], B monotone there.
+
+    ``gu = B(u) - level`` and ``gv = B(v) - level`` have opposite signs.
+
+    Illinois regula falsi, safeguarded by bisection, to adjacent floats.
+    """
+    side = 0
+    for _ in range(200):
+        st[C.INTERSECTIONS] += 1
+        t = (u * gv - v * gu) / (gv - gu)
+        if not (u < t < v):
+            t = 0.5 * (u + v)
+            if not (u < t < v):
+                break
+        g = point_value(degree, a0, a1, a2, a3, t) - level
+        if g == 0.0:
+            return t
+        if (g < 0.0) == (gu < 0.0):
+            u = t
+            gu = g
+            if side == -1:
+                gv *= 0.5
+            side = -1
+        else:
+            v = t
+            gv = g
+            if side == 1:
+                gu *= 0.5
+            side = 1
+    return u if abs(point_value(degree, a0, a1, a2, a3, u) - level) <= \
+        abs(point_value(degree, a0, a1, a2, a3, v) - level) else v
+
+
+@scalar
+def _add_break(brk_t, brk_e, n, t, edge_bit):
+    if n < brk_t.shape[0]:
+        brk_t[n] = t
+        brk_e[n] = edge_bit
+        n += 1
+    return n
+
+
+@scalar
+def _line_roots(degree, a0, a1, a2, a3, level, edge_bit, lo, hi, brk_t, brk_e, n, st):
+    """Add to the break table the parameters in [lo, hi] where B(t) crosses `level`."""
+    s0, s1, s2, s3 = piece_values(degree, a0, a1, a2, a3, lo, hi)
+    below = (s0 < level) | (s1 < level) | (s2 < level) | (s3 < level)
+    above = (s0 > level) | (s1 > level) | (s2 > level) | (s3 > level)
+    if not (below and above) and not (s0 == level or s3 == level):
+        return n  # the piece stays on one side (or lies on the line): no crossing
+    c0, c1 = _critical_points(degree, a0, a1, a2, a3)
+    u = lo
+    gu = point_value(degree, a0, a1, a2, a3, u) - level
+    if gu == 0.0:
+        n = _add_break(brk_t, brk_e, n, u, edge_bit)
+    for k in range(3):
+        v = hi
+        if k == 0 and lo < c0 < hi:
+            v = c0
+        elif k <= 1 and lo < c1 < hi and c1 > u:
+            v = c1
+        if v <= u:
+            continue
+        gv = point_value(degree, a0, a1, a2, a3, v) - level
+        if gv == 0.0:
+            n = _add_break(brk_t, brk_e, n, v, edge_bit)
+        elif (gu < 0.0) != (gv < 0.0) and gu != 0.0:
+            n = _add_break(brk_t, brk_e, n,
+                           _solve_monotone(degree, a0, a1, a2, a3, level, u, v, gu, gv, st),
+                           edge_bit)
+        u = v
+        gu = gv
+        if u >= hi:
+            break
+    return n
+
+
+@scalar
+def edge_breaks(degree, x0, x1, x2, x3, y0, y1, y2, y3, lo, hi, xmin, ymin, xmax, ymax,
+                brk_t, brk_e, st):
+    """Fill the break table of the piece [lo, hi]; return its length.
+
+    ``brk_t[0] = lo < ... < brk_t[n-1] = hi`` with ``brk_e[k]`` the bits (LEFT, RIGHT,
+    BOTTOM, TOP) of the edge lines the curve crosses or touches at ``brk_t[k]``. Between
+    two breaks the piece lies in one of the nine regions the edge lines make.
+    """
+    n = _add_break(brk_t, brk_e, 0, lo, 0)
+    n = _line_roots(degree, x0, x1, x2, x3, xmin, LEFT, lo, hi, brk_t, brk_e, n, st)
+    n = _line_roots(degree, x0, x1, x2, x3, xmax, RIGHT, lo, hi, brk_t, brk_e, n, st)
+    n = _line_roots(degree, y0, y1, y2, y3, ymin, BOTTOM, lo, hi, brk_t, brk_e, n, st)
+    n = _line_roots(degree, y0, y1, y2, y3, ymax, TOP, lo, hi, brk_t, brk_e, n, st)
+    n = _add_break(brk_t, brk_e, n, hi, 0)
+    # Insertion sort (at most BREAK_CAPACITY entries), then merge equal parameters.
+    for i in range(1, n):
+        t = brk_t[i]
+        e = brk_e[i]
+        j = i - 1
+        while j >= 0 and brk_t[j] > t:
+            brk_t[j + 1] = brk_t[j]
+            brk_e[j + 1] = brk_e[j]
+            j -= 1
+        brk_t[j + 1] = t
+        brk_e[j + 1] = e
+    m = 0
+    for i in range(n):
+        t = min(max(brk_t[i], lo), hi)
+        if m > 0 and brk_t[m - 1] == t:
+            brk_e[m - 1] |= brk_e[i]
+        else:
+            brk_t[m] = t
+            brk_e[m] = brk_e[i]
+            m += 1
+    return m
+
+
+@scalar
+def _snap(x, y, edges, xmin, ymin, xmax, ymax):
+    """Return the point moved exactly onto the edge lines it was found on."""
+    if edges & LEFT:
+        x = xmin
+    elif edges & RIGHT:
+        x = xmax
+    if edges & BOTTOM:
+        y = ymin
+    elif edges & TOP:
+        y = ymax
+    return x, y
+
+
+@scalar
+def _put_segment(write, degree, px, py, out_ctrl, out_deg, si, sf):
+    """Append one output segment with control points px[0..3], py[0..3]."""
+    v = si[_V]
+    if write:
+        for k in range(4):
+            out_ctrl[v, k, 0] = px[k]
+            out_ctrl[v, k, 1] = py[k]
+        out_deg[v] = degree
+    si[_V] = v + 1
+    sf[_CUR_X] = px[3]
+    sf[_CUR_Y] = py[3]
+
+
+@scalar
+def _put_line(write, x, y, out_ctrl, out_deg, si, sf):
+    """Append a line from the current point to (x, y)."""
+    v = si[_V]
+    if write:
+        out_ctrl[v, 0, 0] = sf[_CUR_X]
+        out_ctrl[v, 0, 1] = sf[_CUR_Y]
+        for k in range(1, 4):
+            out_ctrl[v, k, 0] = x
+            out_ctrl[v, k, 1] = y
+        out_deg[v] = 1
+    si[_V] = v + 1
+    sf[_CUR_X] = x
+    sf[_CUR_Y] = y
+
+
+@scalar
+def _begin_subpath(write, x, y, source, out_first, out_start, out_from, si, sf):
+    s = si[_S]
+    if write:
+        out_first[s] = si[_V]
+        out_start[s, 0] = x
+        out_start[s, 1] = y
+        out_from[s] = source
+    si[_S] = s + 1
+    si[_OPEN] = 1
+    si[_LAST_RUN] = 0
+    sf[_CUR_X] = x
+    sf[_CUR_Y] = y
+
+
+@scalar
+def _emit_piece(write, fill, degree, px, py, source, out_ctrl, out_deg, out_first, out_start,
+                out_from, si, sf):
+    """Add a visible piece (control points px, py) to the output."""
+    if fill:
+        if px[0] != sf[_CUR_X] or py[0] != sf[_CUR_Y]:
+            # Rounding left a gap between the clamped path and the piece: bridge it.
+            _put_line(write, px[0], py[0], out_ctrl, out_deg, si, sf)
+    elif si[_OPEN] == 0 or px[0] != sf[_CUR_X] or py[0] != sf[_CUR_Y]:
+        if si[_VISIBLE] == 0 and si[_BROKEN] == 0:
+            si[_FIRST_AT_START] = 1  # nothing before it: it starts at t = 0
+        _begin_subpath(write, px[0], py[0], source, out_first, out_start, out_from, si, sf)
+    _put_segment(write, degree, px, py, out_ctrl, out_deg, si, sf)
+    si[_LAST_RUN] = 0
+    si[_VISIBLE] = 1
+
+
+@scalar
+def _clamp_to(write, x, y, xmin, ymin, xmax, ymax, out_ctrl, out_deg, si, sf):
+    """Fill: continue the output along the boundary to the clamp of (x, y)."""
+    cx = clamp(x, xmin, xmax)
+    cy = clamp(y, ymin, ymax)
+    ux = sf[_CUR_X]
+    uy = sf[_CUR_Y]
+    if cx == ux and cy == uy:
+        return
+    rx = sf[_RUN_X]
+    ry = sf[_RUN_Y]
+    same_edge = ((rx == ux) & (ux == cx) & ((cx == xmin) | (cx == xmax))) | \
+        ((ry == uy) & (uy == cy) & ((cy == ymin) | (cy == ymax)))
+    if si[_LAST_RUN] == 1 and same_edge:
+        # Extend the last boundary line instead of adding one along the same edge.
+        sf[_AREA] += (rx * cy - cx * ry) - (rx * uy - ux * ry)
+        if cx == rx and cy == ry:
+            si[_V] -= 1  # back where the line began: drop it
+            si[_LAST_RUN] = 0
+        elif write:
+            v = si[_V] - 1
+            for k in range(1, 4):
+                out_ctrl[v, k, 0] = cx
+                out_ctrl[v, k, 1] = cy
+        sf[_CUR_X] = cx
+        sf[_CUR_Y] = cy
+        return
+    sf[_AREA] += ux * cy - cx * uy
+    sf[_RUN_X] = ux
+    sf[_RUN_Y] = uy
+    _put_line(write, cx, cy, out_ctrl, out_deg, si, sf)
+    si[_LAST_RUN] = 1
+
+
+@scalar
+def _outside(write, fill, x, y, xmin, ymin, xmax, ymax, out_ctrl, out_deg, si, sf):
+    """Mark the part ending at (x, y) not visible: clamp to it (fill), or end the chain."""
+    si[_BROKEN] = 1
+    if fill:
+        _clamp_to(write, x, y, xmin, ymin, xmax, ymax, out_ctrl, out_deg, si, sf)
+    else:
+        si[_OPEN] = 0
+
+
+@scalar
+def _flush(write, fill, flatten, degree, x0, x1, x2, x3, y0, y1, y2, y3, xmin, ymin, xmax,
+           ymax, tol, source, px, py, out_ctrl, out_deg, out_first, out_start, out_from, si, sf):
+    """Output the pending visible interval of the segment, if any."""
+    if si[_PEND] == 0:
+        return
+    si[_PEND] = 0
+    a = sf[_PEND_A]
+    b = sf[_PEND_B]
+    qx0, qx1, qx2, qx3 = piece_values(degree, x0, x1, x2, x3, a, b)
+    qy0, qy1, qy2, qy3 = piece_values(degree, y0, y1, y2, y3, a, b)
+    sx, sy = _snap(qx0, qy0, si[_PEND_EA], xmin, ymin, xmax, ymax)
+    # piece_values repeats the end in the unused slots: qx3, qy3 is the end.
+    ex, ey = _snap(qx3, qy3, si[_PEND_EB], xmin, ymin, xmax, ymax)
+    if not flatten or degree == 1:
+        px[0] = sx
+        py[0] = sy
+        px[1] = ex if degree == 1 else qx1
+        py[1] = ey if degree == 1 else qy1
+        px[2] = qx2 if degree == 3 else ex
+        py[2] = qy2 if degree == 3 else ey
+        px[3] = ex
+        py[3] = ey
+        _emit_piece(write, fill, degree, px, py, source, out_ctrl, out_deg, out_first,
+                    out_start, out_from, si, sf)
+        return
+    steps = flatten_count(degree, qx0, qx1, qx2, qx3, qy0, qy1, qy2, qy3, tol)
+    prev_x = sx
+    prev_y = sy
+    for k in range(1, steps + 1):
+        if k == steps:
+            nx = ex
+            ny = ey
+        else:
+            t = a + (b - a) * k / steps
+            nx = point_value(degree, x0, x1, x2, x3, t)
+            ny = point_value(degree, y0, y1, y2, y3, t)
+        px[0] = prev_x
+        py[0] = prev_y
+        for j in range(1, 4):
+            px[j] = nx
+            py[j] = ny
+        _emit_piece(write, fill, 1, px, py, source, out_ctrl, out_deg, out_first, out_start,
+                    out_from, si, sf)
+        prev_x = nx
+        prev_y = ny
+
+
+@scalar
+def _pend(a, b, edges_a, edges_b, si, sf):
+    """Mark [a, b] visible; return whether it continues the pending interval."""
+    if si[_PEND] == 1 and sf[_PEND_B] == a:
+        sf[_PEND_B] = b
+        si[_PEND_EB] = edges_b
+        return True
+    return False
+
+
+@scalar
+def _visible(write, fill, flatten, degree, x0, x1, x2, x3, y0, y1, y2, y3, a, b, edges_a,
+             edges_b, xmin, ymin, xmax, ymax, tol, source, px, py, out_ctrl, out_deg,
+             out_first, out_start, out_from, si, sf):
+    if _pend(a, b, edges_a, edges_b, si, sf):
+        return
+    _flush(write, fill, flatten, degree, x0, x1, x2, x3, y0, y1, y2, y3, xmin, ymin, xmax,
+           ymax, tol, source, px, py, out_ctrl, out_deg, out_first, out_start, out_from, si, sf)
+    si[_PEND] = 1
+    sf[_PEND_A] = a
+    sf[_PEND_B] = b
+    si[_PEND_EA] = edges_a
+    si[_PEND_EB] = edges_b
+
+
+@scalar
+def _leaf(write, fill, flatten, degree, x0, x1, x2, x3, y0, y1, y2, y3, a, b, xmin, ymin,
+          xmax, ymax, tol, source, px, py, brk_t, brk_e, out_ctrl, out_deg, out_first,
+          out_start, out_from, si, sf, st):
+    """Clip the piece [a, b] exactly at its crossings with the edge lines."""
+    st[C.CLIPPED] += 1
+    n = edge_breaks(degree, x0, x1, x2, x3, y0, y1, y2, y3, a, b, xmin, ymin, xmax, ymax,
+                    brk_t, brk_e, st)
+    for k in range(n - 1):
+        t0 = brk_t[k]
+        t1 = brk_t[k + 1]
+        tm = 0.5 * (t0 + t1)
+        code = outcode(point_value(degree, x0, x1, x2, x3, tm),
+                       point_value(degree, y0, y1, y2, y3, tm), xmin, ymin, xmax, ymax)
+        if code == 0:
+            _visible(write, fill, flatten, degree, x0, x1, x2, x3, y0, y1, y2, y3, t0, t1,
+                     brk_e[k], brk_e[k + 1], xmin, ymin, xmax, ymax, tol, source, px, py,
+                     out_ctrl, out_deg, out_first, out_start, out_from, si, sf)
+        else:
+            _flush(write, fill, flatten, degree, x0, x1, x2, x3, y0, y1, y2, y3, xmin, ymin,
+                   xmax, ymax, tol, source, px, py, out_ctrl, out_deg, out_first, out_start,
+                   out_from, si, sf)
+            ex, ey = _snap(point_value(degree, x0, x1, x2, x3, t1),
+                           point_value(degree, y0, y1, y2, y3, t1), brk_e[k + 1], xmin, ymin,
+                           xmax, ymax)
+            _outside(write, fill, ex, ey, xmin, ymin, xmax, ymax, out_ctrl, out_deg,
+                     si, sf)
+
+
+@scalar
+def clip_segment(write, fill, flatten, exact, degree, x0, x1, x2, x3, y0, y1, y2, y3, xmin,
+                 ymin, xmax, ymax, n_split, leaf_depth, tol, source, px, py, brk_t, brk_e,
+                 stack, out_ctrl, out_deg, out_first, out_start, out_from, si, sf, st):
+    """Clip one segment (degree 1..3, control points x0..x3, y0..y3) into the output."""
+    st[C.EVALUATED] += 1
+    c_or, c_and = _hull_codes(degree, x0, x1, x2, x3, y0, y1, y2, y3, xmin, ymin, xmax, ymax)
+    if c_or == 0:
+        st[C.ACCEPTED] += 1
+        st[C.LEVELS] += 1
+        _visible(write, fill, flatten, degree, x0, x1, x2, x3, y0, y1, y2, y3, 0.0, 1.0, 0, 0,
+                 xmin, ymin, xmax, ymax, tol, source, px, py, out_ctrl, out_deg, out_first,
+                 out_start, out_from, si, sf)
+        _flush(write, fill, flatten, degree, x0, x1, x2, x3, y0, y1, y2, y3, xmin, ymin, xmax,
+               ymax, tol, source, px, py, out_ctrl, out_deg, out_first, out_start, out_from,
+               si, sf)
+        return
+    if c_and != 0:
+        st[C.REJECTED] += 1
+        st[C.LEVELS] += 1
+        end_x = x3 if degree == 3 else (x2 if degree == 2 else x1)
+        end_y = y3 if degree == 3 else (y2 if degree == 2 else y1)
+        _outside(write, fill, end_x, end_y, xmin, ymin, xmax, ymax, out_ctrl, out_deg,
+                 si, sf)
+        return
+    st[C.EVALUATED] -= 1  # counted again when popped
+    stack[0, 0] = 0.0
+    stack[0, 1] = 1.0
+    stack[0, 2] = 0.0
+    sp = 1
+    while sp > 0:
+        sp -= 1
+        a = stack[sp, 0]
+        b = stack[sp, 1]
+        level = int(stack[sp, 2])
+        slot = min(level, C.N_LEVELS - 1)
+        if level > st[C.DEEPEST]:
+            st[C.DEEPEST] = level
+        st[C.EVALUATED] += 1
+        qx0, qx1, qx2, qx3 = piece_values(degree, x0, x1, x2, x3, a, b)
+        qy0, qy1, qy2, qy3 = piece_values(degree, y0, y1, y2, y3, a, b)
+        c_or, c_and = _hull_codes(degree, qx0, qx1, qx2, qx3, qy0, qy1, qy2, qy3, xmin, ymin,
+                                  xmax, ymax)
+        if c_or == 0:
+            st[C.ACCEPTED] += 1
+            st[C.LEVELS + slot] += 1
+            _visible(write, fill, flatten, degree, x0, x1, x2, x3, y0, y1, y2, y3, a, b, 0, 0,
+                     xmin, ymin, xmax, ymax, tol, source, px, py, out_ctrl, out_deg,
+                     out_first, out_start, out_from, si, sf)
+            continue
+        if c_and != 0:
+            st[C.REJECTED] += 1
+            st[C.LEVELS + slot] += 1
+            _flush(write, fill, flatten, degree, x0, x1, x2, x3, y0, y1, y2, y3, xmin, ymin,
+                   xmax, ymax, tol, source, px, py, out_ctrl, out_deg, out_first, out_start,
+                   out_from, si, sf)
+            _outside(write, fill, qx3, qy3, xmin, ymin, xmax, ymax, out_ctrl,
+                     out_deg, si, sf)
+            continue
+        # Ambiguous. A leaf when deep enough, or (flatten) flat enough, or (approx)
+        # smaller than the tolerance.
+        if flatten:
+            is_leaf = level >= leaf_depth or flatten_count(
+                degree, qx0, qx1, qx2, qx3, qy0, qy1, qy2, qy3, tol) == 1
+        elif exact:
+            is_leaf = level >= leaf_depth
+        else:
+            size = max(max(qx0, qx1, qx2, qx3) - min(qx0, qx1, qx2, qx3),
+                       max(qy0, qy1, qy2, qy3) - min(qy0, qy1, qy2, qy3))
+            is_leaf = level >= leaf_depth or size <= tol
+        if not is_leaf and sp + n_split <= stack.shape[0]:
+            st[C.SUBDIVIDED] += 1
+            for j in range(n_split, 0, -1):
+                stack[sp, 0] = a + (b - a) * (j - 1) / n_split
+                stack[sp, 1] = b if j == n_split else a + (b - a) * j / n_split
+                stack[sp, 2] = level + 1
+                sp += 1
+            continue
+        st[C.LEVELS + slot] += 1
+        if flatten:
+            # The piece is flat: clip its chord as a line.
+            _flush(write, fill, flatten, degree, x0, x1, x2, x3, y0, y1, y2, y3, xmin, ymin,
+                   xmax, ymax, tol, source, px, py, out_ctrl, out_deg, out_first, out_start,
+                   out_from, si, sf)
+            _leaf(write, fill, False, 1, qx0, qx3, qx3, qx3, qy0, qy3, qy3, qy3, 0.0, 1.0,
+                  xmin, ymin, xmax, ymax, tol, source, px, py, brk_t, brk_e, out_ctrl, out_deg,
+                  out_first, out_start, out_from, si, sf, st)
+            _flush(write, fill, False, 1, qx0, qx3, qx3, qx3, qy0, qy3, qy3, qy3, xmin, ymin,
+                   xmax, ymax, tol, source, px, py, out_ctrl, out_deg, out_first, out_start,
+                   out_from, si, sf)
+        elif exact:
+            _leaf(write, fill, flatten, degree, x0, x1, x2, x3, y0, y1, y2, y3, a, b, xmin,
+                  ymin, xmax, ymax, tol, source, px, py, brk_t, brk_e, out_ctrl, out_deg,
+                  out_first, out_start, out_from, si, sf, st)
+        else:
+            st[C.DROPPED] += 1
+            _flush(write, fill, flatten, degree, x0, x1, x2, x3, y0, y1, y2, y3, xmin, ymin,
+                   xmax, ymax, tol, source, px, py, out_ctrl, out_deg, out_first, out_start,
+                   out_from, si, sf)
+            _outside(write, fill, qx3, qy3, xmin, ymin, xmax, ymax, out_ctrl,
+                     out_deg, si, sf)
+    _flush(write, fill, flatten, degree, x0, x1, x2, x3, y0, y1, y2, y3, xmin, ymin, xmax,
+           ymax, tol, source, px, py, out_ctrl, out_deg, out_first, out_start, out_from, si, sf)
+
+
+@scalar
+def _rotate_last_chain(s0, s_end, v0, v_end, out_ctrl, out_deg, out_first, out_start):
+    """Move the last chain of a closed stroke in front of its first one, joining them.
+
+    The chains of the subpath are ``out_first[s0:s_end]`` over segments v0..v_end-1;
+    the last chain ends where the first begins (the subpath's start point).
+    """
+    last_first = out_first[s_end - 1]
+    k = v_end - last_first
+    moved_ctrl = out_ctrl[last_first:v_end].copy()
+    moved_deg = out_deg[last_first:v_end].copy()
+    for v in range(v_end - 1, v0 + k - 1, -1):
+        out_ctrl[v] = out_ctrl[v - k]
+        out_deg[v] = out_deg[v - k]
+    out_ctrl[v0:v0 + k] = moved_ctrl
+    out_deg[v0:v0 + k] = moved_deg
+    for s in range(s0 + 1, s_end - 1):
+        out_first[s] += k
+    out_start[s0, 0] = out_start[s_end - 1, 0]
+    out_start[s0, 1] = out_start[s_end - 1, 1]
+
+
+@scalar
+def _clip_subpath(write, fill, flatten, exact, controls, degree, first, last, closed, sx, sy,
+                  source, xmin, ymin, xmax, ymax, n_split, leaf_depth, tol, v0, s0, px, py,
+                  brk_t, brk_e, stack, out_ctrl, out_deg, out_first, out_start, out_closed,
+                  out_from, si, sf, st):
+    """Clip the subpath of segments first..last-1 starting at (sx, sy) into the output.
+
+    Strokes: the visible parts as open subpaths (the subpath itself, closed, if it is
+    visible whole; a closed subpath's last and first parts are joined at its start).
+    Fill (`fill`): one closed subpath, the visible parts joined by the boundary, or
+    nothing if no part is visible and the boundary path winds around no point.
+    """
+    si[:] = 0
+    sf[:] = 0.0
+    si[_V] = v0
+    si[_S] = s0
+    sf[_START_X] = sx
+    sf[_START_Y] = sy
+    if first == last:
+        # A lone moveto: nothing to fill; as a stroke, a dot (caps) if in the window.
+        if not fill and outcode(sx, sy, xmin, ymin, xmax, ymax) == 0:
+            _begin_subpath(write, sx, sy, source, out_first, out_start, out_from, si, sf)
+            if write:
+                out_closed[s0] = closed
+        return
+    if fill:
+        _begin_subpath(write, clamp(sx, xmin, xmax), clamp(sy, ymin, ymax), source,
+                       out_first, out_start, out_from, si, sf)
+    for i in range(first, last + 1):
+        if i < last:
+            d = degree[i]
+            x0 = controls[i, 0, 0]
+            x1 = controls[i, 1, 0]
+            x2 = controls[i, 2, 0]
+            x3 = controls[i, 3, 0]
+            y0 = controls[i, 0, 1]
+            y1 = controls[i, 1, 1]
+            y2 = controls[i, 2, 1]
+            y3 = controls[i, 3, 1]
+        else:
+            # The closing line back to the start: filled subpaths are always closed.
+            if not (fill or closed):
+                break
+            d = 1
+            x0 = controls[last - 1, 3, 0]
+            y0 = controls[last - 1, 3, 1]
+            x1 = sx
+            y1 = sy
+            x2 = sx
+            y2 = sy
+            x3 = sx
+            y3 = sy
+        if x0 == x1 == x2 == x3 and y0 == y1 == y2 == y3:
+            continue  # a point: nothing to draw, nothing to clamp
+        clip_segment(write, fill, flatten, exact, d, x0, x1, x2, x3, y0, y1, y2, y3, xmin,
+                     ymin, xmax, ymax, n_split, leaf_depth, tol, source, px, py, brk_t, brk_e,
+                     stack, out_ctrl, out_deg, out_first, out_start, out_from, si, sf, st)
+    if write:
+        for s in range(s0, si[_S]):
+            out_closed[s] = False
+    if fill:
+        cx = clamp(sx, xmin, xmax)
+        cy = clamp(sy, ymin, ymax)
+        if sf[_CUR_X] != cx or sf[_CUR_Y] != cy:
+            _put_line(write, cx, cy, out_ctrl, out_deg, si, sf)
+        if si[_VISIBLE] == 0 and abs(sf[_AREA]) < (xmax - xmin) * (ymax - ymin):
+            # Only boundary lines, winding around no point of the window: nothing.
+            si[_V] = v0
+            si[_S] = s0
+        elif write:
+            out_closed[s0] = True
+        return
+    if not closed or si[_S] == s0:
+        return
+    end_x = controls[last - 1, 3, 0]
+    end_y = controls[last - 1, 3, 1]
+    whole = si[_BROKEN] == 0 and si[_S] == s0 + 1
+    if whole:
+        if end_x != sx or end_y != sy:
+            si[_V] -= 1  # the explicit closing line: Z draws it
+        if write:
+            out_closed[s0] = True
+    elif (si[_FIRST_AT_START] == 1 and si[_OPEN] == 1 and si[_S] >= s0 + 2
+          and sf[_CUR_X] == sx and sf[_CUR_Y] == sy):
+        # The output keeps its counted size: the freed subpath entry is marked with
+        # source -1 for the caller to drop (joins are rare; one pass over the table).
+        if write:
+            _rotate_last_chain(s0, si[_S], v0, si[_V], out_ctrl, out_deg, out_first,
+                               out_start)
+            out_from[si[_S] - 1] = -1
+
+
+@parallel
+def clip_path_blocks(controls, degree, subpath_offsets, closed, start, subpath_source, xmin,
+                     ymin, xmax, ymax, fill, flatten, exact, n_split, leaf_depth, tol,
+                     block_size, write, segment_start, subpath_start, out_ctrl, out_deg,
+                     out_first, out_start, out_closed, out_from, n_segments, n_subpaths,
+                     counters):
+    """Count (``write=False``) or write the clipped subpaths of a path array.
+
+    Subpath k is the segments ``subpath_offsets[k]:subpath_offsets[k+1]`` of `controls`
+    (m, 4, 2) and `degree` (m,), starting at ``start[k]``. The count pass stores each
+    subpath's output size in `n_segments`, `n_subpaths` (and the stats, one counter row
+    per block); the write pass writes subpath k's output from ``segment_start[k]`` and
+    ``subpath_start[k]`` on: control points and degrees, and for each output subpath
+    its first segment, start point, closed flag and source (``subpath_source[k]``, or
+    -1 for an entry freed by joining the ends of a closed stroke: drop those).
+    """
+    n = subpath_offsets.shape[0] - 1
+    n_blocks = counters.shape[0]
+    for blk in prange(n_blocks):
+        st = np.zeros(C.WIDTH, dtype=np.int64) if write else counters[blk]
+        si = np.zeros(_INT_STATE_WIDTH, dtype=np.int64)
+        sf = np.zeros(_FLOAT_STATE_WIDTH, dtype=np.float64)
+        px = np.empty(4, dtype=np.float64)
+        py = np.empty(4, dtype=np.float64)
+        brk_t = np.empty(BREAK_CAPACITY, dtype=np.float64)
+        brk_e = np.empty(BREAK_CAPACITY, dtype=np.int64)
+        stack = np.empty((CURVE_STACK_CAPACITY, 3), dtype=np.float64)
+        for k in range(blk * block_size, min(n, (blk + 1) * block_size)):
+            v0 = 0
+            s0 = 0
+            if write:
+                if n_subpaths[k] == 0:
+                    continue
+                v0 = segment_start[k]
+                s0 = subpath_start[k]
+            _clip_subpath(write, fill, flatten, exact, controls, degree, subpath_offsets[k],
+                          subpath_offsets[k + 1], closed[k], start[k, 0], start[k, 1],
+                          subpath_source[k], xmin, ymin, xmax, ymax, n_split, leaf_depth, tol,
+                          v0, s0, px, py, brk_t, brk_e, stack, out_ctrl, out_deg, out_first,
+                          out_start, out_closed, out_from, si, sf, st)
+            if not write:
+                n_segments[k] = si[_V]
+                n_subpaths[k] = si[_S]

@@ -6,6 +6,7 @@ The public API lives here; see README.md for a tour.
 from rnsca.arrays import GeometryKind, Ragged
 from rnsca.clip import SegmentClipResult, clip, clip_segments
 from rnsca.clip_geojson import clip_geojson
+from rnsca.clip_svg import Curves, Fill, PathClipResult, clip_paths, clip_svg, flatten_paths
 from rnsca.errors import (
     BackendUnavailableError,
     InvalidGeometryError,
@@ -16,6 +17,7 @@ from rnsca.errors import (
     RnscaError,
     UnsupportedGeometryError,
 )
+from rnsca.formats.svgpath import PathArrays, parse_path, parse_paths, write_path, write_paths
 from rnsca.options import Backend, Boundary, Method, Mode
 from rnsca.ragged import RaggedClipResult, clip_ragged
 from rnsca.stats import ClipStats
@@ -29,6 +31,8 @@ __all__ = [
     "BackendUnavailableError",
     "Boundary",
     "ClipStats",
+    "Curves",
+    "Fill",
     "GeometryKind",
     "InvalidGeometryError",
     "InvalidOptionError",
@@ -37,6 +41,8 @@ __all__ = [
     "Method",
     "Mode",
     "ParseError",
+    "PathArrays",
+    "PathClipResult",
     "Ragged",
     "RaggedClipResult",
     "RnscaError",
@@ -46,7 +52,14 @@ __all__ = [
     "Window",
     "clip",
     "clip_geojson",
+    "clip_paths",
     "clip_ragged",
     "clip_segments",
+    "clip_svg",
+    "flatten_paths",
+    "parse_path",
+    "parse_paths",
     "verify",
+    "write_path",
+    "write_paths",
 ]

@@ -11,7 +11,7 @@ touches the window (where Shapely returns a point) is expected to give nothing.
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from functools import cached_property
 
 import numpy as np
@@ -20,14 +20,17 @@ from shapely.geometry import shape
 
 from rnsca.arrays import Ragged
 from rnsca.clip import SegmentClipResult, as_segments
+from rnsca.clip_svg import CURVE_RELATIVE_TOLERANCE, Fill, PathClipResult
 from rnsca.errors import (
     InvalidGeometryError,
     InvalidOptionError,
     ParseError,
     UnsupportedGeometryError,
 )
+from rnsca.formats.svgpath import PathArrays, parse_paths
 from rnsca.options import Boundary, Method, Mode
 from rnsca.ragged import RaggedClipResult, window_table
+from rnsca.verify_paths import paths_to_shapely
 from rnsca.window import Window
 
 __all__ = ["Verification", "verify", "approx_leaf_bound"]
@@ -117,7 +120,7 @@ def approx_leaf_bound(lengths: np.ndarray, result: SegmentClipResult) -> np.ndar
 
 
 def verify(original, clipped, window, *, mode=None, approx_bound=None,
-           boundary="closed") -> Verification:
+           boundary="closed", fill=None, tolerance=None) -> Verification:
     """Return how `clipped` compares with Shapely's intersection of `original` and `window`.
 
     Parameters
@@ -135,9 +138,12 @@ def verify(original, clipped, window, *, mode=None, approx_bound=None,
           Feature collections are aligned feature by feature when `clipped` has as many
           features, or has one for each input feature whose clip is not empty (features
           left empty were dropped); otherwise the two collections are compared whole.
+        - SVG path data (a str or a list of them) or a `PathArrays`, for a
+          `PathClipResult` or path data. Both sides are flattened within `tolerance`
+          and compared as lines (strokes) or as the regions their fill rule paints.
     clipped
-        The clip: a `SegmentClipResult`, Shapely geometry or array, `RaggedClipResult`
-        or GeoJSON dict. Z values are ignored.
+        The clip: a `SegmentClipResult`, Shapely geometry or array, `RaggedClipResult`,
+        GeoJSON dict, `PathClipResult` or SVG path data. Z values are ignored.
     window : Window, sequence of 4 floats, or array_like (G, 4)
         ``(xmin, ymin, xmax, ymax)``; for geometries also one window per input.
     mode : {"exact", "approx"}, optional
@@ -151,6 +157,13 @@ def verify(original, clipped, window, *, mode=None, approx_bound=None,
         ``shapely.intersection``; interior with ``shapely.clip_by_rect`` for lines and
         points strictly inside for points (polygons: ``intersection`` either way).
         Segments are always closed.
+    fill : {None, "nonzero", "evenodd"}
+        Paths: the fill rule the clip followed (None: strokes); a `PathClipResult`
+        knows its own.
+    tolerance : float, optional
+        Paths: the flattening accuracy of the comparison; default 1e-6 of the window's
+        size. The allowed deviation grows by twice it (both sides are flattened), and
+        in exact mode it is ``1e-9 * size + 2 * tolerance``.
 
     Returns
     -------
@@ -191,6 +204,9 @@ def verify(original, clipped, window, *, mode=None, approx_bound=None,
     boundary = Boundary(boundary)
     if approx_bound is not None:
         approx_bound = _bound(approx_bound)
+    if isinstance(clipped, PathClipResult) or (_is_path_data(clipped)
+                                                and _is_path_data(original)):
+        return _verify_paths(original, clipped, window, mode, approx_bound, fill, tolerance)
     if isinstance(clipped, SegmentClipResult):
         if boundary is not Boundary.CLOSED:
             raise InvalidOptionError("segments are always clipped with boundary='closed'")
@@ -217,6 +233,57 @@ def verify(original, clipped, window, *, mode=None, approx_bound=None,
     bounds = _window_bounds(window, originals.shape[0])
     return _verify_geometries(originals, delivered, source, bounds, mode, approx_bound,
                               boundary)
+
+
+def _is_path_data(value) -> bool:
+    return isinstance(value, (str, PathArrays)) or (
+        isinstance(value, (list, tuple)) and len(value) > 0
+        and all(isinstance(v, str) for v in value))
+
+
+def _as_paths(value, name: str) -> PathArrays:
+    if isinstance(value, PathArrays):
+        return value
+    if isinstance(value, str):
+        return parse_paths([value])
+    if isinstance(value, (list, tuple)) and all(isinstance(v, str) for v in value):
+        return parse_paths(list(value))
+    raise UnsupportedGeometryError(
+        f"{name} must be SVG path data (str or list of str) or a PathArrays to compare "
+        f"with clipped paths, got {type(value).__name__}")
+
+
+def _verify_paths(original, clipped, window, mode, approx_bound, fill,
+                  tolerance) -> Verification:
+    """Return the verification of clipped paths (see `verify`)."""
+    window = Window.of(window)
+    if isinstance(clipped, PathClipResult):
+        delivered_paths = clipped.paths
+        fill = clipped.fill if fill is None else fill
+        mode = Mode(clipped.mode if mode is None else mode)
+    else:
+        delivered_paths = _as_paths(clipped, "clipped")
+        mode = Mode.EXACT if mode is None else Mode(mode)
+    rule = Fill.of(fill)
+    originals_paths = _as_paths(original, "original")
+    if len(originals_paths) != len(delivered_paths):
+        raise InvalidGeometryError(
+            f"verify needs one clipped path per original: {len(delivered_paths)} clipped, "
+            f"{len(originals_paths)} originals")
+    flat = window.size * CURVE_RELATIVE_TOLERANCE if tolerance is None else _bound(tolerance)
+    if not flat > 0:
+        raise InvalidOptionError(f"tolerance must be > 0, got {tolerance!r}")
+    if mode is Mode.APPROX and approx_bound is None:
+        raise InvalidOptionError(
+            "verify in approx mode needs approx_bound (the largest deviation to accept)")
+    allowed = (approx_bound if mode is Mode.APPROX else
+               EXACT_RELATIVE_TOLERANCE * window.size) + 2.0 * flat
+    originals = paths_to_shapely(originals_paths, flat, rule)
+    delivered = paths_to_shapely(delivered_paths, flat, rule)
+    bounds = _window_bounds(window, originals.shape[0])
+    result = _verify_geometries(originals, delivered, np.arange(delivered.shape[0]), bounds,
+                                Mode.APPROX, allowed, Boundary.CLOSED)
+    return replace(result, mode=mode.value)
 
 
 def _bound(value) -> float:

@@ -41,6 +41,8 @@ __all__ = [
     "clip_path_blocks",
     "edge_breaks",
     "flatten_count",
+    "flatten_into",
+    "flatten_steps",
     "piece_values",
     "point_value",
 ]
@@ -213,8 +215,8 @@ def _solve_monotone(degree, a0, a1, a2, a3, level, u, v, gu, gv, st):
     Illinois regula falsi, safeguarded by bisection, to adjacent floats.
     """
     side = 0
+    st[C.INTERSECTIONS] += 1
     for _ in range(200):
-        st[C.INTERSECTIONS] += 1
         t = (u * gv - v * gu) / (gv - gu)
         if not (u < t < v):
             t = 0.5 * (u + v)
@@ -805,3 +807,48 @@ def clip_path_blocks(controls, degree, subpath_offsets, closed, start, subpath_s
             if not write:
                 n_segments[k] = si[_V]
                 n_subpaths[k] = si[_S]
+
+
+@parallel
+def flatten_steps(controls, degree, tol):
+    """Return how many lines flatten each segment within `tol` (`flatten_count`)."""
+    m = controls.shape[0]
+    steps = np.empty(m, dtype=np.int64)
+    for i in prange(m):
+        steps[i] = flatten_count(degree[i], controls[i, 0, 0], controls[i, 1, 0],
+                                 controls[i, 2, 0], controls[i, 3, 0], controls[i, 0, 1],
+                                 controls[i, 1, 1], controls[i, 2, 1], controls[i, 3, 1], tol)
+    return steps
+
+
+@parallel
+def flatten_into(controls, degree, tol, subpath_offsets, start, lines, closes, steps,
+                 segment_points, line_offsets, coords):
+    """Write subpath ``lines[j]`` as the polyline ``coords[line_offsets[j]:]``.
+
+    Segment i contributes ``steps[i]`` points at equal parameter steps (its end point
+    exactly last); a subpath with ``closes`` set returns to its start point.
+    """
+    for j in prange(lines.shape[0]):
+        s = lines[j]
+        pos = line_offsets[j]
+        coords[pos, 0] = start[s, 0]
+        coords[pos, 1] = start[s, 1]
+        pos += 1
+        for i in range(subpath_offsets[s], subpath_offsets[s + 1]):
+            d = degree[i]
+            n = steps[i]
+            for k in range(1, n + 1):
+                if k == n:
+                    coords[pos, 0] = controls[i, 3, 0]
+                    coords[pos, 1] = controls[i, 3, 1]
+                else:
+                    t = k / n
+                    coords[pos, 0] = point_value(d, controls[i, 0, 0], controls[i, 1, 0],
+                                                 controls[i, 2, 0], controls[i, 3, 0], t)
+                    coords[pos, 1] = point_value(d, controls[i, 0, 1], controls[i, 1, 1],
+                                                 controls[i, 2, 1], controls[i, 3, 1], t)
+                pos += 1
+        if closes[s]:
+            coords[pos, 0] = start[s, 0]
+            coords[pos, 1] = start[s, 1]

@@ -1,0 +1,341 @@
+"""Clip SVG paths (lines, quadratic and cubic Béziers, arcs) against a window.
+
+`clip_paths` is the columnar form on `PathArrays`; `clip_svg` reads and writes path
+data strings around it. `flatten_paths` turns paths into polylines (for verification
+and for the flatten-then-clip baseline). The algorithm is in `rnsca.kernels.bezier`.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from enum import Enum
+
+import numpy as np
+
+from rnsca.errors import InvalidOptionError
+from rnsca.formats.svgpath import PathArrays, parse_paths, write_paths
+from rnsca.kernels import bezier as BZ
+from rnsca.kernels import counters as C
+from rnsca.options import MAX_DEPTH_LIMIT, Backend, Method, Mode, _ChoiceEnum, _integer
+from rnsca.stats import ClipStats
+from rnsca.window import Window
+
+__all__ = [
+    "Curves",
+    "Fill",
+    "PathClipResult",
+    "clip_paths",
+    "clip_svg",
+    "flatten_paths",
+    "CURVE_RELATIVE_TOLERANCE",
+]
+
+#: Default `tolerance` of curve clipping, relative to the window's longer side: how far
+#: flattened lines may stray from the curve (``curves="flatten"``), and the size below
+#: which approx mode stops subdividing.
+CURVE_RELATIVE_TOLERANCE = 1e-6
+
+# Subpaths per block of the parallel kernel: enough work per block to pay for its
+# scratch arrays, enough blocks to balance the threads.
+_BLOCK = 64
+
+
+class Curves(_ChoiceEnum):
+    """What the clipped output is made of."""
+
+    PRESERVE = "preserve"
+    """Béziers of the input's degrees, cut where they cross the window's edges."""
+    FLATTEN = "flatten"
+    """Lines: curves flattened within `tolerance`, then clipped as lines."""
+
+
+class Fill(str, Enum):
+    """How a closed path is filled; the clip keeps the fill inside the window."""
+
+    NONZERO = "nonzero"
+    EVENODD = "evenodd"
+
+    @classmethod
+    def of(cls, value) -> Fill | None:
+        """Return the fill rule, or None (strokes) for None or "none"."""
+        if value is None or (isinstance(value, str) and value.lower() == "none"):
+            return None
+        if isinstance(value, cls):
+            return value
+        if isinstance(value, str):
+            for member in cls:
+                if member.value == value.lower():
+                    return member
+        raise InvalidOptionError(
+            f"fill must be 'nonzero', 'evenodd' or None (strokes), got {value!r}")
+
+
+@dataclass(frozen=True, slots=True)
+class PathClipResult:
+    """Clipped paths: one output path per input path (empty where nothing is left).
+
+    Attributes
+    ----------
+    paths : PathArrays
+        The clipped paths, in input order.
+    stats : ClipStats
+        ``segments_in`` counts input segments (closing edges included);
+        ``pieces_out`` output segments; fragments are pieces of segments tested by the
+        outcodes of their control points.
+    curves, fill, mode : str or None
+        The options the clip ran with (``fill`` None for strokes), for `rnsca.verify`.
+    tolerance : float
+        The clip's tolerance (flattening, approx leaves), user units.
+    """
+
+    paths: PathArrays
+    stats: ClipStats
+    curves: str = "preserve"
+    fill: str | None = None
+    mode: str = "exact"
+    tolerance: float = 0.0
+
+
+@dataclass(frozen=True, slots=True)
+class _CurveOptions:
+    curves: Curves
+    fill: Fill | None
+    mode: Mode
+    n_split: int
+    leaf_depth: int
+    tolerance: float
+
+
+def _resolve(window: Window, *, curves, fill, tolerance, method, n, max_depth, mode,
+             backend) -> _CurveOptions:
+    curves = Curves(curves)
+    fill = Fill.of(fill)
+    mode = Mode(mode)
+    if Method(method) is not Method.RNSCA:
+        raise InvalidOptionError(
+            f"curves are clipped by method='rnsca' only, got {method!r} (the line "
+            "baselines clip curves after flatten_paths)")
+    if Backend(backend) is not Backend.NUMBA:
+        raise InvalidOptionError(f"curves are clipped on backend='numba' only, got {backend!r}")
+    if isinstance(n, str):
+        if n.lower() != "auto":
+            raise InvalidOptionError(f"n must be an integer 2..64 or 'auto', got {n!r}")
+        n_split = BZ.CURVE_N_AUTO
+    else:
+        n_split = _integer("n", n, 2, 64)
+    if max_depth is None:
+        depth = BZ.EXACT_LEAF_DEPTH if (mode is Mode.EXACT and curves is Curves.PRESERVE) \
+            else MAX_DEPTH_LIMIT
+    else:
+        depth = _integer("max_depth", max_depth, 0, MAX_DEPTH_LIMIT)
+    if tolerance is None:
+        tol = window.size * CURVE_RELATIVE_TOLERANCE
+    else:
+        if isinstance(tolerance, bool):
+            raise InvalidOptionError(f"tolerance must be a positive number, got {tolerance!r}")
+        try:
+            tol = float(tolerance)
+        except (TypeError, ValueError):
+            raise InvalidOptionError(
+                f"tolerance must be a positive number, got {tolerance!r}") from None
+        if not (tol > 0 and math.isfinite(tol)):
+            raise InvalidOptionError(f"tolerance must be a positive finite number, got "
+                                     f"{tolerance!r}")
+    return _CurveOptions(curves, fill, mode, n_split, depth, tol)
+
+
+def clip_paths(paths: PathArrays, window, *, curves="preserve", fill=None, tolerance=None,
+               method="rnsca", n="auto", max_depth=None, mode="exact",
+               backend="numba") -> PathClipResult:
+    """Return paths clipped to a rectangular window, keeping curves as curves.
+
+    Parameters
+    ----------
+    paths : PathArrays
+        Paths of lines, quadratic and cubic Béziers (`rnsca.formats.svgpath`).
+    window : Window or sequence of 4 floats
+        The closed window ``(xmin, ymin, xmax, ymax)``.
+    curves : {"preserve", "flatten"}
+        "preserve": visible parts as Béziers of the same degree, cut exactly where
+        they cross an edge (to about 1e-15 of the parameter, ends snapped onto the
+        edge). "flatten": lines within `tolerance` of the curves.
+    fill : {None, "nonzero", "evenodd"}
+        None: paths are strokes; each visible part becomes an open subpath (a closed
+        subpath visible whole stays closed). A fill rule: each subpath is closed and
+        gives one closed subpath whose fill inside the window, under that rule, is
+        the input's (outside parts are replaced by runs along the window's edge);
+        subpaths that leave nothing are dropped.
+    tolerance : float, optional
+        Flattening accuracy and approx mode's smallest piece, in user units; default
+        `CURVE_RELATIVE_TOLERANCE` times the window's longer side.
+    method, n, max_depth, mode, backend
+        RNSCA's options: N pieces per split (``"auto"``: 4), deepest level (default:
+        2 in exact preserve mode, where leaves are solved exactly; 32 otherwise),
+        ``mode="approx"`` drops undecided leaves (no root finding; the output stays
+        inside the window).
+
+    Returns
+    -------
+    PathClipResult
+
+    Raises
+    ------
+    InvalidWindowError, InvalidOptionError
+        (ValueError) naming the bad value.
+    """
+    window = Window.of(window)
+    options = _resolve(window, curves=curves, fill=fill, tolerance=tolerance, method=method,
+                       n=n, max_depth=max_depth, mode=mode, backend=backend)
+    n_subpaths = paths.closed.shape[0]
+    subpath_source = np.repeat(np.arange(len(paths), dtype=np.int64),
+                               np.diff(paths.path_offsets))
+    n_blocks = max(1, -(-n_subpaths // _BLOCK))
+    counters = np.zeros((n_blocks, C.WIDTH), dtype=np.int64)
+    n_segments = np.zeros(n_subpaths, dtype=np.int64)
+    n_out = np.zeros(n_subpaths, dtype=np.int64)
+    args = (paths.controls, paths.degree, paths.subpath_offsets, paths.closed, paths.start,
+            subpath_source, *window.bounds, options.fill is not None,
+            options.curves is Curves.FLATTEN, options.mode is Mode.EXACT, options.n_split,
+            options.leaf_depth, options.tolerance, _BLOCK)
+    nothing = np.empty(0, dtype=np.int64)
+    BZ.clip_path_blocks(*args, False, nothing, nothing, np.empty((0, 4, 2)),
+                        np.empty(0, np.int8), nothing, np.empty((0, 2)), np.empty(0, bool),
+                        nothing, n_segments, n_out, counters)
+    segment_start = _exclusive_sum(n_segments)
+    subpath_start = _exclusive_sum(n_out)
+    m = int(segment_start[-1])
+    k = int(subpath_start[-1])
+    out_ctrl = np.empty((m, 4, 2))
+    out_deg = np.empty(m, dtype=np.int8)
+    out_first = np.empty(k + 1, dtype=np.int64)
+    out_first[k] = m
+    out_start = np.empty((k, 2))
+    out_closed = np.empty(k, dtype=bool)
+    out_from = np.empty(k, dtype=np.int64)
+    BZ.clip_path_blocks(*args, True, segment_start, subpath_start, out_ctrl, out_deg,
+                        out_first, out_start, out_closed, out_from, n_segments, n_out,
+                        np.zeros((n_blocks, C.WIDTH), dtype=np.int64))
+    kept = out_from >= 0
+    if not kept.all():  # entries freed by joining the two ends of a closed stroke
+        out_first = np.append(out_first[:-1][kept], m)
+        out_start, out_closed, out_from = out_start[kept], out_closed[kept], out_from[kept]
+    path_offsets = _exclusive_sum(np.bincount(out_from, minlength=len(paths)))
+    clipped = PathArrays(controls=out_ctrl, degree=out_deg, subpath_offsets=out_first,
+                         closed=out_closed, start=out_start, path_offsets=path_offsets)
+    segments_in = paths.degree.shape[0] + _closing_edges(paths, options.fill is not None)
+    non_empty = int((np.diff(path_offsets) > 0).sum())
+    stats = ClipStats.from_counters(counters, segments_in, m, geometries_in=len(paths),
+                                    geometries_out=non_empty,
+                                    vertices_in=int(paths.controls.shape[0]),
+                                    vertices_out=m)
+    return PathClipResult(clipped, stats, options.curves.value,
+                          None if options.fill is None else options.fill.value,
+                          options.mode.value, options.tolerance)
+
+
+def _closing_edges(paths: PathArrays, fill: bool) -> int:
+    """Return how many subpaths have a closing edge that is clipped as a segment."""
+    counts = np.diff(paths.subpath_offsets)
+    has = counts > 0
+    if not fill:
+        has &= paths.closed
+    ends = paths.controls[np.maximum(paths.subpath_offsets[1:] - 1, 0), 3]
+    return int((has & (ends != paths.start).any(axis=1)).sum())
+
+
+def _exclusive_sum(counts: np.ndarray) -> np.ndarray:
+    out = np.zeros(counts.shape[0] + 1, dtype=np.int64)
+    np.cumsum(counts, out=out[1:])
+    return out
+
+
+def clip_svg(d, window, *, curves="preserve", fill=None, tolerance=None, precision=None,
+             **options):
+    """Return SVG path data clipped to a rectangular window, and the stats.
+
+    Parameters
+    ----------
+    d : str or sequence of str
+        Path data (the ``d`` attribute), or many (clipped in one parallel call).
+    window : Window or sequence of 4 floats
+        The closed window ``(xmin, ymin, xmax, ymax)``, in the path's user units.
+    curves, fill, tolerance, **options
+        As for `clip_paths` (``method``, ``n``, ``max_depth``, ``mode``,
+        ``backend``). Arcs are read as cubics within `tolerance` (default: 1e-9 of
+        each arc's radius).
+    precision : int or None
+        Significant digits of the written numbers; None (default) writes each number
+        exactly (shortest round-trip form).
+
+    Returns
+    -------
+    (str or list of str, ClipStats)
+        The clipped path data in the form `d` came in (``""`` where nothing is left).
+
+    Raises
+    ------
+    ParseError
+        Malformed path data: the message names the path (for a list), the character
+        position and what was expected.
+    InvalidWindowError, InvalidOptionError, InvalidGeometryError
+        (ValueError) naming the bad value.
+
+    Examples
+    --------
+    >>> d = "M-5 5 C0 10 10 10 15 5"
+    >>> clip_svg(d, (0, 0, 10, 10), precision=6)[0]
+    'M0 7.97398C3.17644 9.00867 6.82356 9.00867 10 7.97398'
+    >>> clip_svg(d, (0, 0, 10, 10), fill="nonzero", precision=6)[0]
+    'M0 5V7.97398C3.17644 9.00867 6.82356 9.00867 10 7.97398V5H0Z'
+    """
+    single = isinstance(d, str)
+    if not single and not isinstance(d, Sequence):
+        raise TypeError(f"d must be a str or a sequence of str, not {type(d).__name__}")
+    paths = parse_paths([d] if single else list(d), tolerance=tolerance)
+    result = clip_paths(paths, window, curves=curves, fill=fill, tolerance=tolerance,
+                        **options)
+    written = write_paths(result.paths, precision=precision)
+    return (written[0] if single else written), result.stats
+
+
+def flatten_paths(paths: PathArrays, tolerance: float, *, close: bool = False):
+    """Return the paths as polylines within `tolerance` of every curve.
+
+    Parameters
+    ----------
+    paths : PathArrays
+    tolerance : float
+        Largest distance from a curve to its lines (user units), > 0.
+    close : bool
+        Close every subpath (fill): the polyline returns to the subpath's start;
+        otherwise only subpaths marked closed do.
+
+    Returns
+    -------
+    coords : ndarray, shape (V, 2)
+    line_offsets : ndarray of int64, shape (L + 1,)
+        One polyline per subpath with at least one segment.
+    line_path : ndarray of int64, shape (L,)
+        The path of each polyline.
+    """
+    if not (tolerance > 0 and math.isfinite(tolerance)):
+        raise InvalidOptionError(f"tolerance must be a positive finite number, got "
+                                 f"{tolerance!r}")
+    sub = paths.subpath_offsets
+    steps = BZ.flatten_steps(paths.controls, paths.degree, float(tolerance))
+    segment_points = _exclusive_sum(steps)
+    counts = np.diff(sub)
+    has_line = counts > 0
+    closes = has_line & (paths.closed | close)
+    ends = paths.controls[np.maximum(sub[1:] - 1, 0), 3]
+    closes &= (ends != paths.start).any(axis=1)
+    points = segment_points[sub[1:]] - segment_points[sub[:-1]] + has_line + closes
+    line_offsets = _exclusive_sum(points[has_line])
+    coords = np.empty((int(line_offsets[-1]), 2))
+    BZ.flatten_into(paths.controls, paths.degree, float(tolerance), sub, paths.start,
+                    np.flatnonzero(has_line), closes, steps, segment_points, line_offsets,
+                    coords)
+    subpath_path = np.repeat(np.arange(len(paths), dtype=np.int64), np.diff(paths.path_offsets))
+    return coords, line_offsets, subpath_path[has_line]

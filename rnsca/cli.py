@@ -1,9 +1,10 @@
 """The ``rnsca`` command line.
 
 Commands: ``clip`` (GeoJSON documents), ``segments`` (.npy arrays of segments),
-``backends`` and ``warm-up``. Errors print one line, ``error: <what and where>``, on
-stderr and exit with 2 for a wrong command line (options, window, the kind of input) or
-1 for input that cannot be clipped (not JSON, invalid GeoJSON, unreadable files).
+``backends``, ``warm-up`` and ``serve`` (the HTTP service; needs the ``service`` extra).
+Errors print one line, ``error: <what and where>``, on stderr and exit with 2 for a wrong
+command line (options, window, the kind of input) or 1 for input that cannot be clipped
+(not JSON, invalid GeoJSON, unreadable files).
 """
 
 from __future__ import annotations
@@ -64,6 +65,34 @@ def warm_up() -> None:
         if hasattr(engine, "warm_up"):
             engine.warm_up()
     typer.echo("kernels ready")
+
+
+@app.command()
+def serve(
+    host: Annotated[str | None, typer.Option(help="address to listen on [default: "
+                                                  "RNSCA_HOST or 127.0.0.1]")] = None,
+    port: Annotated[int | None, typer.Option(help="TCP port [default: RNSCA_PORT or "
+                                                  "8000]")] = None,
+    workers: Annotated[int | None, typer.Option(help="worker processes [default: "
+                                                     "RNSCA_WORKERS or 1]")] = None,
+) -> None:
+    """Run the HTTP service under uvicorn (other settings from RNSCA_* variables)."""
+    import os
+
+    try:
+        from service.config import Settings
+        from service.serve import serve as run
+    except ImportError as exc:
+        _fail(f"the service needs the service extra: pip install 'rnsca[service]' ({exc})",
+              EXIT_USAGE)
+    for name, value in (("HOST", host), ("PORT", port), ("WORKERS", workers)):
+        if value is not None:  # the workers build their app from the environment
+            os.environ[f"RNSCA_{name}"] = str(value)
+    try:
+        settings = Settings()
+    except ValueError as exc:
+        _fail(f"invalid settings: {exc}", EXIT_USAGE)
+    run(settings)
 
 
 @app.command()

@@ -61,8 +61,8 @@ def as_segments(segments) -> np.ndarray:
     ------
     InvalidGeometryError
         (a ValueError) for another shape or dtype, a NaN or infinite coordinate, or a
-        segment whose coordinate differences overflow float64; the message names the
-        first bad row.
+        segment whose coordinate differences overflow float64; the message (and the
+        ``row`` attribute) names the first bad row.
     """
     try:
         array = np.asarray(segments)
@@ -83,10 +83,13 @@ def as_segments(segments) -> np.ndarray:
     if row >= 0:
         values = array[row].tolist()
         if not np.isfinite(array[row]).all():
-            raise InvalidGeometryError(f"segment {row} has a non-finite coordinate: {values}")
-        raise InvalidGeometryError(
-            f"segment {row} spans more than float64 can hold (x1 - x0 or y1 - y0 overflows): "
-            f"{values}")
+            error = InvalidGeometryError(f"segment {row} has a non-finite coordinate: {values}")
+        else:
+            error = InvalidGeometryError(
+                f"segment {row} spans more than float64 can hold (x1 - x0 or y1 - y0 "
+                f"overflows): {values}")
+        error.row = row  # callers name it in their own terms (the service: a JSON path)
+        raise error
     return array
 
 

@@ -1,0 +1,94 @@
+"""Settings of the service: the one place that reads the environment (prefix ``RNSCA_``)."""
+
+from __future__ import annotations
+
+from typing import Annotated, Literal
+
+from pydantic import Field, PositiveFloat, PositiveInt, field_validator, model_validator
+from pydantic_settings import BaseSettings, NoDecode, SettingsConfigDict
+
+from rnsca.options import Backend
+
+__all__ = ["Settings", "LogLevel", "ThreadingLayer"]
+
+LogLevel = Literal["critical", "error", "warning", "info", "debug"]
+#: Numba threading layers the service accepts. ``threadsafe`` lets Numba pick one that
+#: allows concurrent callers (``tbb`` or ``omp``); ``workqueue`` is not thread-safe, so
+#: the service then serializes its parallel kernel calls (see `service.runner`).
+ThreadingLayer = Literal["threadsafe", "tbb", "omp", "workqueue"]
+
+
+class Settings(BaseSettings):
+    """Everything an operator can set, from ``RNSCA_*`` variables (or a ``.env`` file).
+
+    Invalid values stop the process at start-up, before it listens.
+
+    Examples
+    --------
+    >>> Settings(max_vertices=10).max_vertices
+    10
+    >>> Settings(port=0)  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    pydantic_core._pydantic_core.ValidationError: 1 validation error for Settings
+    ...
+    """
+
+    model_config = SettingsConfigDict(env_prefix="RNSCA_", env_file=".env",
+                                      env_file_encoding="utf-8", extra="ignore")
+
+    host: str = "127.0.0.1"
+    """Address `rnsca serve` listens on (the Docker image sets 0.0.0.0)."""
+    port: int = Field(8000, ge=1, le=65535)
+    """TCP port."""
+    workers: PositiveInt = 1
+    """uvicorn worker processes; each compiles nothing (kernels load from the cache)."""
+    max_body_bytes: PositiveInt = 64 * 2**20
+    """Request bodies larger than this are refused with 413 while they are read."""
+    max_vertices: PositiveInt = 5_000_000
+    """Largest input, in vertices (a segment counts 2); more gives 413."""
+    work_budget: PositiveInt = 500_000_000
+    """Largest estimated work of one request, in fragments evaluated (about 20 ns each on
+    one core, see `service.budget`); more gives 422 before any clipping."""
+    request_time_limit: PositiveFloat = 30.0
+    """Seconds a request may wait for and use a clipping thread; past it: 503."""
+    clip_threads: PositiveInt = 2
+    """Requests clipped at once (more wait their turn); kernels are parallel inside each."""
+    verify_max_vertices: int = Field(100_000, ge=0)
+    """``verify`` defaults to true for inputs of at most this many vertices."""
+    default_backend: Backend = Backend.NUMBA
+    """Backend of requests that name none."""
+    cors_origins: Annotated[list[str], NoDecode] = []
+    """Origins allowed by CORS, comma-separated (``*`` for any); empty: no CORS headers."""
+    gzip_min_bytes: PositiveInt = 1024
+    """Responses at least this large are gzip-compressed when the client accepts it."""
+    log_level: LogLevel = "info"
+    """Level of the JSON log lines (one per request at ``info``)."""
+    warm_up: bool = True
+    """Compile (or load from the cache) the kernels before `/readyz` answers 200."""
+    threading_layer: ThreadingLayer = "threadsafe"
+    """Numba threading layer, applied unless ``NUMBA_THREADING_LAYER`` is set."""
+    graceful_shutdown_seconds: PositiveFloat = 60.0
+    """On SIGTERM, how long requests in flight may take to finish."""
+
+    @field_validator("cors_origins", mode="before")
+    @classmethod
+    def _split_origins(cls, value):
+        if isinstance(value, str):
+            return [part.strip() for part in value.split(",") if part.strip()]
+        return value
+
+    @field_validator("log_level", mode="before")
+    @classmethod
+    def _lower_level(cls, value):
+        return value.lower() if isinstance(value, str) else value
+
+    @model_validator(mode="after")
+    def _consistent(self) -> Settings:
+        if self.verify_max_vertices > self.max_vertices:
+            raise ValueError(f"verify_max_vertices ({self.verify_max_vertices}) exceeds "
+                             f"max_vertices ({self.max_vertices})")
+        if self.graceful_shutdown_seconds < self.request_time_limit:
+            raise ValueError("graceful_shutdown_seconds must be at least request_time_limit, "
+                             "so a request in flight at SIGTERM can finish")
+        return self

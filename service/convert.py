@@ -1,0 +1,253 @@
+"""The conversion layer: request bytes in, library call, response bytes out.
+
+Each public function runs in a worker thread (`service.runner.ClipRunner`): it validates
+the request body with its pydantic model (so parsing a large body does not hold the event
+loop either), checks the limits (`service.budget`), calls the library, optionally verifies
+the result against Shapely, and serializes the answer with orjson. It knows nothing of
+geometry beyond what the library returns.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass, field
+
+import numpy as np
+import orjson
+
+import rnsca
+from rnsca.backends.registry import available_backends
+from rnsca.clip import as_segments
+from rnsca.errors import BackendUnavailableError, InvalidGeometryError, LimitExceededError
+from rnsca.options import Mode
+from rnsca.stats import ClipStats
+from rnsca.window import Window
+from service.budget import (
+    check_vertices,
+    check_work,
+    geometry_vertex_cap,
+    segment_work,
+    subdivision_cost,
+)
+from service.config import Settings
+from service.errors import (
+    InvalidBodyError,
+    NotImplementedYetError,
+    TooManyVerticesError,
+    WorkOverBudgetError,
+)
+from service.schemas import (
+    BackendName,
+    ClipGeoJSONRequest,
+    ClipOptions,
+    ClipSegmentsRequest,
+    ClipSVGRequest,
+)
+
+__all__ = ["Outcome", "clip_geojson", "clip_svg", "clip_segments_json",
+           "clip_segments_binary", "svg_available", "backend_report", "SEGMENT_BYTES"]
+
+#: One binary segment: four little-endian float64.
+SEGMENT_BYTES = 32
+_JSON = orjson.OPT_SERIALIZE_NUMPY
+
+
+@dataclass
+class Outcome:
+    """A response to send: its body, media type, extra headers, and the clip's stats."""
+
+    content: bytes
+    stats: ClipStats | None
+    media_type: str = "application/json"
+    headers: dict = field(default_factory=dict)
+
+
+def backend_report() -> list[dict]:
+    """Return each backend the API names, whether it is present here, and why not."""
+    present = {kind.value for kind in available_backends()}
+    report = []
+    for name in BackendName:
+        entry = {"name": name.value, "available": name.value in present}
+        if name.value in present:
+            entry["devices"] = ["cpu"]
+        else:
+            entry["reason"] = _missing_reason(name)
+        report.append(entry)
+    return report
+
+
+def _missing_reason(name: BackendName) -> str:
+    return (f"backend {name.value!r} is not part of this build of rnsca "
+            f"(available: {', '.join(k.value for k in available_backends())})")
+
+
+def _library_options(options: ClipOptions, settings: Settings) -> dict:
+    """Return the keyword arguments of a library call; refuse a backend not present."""
+    backend = options.backend.value if options.backend else settings.default_backend.value
+    if backend not in {kind.value for kind in available_backends()}:
+        raise BackendUnavailableError(_missing_reason(BackendName(backend)))
+    return dict(method=options.method, n=options.n, max_depth=options.max_depth,
+                tolerance=options.tolerance, mode=options.mode, backend=backend)
+
+
+def _verify_wanted(asked: bool | None, vertices: int, settings: Settings) -> bool:
+    return asked if asked is not None else vertices <= settings.verify_max_vertices
+
+
+def _dict_or_none(value):
+    return None if value is None else value.to_dict()
+
+
+# --- GeoJSON -------------------------------------------------------------------------
+
+
+def clip_geojson(body: bytes, settings: Settings) -> Outcome:
+    """Answer ``POST /v1/clip/geojson``."""
+    request = ClipGeoJSONRequest.model_validate_json(body)
+    window = Window(*request.window)
+    options = request.options
+    arguments = _library_options(options, settings)
+    cap, by_budget = geometry_vertex_cap(options, window, settings.max_vertices,
+                                         settings.work_budget)
+    try:
+        clipped, stats = rnsca.clip_geojson(
+            request.geojson, window, keep_empty=options.keep_empty, max_vertices=cap,
+            arrays=True, boundary=options.boundary, check_validity=options.check_validity,
+            **arguments)
+    except LimitExceededError as exc:
+        if by_budget:
+            per_vertex = 1 + subdivision_cost(options, window, None)
+            raise WorkOverBudgetError(
+                f"{exc}: with these options a vertex may cost up to {per_vertex} fragments, "
+                f"so the work budget of {settings.work_budget} allows {cap} vertices; lower "
+                "options.max_depth or options.n, or use exact mode with no tolerance",
+                budget=settings.work_budget) from None
+        raise TooManyVerticesError(f"{exc} (this server's max_vertices)",
+                                   limit=cap) from None
+    except InvalidGeometryError as exc:
+        path = getattr(exc, "path", None)
+        if path is not None:  # a JSON path inside the document: make it one in the body
+            exc.path = "geojson" + (path if not path or path.startswith("[") else "." + path)
+        raise
+    verification = None
+    approx_unbounded = options.mode is Mode.APPROX and request.approx_bound is None
+    if _verify_wanted(request.verify, stats.vertices_in, settings) and not (
+            request.verify is None and approx_unbounded):
+        verification = rnsca.verify(request.geojson, clipped, window, mode=options.mode,
+                                    approx_bound=request.approx_bound,
+                                    boundary=options.boundary)
+    payload = {"geojson": clipped, "stats": stats.to_dict(),
+               "verification": _dict_or_none(verification)}
+    return Outcome(orjson.dumps(payload, option=_JSON), stats)
+
+
+# --- Segments ------------------------------------------------------------------------
+
+
+def _clip_segments(array: np.ndarray, window: Window, options: ClipOptions,
+                   verify: bool | None, settings: Settings):
+    check_vertices(2 * array.shape[0], settings.max_vertices)
+    arguments = _library_options(options, settings)
+    segments = as_segments(array)
+    check_work(segment_work(segments, window, options), settings.work_budget)
+    result = rnsca.clip_segments(segments, window, **arguments)
+    verification = None
+    if _verify_wanted(verify, 2 * segments.shape[0], settings):
+        verification = rnsca.verify(segments, result, window)
+    return result, verification
+
+
+def clip_segments_json(body: bytes, settings: Settings) -> Outcome:
+    """Answer ``POST /v1/clip/segments`` with a JSON body."""
+    request = ClipSegmentsRequest.model_validate_json(body)
+    window = Window(*request.window)
+    array = np.array(request.segments, dtype=np.float64).reshape(-1, 4)
+    try:
+        result, verification = _clip_segments(array, window, request.options,
+                                               request.verify, settings)
+    except InvalidGeometryError as exc:
+        if getattr(exc, "row", None) is not None:
+            exc.path = f"segments[{exc.row}]"
+        raise
+    payload = {"segments": result.segments, "source": result.source, "t": result.t,
+               "stats": result.stats.to_dict(), "verification": _dict_or_none(verification),
+               "method": result.method.value, "mode": result.mode.value,
+               "backend": result.backend.value}
+    return Outcome(orjson.dumps(payload, option=_JSON), result.stats)
+
+
+def clip_segments_binary(body: bytes, window: Window, options: ClipOptions,
+                         verify: bool | None, settings: Settings) -> Outcome:
+    """Answer ``POST /v1/clip/segments`` with an ``application/octet-stream`` body.
+
+    In: little-endian float64 rows ``x0, y0, x1, y1``. Out: the pieces as float64 rows
+    of 4, then their source indices as int64, then their parameter intervals as float64
+    rows of 2, all little-endian; the header ``X-Rnsca-Pieces`` gives the number m of
+    pieces (so the parts are 32 m, 8 m and 16 m bytes), ``X-Rnsca-Stats`` and
+    ``X-Rnsca-Verification`` carry the stats and the verification as JSON.
+    """
+    if len(body) % SEGMENT_BYTES:
+        raise InvalidBodyError(
+            f"the body has {len(body)} bytes, not a multiple of {SEGMENT_BYTES}: send "
+            "segments as rows of four little-endian float64 (x0, y0, x1, y1)")
+    # A writable copy: a read-only array would make Numba compile another specialization.
+    array = np.frombuffer(bytearray(body), dtype="<f8").reshape(-1, 4)
+    result, verification = _clip_segments(array, window, options, verify, settings)
+    content = b"".join((result.segments.astype("<f8", copy=False).tobytes(),
+                        result.source.astype("<i8", copy=False).tobytes(),
+                        result.t.astype("<f8", copy=False).tobytes()))
+    headers = {
+        "X-Rnsca-Pieces": str(len(result)),
+        "X-Rnsca-Layout": "segments:<f8[m,4];source:<i8[m];t:<f8[m,2]",
+        "X-Rnsca-Stats": orjson.dumps(result.stats.to_dict()).decode(),
+        "X-Rnsca-Method": result.method.value,
+        "X-Rnsca-Mode": result.mode.value,
+        "X-Rnsca-Backend": result.backend.value,
+    }
+    if verification is not None:
+        headers["X-Rnsca-Verification"] = orjson.dumps(verification.to_dict()).decode()
+    return Outcome(content, result.stats, "application/octet-stream", headers)
+
+
+# --- SVG -----------------------------------------------------------------------------
+
+_NUMBER = re.compile(rb"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
+
+
+def svg_available() -> bool:
+    """Return whether the library has SVG path clipping (`rnsca.clip_svg`)."""
+    return callable(getattr(rnsca, "clip_svg", None))
+
+
+def clip_svg(body: bytes, settings: Settings) -> Outcome:
+    """Answer ``POST /v1/clip/svg`` through `rnsca.clip_svg`.
+
+    Until the library has ``clip_svg`` a valid request is answered 501 (a bad one still
+    gets its 422): the one place to change when it lands is `_call_clip_svg`.
+    """
+    request = ClipSVGRequest.model_validate_json(body)
+    window = Window(*request.window)
+    arguments = _library_options(request.options, settings)
+    # Each vertex is two numbers: bound the input before the library reads it.
+    vertices = sum(len(_NUMBER.findall(d.encode())) for d in request.paths) // 2
+    check_vertices(vertices, settings.max_vertices)
+    check_work(vertices * (1 + subdivision_cost(request.options, window, None)),
+               settings.work_budget)
+    paths, stats, verification = _call_clip_svg(request, window, arguments, vertices, settings)
+    payload = {"paths": paths, "stats": stats.to_dict(),
+               "verification": _dict_or_none(verification)}
+    return Outcome(orjson.dumps(payload, option=_JSON), stats)
+
+
+def _call_clip_svg(request: ClipSVGRequest, window: Window, arguments: dict, vertices: int,
+                   settings: Settings):
+    """Return ``(paths, stats, verification)`` from `rnsca.clip_svg` (501 until it exists)."""
+    if not svg_available():
+        raise NotImplementedYetError(
+            "SVG path clipping is not in this release of rnsca yet (rnsca.clip_svg); "
+            "the request was valid. See /v1/capabilities (svg) for when it is.")
+    options = request.options
+    paths, stats = rnsca.clip_svg(request.paths, window, curves=options.curves,
+                                  fill=options.fill, **arguments)
+    verification = None  # TODO(issue 5 follow-up): verify SVG output once verify speaks it
+    return list(paths), stats, verification

@@ -1,0 +1,108 @@
+"""Put the app together: settings, thread pool, middleware, handlers, routers.
+
+Run it with ``rnsca serve`` or ``python -m service`` (settings from ``RNSCA_*``), or
+``uvicorn --factory service.main:create_app``.
+"""
+
+from __future__ import annotations
+
+import asyncio
+from contextlib import asynccontextmanager
+
+from fastapi import FastAPI
+from fastapi.openapi.utils import get_openapi
+from starlette.middleware import Middleware
+from starlette.middleware.cors import CORSMiddleware
+from starlette.middleware.gzip import GZipMiddleware
+
+import rnsca
+from rnsca.backends.registry import available_backends, get_backend
+from service.config import Settings
+from service.errors import install_handlers
+from service.logs import configure_logging
+from service.metrics import Metrics
+from service.middleware import AccessMiddleware, BodyLimitMiddleware
+from service.routes import api_router
+from service.runner import ClipRunner
+from service.schemas import REQUEST_MODELS
+
+__all__ = ["create_app"]
+
+_DESCRIPTION = """\
+Clip geometry against an axis-aligned window with the Recursive N-Subdivision Clipping
+Algorithm (RNSCA): GeoJSON, SVG path data and line segments (JSON or binary). Every
+answer carries the clipping statistics and, on request (by default for small inputs), the
+comparison with Shapely's exact intersection. Errors are RFC 9457 problem documents
+(`application/problem+json`).
+"""
+
+
+def create_app(settings: Settings | None = None) -> FastAPI:
+    """Return the service's ASGI app, configured by `settings` (default: the environment).
+
+    Examples
+    --------
+    >>> app = create_app(Settings(warm_up=False))
+    >>> sorted(r.path for r in app.routes if r.path.startswith("/v1"))
+    ['/v1/capabilities', '/v1/clip/geojson', '/v1/clip/segments', '/v1/clip/svg']
+    """
+    settings = settings or Settings()
+    configure_logging(settings.log_level)
+    runner = ClipRunner(settings.clip_threads, settings.request_time_limit)
+    runner.prepare(settings.threading_layer)
+    metrics = Metrics()
+
+    @asynccontextmanager
+    async def lifespan(app: FastAPI):
+        if settings.warm_up:
+            backends = [get_backend(kind) for kind in available_backends()]
+            warming = asyncio.create_task(runner.start(backends))
+        else:
+            warming = None
+            runner.ready.set()
+        try:
+            yield
+        finally:
+            if warming is not None:
+                await warming  # a thread cannot be stopped; let it finish
+            await asyncio.get_running_loop().run_in_executor(None, runner.shutdown)
+
+    middleware = [Middleware(AccessMiddleware, metrics=metrics),
+                  Middleware(GZipMiddleware, minimum_size=settings.gzip_min_bytes)]
+    if settings.cors_origins:
+        middleware.append(Middleware(
+            CORSMiddleware, allow_origins=settings.cors_origins,
+            allow_methods=["GET", "POST"], allow_headers=["Content-Type"],
+            expose_headers=["X-Rnsca-Pieces", "X-Rnsca-Layout", "X-Rnsca-Stats",
+                            "X-Rnsca-Verification"]))
+    middleware.append(Middleware(BodyLimitMiddleware, max_bytes=settings.max_body_bytes))
+
+    app = FastAPI(title="rnsca", version=rnsca.__version__, description=_DESCRIPTION,
+                  lifespan=lifespan, middleware=middleware, docs_url="/docs",
+                  redoc_url=None, openapi_url="/openapi.json")
+    app.state.settings = settings
+    app.state.runner = runner
+    app.state.metrics = metrics
+    install_handlers(app)
+    app.include_router(api_router)
+    app.openapi = lambda: _openapi(app)
+    return app
+
+
+def _openapi(app: FastAPI) -> dict:
+    """Return the OpenAPI schema, with the request models the routes validate themselves.
+
+    The clip routes read their bodies as bytes and validate them in the worker thread
+    (`service.convert`), so FastAPI does not see those models: they are added here.
+    """
+    if app.openapi_schema is None:
+        schema = get_openapi(title=app.title, version=app.version,
+                             description=app.description, routes=app.routes)
+        components = schema.setdefault("components", {}).setdefault("schemas", {})
+        for model in REQUEST_MODELS:
+            found = model.model_json_schema(ref_template="#/components/schemas/{model}")
+            for name, definition in found.pop("$defs", {}).items():
+                components.setdefault(name, definition)
+            components[model.__name__] = found
+        app.openapi_schema = schema
+    return app.openapi_schema

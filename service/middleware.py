@@ -1,0 +1,121 @@
+"""Pure ASGI middleware: the request body limit, and the access log with its metrics."""
+
+from __future__ import annotations
+
+import logging
+import time
+
+from service.errors import BodyTooLargeError, problem_bytes
+from service.logs import ACCESS_LOGGER
+from service.metrics import Metrics
+
+__all__ = ["BodyLimitMiddleware", "AccessMiddleware"]
+
+_access = logging.getLogger(ACCESS_LOGGER)
+
+
+async def _send_problem(send, status: int, slug: str, title: str, detail: str,
+                        instance: str, **extensions) -> None:
+    body = problem_bytes(status, slug, title, detail, instance=instance, **extensions)
+    await send({"type": "http.response.start", "status": status,
+                "headers": [(b"content-type", b"application/problem+json"),
+                            (b"content-length", str(len(body)).encode()),
+                            (b"connection", b"close")]})
+    await send({"type": "http.response.body", "body": body})
+
+
+class BodyLimitMiddleware:
+    """Refuse bodies over `max_bytes` with 413, before the application reads them whole.
+
+    A ``Content-Length`` over the limit is refused at once, unread. A body without one
+    (chunked) is counted as it arrives and refused at the first chunk past the limit:
+    `BodyTooLargeError` is raised from ``receive`` inside the route, where the service's
+    handler answers it (and, should the response not have started otherwise, here).
+    """
+
+    def __init__(self, app, max_bytes: int) -> None:
+        self.app = app
+        self.max_bytes = max_bytes
+
+    async def __call__(self, scope, receive, send):  # noqa: D102
+        if scope["type"] != "http":
+            return await self.app(scope, receive, send)
+        limit = self.max_bytes
+        for name, value in scope["headers"]:
+            if name == b"content-length" and value.isdigit() and int(value) > limit:
+                return await _send_problem(
+                    send, 413, BodyTooLargeError.slug, BodyTooLargeError.title,
+                    f"the body has {int(value)} bytes, more than this server's limit of "
+                    f"{limit}", scope["path"], limit=limit)
+        received = 0
+        started = False
+
+        async def limited_receive():
+            nonlocal received
+            message = await receive()
+            if message["type"] == "http.request":
+                received += len(message.get("body", b""))
+                if received > limit:
+                    raise BodyTooLargeError(
+                        f"the body is longer than this server's limit of {limit} bytes",
+                        headers={"Connection": "close"}, limit=limit)
+            return message
+
+        async def tracking_send(message):
+            nonlocal started
+            if message["type"] == "http.response.start":
+                started = True
+            await send(message)
+
+        try:
+            await self.app(scope, limited_receive, tracking_send)
+        except BodyTooLargeError as exc:
+            if started:
+                raise
+            await _send_problem(send, 413, exc.slug, exc.title, exc.detail, scope["path"],
+                                limit=limit)
+
+
+class AccessMiddleware:
+    """Log one JSON line per request and count it in the metrics.
+
+    The line has ``method``, ``path``, ``route`` (the matched template), ``status``,
+    ``duration_ms``, ``request_bytes`` and ``response_bytes`` (as sent, so after gzip).
+    """
+
+    def __init__(self, app, metrics: Metrics) -> None:
+        self.app = app
+        self.metrics = metrics
+
+    async def __call__(self, scope, receive, send):  # noqa: D102
+        if scope["type"] != "http":
+            return await self.app(scope, receive, send)
+        started = time.perf_counter()
+        status, request_bytes, response_bytes = 500, 0, 0
+
+        async def counting_receive():
+            nonlocal request_bytes
+            message = await receive()
+            if message["type"] == "http.request":
+                request_bytes += len(message.get("body", b""))
+            return message
+
+        async def counting_send(message):
+            nonlocal status, response_bytes
+            if message["type"] == "http.response.start":
+                status = message["status"]
+            elif message["type"] == "http.response.body":
+                response_bytes += len(message.get("body", b""))
+            await send(message)
+
+        try:
+            await self.app(scope, counting_receive, counting_send)
+        finally:
+            seconds = time.perf_counter() - started
+            route = scope.get("route")
+            template = getattr(route, "path", None) or "<unmatched>"
+            self.metrics.observe_request(scope["method"], template, status, seconds)
+            _access.info("request", extra={"fields": {
+                "method": scope["method"], "path": scope["path"], "route": template,
+                "status": status, "duration_ms": round(seconds * 1000, 3),
+                "request_bytes": request_bytes, "response_bytes": response_bytes}})

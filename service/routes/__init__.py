@@ -1,0 +1,15 @@
+"""The routers: ``/v1`` (clipping, capabilities) and the operational endpoints."""
+
+from fastapi import APIRouter
+
+from service.routes import clip, health, meta
+
+__all__ = ["api_router"]
+
+# Each router carries its whole prefix (no nesting), so a route's `path` is its full
+# template, which the access log and the metrics use as the route label.
+api_router = APIRouter()
+api_router.include_router(clip.router)
+api_router.include_router(meta.v1_router)
+api_router.include_router(health.router)
+api_router.include_router(meta.router)

@@ -1,0 +1,161 @@
+"""``/v1/clip/*``: read the body, hand it to the conversion layer in the thread pool."""
+
+from __future__ import annotations
+
+from typing import Annotated
+
+from fastapi import APIRouter, Query, Request
+from pydantic import BaseModel, ConfigDict, Field, FiniteFloat
+from starlette.responses import Response
+
+from rnsca.options import Method, Mode
+from rnsca.window import Window
+from service import convert
+from service.deps import MetricsDep, RunnerDep, SettingsDep
+from service.errors import UnsupportedMediaTypeError
+from service.schemas import (
+    BackendName,
+    ClipGeoJSONRequest,
+    ClipGeoJSONResponse,
+    ClipOptions,
+    ClipSegmentsRequest,
+    ClipSegmentsResponse,
+    ClipSVGRequest,
+    ClipSVGResponse,
+    Problem,
+)
+
+__all__ = ["router"]
+
+router = APIRouter(prefix="/v1/clip", tags=["clip"])
+
+_PROBLEM = {"model": Problem, "content": {"application/problem+json": {}}}
+_ERRORS = {400: {**_PROBLEM, "description": "Malformed JSON"},
+           413: {**_PROBLEM, "description": "Body or vertex count over the limit"},
+           415: {**_PROBLEM, "description": "Unsupported Content-Type"},
+           422: {**_PROBLEM, "description": "Invalid window, options, geometry or "
+                                            "coordinates; work over budget; backend not "
+                                            "available"},
+           503: {**_PROBLEM, "description": "Request time limit exceeded (server busy)"}}
+
+
+def _json_body(model: type[BaseModel], binary: bool = False) -> dict:
+    """Return the OpenAPI ``requestBody`` of a route that validates `model` itself."""
+    content = {"application/json": {"schema": {"$ref": f"#/components/schemas/{model.__name__}"}}}
+    if binary:
+        content["application/octet-stream"] = {
+            "schema": {"type": "string", "format": "binary",
+                       "description": "Little-endian float64 rows x0, y0, x1, y1; window "
+                                      "and options as query parameters."}}
+    return {"requestBody": {"required": True, "content": content}}
+
+
+def _media_type(request: Request) -> str:
+    return request.headers.get("content-type", "").split(";")[0].strip().lower()
+
+
+async def _read_json(request: Request) -> bytes:
+    media = _media_type(request)
+    if media != "application/json" and not media.endswith("+json"):
+        raise UnsupportedMediaTypeError(
+            f"send the body as application/json, got {media or 'no Content-Type'}")
+    return await request.body()
+
+
+def _respond(outcome: convert.Outcome, metrics) -> Response:
+    if outcome.stats is not None:
+        metrics.observe_clip(outcome.stats)
+    return Response(outcome.content, media_type=outcome.media_type, headers=outcome.headers)
+
+
+@router.post("/geojson", response_model=ClipGeoJSONResponse, responses=_ERRORS,
+             openapi_extra=_json_body(ClipGeoJSONRequest),
+             summary="Clip a GeoJSON Geometry, Feature or FeatureCollection")
+async def clip_geojson(request: Request, settings: SettingsDep, runner: RunnerDep,
+                       metrics: MetricsDep) -> Response:
+    """Return the document clipped to the window, with the stats (and verification).
+
+    Properties, ids and foreign members are kept; a geometry takes the type of what is
+    left (a LineString cut in two becomes a MultiLineString).
+    """
+    body = await _read_json(request)
+    return _respond(await runner.run(convert.clip_geojson, body, settings), metrics)
+
+
+@router.post("/svg", response_model=ClipSVGResponse,
+             responses={**_ERRORS, 501: {**_PROBLEM, "description": "SVG clipping is not "
+                                         "in this release of the library yet"}},
+             openapi_extra=_json_body(ClipSVGRequest), summary="Clip SVG path data")
+async def clip_svg(request: Request, settings: SettingsDep, runner: RunnerDep,
+                   metrics: MetricsDep) -> Response:
+    """Return each path's data clipped to the window (curves kept or flattened).
+
+    Answers 501 until the library has SVG clipping (see `/v1/capabilities`).
+    """
+    body = await _read_json(request)
+    return _respond(await runner.run(convert.clip_svg, body, settings), metrics)
+
+
+class SegmentQuery(BaseModel):
+    """Window and options of a binary request (ignored for JSON bodies)."""
+
+    model_config = ConfigDict(extra="ignore")
+
+    xmin: FiniteFloat | None = None
+    ymin: FiniteFloat | None = None
+    xmax: FiniteFloat | None = None
+    ymax: FiniteFloat | None = None
+    method: Method | None = None
+    n: Annotated[int, Field(ge=2, le=64)] | None = Field(None, description="Omitted: auto.")
+    max_depth: Annotated[int, Field(ge=0, le=32)] | None = None
+    tolerance: Annotated[float, Field(gt=0)] | None = None
+    mode: Mode | None = None
+    backend: BackendName | None = None
+    verify: bool | None = None
+
+
+@router.post("/segments", response_model=ClipSegmentsResponse,
+             responses={**_ERRORS, 200: {"content": {"application/octet-stream": {}},
+                                         "description": "JSON, or binary for a binary "
+                                                        "request (see the description)"}},
+             openapi_extra=_json_body(ClipSegmentsRequest, binary=True),
+             summary="Clip line segments (JSON or binary)")
+async def clip_segments(request: Request, query: Annotated[SegmentQuery, Query()],
+                        settings: SettingsDep, runner: RunnerDep,
+                        metrics: MetricsDep) -> Response:
+    """Return the visible piece of each segment, with its source index and interval.
+
+    JSON: the body is `ClipSegmentsRequest`. Binary (`application/octet-stream`): the
+    body is little-endian float64 rows `x0, y0, x1, y1`, the window is the query
+    parameters `xmin, ymin, xmax, ymax` and the options further query parameters; the
+    answer is binary too: the pieces as float64 rows of 4, then their source indices as
+    int64, then their intervals `t` as float64 rows of 2 (header `X-Rnsca-Pieces` gives
+    their number; `X-Rnsca-Stats` and `X-Rnsca-Verification` hold JSON).
+    """
+    media = _media_type(request)
+    if media == "application/octet-stream":
+        window = _query_window(query)
+        options = ClipOptions.model_validate({
+            k: v for k, v in query.model_dump(
+                include={"method", "n", "max_depth", "tolerance", "mode", "backend"}).items()
+            if v is not None}, strict=False)
+        body = await request.body()
+        outcome = await runner.run(convert.clip_segments_binary, body, window, options,
+                                   query.verify, settings)
+    else:
+        body = await _read_json(request)
+        outcome = await runner.run(convert.clip_segments_json, body, settings)
+    return _respond(outcome, metrics)
+
+
+def _query_window(query: SegmentQuery) -> Window:
+    bounds = (query.xmin, query.ymin, query.xmax, query.ymax)
+    if any(b is None for b in bounds):
+        from fastapi.exceptions import RequestValidationError
+
+        missing = [name for name, b in zip(("xmin", "ymin", "xmax", "ymax"), bounds,
+                                           strict=True) if b is None]
+        raise RequestValidationError([{
+            "loc": ("query", name), "msg": "Field required (the window of a binary request)",
+            "type": "missing"} for name in missing])
+    return Window(*bounds)

@@ -1,0 +1,34 @@
+"""``/healthz`` (the process answers) and ``/readyz`` (the kernels are ready)."""
+
+from __future__ import annotations
+
+import orjson
+from fastapi import APIRouter
+from starlette.responses import Response
+
+from service.deps import RunnerDep
+from service.errors import NotReadyError
+from service.schemas import Health, Problem
+
+__all__ = ["router"]
+
+router = APIRouter(tags=["operations"])
+
+
+@router.get("/healthz", response_model=Health, summary="Liveness")
+async def healthz() -> Response:
+    """Answer 200 while the event loop runs (also during a long clip)."""
+    return Response(orjson.dumps({"status": "ok"}), media_type="application/json")
+
+
+@router.get("/readyz", response_model=Health, summary="Readiness",
+            responses={503: {"model": Problem, "description": "Kernels not ready yet",
+                             "content": {"application/problem+json": {}}}})
+async def readyz(runner: RunnerDep) -> Response:
+    """Answer 200 once the kernels are compiled or loaded from the cache, else 503."""
+    if runner.failure is not None:
+        raise NotReadyError(f"warming up the kernels failed: {runner.failure}")
+    if not runner.ready.is_set():
+        raise NotReadyError("the kernels are being compiled or loaded from the cache",
+                            headers={"Retry-After": "2"})
+    return Response(orjson.dumps({"status": "ready"}), media_type="application/json")

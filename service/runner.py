@@ -1,0 +1,134 @@
+"""Where clipping runs: a thread pool off the event loop, safe for Numba's parallel kernels.
+
+The kernels release the GIL (``nogil=True``), so requests clipped in different threads run
+in parallel while the event loop keeps answering (`/healthz` included). Numba's parallel
+kernels need a threading layer that accepts concurrent callers: the default ``workqueue``
+layer aborts the process when two threads enter ``parallel=True`` code at once. So
+`ClipRunner.prepare` selects a thread-safe layer before any parallel kernel runs (``tbb``
+or ``omp``, by `Settings.threading_layer`, unless ``NUMBA_THREADING_LAYER`` is set), and
+after warm-up reads back the layer that was actually loaded: if it is ``workqueue`` (no
+TBB and no OpenMP runtime here, or the process had already started it), every call is
+serialized by a lock instead. `/v1/capabilities` reports which.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+import os
+import threading
+import time
+from concurrent.futures import ThreadPoolExecutor
+from contextlib import nullcontext
+
+from service.errors import TimeLimitError
+
+__all__ = ["ClipRunner"]
+
+_log = logging.getLogger("rnsca.service")
+#: Layers that accept concurrent callers (Numba's own classification).
+THREAD_SAFE_LAYERS = ("tbb", "omp")
+
+
+class ClipRunner:
+    """Run library calls in a bounded thread pool, with a time limit per request.
+
+    Parameters
+    ----------
+    threads : int
+        Calls that run at once; later ones wait in the pool's queue.
+    time_limit : float
+        Seconds a call may wait and run before the request is answered with 503 (the call
+        itself finishes in the background: threads cannot be interrupted).
+    """
+
+    def __init__(self, threads: int, time_limit: float) -> None:
+        self._pool = ThreadPoolExecutor(max_workers=threads, thread_name_prefix="rnsca-clip")
+        self.time_limit = time_limit
+        self.ready = threading.Event()
+        self.threading_layer: str | None = None
+        self.warm_up_seconds: float | None = None
+        self.failure: str | None = None
+        # One call at a time until the loaded threading layer is known to be thread-safe.
+        self._serial: threading.Lock | None = threading.Lock()
+        self._settled = False
+
+    @property
+    def serialized(self) -> bool:
+        """Whether calls run one at a time (the loaded threading layer is not thread-safe)."""
+        return self._serial is not None
+
+    def prepare(self, layer: str) -> None:
+        """Ask Numba for threading layer `layer` unless its layer is already started."""
+        import numba
+        from numba.np.ufunc import parallel
+
+        if "NUMBA_THREADING_LAYER" in os.environ or parallel._is_initialized:
+            return
+        numba.config.THREADING_LAYER = layer
+
+    def warm_up(self, backends) -> None:
+        """Compile (or load) the kernels of `backends`, then settle how calls may overlap.
+
+        Runs in a pool thread at start-up; sets `ready` when done.
+        """
+        started = time.perf_counter()
+        for engine in backends:
+            if hasattr(engine, "warm_up"):
+                engine.warm_up()
+        self.settle()
+        self.warm_up_seconds = time.perf_counter() - started
+        self.ready.set()
+        _log.info("kernels ready", extra={"fields": {
+            "warm_up_seconds": round(self.warm_up_seconds, 3),
+            "threading_layer": self.threading_layer, "serialized": self.serialized}})
+
+    def settle(self) -> None:
+        """Read the threading layer that runs; serialize calls unless it is thread-safe."""
+        import numba
+
+        if numba.config.DISABLE_JIT:  # plain Python: nothing parallel to protect
+            self._serial, self._settled = None, True
+            return
+        try:
+            self.threading_layer = numba.threading_layer()
+        except ValueError:  # not started yet: no parallel kernel has run; decide later
+            return
+        if self.threading_layer not in THREAD_SAFE_LAYERS:
+            _log.warning("Numba threading layer %r is not thread-safe: clipping calls are "
+                         "serialized", self.threading_layer)
+        self._serial = None if self.threading_layer in THREAD_SAFE_LAYERS else self._serial
+        self._settled = True
+
+    async def start(self, backends) -> None:
+        """Warm up in the pool, off the event loop (so `/healthz` answers meanwhile)."""
+        loop = asyncio.get_running_loop()
+        try:
+            await loop.run_in_executor(self._pool, self._call, self.warm_up, (backends,))
+        except Exception as exc:  # reported by /readyz; the process keeps answering
+            self.failure = f"{type(exc).__name__}: {exc}"
+            _log.error("warming up the kernels failed", exc_info=exc)
+
+    async def run(self, function, *args):
+        """Return ``function(*args)`` run in the pool; raise `TimeLimitError` past the limit."""
+        loop = asyncio.get_running_loop()
+        future = loop.run_in_executor(self._pool, self._call, function, args)
+        try:
+            return await asyncio.wait_for(future, self.time_limit)
+        except TimeoutError:
+            raise TimeLimitError(
+                f"the request did not finish within the time limit of {self.time_limit:g} s "
+                "(the server is busy); retry later",
+                headers={"Retry-After": str(max(1, round(self.time_limit / 2)))}) from None
+
+    def _call(self, function, args):
+        with self._serial or nullcontext():
+            try:
+                return function(*args)
+            finally:
+                if not self._settled:
+                    self.settle()
+
+    def shutdown(self) -> None:
+        """Wait for running calls to finish, then stop the threads."""
+        self._pool.shutdown(wait=True, cancel_futures=False)

@@ -12,6 +12,7 @@ where one is known.
 from __future__ import annotations
 
 import logging
+import re
 
 import orjson
 from fastapi import FastAPI, Request
@@ -51,6 +52,9 @@ __all__ = [
 
 PROBLEM_JSON = "application/problem+json"
 _TYPE_PREFIX = "urn:rnsca:problem:"
+# The tags pydantic puts in an error's location for the member of a union it tried.
+_UNION_TAG = re.compile(r"^(constrained-\w+|literal\[.*\]|function-\w+\[.*\]|int|float|str|"
+                        r"bool|none|tuple\[.*\]|list\[.*\]|dict\[.*\])$")
 _log = logging.getLogger("rnsca.service")
 
 
@@ -172,9 +176,13 @@ def json_path(location) -> str:
     'geojson.features[3].geometry'
     >>> json_path(("query", "xmin"))
     'query.xmin'
+    >>> json_path(("options", "n", "constrained-int"))
+    'options.n'
     """
     out = ""
     for part in location:
+        if isinstance(part, str) and _UNION_TAG.match(part):
+            continue  # pydantic names the union member tried; not part of the document
         if isinstance(part, int):
             out += f"[{part}]"
         else:

@@ -1,0 +1,320 @@
+"""The service through a real uvicorn server on a loopback port: every endpoint, every
+error status, the binary form, gzip, concurrency and graceful shutdown."""
+
+from __future__ import annotations
+
+import gzip
+import threading
+import time
+from concurrent.futures import ThreadPoolExecutor
+
+import httpx
+import numpy as np
+import orjson
+import pytest
+
+from tests.e2e.server import LiveServer
+
+pytestmark = pytest.mark.e2e
+
+PROBLEM = "application/problem+json"
+WINDOW = [0, 0, 10, 10]
+LINE = {"type": "Feature", "id": 7, "properties": {"name": "road"},
+        "geometry": {"type": "LineString",
+                     "coordinates": [[-5, 1], [5, 1], [5, 20], [8, 20], [8, 5], [15, 5]]}}
+
+
+@pytest.fixture(scope="module")
+def server():
+    with LiveServer(env={"RNSCA_CLIP_THREADS": "3", "RNSCA_MAX_BODY_BYTES": str(8 * 2**20),
+                         "RNSCA_MAX_VERTICES": "400000",
+                         "RNSCA_VERIFY_MAX_VERTICES": "1000"}) as live:
+        yield live
+
+
+@pytest.fixture(scope="module")
+def client(server):
+    with httpx.Client(base_url=server.url, timeout=60) as c:
+        yield c
+
+
+def crossing_segments(count: int, seed: int = 0) -> np.ndarray:
+    """Long segments through the unit window (every one ambiguous: the costly case)."""
+    a = np.random.default_rng(seed).uniform(-500, 500, (count, 2))
+    return np.column_stack([a, -a])
+
+
+def big_binary_request(client, count=100_000, seed=0):
+    return client.post(
+        "/v1/clip/segments", content=crossing_segments(count, seed).astype("<f8").tobytes(),
+        params={"xmin": 0, "ymin": 0, "xmax": 1, "ymax": 1, "mode": "approx", "n": 64,
+                "verify": "false"},
+        headers={"Content-Type": "application/octet-stream"})
+
+
+def assert_problem(response, status, slug=None):
+    assert response.status_code == status, response.text
+    assert response.headers["content-type"] == PROBLEM
+    body = response.json()
+    assert body["status"] == status and body["title"] and body["detail"]
+    if slug:
+        assert body["type"] == f"urn:rnsca:problem:{slug}"
+    return body
+
+
+# --- every endpoint ---------------------------------------------------------------------
+
+
+def test_healthz_readyz_capabilities(client):
+    assert client.get("/healthz").json() == {"status": "ok"}
+    assert client.get("/readyz").json() == {"status": "ready"}
+    caps = client.get("/v1/capabilities").json()
+    assert "rnsca" in caps["methods"] and caps["limits"]["max_vertices"] == 400000
+    assert caps["threading_layer"] in ("omp", "tbb") and caps["serialized"] is False
+
+
+def test_clip_geojson_keeps_properties_and_verifies(client):
+    r = client.post("/v1/clip/geojson", json={"window": WINDOW, "geojson": LINE})
+    assert r.status_code == 200
+    body = r.json()
+    assert body["geojson"]["id"] == 7 and body["geojson"]["properties"] == {"name": "road"}
+    assert body["geojson"]["geometry"]["coordinates"] == [
+        [[0.0, 1.0], [5.0, 1.0], [5.0, 10.0]], [[8.0, 10.0], [8.0, 5.0], [10.0, 5.0]]]
+    assert body["stats"]["segments_in"] == 5 and body["verification"]["passed"] is True
+
+
+def test_clip_segments_json(client):
+    r = client.post("/v1/clip/segments", json={
+        "window": WINDOW, "segments": [[-5, 5, 15, 5], [20, 20, 30, 30]],
+        "options": {"method": "liang_barsky"}})
+    assert r.status_code == 200
+    body = r.json()
+    assert body["segments"] == [[0.0, 5.0, 10.0, 5.0]] and body["source"] == [0]
+    assert body["t"] == [[0.25, 0.75]] and body["method"] == "liang_barsky"
+    assert body["verification"]["passed"] is True
+
+
+def test_clip_segments_binary_in_and_out(client):
+    segments = np.array([[-5.0, 5, 15, 5], [20, 20, 30, 30], [1, 1, 2, 2]])
+    r = client.post("/v1/clip/segments", content=segments.astype("<f8").tobytes(),
+                    params={"xmin": 0, "ymin": 0, "xmax": 10, "ymax": 10, "verify": "true"},
+                    headers={"Content-Type": "application/octet-stream"})
+    assert r.status_code == 200 and r.headers["content-type"] == "application/octet-stream"
+    m = int(r.headers["x-rnsca-pieces"])
+    assert m == 2 and len(r.content) == m * (32 + 8 + 16)
+    pieces = np.frombuffer(r.content[:32 * m], "<f8").reshape(m, 4)
+    source = np.frombuffer(r.content[32 * m:40 * m], "<i8")
+    t = np.frombuffer(r.content[40 * m:], "<f8").reshape(m, 2)
+    assert pieces.tolist() == [[0.0, 5.0, 10.0, 5.0], [1.0, 1.0, 2.0, 2.0]]
+    assert source.tolist() == [0, 2] and t.tolist() == [[0.25, 0.75], [0.0, 1.0]]
+    assert orjson.loads(r.headers["x-rnsca-stats"])["segments_in"] == 3
+    assert orjson.loads(r.headers["x-rnsca-verification"])["passed"] is True
+
+
+def test_clip_svg_answers_501_until_the_library_has_it(client):
+    r = client.post("/v1/clip/svg", json={"window": WINDOW, "paths": ["M -5 5 L 15 5"]})
+    if client.get("/v1/capabilities").json()["svg"]:  # flips once rnsca.clip_svg lands
+        assert r.status_code == 200 and len(r.json()["paths"]) == 1
+    else:
+        assert_problem(r, 501, "not-implemented")
+
+
+def test_metrics_count_requests_and_clipping(client):
+    client.post("/v1/clip/segments", json={"window": WINDOW, "segments": [[-5, 5, 15, 5]]})
+    text = client.get("/metrics").text
+    assert 'rnsca_http_requests_total{method="POST",route="/v1/clip/segments",status="200"}' \
+        in text
+    assert "rnsca_http_request_duration_seconds_bucket" in text
+    for name in ("rnsca_segments_clipped_total", "rnsca_fragments_pruned_total",
+                 "rnsca_intersections_total"):
+        assert name in text
+
+
+def test_docs_and_openapi(client):
+    assert client.get("/docs").status_code == 200
+    schema = client.get("/openapi.json").json()
+    assert "ClipGeoJSONRequest" in schema["components"]["schemas"]
+
+
+def test_gzip_when_accepted(client):
+    request = {"window": [0, 0, 1000, 1000],
+               "segments": crossing_segments(2000).tolist(), "verify": False}
+    r = client.post("/v1/clip/segments", json=request, headers={"Accept-Encoding": "gzip"})
+    assert r.status_code == 200 and r.headers["content-encoding"] == "gzip"
+    assert r.json()["stats"]["segments_in"] == 2000  # httpx decodes it
+    raw = client.post("/v1/clip/segments", json=request,
+                      headers={"Accept-Encoding": "identity"})
+    assert "content-encoding" not in raw.headers
+    assert len(gzip.compress(raw.content)) < len(raw.content)
+
+
+def test_one_json_log_line_per_request(server, client):
+    client.get("/healthz", params={"marker": "log-line-check"})
+    time.sleep(0.2)
+    lines = [orjson.loads(line) for line in server.log().splitlines()
+             if line.startswith("{") and '"rnsca.service.access"' in line]
+    line = lines[-1]
+    assert line["method"] == "GET" and line["path"] == "/healthz" and line["status"] == 200
+    assert {"duration_ms", "request_bytes", "response_bytes"} <= set(line)
+
+
+# --- every error status -----------------------------------------------------------------
+
+
+def test_malformed_json_400(client):
+    r = client.post("/v1/clip/geojson", content=b'{"window": [0,0,1,1], ',
+                    headers={"Content-Type": "application/json"})
+    assert_problem(r, 400, "malformed-json")
+
+
+@pytest.mark.parametrize("text, path", [
+    ('{"window": [10, 0, 0, 10], "segments": []}', "window"),
+    ('{"window": [0, 0, 10], "segments": []}', "window[3]"),
+    ('{"window": [0, 0, 10, NaN], "segments": []}', "window[3]"),
+    ('{"window": [0, 0, 10, 10], "segments": [], "options": {"n": 1}}', "options.n"),
+    ('{"window": [0, 0, 10, 10], "segments": [], "options": {"nn": 4}}', "options.nn"),
+    ('{"window": [0, 0, 10, 10], "segments": [], "options": {"mode": "fast"}}',
+     "options.mode"),
+    ('{"window": [0, 0, 10, 10], "segments": [[0, 0, 1, "2"]]}', "segments[0][3]"),
+    ('{"window": [0, 0, 10, 10], "segments": [[0, 0, 1, 2], [0, 0, 1, 1e999]]}',
+     "segments[1]"),
+    ('{"window": [0, 0, 10, 10], "segments": [[0, 0, 1, 2], [NaN, 0, 1, 1]]}',
+     "segments[1]"),
+])
+def test_invalid_segment_requests_422_name_the_path(client, text, path):
+    r = client.post("/v1/clip/segments", content=text.encode(),
+                    headers={"Content-Type": "application/json"})
+    body = assert_problem(r, 422)
+    assert body["path"] == path, body
+
+
+def test_invalid_geojson_422_names_the_json_path(client):
+    feature = {**LINE, "geometry": {"type": "LineString", "coordinates": [[0, 0], [1, True]]}}
+    r = client.post("/v1/clip/geojson", json={
+        "window": WINDOW, "geojson": {"type": "FeatureCollection", "features": [LINE, feature]}})
+    body = assert_problem(r, 422, "invalid-geometry")
+    assert body["path"] == "geojson.features[1].geometry.coordinates[1][1]"
+
+
+def test_unavailable_backend_422_with_reason(client):
+    r = client.post("/v1/clip/segments", json={"window": WINDOW, "segments": [],
+                                               "options": {"backend": "opencl"}})
+    body = assert_problem(r, 422, "backend-unavailable")
+    assert "opencl" in body["detail"] and "available" in body["detail"]
+
+
+def test_body_over_the_limit_413_from_content_length(client):
+    r = client.post("/v1/clip/segments", content=b"0" * (8 * 2**20 + 1),
+                    headers={"Content-Type": "application/octet-stream"})
+    assert_problem(r, 413, "body-too-large")
+
+
+def test_body_over_the_limit_413_while_reading_a_chunked_body(client):
+    def chunks():
+        for _ in range(9):
+            yield b"\0" * 2**20
+
+    r = client.post("/v1/clip/segments", content=chunks(),
+                    params={"xmin": 0, "ymin": 0, "xmax": 1, "ymax": 1},
+                    headers={"Content-Type": "application/octet-stream"})
+    assert_problem(r, 413, "body-too-large")
+    assert client.get("/healthz").status_code == 200
+
+
+def test_too_many_vertices_413(client):
+    r = client.post("/v1/clip/segments", content=np.zeros((200_001, 4)).tobytes(),
+                    params={"xmin": 0, "ymin": 0, "xmax": 1, "ymax": 1},
+                    headers={"Content-Type": "application/octet-stream"})
+    body = assert_problem(r, 413, "too-many-vertices")
+    assert "400002" in body["detail"]
+
+
+def test_work_over_budget_422(client):
+    r = client.post("/v1/clip/segments", content=crossing_segments(150_000).tobytes(),
+                    params={"xmin": 0, "ymin": 0, "xmax": 1, "ymax": 1, "mode": "approx",
+                            "n": 64, "tolerance": 1e-300},
+                    headers={"Content-Type": "application/octet-stream"})
+    assert_problem(r, 422, "work-over-budget")
+
+
+def test_unknown_route_404_and_wrong_method_405(client):
+    assert_problem(client.get("/v2/nothing"), 404, "not-found")
+    r = client.get("/v1/clip/geojson")
+    assert_problem(r, 405, "method-not-allowed")
+    assert r.headers["allow"] == "POST"
+
+
+def test_unsupported_media_type_415(client):
+    r = client.post("/v1/clip/geojson", content=b"window=0", headers={
+        "Content-Type": "application/x-www-form-urlencoded"})
+    assert_problem(r, 415, "unsupported-media-type")
+
+
+# --- load ---------------------------------------------------------------------------
+
+
+def test_healthz_answers_during_a_large_request(client, server):
+    result = {}
+
+    def large():
+        result["response"] = big_binary_request(client)
+
+    worker = threading.Thread(target=large)
+    worker.start()
+    time.sleep(0.3)
+    latencies = []
+    with httpx.Client(base_url=server.url, timeout=5) as other:
+        while worker.is_alive() and len(latencies) < 50:
+            started = time.perf_counter()
+            assert other.get("/healthz").status_code == 200
+            latencies.append(time.perf_counter() - started)
+            time.sleep(0.05)
+    worker.join(60)
+    assert result["response"].status_code == 200
+    assert len(latencies) >= 3, "the large request finished too soon to overlap"
+    assert max(latencies) < 0.5, latencies
+
+
+def test_concurrent_large_requests_all_succeed_and_the_server_survives(client, server):
+    with ThreadPoolExecutor(4) as pool:
+        responses = list(pool.map(lambda seed: big_binary_request(client, 60_000, seed),
+                                  range(4)))
+    assert [r.status_code for r in responses] == [200] * 4
+    for seed, r in enumerate(responses):
+        pieces = int(r.headers["x-rnsca-pieces"])
+        assert pieces > 0 and len(r.content) == 56 * pieces, seed
+    assert server.process.poll() is None
+    assert client.get("/healthz").status_code == 200
+
+
+def test_serialized_when_the_threading_layer_is_not_thread_safe():
+    """With Numba's workqueue layer forced, calls are serialized and still all succeed."""
+    with LiveServer(env={"NUMBA_THREADING_LAYER": "workqueue", "RNSCA_CLIP_THREADS": "3"}) \
+            as live, httpx.Client(base_url=live.url, timeout=60) as c:
+        caps = c.get("/v1/capabilities").json()
+        assert caps["threading_layer"] == "workqueue" and caps["serialized"] is True
+        with ThreadPoolExecutor(3) as pool:
+            responses = list(pool.map(lambda seed: big_binary_request(c, 30_000, seed),
+                                      range(3)))
+        assert [r.status_code for r in responses] == [200] * 3
+        assert live.process.poll() is None
+
+
+def test_graceful_shutdown_finishes_the_request_in_flight():
+    live = LiveServer()
+    try:
+        with httpx.Client(base_url=live.url, timeout=60) as c:
+            result = {}
+            worker = threading.Thread(
+                target=lambda: result.update(response=big_binary_request(c)))
+            worker.start()
+            time.sleep(0.5)
+            live.terminate()
+            worker.join(60)
+            assert result["response"].status_code == 200
+            assert int(result["response"].headers["x-rnsca-pieces"]) > 0
+        live.process.wait(30)
+        with pytest.raises(httpx.TransportError):
+            httpx.get(live.url + "/healthz", timeout=2)
+    finally:
+        live.stop()

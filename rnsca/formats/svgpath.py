@@ -45,7 +45,6 @@ import numpy as np
 
 from rnsca.errors import InvalidGeometryError, InvalidOptionError, ParseError
 from rnsca.kernels import svgparse, svgwrite
-from rnsca.kernels.validate import all_finite
 
 __all__ = [
     "ARC_RELATIVE_TOLERANCE",
@@ -149,42 +148,15 @@ class PathArrays:
         self._check_geometry()
 
     def _check_geometry(self) -> None:
-        controls, start = self.controls, self.start
-        if not all_finite(controls):
-            seg = int(np.flatnonzero(~np.isfinite(controls).all(axis=(1, 2)))[0])
-            self._fail_segment(seg, "coordinates must be finite")
-        if not all_finite(start):
-            sub = int(np.flatnonzero(~np.isfinite(start).all(axis=1))[0])
-            self._fail_subpath(sub, "coordinates must be finite")
-        # Unused rows repeat the end point: rows d..3 all equal row 3.
-        rows = np.arange(4)
-        unused = rows[None, :] >= self.degree[:, None].astype(np.int64)
-        bad = unused & (controls != controls[:, 3:4, :]).any(axis=2)
-        if bad.any():
-            seg = int(np.flatnonzero(bad.any(axis=1))[0])
-            self._fail_segment(seg, "unused control points must repeat the end point")
-        # Each segment starts where the previous one of its subpath ends, the first at
-        # the subpath's start.
-        expected = np.empty((controls.shape[0], 2))
-        expected[1:] = controls[:-1, 3]
-        counts = np.diff(self.subpath_offsets)
-        firsts = self.subpath_offsets[:-1][counts > 0]
-        expected[firsts] = start[counts > 0]
-        bad = (controls[:, 0] != expected).any(axis=1)
-        if bad.any():
-            self._fail_segment(int(np.flatnonzero(bad)[0]),
-                               "segments must start where the previous one ends (the "
-                               "first at the subpath's start)")
-
-    def _fail_subpath(self, sub: int, message: str):
-        path = int(np.searchsorted(self.path_offsets, sub, side="right") - 1)
-        error = InvalidGeometryError(f"path {path}: {message}")
-        error.path_index = path
-        raise error
-
-    def _fail_segment(self, seg: int, message: str):
-        sub = int(np.searchsorted(self.subpath_offsets, seg, side="right") - 1)
-        self._fail_subpath(sub, f"{message} (segment {seg})")
+        sub, seg, code = svgparse.check_layout(self.controls, self.degree,
+                                               self.subpath_offsets, self.start)
+        if code != 0:
+            path = int(np.searchsorted(self.path_offsets, sub, side="right") - 1)
+            where = f" (segment {seg})" if seg >= 0 else " (subpath start)"
+            error = InvalidGeometryError(
+                f"path {path}: {svgparse.LAYOUT_MESSAGES[int(code)]}{where}")
+            error.path_index = path
+            raise error
 
     @classmethod
     def empty(cls) -> PathArrays:
@@ -342,10 +314,8 @@ def _arc_tolerance(tolerance) -> tuple[float, float]:
     """Return the kernel's (absolute, relative) tolerance pair; one of them is 0."""
     if tolerance is None:
         return 0.0, ARC_RELATIVE_TOLERANCE
-    try:
-        value = float(tolerance)
-    except (TypeError, ValueError):
-        value = math.nan
+    number = isinstance(tolerance, (int, float, np.integer, np.floating))
+    value = float(tolerance) if number else math.nan
     if isinstance(tolerance, bool) or not (math.isfinite(value) and value > 0.0):
         raise InvalidOptionError(f"tolerance must be a positive finite number or None, "
                                  f"not {tolerance!r}")
@@ -507,7 +477,8 @@ def write_paths(p: PathArrays, *, precision: int | None = 6) -> list[str]:
     minus sign nor a second decimal point separates them (``1-2``, ``.5.5``). With a
     finite precision the reflections and the points that ``H``, ``V`` and an omitted
     ``M`` take from the current point are computed by the reader from rounded numbers,
-    so they are within a few roundings of the original.
+    so they are within a few roundings of the original (``T`` never follows ``T``
+    then: the reader would add up the roundings along a chain).
 
     Examples
     --------
@@ -524,7 +495,7 @@ def write_paths(p: PathArrays, *, precision: int | None = 6) -> list[str]:
     if len(p) == 0:
         return []
     kind, with_moveto = svgwrite.classify(p.controls, p.degree, p.subpath_offsets, p.closed,
-                                          p.start, p.path_offsets)
+                                          p.start, p.path_offsets, precision is None)
     m = kind.shape[0]
     values = np.concatenate([p.controls.reshape(m, 8)[svgwrite.COLUMNS[kind]],
                              p.start[with_moveto].reshape(-1)])

@@ -39,6 +39,8 @@ __all__ = [
     "count_segments",
     "write_segments",
     "arc_error",
+    "LAYOUT_MESSAGES",
+    "check_layout",
 ]
 
 # Error codes of the tokenizer (0: no error); `ERROR_MESSAGES` says what was expected.
@@ -141,7 +143,7 @@ def _scan_number(buf, i, last):
     dropped = False   # a significant digit did not fit in `mantissa`
     n_digits = 0
     while i < last and _CLASS[buf[i]] & _DIGIT:
-        d = buf[i] - _ZERO
+        d = int(buf[i]) - _ZERO
         if n_kept < _MAX_DIGITS:
             if n_kept > 0 or d != 0:
                 mantissa = mantissa * 10 + d
@@ -154,7 +156,7 @@ def _scan_number(buf, i, last):
     if i < last and buf[i] == _DOT:
         i += 1
         while i < last and _CLASS[buf[i]] & _DIGIT:
-            d = buf[i] - _ZERO
+            d = int(buf[i]) - _ZERO
             if n_kept < _MAX_DIGITS:
                 if n_kept > 0 or d != 0:
                     mantissa = mantissa * 10 + d
@@ -177,7 +179,7 @@ def _scan_number(buf, i, last):
         e = 0
         while i < last and _CLASS[buf[i]] & _DIGIT:
             if e < _EXPONENT_CAP:
-                e = e * 10 + (buf[i] - _ZERO)
+                e = e * 10 + (int(buf[i]) - _ZERO)
             i += 1
         exponent += -e if exponent_negative else e
     if mantissa == 0:
@@ -258,7 +260,7 @@ def _tokenize(buf, first, last, write, nums, num_at, cmds, cmd_at, fallback, fal
                     # Flags are single characters, so "a1 1 0 00 1 1" reads two flags.
                     if i < last and (buf[i] == _ZERO or buf[i] == _ONE):
                         if write:
-                            nums[num_at + n_nums] = float(buf[i] - _ZERO)
+                            nums[num_at + n_nums] = float(int(buf[i]) - _ZERO)
                         n_nums += 1
                         i += 1
                         continue
@@ -386,7 +388,11 @@ def _arc_setup(x0, y0, rx, ry, angle, large, sweep, x, y):
     ry = abs(ry)
     if rx == 0.0 or ry == 0.0:
         return 1, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0
-    phi = math.radians(np.fmod(angle, 360.0))
+    # Modulo 360 into [0, 360), exactly (fmod is exact), so 390 and -330 are 30.
+    phi = np.fmod(angle, 360.0)
+    if phi < 0.0:
+        phi += 360.0
+    phi = math.radians(phi)
     cos_phi = math.cos(phi)
     sin_phi = math.sin(phi)
     hx = 0.5 * (x0 - x)
@@ -539,10 +545,10 @@ def _build(nums, num_at, cmds, cmd_first, cmd_last, tol_abs, tol_rel, write, con
     py = 0.0
     for g in range(cmd_first, cmd_last):
         cmd = cmds[g]
-        upper = cmd & ~_CASE_BIT
+        lower = cmd | _CASE_BIT               # the letter in lower case
         ox = cx if cmd & _CASE_BIT else 0.0   # origin of relative coordinates
         oy = cy if cmd & _CASE_BIT else 0.0
-        if upper == 77:                       # M: a new subpath
+        if lower == 109:                      # m: a new subpath
             cx = nums[q] + ox
             cy = nums[q + 1] + oy
             q += 2
@@ -568,14 +574,14 @@ def _build(nums, num_at, cmds, cmd_first, cmd_last, tol_abs, tol_rel, write, con
             n_sub += 1
             is_open = True
         at = seg_at + n_seg
-        if upper == 90:                       # Z: close; the closing edge is implicit
+        if lower == 122:                      # z: close; the closing edge is implicit
             if write:
                 closed[sub_at + n_sub - 1] = True
             cx = sx
             cy = sy
             is_open = False
             prev = 0
-        elif upper == 76:                     # L
+        elif lower == 108:                    # l
             x = nums[q] + ox
             y = nums[q + 1] + oy
             q += 2
@@ -585,10 +591,10 @@ def _build(nums, num_at, cmds, cmd_first, cmd_last, tol_abs, tol_rel, write, con
             cx = x
             cy = y
             prev = 0
-        elif upper == 72 or upper == 86:      # H, V
+        elif lower == 104 or lower == 118:    # h, v
             x = cx
             y = cy
-            if upper == 72:
+            if lower == 104:
                 x = nums[q] + ox
             else:
                 y = nums[q] + oy
@@ -599,8 +605,8 @@ def _build(nums, num_at, cmds, cmd_first, cmd_last, tol_abs, tol_rel, write, con
             cx = x
             cy = y
             prev = 0
-        elif upper == 67 or upper == 83:      # C, S
-            if upper == 67:
+        elif lower == 99 or lower == 115:     # c, s
+            if lower == 99:
                 x1 = nums[q] + ox
                 y1 = nums[q + 1] + oy
                 q += 2
@@ -625,8 +631,8 @@ def _build(nums, num_at, cmds, cmd_first, cmd_last, tol_abs, tol_rel, write, con
             prev = 3
             px = x2
             py = y2
-        elif upper == 81 or upper == 84:      # Q, T
-            if upper == 81:
+        elif lower == 113 or lower == 116:    # q, t
+            if lower == 113:
                 x1 = nums[q] + ox
                 y1 = nums[q + 1] + oy
                 q += 2
@@ -705,3 +711,63 @@ def write_segments(nums, num_offsets, cmds, cmd_offsets, tol_abs, tol_rel, seg_o
                tol_rel, True, controls, degree, seg_offsets[p], start, closed,
                subpath_offsets, sub_offsets[p])
     return controls, degree, start, closed, subpath_offsets
+
+
+# --------------------------------------------------------------------------- layout
+
+# Codes of `check_layout` (0: valid), and what each says is wrong.
+_NOT_FINITE = 1
+_UNUSED_ROW = 2
+_DISCONTINUOUS = 3
+LAYOUT_MESSAGES = {
+    _NOT_FINITE: "coordinates must be finite",
+    _UNUSED_ROW: "unused control points must repeat the end point",
+    _DISCONTINUOUS: ("segments must start where the previous one ends (the first at the "
+                     "subpath's start)"),
+}
+
+
+@scalar
+def _segment_problem(controls, degree, i, x, y):
+    """Return the problem code of segment i that should start at (x, y), or 0."""
+    for r in range(4):
+        if not (math.isfinite(controls[i, r, 0]) and math.isfinite(controls[i, r, 1])):
+            return _NOT_FINITE
+    for r in range(degree[i], 3):
+        if controls[i, r, 0] != controls[i, 3, 0] or controls[i, r, 1] != controls[i, 3, 1]:
+            return _UNUSED_ROW
+    if controls[i, 0, 0] != x or controls[i, 0, 1] != y:
+        return _DISCONTINUOUS
+    return 0
+
+
+@parallel
+def check_layout(controls, degree, subpath_offsets, start):
+    """Return ``(subpath, segment, code)`` of the first broken rule, or (-1, -1, 0).
+
+    Rules of `rnsca.formats.svgpath.PathArrays`: finite coordinates, unused control
+    rows equal to the end point, each segment starting at the previous one's end (the
+    first at its subpath's start). The caller has checked shapes, degrees and offsets.
+    One parallel pass over the subpaths, no temporaries.
+    """
+    k = start.shape[0]
+    problem = np.zeros(k, dtype=np.int64)
+    at = np.full(k, -1, dtype=np.int64)
+    for s in prange(k):
+        x = start[s, 0]
+        y = start[s, 1]
+        if not (math.isfinite(x) and math.isfinite(y)):
+            problem[s] = _NOT_FINITE
+            continue
+        for i in range(subpath_offsets[s], subpath_offsets[s + 1]):
+            code = _segment_problem(controls, degree, i, x, y)
+            if code != 0:
+                problem[s] = code
+                at[s] = i
+                break
+            x = controls[i, 3, 0]
+            y = controls[i, 3, 1]
+    for s in range(k):
+        if problem[s] != 0:
+            return s, at[s], problem[s]
+    return -1, -1, 0

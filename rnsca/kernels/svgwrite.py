@@ -64,12 +64,14 @@ def _reflects(controls, i, row, prev_row):
 
 
 @parallel
-def classify(controls, degree, subpath_offsets, closed, start, path_offsets):
+def classify(controls, degree, subpath_offsets, closed, start, path_offsets, t_after_t):
     """Return ``(kind, with_moveto)``: int8 (m,) segment kinds, bool (k,) per subpath.
 
     A subpath needs no moveto when the previous subpath of its path was closed, it
     starts where that one started and it has a segment or is closed (the reader then
-    starts it at that point; an empty open one would vanish).
+    starts it at that point; an empty open one would vanish). Without `t_after_t`, a
+    T never follows a T: the reader computes a T's control point from the previous
+    one, so with rounded numbers a chain of T would add up the rounding errors.
     """
     m = controls.shape[0]
     k = closed.shape[0]
@@ -95,6 +97,8 @@ def classify(controls, degree, subpath_offsets, closed, start, path_offsets):
                         kind[i] = L
                 elif d == 2:
                     smooth = _reflects(controls, i, 1, 1 if prev == 2 else -1)
+                    if smooth and prev == 2 and not t_after_t and kind[i - 1] == T:
+                        smooth = False
                     kind[i] = T if smooth else Q
                 else:
                     smooth = _reflects(controls, i, 1, 2 if prev == 3 else -1)

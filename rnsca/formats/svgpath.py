@@ -15,9 +15,9 @@ Reading follows SVG 2 (section 9.3, "Path data"), with these choices:
 - Strict: where SVG renders a path up to its first error, we raise `ParseError` with
   the path's index (bulk reads), the 0-based character position, the character found
   and what was expected. Numbers are read exactly as Python's ``float()`` reads them;
-  one beyond float64's range is an error ("number out of range"), and so is a
-  coordinate that becomes infinite (relative steps summing past 1.8e308;
-  `InvalidGeometryError`).
+  one beyond float64's range is an error too ("number out of range"; grammar errors,
+  in any path, are reported first), and so is a coordinate that becomes infinite
+  (relative steps summing past 1.8e308; `InvalidGeometryError`).
 - ``Z`` closes the subpath: `PathArrays.closed` is set and no closing segment is
   added; the edge back to the subpath's start is implicit. A command after ``Z`` other
   than a moveto starts a new subpath at the same start point. A moveto with no drawing

@@ -21,7 +21,9 @@ decimal ``m * 10**e`` whose integer mantissa ``m`` is below 2**53 and with
 ``|e| <= 22`` is one IEEE multiplication or division of two exact doubles (10**22 is the
 largest exact power of ten), hence correctly rounded, bit for bit what Python's
 ``float()`` gives. Realistic path data (fonts, icons: a few digits) always takes this
-path; 16- and 17-digit numbers (``repr`` output) and large exponents fall back.
+path; 16- and 17-digit numbers (``repr`` output) and large exponents fall back. So do
+numbers beyond float64's range: the caller finds them infinite and reports them, after
+every grammar error.
 """
 
 import math
@@ -44,6 +46,7 @@ __all__ = [
 ]
 
 # Error codes of the tokenizer (0: no error); `ERROR_MESSAGES` says what was expected.
+# OUT_OF_RANGE is the caller's, for a number that converts to infinity.
 EXPECTED_MOVETO = 1
 EXPECTED_NUMBER = 2
 EXPECTED_DIGIT = 3
@@ -185,10 +188,6 @@ def _scan_number(buf, i, last):
     if mantissa == 0:
         # Zero with any exponent ("0e999"); `dropped` is impossible without a kept digit.
         return i, 0, -0.0 if negative else 0.0, True
-    # The value is at least 10**(n_kept - 1 + exponent); from 10**309 on it is certainly
-    # beyond the largest double (1.797e308). Values just below are left to the fallback.
-    if n_kept - 1 + exponent >= 309:
-        return i, OUT_OF_RANGE, 0.0, False
     value = 0.0
     exact = False
     if not dropped and mantissa < _TWO_53:
@@ -269,7 +268,7 @@ def _tokenize(buf, first, last, write, nums, num_at, cmds, cmd_at, fallback, fal
                     return n_nums, n_cmds, n_fb, EXPECTED_NUMBER, i
                 end, error, value, exact = _scan_number(buf, i, last)
                 if error != 0:
-                    return n_nums, n_cmds, n_fb, error, (i if error == OUT_OF_RANGE else end)
+                    return n_nums, n_cmds, n_fb, error, end
                 if write:
                     nums[num_at + n_nums] = value
                     if not exact:
@@ -546,8 +545,10 @@ def _build(nums, num_at, cmds, cmd_first, cmd_last, tol_abs, tol_rel, write, con
     for g in range(cmd_first, cmd_last):
         cmd = cmds[g]
         lower = cmd | _CASE_BIT               # the letter in lower case
-        ox = cx if cmd & _CASE_BIT else 0.0   # origin of relative coordinates
-        oy = cy if cmd & _CASE_BIT else 0.0
+        # Origin of the coordinates: the current point for relative commands, else -0.0,
+        # the exact identity of addition (x + 0.0 would turn -0.0 into 0.0).
+        ox = cx if cmd & _CASE_BIT else -0.0
+        oy = cy if cmd & _CASE_BIT else -0.0
         if lower == 109:                      # m: a new subpath
             cx = nums[q] + ox
             cy = nums[q + 1] + oy

@@ -1,17 +1,19 @@
-"""Run the benchmarks (segments, then geometry); print summaries, write JSON and a plot.
+"""Run the benchmarks (segments, geometry, svg); print summaries, write JSON and a plot.
 
 Usage::
 
-    python -m benchmarks.run                    # full run of both suites (make bench)
+    python -m benchmarks.run                    # full run of every suite (make bench)
     python -m benchmarks.run --quick            # small sizes only, a smoke test
-    python -m benchmarks.run --suite geometry   # one suite: segments or geometry
+    python -m benchmarks.run --suite svg        # one suite: segments, geometry or svg
     RNSCA_BENCH_QUICK=1 python -m benchmarks.run
 
 The segment suite writes ``<out>/segments-<timestamp>.json`` and ``.png``, and copies
 both to ``<out>/latest.json`` and ``latest.png``; a full run into the default directory
 also copies the plot to ``benchmarks/figure5.png`` (the copy the README shows). The
 geometry suite (issue 3: curves, polygons with holes, GeoJSON) writes
-``<out>/geometry-<timestamp>.json`` and copies it to ``<out>/latest-geometry.json``.
+``<out>/geometry-<timestamp>.json`` and copies it to ``<out>/latest-geometry.json``. The svg
+suite (issue 4: SVG path data parse and write throughput) writes ``<out>/svg-<timestamp>.json``
+and ``<out>/latest-svg.json``.
 """
 
 from __future__ import annotations
@@ -28,7 +30,7 @@ from pathlib import Path
 
 import numba
 
-from benchmarks import bench_geometry, datasets
+from benchmarks import bench_geometry, bench_svg, datasets
 from benchmarks.bench_segments import (
     Plan,
     backend_unavailable_reason,
@@ -44,7 +46,8 @@ from benchmarks.timing import Policy
 
 SCHEMA = "rnsca-bench-segments/1"
 GEOMETRY_SCHEMA = "rnsca-bench-geometry/1"
-SUITES = ("segments", "geometry")
+SVG_SCHEMA = "rnsca-bench-svg/1"
+SUITES = ("segments", "geometry", "svg")
 #: Environment variables that change how Numba's parallel kernels behave under load.
 THREADING_ENV = ("NUMBA_NUM_THREADS", "NUMBA_THREADING_LAYER", "OMP_NUM_THREADS",
                  "OMP_WAIT_POLICY")
@@ -241,6 +244,33 @@ def run_geometry(quick: bool, out_dir: Path) -> dict:
     return result
 
 
+def run_svg(quick: bool, out_dir: Path) -> dict:
+    """Run the SVG path data benchmarks (issue 4); write JSON into `out_dir`; return it."""
+    started = time.monotonic()
+    stamp = datetime.now(timezone.utc).strftime("%Y%m%dT%H%M%SZ")
+    plan = bench_svg.QUICK_PLAN if quick else bench_svg.FULL_PLAN
+    machine = describe_machine(PROJECT_ROOT)
+    svg = bench_svg.run_svg(plan, log=_log)
+    machine["numba_threading_layer"] = numba.threading_layer()
+    out_dir.mkdir(parents=True, exist_ok=True)
+    json_path = out_dir / f"svg-{stamp}.json"
+    result = {
+        "schema": SVG_SCHEMA, "created": stamp, "quick": quick, "machine": machine,
+        "load_average_at_end": load_average(),
+        "config": {"n_paths": plan.n_paths, "policy": vars(plan.policy),
+                   "environment": {name: os.environ.get(name) for name in THREADING_ENV},
+                   "timing": bench_svg.TIMING},
+        "svg": svg,
+        "targets": bench_svg.evaluate_svg_targets(svg),
+        "elapsed_seconds": time.monotonic() - started,
+        "paths": {"json": str(json_path)},
+    }
+    text = json.dumps(result, indent=1, default=_json_default)
+    json_path.write_text(text)
+    (out_dir / "latest-svg.json").write_text(text)
+    return result
+
+
 def main(argv: list[str] | None = None) -> int:
     """Parse the command line, run, print the summary."""
     parser = argparse.ArgumentParser(prog="python -m benchmarks.run", description=__doc__,
@@ -249,7 +279,7 @@ def main(argv: list[str] | None = None) -> int:
                         default=os.environ.get("RNSCA_BENCH_QUICK", "") not in ("", "0"),
                         help="small sizes only (smoke test); also RNSCA_BENCH_QUICK=1")
     parser.add_argument("--suite", choices=("all", *SUITES), default="all",
-                        help="run both suites (default) or only one")
+                        help="run every suite (default) or only one")
     parser.add_argument("--out", type=Path, default=DEFAULT_OUT,
                         help=f"directory for the JSON and PNG (default {DEFAULT_OUT})")
     parser.add_argument("--sizes", type=lambda s: [int(v) for v in s.split(",")],
@@ -265,6 +295,8 @@ def main(argv: list[str] | None = None) -> int:
         print_summary(run(args.quick, args.out, args.sizes, args.shapely_10m, copy_figure))
     if args.suite in ("all", "geometry"):
         print_geometry_summary(run_geometry(args.quick, args.out))
+    if args.suite in ("all", "svg"):
+        bench_svg.print_svg_summary(run_svg(args.quick, args.out))
     return 0
 
 

@@ -1,7 +1,7 @@
 """The benchmark harness runs end to end in quick mode and writes well-formed results.
 
 No timing assertions: this only proves `make bench` will not crash and that the JSON of
-both suites (segments, geometry) keeps the structure benchmarks/README.md documents.
+every suite (segments, geometry, svg) keeps the structure benchmarks/README.md documents.
 """
 
 import json
@@ -195,3 +195,27 @@ def test_geometry_targets_are_all_evaluated(geometry):
     assert targets.keys() == GEOMETRY_TARGETS
     for t in targets.values():
         assert t["met"] in (True, False)
+
+
+def test_svg_suite_times_parse_and_write_and_checks_the_round_trip(quick_run):
+    out, _, stdout = quick_run
+    stamped = list(out.glob("svg-*.json"))
+    assert len(stamped) == 1
+    result = json.loads((out / "latest-svg.json").read_text())
+    assert json.loads(stamped[0].read_text()) == result
+    assert result["schema"] == "rnsca-bench-svg/1"
+    assert result["quick"] is True
+    info = result["svg"]["workload"]
+    assert info["paths"] == 500 and info["bytes"] > 100_000
+    assert info["segments"] == sum(info["segments_by_degree"].values()) > 0
+    runs = {r["label"]: r for r in result["svg"]["runs"]}
+    assert runs.keys() == {"parse:parse_paths", "parse:parse_paths:1thread",
+                           "write:precision=6", "write:precision=None"}
+    for r in runs.values():
+        assert r["seconds"] > 0 and r["mb_per_s"] > 0
+    assert runs["write:precision=None"]["reads_back"] is True
+    assert runs["write:precision=6"]["reads_back"] is True
+    targets = {t["key"]: t for t in result["targets"]}
+    assert targets.keys() == {"parse_throughput"}
+    assert targets["parse_throughput"]["met"] in (True, False)
+    assert "Issue 4 targets" in stdout

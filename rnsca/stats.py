@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, fields
 
 import numpy as np
 
@@ -134,6 +134,35 @@ class ClipStats:
             invalid_polygons=int(total[C.INVALID_POLYGONS]),
             **geometry,
         )
+
+    @classmethod
+    def combine(cls, parts) -> ClipStats:
+        """Return the stats of several clipping calls taken as one.
+
+        Counters and per-level tuples add up; the deepest levels are the deepest of
+        any part. No parts give all-zero stats.
+
+        Examples
+        --------
+        >>> a = ClipStats(2, 1, 3, 1, 1, 1, 0, 0, 2, 1, (1, 2) + (0,) * 31)
+        >>> b = ClipStats(1, 1, 1, 1, 0, 0, 0, 0, 0, 0, (1,) + (0,) * 32)
+        >>> c = ClipStats.combine([a, b])
+        >>> c.segments_in, c.deepest_level, c.decided_per_level[:2]
+        (3, 1, (2, 2))
+        """
+        parts = list(parts)
+        values = {}
+        for field in fields(cls):
+            column = [getattr(part, field.name) for part in parts]
+            if field.name in ("deepest_level", "runs_deepest_level"):
+                values[field.name] = max(column, default=0)
+            elif field.name.endswith("per_level"):
+                total = np.sum(column, axis=0, dtype=np.int64) if column \
+                    else np.zeros(C.N_LEVELS, np.int64)
+                values[field.name] = tuple(total.tolist())
+            else:
+                values[field.name] = sum(column)
+        return cls(**values)
 
     def to_dict(self) -> dict:
         """Return the stats as plain JSON-ready values, with the shallow fraction."""

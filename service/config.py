@@ -85,9 +85,6 @@ class Settings(BaseSettings):
 
     @model_validator(mode="after")
     def _consistent(self) -> Settings:
-        if self.verify_max_vertices > self.max_vertices:
-            raise ValueError(f"verify_max_vertices ({self.verify_max_vertices}) exceeds "
-                             f"max_vertices ({self.max_vertices})")
         if self.graceful_shutdown_seconds < self.request_time_limit:
             raise ValueError("graceful_shutdown_seconds must be at least request_time_limit, "
                              "so a request in flight at SIGTERM can finish")

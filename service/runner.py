@@ -43,7 +43,8 @@ class ClipRunner:
     """
 
     def __init__(self, threads: int, time_limit: float) -> None:
-        self._pool = ThreadPoolExecutor(max_workers=threads, thread_name_prefix="rnsca-clip")
+        self._threads = threads
+        self._pool: ThreadPoolExecutor | None = None
         self.time_limit = time_limit
         self.ready = threading.Event()
         self.threading_layer: str | None = None
@@ -104,7 +105,7 @@ class ClipRunner:
         """Warm up in the pool, off the event loop (so `/healthz` answers meanwhile)."""
         loop = asyncio.get_running_loop()
         try:
-            await loop.run_in_executor(self._pool, self._call, self.warm_up, (backends,))
+            await loop.run_in_executor(self._executor(), self._call, self.warm_up, (backends,))
         except Exception as exc:  # reported by /readyz; the process keeps answering
             self.failure = f"{type(exc).__name__}: {exc}"
             _log.error("warming up the kernels failed", exc_info=exc)
@@ -112,7 +113,7 @@ class ClipRunner:
     async def run(self, function, *args):
         """Return ``function(*args)`` run in the pool; raise `TimeLimitError` past the limit."""
         loop = asyncio.get_running_loop()
-        future = loop.run_in_executor(self._pool, self._call, function, args)
+        future = loop.run_in_executor(self._executor(), self._call, function, args)
         try:
             return await asyncio.wait_for(future, self.time_limit)
         except TimeoutError:
@@ -129,6 +130,16 @@ class ClipRunner:
                 if not self._settled:
                     self.settle()
 
+    def _executor(self) -> ThreadPoolExecutor:
+        # Made on first use, so an app whose lifespan ends and starts again (test clients
+        # do that) gets a new pool instead of a closed one.
+        if self._pool is None:
+            self._pool = ThreadPoolExecutor(max_workers=self._threads,
+                                            thread_name_prefix="rnsca-clip")
+        return self._pool
+
     def shutdown(self) -> None:
         """Wait for running calls to finish, then stop the threads."""
-        self._pool.shutdown(wait=True, cancel_futures=False)
+        pool, self._pool = self._pool, None
+        if pool is not None:
+            pool.shutdown(wait=True, cancel_futures=False)

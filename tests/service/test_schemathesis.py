@@ -1,0 +1,40 @@
+"""Bad-input fuzzing: schemathesis generates requests from the app's own OpenAPI schema.
+
+Every answer must be below 500 (the one deliberate exception: `/v1/clip/svg` answers 501
+until the library has SVG clipping; remove `_DELIBERATE` when it does), and every error
+must be an RFC 9457 problem document.
+"""
+
+import warnings
+
+import pytest
+import schemathesis
+from hypothesis import HealthCheck, settings
+
+from service import Settings, create_app
+from service.convert import svg_available
+
+app = create_app(Settings(warm_up=False, verify_max_vertices=50, max_vertices=10_000,
+                          max_body_bytes=2**20))
+schema = schemathesis.openapi.from_asgi("/openapi.json", app)
+#: (method, path) -> status answered on purpose although >= 500.
+_DELIBERATE = {} if svg_available() else {("POST", "/v1/clip/svg"): 501}
+
+
+@pytest.mark.filterwarnings("ignore::DeprecationWarning")
+@schema.parametrize()
+@settings(max_examples=25, deadline=None, derandomize=True,
+          suppress_health_check=list(HealthCheck))
+def test_no_server_error_and_every_error_is_a_problem(case):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        response = case.call()
+    status = response.status_code
+    key = (case.method.upper(), case.path)
+    if status >= 500:
+        assert _DELIBERATE.get(key) == status, (key, status, response.text)
+    if status >= 400:
+        assert response.headers["content-type"][0].startswith("application/problem+json"), \
+            (key, status, response.text)
+        body = response.json()
+        assert body["status"] == status and body["type"].startswith("urn:rnsca:problem:")

@@ -336,8 +336,9 @@ def _apply(m: np.ndarray, points: np.ndarray) -> np.ndarray:
     """Return `points` (..., 2) mapped by the matrices `m` (..., 6), broadcast."""
     x, y = points[..., 0], points[..., 1]
     out = np.empty(np.broadcast_shapes(points.shape, m.shape[:-1] + (2,)))
-    out[..., 0] = m[..., 0] * x + m[..., 2] * y + m[..., 4]
-    out[..., 1] = m[..., 1] * x + m[..., 3] * y + m[..., 5]
+    with np.errstate(over="ignore", invalid="ignore"):  # PathArrays names the path
+        out[..., 0] = m[..., 0] * x + m[..., 2] * y + m[..., 4]
+        out[..., 1] = m[..., 1] * x + m[..., 3] * y + m[..., 5]
     return out
 
 

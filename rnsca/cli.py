@@ -1,10 +1,10 @@
 """The ``rnsca`` command line.
 
-Commands: ``clip`` (GeoJSON documents), ``segments`` (.npy arrays of segments),
+Commands: ``clip`` (GeoJSON or SVG documents), ``segments`` (.npy arrays of segments),
 ``backends``, ``warm-up`` and ``serve`` (the HTTP service; needs the ``service`` extra).
 Errors print one line, ``error: <what and where>``, on stderr and exit with 2 for a wrong
 command line (options, window, the kind of input) or 1 for input that cannot be clipped
-(not JSON, invalid GeoJSON, unreadable files).
+(not JSON, invalid GeoJSON or SVG, unreadable files).
 """
 
 from __future__ import annotations
@@ -28,7 +28,8 @@ from rnsca.errors import (
     RnscaError,
 )
 from rnsca.formats.geojson import dumps, loads
-from rnsca.options import Mode
+from rnsca.formats.svgdoc import clip_svg_document
+from rnsca.options import Boundary, Mode
 
 __all__ = ["app", "PROGRESS_MIN_BYTES"]
 
@@ -38,6 +39,8 @@ EXIT_DATA = 1
 EXIT_USAGE = 2
 #: File name endings read as GeoJSON (compared case-insensitively).
 GEOJSON_SUFFIXES = (".geojson", ".json")
+#: File name endings read as SVG; so is input whose first character is ``<``.
+SVG_SUFFIXES = (".svg",)
 #: With stderr on a terminal, inputs of at least this many bytes get a progress bar.
 PROGRESS_MIN_BYTES = 8 * 2**20
 # Files are read and written in blocks of this size, so that the bar moves.
@@ -131,13 +134,14 @@ def segments(
 def clip(
     source: Annotated[str | None, typer.Argument(
         metavar="INPUT", show_default=False,
-        help="GeoJSON file (.geojson or .json); - or nothing reads stdin")] = None,
+        help="GeoJSON (.geojson or .json) or SVG (.svg) file; - or nothing reads "
+             "stdin")] = None,
     window: Annotated[str, typer.Option(
         "--window", "-w", show_default=False,
         help="xmin,ymin,xmax,ymax, e.g. 0,0,10,10 or -10,-10,10,10")] = ...,
     output: Annotated[str | None, typer.Option(
         "--output", "-o", show_default=False,
-        help="file to write the clipped GeoJSON to; default (or -): stdout")] = None,
+        help="file to write the clipped document to; default (or -): stdout")] = None,
     stats: Annotated[Path | None, typer.Option(
         "--stats", show_default=False,
         help="write the statistics (and verification) JSON to this file instead of "
@@ -148,7 +152,8 @@ def clip(
                                              "nicholl_lee_nicholl or midpoint")] = "rnsca",
     n: Annotated[str, typer.Option(help="pieces (runs) per split, 2..64 or auto")] = "auto",
     max_depth: Annotated[int | None, typer.Option(help="0..32")] = None,
-    tolerance: Annotated[float | None, typer.Option(help="leaf length")] = None,
+    tolerance: Annotated[float | None, typer.Option(
+        help="leaf length; SVG: also how far flattened curves may stray")] = None,
     mode: Annotated[str, typer.Option(help="exact or approx (lines and points only)")] = "exact",
     backend: Annotated[str, typer.Option(help="numba")] = "numba",
     boundary: Annotated[str, typer.Option(
@@ -167,12 +172,23 @@ def clip(
         "--progress/--no-progress", show_default=False,
         help="show a progress bar on stderr (default: for inputs of 8 MiB or more when "
              "stderr is a terminal)")] = None,
+    curves: Annotated[str, typer.Option(
+        help="SVG: preserve (Béziers cut at the edges) or flatten (lines)")] = "preserve",
+    fill: Annotated[str, typer.Option(
+        help="SVG: auto (each shape as a fill if its fill is not none, else as a stroke), "
+             "stroke or fill")] = "auto",
+    precision: Annotated[int | None, typer.Option(
+        help="SVG: significant digits of the written path data [default: exact]")] = None,
 ) -> None:
     """Clip a GeoJSON document to a window and write the clipped GeoJSON.
 
     Geometry, Feature and FeatureCollection documents are accepted; properties, ids and
     foreign members are kept, bbox members recomputed. The statistics go to stderr as
     JSON (or to --stats FILE), with the comparison with Shapely under --verify.
+
+    SVG documents (a .svg file, or input starting with <) have every drawn shape
+    clipped (basic shapes become paths, transforms applied) and the rest left intact;
+    --keep-empty keeps emptied shapes as empty paths.
     """
     bounds = _window_bounds(window)
     options = dict(boundary=boundary, method=method, n=int(n) if n.isdigit() else n,
@@ -184,22 +200,33 @@ def clip(
             raise InvalidOptionError(
                 "--verify with --mode approx needs --approx-bound (the largest deviation "
                 "to accept)")
+        clip_svg_document("<svg/>", bounds, curves=curves, fill_mode=fill,
+                          precision=precision)   # checks the SVG options
     name, path = _input(source)
     bar = _ProgressBar(progress)
     try:
         with _reporting(EXIT_DATA):
-            data = _json_text(_read(path, bar), name)
+            data = _read(path, bar)
             bar.phase(f"clipping {name}")
-            document = loads(data)
-            clipped, clip_stats = rnsca.clip_geojson(
-                document, bounds, keep_empty=keep_empty, arrays=True, **options)
-            report = {"stats": clip_stats.to_dict()}
-            if verify:
-                bar.phase(f"verifying {name}")
-                verification = rnsca.verify(document, clipped, bounds, mode=mode,
-                                            approx_bound=approx_bound, boundary=boundary)
-                report["verification"] = verification.to_dict()
-            text = dumps(clipped, indent=indent) + b"\n"
+            if _is_svg(path, data):
+                geojson_only = {"--verify": verify, "--check-validity": check_validity,
+                                "--boundary": Boundary(boundary) is not Boundary.CLOSED,
+                                "--approx-bound": approx_bound is not None,
+                                "--indent": indent}
+                text, report = _clip_svg(data, bounds, options, geojson_only,
+                                         curves=curves, fill_mode=fill,
+                                         precision=precision, keep_empty=keep_empty)
+            else:
+                document = loads(_json_text(data, name))
+                clipped, clip_stats = rnsca.clip_geojson(
+                    document, bounds, keep_empty=keep_empty, arrays=True, **options)
+                report = {"stats": clip_stats.to_dict()}
+                if verify:
+                    bar.phase(f"verifying {name}")
+                    verification = rnsca.verify(document, clipped, bounds, mode=mode,
+                                                approx_bound=approx_bound, boundary=boundary)
+                    report["verification"] = verification.to_dict()
+                text = dumps(clipped, indent=indent) + b"\n"
             _write(output, text, bar)
     finally:
         bar.close()
@@ -260,16 +287,43 @@ def _check_options(bounds, options: dict) -> None:
     rnsca.clip_ragged("Point", np.empty((0, 2)), (), bounds, **options)
 
 
+def _clip_svg(data: memoryview, bounds, options: dict, geojson_only: dict[str, bool],
+              **svg_options) -> tuple[bytes, dict]:
+    """Return the clipped SVG document (UTF-8) and the report.
+
+    Options that only GeoJSON input has (the flags of `geojson_only` that are set) are
+    refused; the curve options (method, n, max_depth, mode, backend) are the library's.
+    """
+    for flag, given in geojson_only.items():
+        if given:
+            raise InvalidOptionError(f"{flag} applies to GeoJSON input, not to SVG")
+    curve_options = {name: options[name] for name in ("method", "n", "max_depth", "mode",
+                                                      "backend", "tolerance")}
+    text, clip_stats = clip_svg_document(bytes(data), bounds, **svg_options,
+                                         **curve_options)
+    return text.encode("utf-8"), {"stats": clip_stats.to_dict()}
+
+
+def _is_svg(path: Path | None, data: memoryview) -> bool:
+    """Return whether the input is SVG: by its name, else by its first character."""
+    if path is not None and path.suffix.lower() in SVG_SUFFIXES:
+        return True
+    if data[:3] == b"\xef\xbb\xbf":  # a UTF-8 byte order mark
+        data = data[3:]
+    first = _NON_SPACE.search(data)
+    return first is not None and first.group() == b"<"
+
+
 def _input(source: str | None) -> tuple[str, Path | None]:
     """Return the name to report and the path of the input (None: stdin), or exit 2."""
     if source is None and sys.stdin.isatty():
-        _fail("no INPUT: name a GeoJSON file, or pipe GeoJSON to stdin", EXIT_USAGE)
+        _fail("no INPUT: name a GeoJSON or SVG file, or pipe one to stdin", EXIT_USAGE)
     if source is None or source == "-":
         return "<stdin>", None
     path = Path(source)
-    if path.suffix and path.suffix.lower() not in GEOJSON_SUFFIXES:
-        _fail(f"{source}: only GeoJSON input is accepted (a .geojson or .json file, or "
-              f"GeoJSON on stdin), got a {path.suffix} file", EXIT_USAGE)
+    if path.suffix and path.suffix.lower() not in GEOJSON_SUFFIXES + SVG_SUFFIXES:
+        _fail(f"{source}: only GeoJSON or SVG input is accepted (a .geojson, .json or .svg "
+              f"file, or either on stdin), got a {path.suffix} file", EXIT_USAGE)
     if not path.is_file():
         _fail(f"{source}: no such file" if not path.exists() else f"{source}: not a file",
               EXIT_USAGE)
@@ -297,8 +351,8 @@ def _read_blocks(stream: BinaryIO, size: int | None, name: str, bar: _ProgressBa
 def _json_text(data: memoryview, name: str) -> memoryview:
     """Return `data` without a byte order mark; exit unless it starts with a JSON object.
 
-    GeoJSON is the one input kind: anything else (SVG, a shapefile...) is refused here,
-    before parsing, with a message that says so.
+    Anything else (SVG was routed before; WKT, a shapefile...) is refused here, before
+    parsing, with a message that says so.
     """
     if data[:3] == b"\xef\xbb\xbf":  # a UTF-8 byte order mark, which RFC 8259 allows
         data = data[3:]
@@ -307,8 +361,9 @@ def _json_text(data: memoryview, name: str) -> memoryview:
         _fail(f"{name} is empty: expected a GeoJSON object", EXIT_DATA)
     if first.group() != b"{":
         start = bytes(data[first.start():first.start() + 16])
-        _fail(f"{name}: only GeoJSON input is accepted (a JSON object: Geometry, Feature "
-              f"or FeatureCollection), but it starts with {start!r}", EXIT_USAGE)
+        _fail(f"{name}: only GeoJSON or SVG input is accepted (a JSON object: Geometry, "
+              f"Feature or FeatureCollection; or an SVG document), but it starts with "
+              f"{start!r}", EXIT_USAGE)
     return data
 
 

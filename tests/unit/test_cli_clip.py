@@ -211,15 +211,16 @@ def test_clip_shows_no_progress_bar_when_stderr_is_not_a_terminal(runner, source
 # --- errors ----------------------------------------------------------------------------------
 
 def test_clip_refuses_input_that_is_not_geojson_by_name(runner, tmp_path):
-    path = tmp_path / "drawing.svg"
-    path.write_text('<svg><path d="M 0 0 L 1 1"/></svg>')
+    path = tmp_path / "drawing.wkt"
+    path.write_text("LINESTRING (0 0, 1 1)")
     result = run(runner, str(path), *WINDOW)
-    assert_one_line_error(result, 2, "only GeoJSON input is accepted", ".svg")
+    assert_one_line_error(result, 2, "only GeoJSON or SVG input is accepted", ".wkt")
 
 
 def test_clip_refuses_input_that_is_not_geojson_by_content(runner):
-    result = run(runner, *WINDOW, stdin='<svg><path d="M 0 0 L 1 1"/></svg>')
-    assert_one_line_error(result, 2, "only GeoJSON input is accepted", "<stdin>", "<svg")
+    result = run(runner, *WINDOW, stdin="LINESTRING (0 0, 1 1)")
+    assert_one_line_error(result, 2, "only GeoJSON or SVG input is accepted", "<stdin>",
+                          "LINESTRING")
 
 
 @pytest.mark.parametrize("window, message", [

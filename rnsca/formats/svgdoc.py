@@ -15,6 +15,7 @@ expansion ("billion laughs") nor external entities (XXE) can happen.
 
 from __future__ import annotations
 
+import functools
 import math
 import re
 import xml.etree.ElementTree as ET
@@ -364,18 +365,32 @@ def _inside(paths: PathArrays, window: Window) -> np.ndarray:
     Such a path is its own clip (a Bézier lies in the hull of its control points), so
     its element is left as it was. A path with no points counts as inside.
     """
-    n = len(paths)
-    subpath_path = np.repeat(np.arange(n), np.diff(paths.path_offsets))
-    segment_path = np.repeat(subpath_path, np.diff(paths.subpath_offsets))
-    low = np.full((n, 2), np.inf)
-    high = np.full((n, 2), -np.inf)
-    np.minimum.at(low, segment_path, paths.controls.min(axis=1))
-    np.maximum.at(high, segment_path, paths.controls.max(axis=1))
-    np.minimum.at(low, subpath_path, paths.start)
-    np.maximum.at(high, subpath_path, paths.start)
+    c = paths.controls
+    segment_low = np.minimum(np.minimum(c[:, 0], c[:, 1]), np.minimum(c[:, 2], c[:, 3]))
+    segment_high = np.maximum(np.maximum(c[:, 0], c[:, 1]), np.maximum(c[:, 2], c[:, 3]))
+    low = np.minimum(_reduce(np.minimum, segment_low, paths.subpath_offsets, np.inf),
+                     paths.start)
+    high = np.maximum(_reduce(np.maximum, segment_high, paths.subpath_offsets, -np.inf),
+                      paths.start)
+    low = _reduce(np.minimum, low, paths.path_offsets, np.inf)
+    high = _reduce(np.maximum, high, paths.path_offsets, -np.inf)
     xmin, ymin, xmax, ymax = window.bounds
     return ((low[:, 0] >= xmin) & (low[:, 1] >= ymin)
             & (high[:, 0] <= xmax) & (high[:, 1] <= ymax))
+
+
+def _reduce(ufunc, values: np.ndarray, offsets: np.ndarray, empty: float) -> np.ndarray:
+    """Return `ufunc` reduced over each run ``offsets[i]:offsets[i + 1]`` of `values`.
+
+    Runs are contiguous; an empty run gives `empty`. Only non-empty runs are passed to
+    ``reduceat``, so each reduces exactly its own rows.
+    """
+    counts = np.diff(offsets)
+    out = np.full((counts.shape[0],) + values.shape[1:], empty)
+    full = counts > 0
+    if full.any():
+        out[full] = ufunc.reduceat(values, offsets[:-1][full], axis=0)
+    return out
 
 
 def _set_path_data(shape: _Shape, d: str) -> None:
@@ -603,6 +618,7 @@ def _compose(m: tuple[float, ...], n: tuple[float, ...]) -> tuple[float, ...]:
             a * n[4] + c * n[5] + e, b * n[4] + d * n[5] + f)
 
 
+@functools.lru_cache(maxsize=256)   # siblings share their group's map
 def _invertible(m: tuple[float, ...]) -> bool:
     """Return whether the map is finite and its inverse too (not singular)."""
     det = m[0] * m[3] - m[1] * m[2]
@@ -686,7 +702,16 @@ def _length(doc, element: ET.Element, name: str, axis: str, default):
     width (``axis`` "x"), height ("y") or normalized diagonal ("xy").
     """
     text = element.get(name)
-    if text is None or text.strip() == "auto":
+    if text is None:
+        return default
+    try:   # the common case: a plain number ("1_0", "inf" and "nan" go on below)
+        value = float(text)
+    except ValueError:
+        pass
+    else:
+        if math.isfinite(value) and "_" not in text:
+            return value
+    if text.strip() == "auto":
         return default
     match = _LENGTH.fullmatch(text)
     if match is None:

@@ -165,6 +165,13 @@ def test_shapes_that_do_not_render_are_left_as_they_are(shape):
     assert ET.fromstring(svg(out))[0].attrib == ET.fromstring(svg(shape))[0].attrib
 
 
+def test_paths_with_empty_subpaths_are_judged_by_their_points():
+    body = ('<path d="" /><path d="M1 1" /><path d="M20 20" fill="none"/>'
+            '<path fill="none" d="M1 1M-5 5H15M2 2"/><path d="M1 1H2" />')
+    assert clipped(body) == ('<path d="" /><path d="M1 1" />'
+                             '<path fill="none" d="M1 1M0 5H10M2 2" /><path d="M1 1H2" />')
+
+
 def test_percentages_resolve_against_the_root_viewbox():
     doc = svg('<rect id="r" x="-50%" width="100%" height="10%"/>',
               ' viewBox="0 0 20 40"')

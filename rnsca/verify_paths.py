@@ -58,6 +58,7 @@ def filled_region(rings: list[np.ndarray], fill: Fill):
         return shapely.MultiPolygon()
     outline = shapely.union_all([shapely.linestrings(r) for r in rings])
     faces = np.asarray(shapely.get_parts(shapely.polygonize([outline])))
+    faces = faces[shapely.area(faces) > 0] if faces.size else faces
     if faces.size == 0:
         return shapely.MultiPolygon()
     inside = shapely.point_on_surface(faces)
@@ -65,12 +66,9 @@ def filled_region(rings: list[np.ndarray], fill: Fill):
     winding = winding_numbers(points, rings)
     keep = winding != 0 if fill is Fill.NONZERO else (winding % 2) == 1
     region = shapely.union_all(faces[keep])
-    if region.geom_type == "Polygon":
-        return shapely.multipolygons([region])
-    if region.geom_type != "MultiPolygon":
-        return shapely.multipolygons(
-            [g for g in shapely.get_parts(region) if g.geom_type == "Polygon"])
-    return region
+    polygons = [g for g in shapely.get_parts(region)
+                if g.geom_type == "Polygon" and not g.is_empty]
+    return shapely.MultiPolygon(polygons)
 
 
 def winding_numbers(points: np.ndarray, rings: list[np.ndarray]) -> np.ndarray:

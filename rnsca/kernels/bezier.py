@@ -85,8 +85,9 @@ _INT_STATE_WIDTH = 10
 
 @scalar
 def _lerp(a, b, t):
-    # Exact at both ends: t = 0 gives a, t = 1 gives b.
-    return (1.0 - t) * a + t * b
+    # Exact at both ends (t = 0 gives a, t = 1 gives b) and where a == b, so a curve
+    # along an edge line stays exactly on it: measured from the nearer end.
+    return a + t * (b - a) if t < 0.5 else b - (1.0 - t) * (b - a)
 
 
 @scalar

@@ -403,7 +403,9 @@ def _convert_fallback(ds, data: bytes, buf: np.ndarray, path_bytes: np.ndarray,
         index = first[short, None] + width
         rows = np.where(width < length[short, None],
                         buf[np.minimum(index, buf.shape[0] - 1)], 0).astype(np.uint8)
-        nums[where[short]] = rows.view(f"S{_VECTOR_NUMBER_BYTES}").ravel().astype(np.float64)
+        with np.errstate(over="ignore"):   # out of range: infinity, reported below
+            nums[where[short]] = rows.view(f"S{_VECTOR_NUMBER_BYTES}").ravel().astype(
+                np.float64)
     for k in np.flatnonzero(~short).tolist():
         nums[where[k]] = float(data[first[k]:end[k]])
     overflow = ~np.isfinite(nums[where])
@@ -496,46 +498,39 @@ def write_paths(p: PathArrays, *, precision: int | None = 6) -> list[str]:
         return []
     kind, with_moveto = svgwrite.classify(p.controls, p.degree, p.subpath_offsets, p.closed,
                                           p.start, p.path_offsets, precision is None)
-    m = kind.shape[0]
-    values = np.concatenate([p.controls.reshape(m, 8)[svgwrite.COLUMNS[kind]],
-                             p.start[with_moveto].reshape(-1)])
-    unique, inverse = np.unique(values, return_inverse=True)
-    table, table_offsets, flags = _number_table(unique.tolist(), precision)
-    n_seg_values = int(svgwrite.NUMBER_COUNT[kind].sum())
     seg_value_offsets = _prefix_sum(svgwrite.NUMBER_COUNT[kind])
-    start_value_offsets = _prefix_sum(with_moveto.astype(np.int64) * 2)
-    inverse = inverse.reshape(-1).astype(np.int64)
-    text, path_chars = svgwrite.write(kind, with_moveto, p.subpath_offsets, p.closed,
-                                      p.path_offsets, inverse[:n_seg_values],
-                                      seg_value_offsets, inverse[n_seg_values:],
-                                      start_value_offsets, table, table_offsets, flags)
-    out = text.tobytes().decode("ascii")
-    return [out[a:b] for a, b in pairwise(path_chars.tolist())]
+    start_value_offsets = _prefix_sum(with_moveto.astype(np.int64) * 2) + seg_value_offsets[-1]
+    values, text, length = svgwrite.format_values(
+        p.controls, p.start, kind, with_moveto, seg_value_offsets, start_value_offsets,
+        0 if precision is None else precision)
+    left = np.flatnonzero(length == 0)
+    if left.size:
+        _format_in_python(values[left], precision, text, length, left)
+    data, bounds = svgwrite.write(kind, with_moveto, p.subpath_offsets, p.closed,
+                                  p.path_offsets, seg_value_offsets, start_value_offsets, text,
+                                  length)
+    out = data.tobytes().decode("ascii")
+    return [out[a:b] for a, b in pairwise(bounds.tolist())]
 
 
-def _number_table(values: list[float], precision: int | None):
-    """Return the compact text of each value: bytes, offsets and separator flags."""
+def _format_in_python(values: np.ndarray, precision: int | None, text: np.ndarray,
+                      length: np.ndarray, rows: np.ndarray) -> None:
+    """Fill `text` and `length` at `rows` with the compact text of `values`.
+
+    Python's ``repr`` and ``%g`` round correctly; each distinct value is formatted once.
+    """
+    unique, inverse = np.unique(values, return_inverse=True)
     if precision is None:
-        texts = [_compact(repr(v)) for v in values]
+        texts = [_compact(repr(v)) for v in unique.tolist()]
     else:
         spec = f"%.{precision}g"
-        texts = [_compact(spec % v) for v in values]
-    joined = "".join(texts).encode("ascii")
-    table = np.frombuffer(joined, dtype=np.uint8)
-    lengths = np.fromiter(map(len, texts), dtype=np.int64, count=len(texts))
-    offsets = _prefix_sum(lengths)
-    flags = np.zeros(len(texts), dtype=np.uint8)
-    if texts:
-        heads = table[offsets[:-1]]
-        flags |= np.where(heads == ord("-"), svgwrite.STARTS_WITH_MINUS, 0).astype(np.uint8)
-        flags |= np.where(heads == ord("."), svgwrite.STARTS_WITH_DOT, 0).astype(np.uint8)
-        dots = np.add.reduceat((table == ord(".")).astype(np.int64), offsets[:-1])
-        exps = np.add.reduceat((table == ord("e")).astype(np.int64), offsets[:-1])
-        # A following ".5" is a new number only after one that has a '.' and no
-        # exponent ("1.5.5"); after "1e5" we keep the space, as some readers require.
-        flags |= np.where((dots > 0) & (exps == 0), svgwrite.ENDS_IN_FRACTION,
-                          0).astype(np.uint8)
-    return table, offsets, flags
+        texts = [_compact(spec % v) for v in unique.tolist()]
+    width = svgwrite.TEXT_WIDTH
+    table = np.frombuffer("".join(t.ljust(width, "\0") for t in texts).encode("ascii"),
+                          dtype=np.uint8).reshape(-1, width)
+    inverse = inverse.reshape(-1)
+    text[rows] = table[inverse]
+    length[rows] = np.fromiter(map(len, texts), dtype=np.int8, count=len(texts))[inverse]
 
 
 def _compact(text: str) -> str:

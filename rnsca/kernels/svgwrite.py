@@ -1,11 +1,26 @@
-"""Bézier segments to SVG path data: choose commands, then lay out the bytes.
+"""Bézier segments to SVG path data: choose commands, format numbers, lay out bytes.
 
 `classify` picks each segment's command (L, H, V, Q, T, C, S) and whether each subpath
-needs its moveto. The caller formats the distinct numbers once (in Python, where
-``repr`` and ``%g`` round correctly) into a table of ASCII strings; `write` then copies
-the command letters and table entries of every path into one byte buffer, in two passes
-with one body (count, prefix sum, write), one path per ``prange`` iteration.
+needs its moveto. `format_values` writes each number the commands need as compact
+decimal text, one fixed-width row per number; the few it cannot round with certainty
+are left (length 0) for the caller, who formats them with Python's correctly rounded
+``repr`` or ``%g``. `write` then lays out the command letters and numbers of every path
+in one byte buffer, in two passes with one body (count, prefix sum, write), one path
+per ``prange`` iteration.
+
+Rounding to p significant digits (Steele & White, "How to print floating-point numbers
+accurately", take the nearest p-digit decimal): with ``|k| <= 22``, ``s = |x| * 10**k``
+is one IEEE operation on exact operands, within half an ulp of the exact product S.
+When no half-integer lies within an ulp of s, ``round(s) == round(S)``: the p digits are
+the correctly rounded ones, the same as ``'%.{p}g' % x``. Otherwise (rare: a tie or a
+near-tie, more often at p = 15 where the ulp of s is 1/8) the number is left to Python.
+The shortest round-trip form tries p = 1, 2, ... 15 and keeps the first whose decimal
+reads back as x (checked with Clinger's exact fast path of the reader); numbers that
+need 16 or 17 digits are left to Python's ``repr``.
 """
+
+import math
+from fractions import Fraction
 
 import numpy as np
 from numba import prange
@@ -13,13 +28,12 @@ from numba import prange
 from rnsca.kernels.jit import parallel, scalar
 
 __all__ = [
+    "TEXT_WIDTH",
     "KIND_LETTERS",
     "NUMBER_COUNT",
     "COLUMNS",
-    "STARTS_WITH_MINUS",
-    "STARTS_WITH_DOT",
-    "ENDS_IN_FRACTION",
     "classify",
+    "format_values",
     "write",
 ]
 
@@ -35,12 +49,33 @@ for _kind, _columns in ((L, (6, 7)), (H, (6,)), (V, (7,)), (Q, (2, 3, 6, 7)), (T
                         (C, (2, 3, 4, 5, 6, 7)), (S, (4, 5, 6, 7))):
     COLUMNS[_kind, list(_columns)] = True
 
-# Flags of a number's text, for the separator rule: no space is needed before a number
-# that starts with '-', nor before one that starts with '.' when the previous one has a
-# fraction ("1.5.5" is 1.5 then .5).
-STARTS_WITH_MINUS = 1
-STARTS_WITH_DOT = 2
-ENDS_IN_FRACTION = 4
+#: Bytes per formatted number: the longest compact form of a float64 with up to 17
+#: digits is 23 ("-12345678901234567e-324").
+TEXT_WIDTH = 24
+
+# The columns each kind writes, as lists padded with -1 (for the kernels).
+_COLUMN_LIST = np.full((7, 6), -1, dtype=np.int64)
+for _kind in range(7):
+    _cols = np.flatnonzero(COLUMNS[_kind])
+    _COLUMN_LIST[_kind, :_cols.shape[0]] = _cols
+
+_POW10_INT = np.array([10**k for k in range(19)], dtype=np.int64)
+
+# Powers of ten as double-doubles, 10**k = _P10_HI[k - _P10_MIN] + _P10_LO[...] within
+# 2**-106 relative: hi is 10**k correctly rounded, lo the rounded remainder.
+_P10_MIN = -300
+_P10_MAX = 300
+_P10_HI = np.empty(_P10_MAX - _P10_MIN + 1)
+_P10_LO = np.empty(_P10_MAX - _P10_MIN + 1)
+for _k in range(_P10_MIN, _P10_MAX + 1):
+    _exact = Fraction(10) ** _k
+    _P10_HI[_k - _P10_MIN] = float(_exact)
+    _P10_LO[_k - _P10_MIN] = float(_exact - Fraction(_P10_HI[_k - _P10_MIN]))
+_SPLITTER = 134217729.0    # 2**27 + 1
+# Magnitudes the kernel formats: with up to 17 digits, the scale 10**k stays within the
+# table and the Veltkamp split of both factors cannot overflow. Others go to Python.
+_SMALLEST = 1e-280
+_LARGEST = 1e280
 
 _M = 77
 _Z = 90
@@ -107,26 +142,288 @@ def classify(controls, degree, subpath_offsets, closed, start, path_offsets, t_a
 
 
 @scalar
-def _number(out, n, write, table, table_offsets, flags, entry, after_number, after_fraction):
-    """Append table `entry`, after a space if the reader needs one; return the new length."""
-    f = flags[entry]
-    if after_number and not (f & STARTS_WITH_MINUS) and not (
-            f & STARTS_WITH_DOT and after_fraction):
+def _two_product(a, b):
+    """Return (p, e) with p = fl(a * b) and p + e = a * b exactly (Dekker, Veltkamp split).
+
+    Exact while no partial product overflows: |a|, |b| below about 1e300.
+    """
+    p = a * b
+    c = _SPLITTER * a
+    ah = c - (c - a)
+    al = a - ah
+    c = _SPLITTER * b
+    bh = c - (c - b)
+    bl = b - bh
+    return p, ((ah * bh - p) + ah * bl + al * bh) + al * bl
+
+
+@scalar
+def _scaled(a, k):
+    """Return ``a * 10**k`` as a double-double (hi, lo), relative error below 2**-100."""
+    i = k - _P10_MIN
+    hi, lo = _two_product(a, _P10_HI[i])
+    lo += a * _P10_LO[i]
+    s = hi + lo
+    return s, lo - (s - hi)
+
+
+# Outcomes of `_nearest_digits`.
+_DIGITS_OK = 0
+_NEAR_TIE = 1
+_BEYOND = 2
+
+
+@scalar
+def _nearest_digits(a, p, e):
+    """Return ``(status, n, k, hi, lo)``: n, of p digits, the integer nearest a * 10**k.
+
+    `e` estimates floor(log10(a)), a > 0. ``hi + lo`` is ``a * 10**k`` as a
+    double-double. Status `_NEAR_TIE`: a half-integer lies too close to ``a * 10**k``
+    to tell the rounding (n is then not set); `_BEYOND`: the scale is beyond the table.
+    """
+    low = _POW10_INT[p - 1]
+    k = 0
+    for _ in range(3):
+        k = p - 1 - e
+        if k < _P10_MIN or k > _P10_MAX:
+            return _BEYOND, 0, 0, 0.0, 0.0
+        hi, lo = _scaled(a, k)
+        f = math.floor(hi)
+        frac = (hi - f) + lo
+        # Above 2**53 hi is an integer and lo may exceed 1 (up to half hi's ulp): move
+        # the whole part of the fraction into the integer, in integer arithmetic.
+        whole = math.floor(frac)
+        frac -= whole
+        # hi + lo is within 2**-100 of the product, which is below 2**57: 2**-40 is a
+        # wide margin for the fraction.
+        if abs(frac - 0.5) <= 2.0**-40:
+            return _NEAR_TIE, 0, k, hi, lo
+        below = int(f) + int(whole)            # floor(a * 10**k)
+        if below >= 10 * low:      # p + 1 digits or more: e was too small
+            e += 1
+        elif below < low:          # fewer than p digits: e was too large
+            e -= 1
+        else:
+            n = below + (1 if frac > 0.5 else 0)
+            if n == 10 * low:      # 99.96 to 3 digits: 100, one exponent higher
+                n = low
+                k -= 1
+                hi, lo = _scaled(a, k)
+            return _DIGITS_OK, n, k, hi, lo
+    return _BEYOND, 0, 0, 0.0, 0.0
+
+
+@scalar
+def _minus(n, hi, lo):
+    """Return ``n - (hi + lo)`` for an int n below 2**62, to about 2**-100 of n."""
+    nh = float(n)
+    nl = float(n - int(nh))   # exact: n - nh is a small integer
+    return (nh - hi) + (nl - lo)
+
+
+@scalar
+def _half_gap(a, k, below):
+    """Return half the gap from a to its neighbouring double, times 10**k (to 2**-52).
+
+    Below a power of two the gap is half the gap above.
+    """
+    mantissa, exponent = math.frexp(a)
+    half_gap = math.ldexp(1.0, exponent - 54)
+    if below and mantissa == 0.5:
+        half_gap *= 0.5
+    i = k - _P10_MIN
+    return half_gap * _P10_HI[i] + half_gap * _P10_LO[i]
+
+
+@scalar
+def _reads_back(a, n, k, hi, lo):
+    """Return 1 if the decimal ``n * 10**-k`` reads as `a`, 0 if not, -1 if too close.
+
+    It does when it lies within half the gap from `a` to the neighbouring double on its
+    side (the gap below a power of two is half the gap above). Compared in units of
+    ``10**-k``: ``n - (hi + lo)`` against the half gap times ``10**k``.
+    """
+    diff = _minus(n, hi, lo)
+    bound = _half_gap(a, k, diff < 0.0)
+    margin = bound * 2.0**-40 + (hi if hi > 1.0 else 1.0) * 2.0**-90
+    if abs(abs(diff) - bound) <= margin:
+        return -1
+    return 1 if abs(diff) < bound else 0
+
+
+@scalar
+def _digit(n, j):
+    """Return the ASCII code of digit j (0: units) of n >= 0."""
+    return 48 + (n // _POW10_INT[j]) % 10
+
+
+@scalar
+def _put_text(text, row, negative, n, q):
+    """Write the compact form of ``-?n * 10**q`` into ``text[row]``; return its length.
+
+    Trailing zeros of n move into q; the positional form (``.05``, ``120``) is kept
+    unless the exponent form (``5e-7``, ``12e5``) is shorter.
+    """
+    while n % 10 == 0:
+        n //= 10
+        q += 1
+    nd = 1
+    while nd < 18 and n >= _POW10_INT[nd]:
+        nd += 1
+    positional = nd + q if q >= 0 else (nd + 1 if -q < nd else 1 - q)
+    aq = abs(q)
+    q_len = (1 if aq < 10 else (2 if aq < 100 else 3)) + (1 if q < 0 else 0)
+    at = 0
+    if negative:
+        text[row, 0] = 45          # '-'
+        at = 1
+    if positional <= nd + 1 + q_len:
+        if q >= 0:
+            for j in range(nd):
+                text[row, at + j] = _digit(n, nd - 1 - j)
+            for j in range(q):
+                text[row, at + nd + j] = 48
+            return at + nd + q
+        if -q < nd:
+            point = nd + q         # digits before the decimal point
+            for j in range(point):
+                text[row, at + j] = _digit(n, nd - 1 - j)
+            text[row, at + point] = 46
+            for j in range(point, nd):
+                text[row, at + j + 1] = _digit(n, nd - 1 - j)
+            return at + nd + 1
+        text[row, at] = 46
+        zeros = -q - nd
+        for j in range(zeros):
+            text[row, at + 1 + j] = 48
+        for j in range(nd):
+            text[row, at + 1 + zeros + j] = _digit(n, nd - 1 - j)
+        return at + 1 - q
+    for j in range(nd):
+        text[row, at + j] = _digit(n, nd - 1 - j)
+    at += nd
+    text[row, at] = 101            # 'e'
+    at += 1
+    if q < 0:
+        text[row, at] = 45
+        at += 1
+    for j in range(q_len - (1 if q < 0 else 0)):
+        text[row, at + q_len - (1 if q < 0 else 0) - 1 - j] = 48 + aq % 10
+        aq //= 10
+    return at + q_len - (1 if q < 0 else 0)
+
+
+@scalar
+def _format(x, precision, text, row):
+    """Write x's compact text into ``text[row]``; return its length, or 0 for Python.
+
+    `precision` is the number of significant digits (1 to 17), or 0 for the shortest
+    form that reads back as x.
+    """
+    if x == 0.0:
+        text[row, 0] = 48          # '0', also for -0.0
+        return 1
+    a = abs(x)
+    if not _SMALLEST <= a <= _LARGEST:
+        return 0
+    e = int(math.floor(math.log10(a)))
+    if precision > 0:
+        status, n, k, hi, lo = _nearest_digits(a, precision, e)
+        return _put_text(text, row, x < 0.0, n, -k) if status == _DIGITS_OK else 0
+    for p in range(1, 18):
+        status, n, k, hi, lo = _nearest_digits(a, p, e)
+        if status == _BEYOND:
+            return 0
+        if status == _NEAR_TIE:
+            # Both p-digit neighbours are half a unit away: if that is far beyond half
+            # the gap to the next double (123.25 at 4 digits), neither reads back.
+            if _half_gap(a, k, False) < 0.25:
+                continue
+            return 0
+        fits = _reads_back(a, n, k, hi, lo)
+        if fits < 0:
+            return 0
+        if fits == 0 and math.frexp(a)[0] == 0.5 and _minus(n, hi, lo) < 0.0:
+            # Below a power of two the nearest decimal may miss the narrower gap while
+            # the next one up fits the wider one: repr takes that one, so do we.
+            fits = _reads_back(a, n + 1, k, hi, lo)
+            if fits < 0:
+                return 0
+            n += fits
+        if fits == 1:
+            return _put_text(text, row, x < 0.0, n, -k)
+    return 0
+
+
+@parallel
+def format_values(controls, start, kind, with_moveto, seg_value_offsets,
+                  start_value_offsets, precision):
+    """Return ``(values, text, length)`` of every number the paths write, in order.
+
+    Segment i writes ``values[seg_value_offsets[i]:seg_value_offsets[i + 1]]`` (its
+    `COLUMNS`), the moveto of subpath s ``values[start_value_offsets[s]:...]``. Row r of
+    `text` (uint8, `TEXT_WIDTH` wide) holds the compact text of ``values[r]`` in its
+    first ``length[r]`` bytes; length 0 leaves the row to the caller. `precision` is 1
+    to 17 significant digits, or 0 for the shortest round-trip form.
+    """
+    m = kind.shape[0]
+    k = with_moveto.shape[0]
+    nv = start_value_offsets[k]
+    values = np.empty(nv, dtype=np.float64)
+    text = np.empty((nv, TEXT_WIDTH), dtype=np.uint8)
+    length = np.zeros(nv, dtype=np.int8)
+    for i in prange(m):
+        r = seg_value_offsets[i]
+        for j in range(6):
+            col = _COLUMN_LIST[kind[i], j]
+            if col < 0:
+                break
+            x = controls[i, col // 2, col % 2]
+            values[r] = x
+            length[r] = _format(x, precision, text, r)
+            r += 1
+    for s in prange(k):
+        if with_moveto[s]:
+            for j in range(2):
+                r = start_value_offsets[s] + j
+                values[r] = start[s, j]
+                length[r] = _format(start[s, j], precision, text, r)
+    return values, text, length
+
+
+@scalar
+def _number(out, n, write, text, length, r, after_number, after_fraction):
+    """Append number row r, after a space if the reader needs one; return the new length.
+
+    No space is needed before a '-', nor before a '.' when the previous number has a
+    fraction ("1.5.5" is 1.5 then .5).
+    """
+    c = text[r, 0]
+    if after_number and c != 45 and not (c == 46 and after_fraction):
         if write:
             out[n] = _SPACE
         n += 1
-    a = table_offsets[entry]
-    b = table_offsets[entry + 1]
+    size = int(length[r])
     if write:
-        for j in range(a, b):
-            out[n + j - a] = table[j]
-    return n + b - a
+        for j in range(size):
+            out[n + j] = text[r, j]
+    return n + size
+
+
+@scalar
+def _ends_in_fraction(text, length, r):
+    """Return whether number row r has a '.' and no exponent ("1e5.5" is avoided)."""
+    dot = False
+    for j in range(length[r]):
+        if text[r, j] == 101:
+            return False
+        dot |= text[r, j] == 46
+    return dot
 
 
 @scalar
 def _write_path(p, write, out, at, kind, with_moveto, subpath_offsets, closed, path_offsets,
-                seg_values, seg_value_offsets, start_values, start_value_offsets, table,
-                table_offsets, flags):
+                seg_value_offsets, start_value_offsets, text, length):
     """Return the byte length of path p's data; with `write`, write it at ``out[at:]``."""
     n = at
     letter = 0                # the command a number without a letter would continue
@@ -138,12 +435,10 @@ def _write_path(p, write, out, at, kind, with_moveto, subpath_offsets, closed, p
                 out[n] = _M
             n += 1
             after_number = False
-            for v in range(start_value_offsets[s], start_value_offsets[s + 1]):
-                e = start_values[v]
-                n = _number(out, n, write, table, table_offsets, flags, e, after_number,
-                            after_fraction)
+            for r in range(start_value_offsets[s], start_value_offsets[s + 1]):
+                n = _number(out, n, write, text, length, r, after_number, after_fraction)
                 after_number = True
-                after_fraction = (flags[e] & ENDS_IN_FRACTION) != 0
+                after_fraction = _ends_in_fraction(text, length, r)
             letter = KIND_LETTERS[L]  # pairs after a moveto are linetos
         for i in range(subpath_offsets[s], subpath_offsets[s + 1]):
             c = KIND_LETTERS[kind[i]]
@@ -153,12 +448,10 @@ def _write_path(p, write, out, at, kind, with_moveto, subpath_offsets, closed, p
                 n += 1
                 letter = c
                 after_number = False
-            for v in range(seg_value_offsets[i], seg_value_offsets[i + 1]):
-                e = seg_values[v]
-                n = _number(out, n, write, table, table_offsets, flags, e, after_number,
-                            after_fraction)
+            for r in range(seg_value_offsets[i], seg_value_offsets[i + 1]):
+                n = _number(out, n, write, text, length, r, after_number, after_fraction)
                 after_number = True
-                after_fraction = (flags[e] & ENDS_IN_FRACTION) != 0
+                after_fraction = _ends_in_fraction(text, length, r)
         if closed[s]:
             if write:
                 out[n] = _Z
@@ -169,27 +462,23 @@ def _write_path(p, write, out, at, kind, with_moveto, subpath_offsets, closed, p
 
 
 @parallel
-def write(kind, with_moveto, subpath_offsets, closed, path_offsets, seg_values,
-          seg_value_offsets, start_values, start_value_offsets, table, table_offsets, flags):
-    """Return ``(text, path_offsets)``: uint8 ASCII of all paths and each one's bounds.
+def write(kind, with_moveto, subpath_offsets, closed, path_offsets, seg_value_offsets,
+          start_value_offsets, text, length):
+    """Return ``(data, bounds)``: uint8 ASCII of all paths and each one's byte bounds.
 
-    ``seg_values[seg_value_offsets[i]:seg_value_offsets[i + 1]]`` are the table entries
-    segment i writes (`COLUMNS` order); ``start_values`` likewise for the moveto of
-    each subpath that has one. Entry e is ``table[table_offsets[e]:table_offsets[e+1]]``
-    with separator `flags` e.
+    The numbers are the rows of `text` that `format_values` laid out (every length
+    filled in).
     """
     n = path_offsets.shape[0] - 1
     no_out = np.empty(0, dtype=np.uint8)
     sizes = np.zeros(n + 1, dtype=np.int64)
     for p in prange(n):
         sizes[p + 1] = _write_path(p, False, no_out, 0, kind, with_moveto, subpath_offsets,
-                                   closed, path_offsets, seg_values, seg_value_offsets,
-                                   start_values, start_value_offsets, table, table_offsets,
-                                   flags)
+                                   closed, path_offsets, seg_value_offsets,
+                                   start_value_offsets, text, length)
     bounds = np.cumsum(sizes)
     out = np.empty(bounds[n], dtype=np.uint8)
     for p in prange(n):
         _write_path(p, True, out, bounds[p], kind, with_moveto, subpath_offsets, closed,
-                    path_offsets, seg_values, seg_value_offsets, start_values,
-                    start_value_offsets, table, table_offsets, flags)
+                    path_offsets, seg_value_offsets, start_value_offsets, text, length)
     return out, bounds

@@ -26,7 +26,7 @@ from hypothesis import strategies as st
 from rnsca.errors import InvalidGeometryError, ParseError
 from rnsca.formats import svgpath
 from rnsca.formats.svgpath import parse_path, parse_paths, write_paths
-from rnsca.kernels import svgparse
+from rnsca.kernels import svgparse, svgwrite
 
 WSP = " \t\n\r\x0c"
 ARGS = {"M": 2, "L": 2, "T": 2, "H": 1, "V": 1, "C": 6, "S": 4, "Q": 4, "A": 7, "Z": 0}
@@ -429,3 +429,24 @@ def test_written_text_is_compact(p):
         assert "  " not in text and ", " not in text
         assert not re.search(r"(?<![0-9.])0\.", text), text     # no leading zero
         assert not re.search(r"\.[0-9]*0(?![0-9])", text), text  # no trailing zero
+
+
+FLOATS = st.one_of(st.floats(allow_nan=False, allow_infinity=False),
+                   st.builds(lambda n, k: n / 10.0**k, st.integers(-10**12, 10**12),
+                             st.integers(-30, 30)),
+                   st.builds(lambda n, k: n * 10.0**k, st.integers(-999, 999),
+                             st.integers(-30, 30)))
+
+
+@given(FLOATS, st.integers(0, 17))
+def test_kernel_number_text_is_pythons_or_left_to_python(x, precision):
+    text = np.zeros((1, svgwrite.TEXT_WIDTH), dtype=np.uint8)
+    size = svgwrite._format(x, precision, text, 0)
+    if size == 0:
+        return   # left to Python: a near tie or beyond the exact powers of ten
+    got = text[0, :size].tobytes().decode()
+    if precision:
+        assert got == svgpath._compact(f"%.{precision}g" % x)
+    else:
+        assert float(got) == x
+        assert got == svgpath._compact(repr(x))

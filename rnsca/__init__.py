@@ -17,6 +17,7 @@ from rnsca.errors import (
     RnscaError,
     UnsupportedGeometryError,
 )
+from rnsca.formats.svgdoc import FillMode, clip_svg_document
 from rnsca.formats.svgpath import PathArrays, parse_path, parse_paths, write_path, write_paths
 from rnsca.options import Backend, Boundary, Method, Mode
 from rnsca.ragged import RaggedClipResult, clip_ragged
@@ -33,6 +34,7 @@ __all__ = [
     "ClipStats",
     "Curves",
     "Fill",
+    "FillMode",
     "GeometryKind",
     "InvalidGeometryError",
     "InvalidOptionError",
@@ -56,6 +58,7 @@ __all__ = [
     "clip_ragged",
     "clip_segments",
     "clip_svg",
+    "clip_svg_document",
     "flatten_paths",
     "parse_path",
     "parse_paths",

@@ -237,12 +237,13 @@ def clip_paths(paths: PathArrays, window, *, curves="preserve", fill=None, toler
 
 def _closing_edges(paths: PathArrays, fill: bool) -> int:
     """Return how many subpaths have a closing edge that is clipped as a segment."""
-    counts = np.diff(paths.subpath_offsets)
-    has = counts > 0
+    has = np.diff(paths.subpath_offsets) > 0
     if not fill:
         has &= paths.closed
-    ends = paths.controls[np.maximum(paths.subpath_offsets[1:] - 1, 0), 3]
-    return int((has & (ends != paths.start).any(axis=1)).sum())
+    if not has.any():
+        return 0
+    ends = paths.controls[paths.subpath_offsets[1:][has] - 1, 3]
+    return int((ends != paths.start[has]).any(axis=1).sum())
 
 
 def _exclusive_sum(counts: np.ndarray) -> np.ndarray:
@@ -326,10 +327,10 @@ def flatten_paths(paths: PathArrays, tolerance: float, *, close: bool = False):
     sub = paths.subpath_offsets
     steps = BZ.flatten_steps(paths.controls, paths.degree, float(tolerance))
     segment_points = _exclusive_sum(steps)
-    counts = np.diff(sub)
-    has_line = counts > 0
+    has_line = np.diff(sub) > 0
     closes = has_line & (paths.closed | close)
-    ends = paths.controls[np.maximum(sub[1:] - 1, 0), 3]
+    ends = paths.start.copy()
+    ends[has_line] = paths.controls[sub[1:][has_line] - 1, 3]
     closes &= (ends != paths.start).any(axis=1)
     points = segment_points[sub[1:]] - segment_points[sub[:-1]] + has_line + closes
     line_offsets = _exclusive_sum(points[has_line])

@@ -80,7 +80,9 @@ _PEND = 6         # a visible interval is pending
 _PEND_EA = 7      # edges the pending interval's ends were cut at (bit masks)
 _PEND_EB = 8
 _FIRST_AT_START = 9  # the subpath's first chain starts at its start point (strokes)
-_INT_STATE_WIDTH = 10
+_V_END = 10       # end of the subpath's counted output: a closing line dropped later
+                  # (a whole closed stroke: Z draws it) is not written past it
+_INT_STATE_WIDTH = 11
 
 
 @scalar
@@ -342,7 +344,7 @@ def _snap(x, y, edges, xmin, ymin, xmax, ymax):
 def _put_segment(write, degree, px, py, out_ctrl, out_deg, si, sf):
     """Append one output segment with control points px[0..3], py[0..3]."""
     v = si[_V]
-    if write:
+    if write and v < si[_V_END]:
         for k in range(4):
             out_ctrl[v, k, 0] = px[k]
             out_ctrl[v, k, 1] = py[k]
@@ -356,7 +358,7 @@ def _put_segment(write, degree, px, py, out_ctrl, out_deg, si, sf):
 def _put_line(write, x, y, out_ctrl, out_deg, si, sf):
     """Append a line from the current point to (x, y)."""
     v = si[_V]
-    if write:
+    if write and v < si[_V_END]:
         out_ctrl[v, 0, 0] = sf[_CUR_X]
         out_ctrl[v, 0, 1] = sf[_CUR_Y]
         for k in range(1, 4):
@@ -611,7 +613,8 @@ def clip_segment(write, fill, flatten, exact, degree, x0, x1, x2, x3, y0, y1, y2
             is_leaf = level >= leaf_depth or flatten_count(
                 degree, qx0, qx1, qx2, qx3, qy0, qy1, qy2, qy3, tol) == 1
         elif exact:
-            is_leaf = level >= leaf_depth
+            # A line's crossings cost no more on the whole than on a piece of it.
+            is_leaf = level >= leaf_depth or degree == 1
         else:
             size = max(max(qx0, qx1, qx2, qx3) - min(qx0, qx1, qx2, qx3),
                        max(qy0, qy1, qy2, qy3) - min(qy0, qy1, qy2, qy3))
@@ -675,8 +678,8 @@ def _rotate_last_chain(s0, s_end, v0, v_end, out_ctrl, out_deg, out_first, out_s
 
 @scalar
 def _clip_subpath(write, fill, flatten, exact, controls, degree, first, last, closed, sx, sy,
-                  source, xmin, ymin, xmax, ymax, n_split, leaf_depth, tol, v0, s0, px, py,
-                  brk_t, brk_e, stack, out_ctrl, out_deg, out_first, out_start, out_closed,
+                  source, xmin, ymin, xmax, ymax, n_split, leaf_depth, tol, v0, v_end, s0, px,
+                  py, brk_t, brk_e, stack, out_ctrl, out_deg, out_first, out_start, out_closed,
                   out_from, si, sf, st):
     """Clip the subpath of segments first..last-1 starting at (sx, sy) into the output.
 
@@ -688,6 +691,7 @@ def _clip_subpath(write, fill, flatten, exact, controls, degree, first, last, cl
     si[:] = 0
     sf[:] = 0.0
     si[_V] = v0
+    si[_V_END] = v_end
     si[_S] = s0
     sf[_START_X] = sx
     sf[_START_Y] = sy
@@ -794,16 +798,18 @@ def clip_path_blocks(controls, degree, subpath_offsets, closed, start, subpath_s
         stack = np.empty((CURVE_STACK_CAPACITY, 3), dtype=np.float64)
         for k in range(blk * block_size, min(n, (blk + 1) * block_size)):
             v0 = 0
+            v_end = np.iinfo(np.int64).max
             s0 = 0
             if write:
                 if n_subpaths[k] == 0:
                     continue
                 v0 = segment_start[k]
+                v_end = v0 + n_segments[k]
                 s0 = subpath_start[k]
             _clip_subpath(write, fill, flatten, exact, controls, degree, subpath_offsets[k],
                           subpath_offsets[k + 1], closed[k], start[k, 0], start[k, 1],
                           subpath_source[k], xmin, ymin, xmax, ymax, n_split, leaf_depth, tol,
-                          v0, s0, px, py, brk_t, brk_e, stack, out_ctrl, out_deg, out_first,
+                          v0, v_end, s0, px, py, brk_t, brk_e, stack, out_ctrl, out_deg, out_first,
                           out_start, out_closed, out_from, si, sf, st)
             if not write:
                 n_segments[k] = si[_V]

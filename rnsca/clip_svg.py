@@ -172,7 +172,8 @@ def clip_paths(paths: PathArrays, window, *, curves="preserve", fill=None, toler
         `CURVE_RELATIVE_TOLERANCE` times the window's longer side.
     method, n, max_depth, mode, backend
         RNSCA's options: N pieces per split (``"auto"``: 4), deepest level (default:
-        2 in exact preserve mode, where leaves are solved exactly; 32 otherwise),
+        0 in exact preserve mode, where an ambiguous segment is solved exactly whole
+        (measured fastest); 32 otherwise),
         ``mode="approx"`` drops undecided leaves (no root finding; the output stays
         inside the window).
 

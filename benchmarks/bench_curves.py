@@ -234,5 +234,7 @@ def print_curve_summary(result: dict) -> None:
                   f"{r['subject_speedup']:7.2f}x the subject's time")
     print("Issue 4 curve targets")
     for t in result["targets"]:
+        if "workload" not in t or not t["key"].startswith("preserve_vs_"):
+            continue
         print(f"  {t['workload']}: {t['description']}: {t['value']:.2f} {t['op']} "
               f"{t['limit']}: {'met' if t['met'] else 'NOT met'}")

@@ -12,8 +12,8 @@ both to ``<out>/latest.json`` and ``latest.png``; a full run into the default di
 also copies the plot to ``benchmarks/figure5.png`` (the copy the README shows). The
 geometry suite (issue 3: curves, polygons with holes, GeoJSON) writes
 ``<out>/geometry-<timestamp>.json`` and copies it to ``<out>/latest-geometry.json``. The svg
-suite (issue 4: SVG path data parse and write throughput) writes ``<out>/svg-<timestamp>.json``
-and ``<out>/latest-svg.json``.
+suite (issue 4: SVG path data parse and write throughput, and Bézier clipping against
+flatten-then-clip) writes ``<out>/svg-<timestamp>.json`` and ``<out>/latest-svg.json``.
 """
 
 from __future__ import annotations
@@ -30,7 +30,7 @@ from pathlib import Path
 
 import numba
 
-from benchmarks import bench_geometry, bench_svg, datasets
+from benchmarks import bench_curves, bench_geometry, bench_svg, datasets
 from benchmarks.bench_segments import (
     Plan,
     backend_unavailable_reason,
@@ -251,6 +251,8 @@ def run_svg(quick: bool, out_dir: Path) -> dict:
     plan = bench_svg.QUICK_PLAN if quick else bench_svg.FULL_PLAN
     machine = describe_machine(PROJECT_ROOT)
     svg = bench_svg.run_svg(plan, log=_log)
+    curves = bench_curves.run_curves(bench_curves.QUICK_PLAN if quick else bench_curves.FULL_PLAN,
+                                     log=_log)
     machine["numba_threading_layer"] = numba.threading_layer()
     out_dir.mkdir(parents=True, exist_ok=True)
     json_path = out_dir / f"svg-{stamp}.json"
@@ -261,7 +263,9 @@ def run_svg(quick: bool, out_dir: Path) -> dict:
                    "environment": {name: os.environ.get(name) for name in THREADING_ENV},
                    "timing": bench_svg.TIMING},
         "svg": svg,
-        "targets": bench_svg.evaluate_svg_targets(svg),
+        "curves": curves,
+        "targets": bench_svg.evaluate_svg_targets(svg)
+        + bench_curves.evaluate_curve_targets(curves),
         "elapsed_seconds": time.monotonic() - started,
         "paths": {"json": str(json_path)},
     }
@@ -296,7 +300,9 @@ def main(argv: list[str] | None = None) -> int:
     if args.suite in ("all", "geometry"):
         print_geometry_summary(run_geometry(args.quick, args.out))
     if args.suite in ("all", "svg"):
-        bench_svg.print_svg_summary(run_svg(args.quick, args.out))
+        svg_result = run_svg(args.quick, args.out)
+        bench_svg.print_svg_summary(svg_result)
+        bench_curves.print_curve_summary(svg_result)
     return 0
 
 

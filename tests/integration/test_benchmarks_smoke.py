@@ -215,7 +215,24 @@ def test_svg_suite_times_parse_and_write_and_checks_the_round_trip(quick_run):
         assert r["seconds"] > 0 and r["mb_per_s"] > 0
     assert runs["write:precision=None"]["reads_back"] is True
     assert runs["write:precision=6"]["reads_back"] is True
-    targets = {t["key"]: t for t in result["targets"]}
-    assert targets.keys() == {"parse_throughput"}
-    assert targets["parse_throughput"]["met"] in (True, False)
+    targets = {(t["key"], t.get("workload")): t for t in result["targets"]}
+    assert ("parse_throughput", info["name"]) in targets
+    assert all(t["met"] in (True, False) for t in targets.values())
     assert "Issue 4 targets" in stdout
+
+
+def test_svg_suite_times_curve_clipping_against_flatten_then_clip(quick_run):
+    out, _, stdout = quick_run
+    result = json.loads((out / "latest-svg.json").read_text())
+    workloads = {w["workload"]["name"]: w for w in result["curves"]}
+    assert len(workloads) == 4 and any(name.startswith("glyphs-") for name in workloads)
+    for w in workloads.values():
+        labels = {r["label"] for r in w["runs"]}
+        assert {"rnsca:preserve", "rnsca:approx", "rnsca:flatten",
+                "flatten+rnsca:clip_ragged", "flatten+shapely:intersection"} <= labels
+        assert all(r["seconds"] > 0 for r in w["runs"])
+        assert w["workload"]["segments"] > 0 and w["workload"]["tolerance"] > 0
+    keys = {t["key"] for t in result["targets"]}
+    assert {"preserve_vs_flatten+rnsca:clip_ragged",
+            "preserve_vs_flatten+shapely:intersection"} <= keys
+    assert "Issue 4 curve targets" in stdout

@@ -57,7 +57,9 @@ def subdivision_cost(options, window: Window, length: float | None) -> int:
     >>> w = Window(0, 0, 1, 1)
     >>> subdivision_cost(ClipOptions(), w, 100.0)   # exact, infinite tolerance
     0
-    >>> subdivision_cost(ClipOptions(mode="approx", n=2, max_depth=3), w, 100.0)
+    >>> approx = ClipOptions.model_validate({"mode": "approx", "n": 2, "max_depth": 3},
+    ...                                     strict=False)
+    >>> subdivision_cost(approx, w, 100.0)
     24
     """
     if not _subdivides(options, window):
@@ -134,8 +136,9 @@ def geometry_vertex_cap(options, window: Window, max_vertices: int,
     >>> from service.schemas import GeometryOptions
     >>> geometry_vertex_cap(GeometryOptions(), Window(0, 0, 1, 1), 1000, 10**9)
     (1000, False)
-    >>> geometry_vertex_cap(GeometryOptions(mode="approx", n=2, max_depth=4),
-    ...                     Window(0, 0, 1, 1), 1000, 3300)
+    >>> approx = GeometryOptions.model_validate({"mode": "approx", "n": 2, "max_depth": 4},
+    ...                                         strict=False)
+    >>> geometry_vertex_cap(approx, Window(0, 0, 1, 1), 1000, 3300)
     (100, True)
     """
     per_vertex = 1 + subdivision_cost(options, window, None)

@@ -43,7 +43,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     Examples
     --------
     >>> app = create_app(Settings(warm_up=False))
-    >>> sorted(r.path for r in app.routes if r.path.startswith("/v1"))
+    >>> sorted(p for p in app.openapi()["paths"] if p.startswith("/v1"))
     ['/v1/capabilities', '/v1/clip/geojson', '/v1/clip/segments', '/v1/clip/svg']
     """
     settings = settings or Settings()

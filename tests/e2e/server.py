@@ -25,10 +25,14 @@ def free_port() -> int:
 
 
 class LiveServer:
-    """``python -m service`` in a subprocess; `url` once `/readyz` answers 200."""
+    """``python -m service`` in a subprocess; `url` once `/readyz` answers 200.
+
+    The first server of a fresh checkout compiles every kernel (Numba's cache is empty),
+    which takes minutes on a loaded two-core machine: hence the long ready timeout.
+    """
 
     def __init__(self, python: str = sys.executable, env: dict | None = None,
-                 cwd: Path | None = None, ready_timeout: float = 180.0) -> None:
+                 cwd: Path | None = None, ready_timeout: float = 900.0) -> None:
         self.port = free_port()
         self.url = f"http://127.0.0.1:{self.port}"
         environment = {k: v for k, v in os.environ.items()
@@ -54,12 +58,14 @@ class LiveServer:
             except httpx.TransportError:
                 pass
             time.sleep(0.2)
+        text = self.log()
         self.stop()
-        raise RuntimeError(f"server not ready within {timeout} s:\n" + self.log())
+        raise RuntimeError(f"server not ready within {timeout} s:\n" + text)
 
     def log(self) -> str:
         """Return what the server wrote so far."""
-        self._log.flush()
+        if not self._log.closed:
+            self._log.flush()
         return self.log_path.read_text(errors="replace")
 
     def terminate(self) -> None:

@@ -95,7 +95,7 @@ def test_image_install_and_start_steps_in_a_fresh_environment(tmp_path):
     workdir = tmp_path / "run"
     workdir.mkdir()
     with LiveServer(python=str(venv / "bin/python"), env=image_env, cwd=workdir,
-                    ready_timeout=120) as live:
+                    ready_timeout=600) as live:
         assert httpx.get(live.url + "/healthz", timeout=5).json() == {"status": "ok"}
         check = subprocess.run([str(venv / "bin/python"), "-m", "service.healthcheck"],
                                env={**os.environ, "RNSCA_PORT": str(live.port)}, timeout=30)

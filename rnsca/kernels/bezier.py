@@ -568,6 +568,64 @@ def _flush(write, fill, flatten, degree, x0, x1, x2, x3, y0, y1, y2, y3, xmin, y
 
 
 @_inline
+def _emit_stretch(write, fill, degree, x0, x1, x2, x3, y0, y1, y2, y3, a, b, edges_a, edges_b,
+                  xmin, ymin, xmax, ymax, source, px, py, out_ctrl, out_deg, out_first,
+                  out_start, out_from, si, sf):
+    """Output the visible stretch [a, b] of a segment as a piece of its degree."""
+    qx0, qx1, qx2, qx3 = piece_values(degree, x0, x1, x2, x3, a, b)
+    qy0, qy1, qy2, qy3 = piece_values(degree, y0, y1, y2, y3, a, b)
+    sx, sy = _snap(qx0, qy0, edges_a, xmin, ymin, xmax, ymax)
+    ex, ey = _snap(qx3, qy3, edges_b, xmin, ymin, xmax, ymax)
+    px[0] = sx
+    py[0] = sy
+    px[1] = ex if degree == 1 else qx1
+    py[1] = ey if degree == 1 else qy1
+    px[2] = qx2 if degree == 3 else ex
+    py[2] = qy2 if degree == 3 else ey
+    px[3] = ex
+    py[3] = ey
+    _emit_piece(write, fill, degree, px, py, source, out_ctrl, out_deg, out_first, out_start,
+                out_from, si, sf)
+
+
+@scalar
+def _emit_exact(write, fill, degree, x0, x1, x2, x3, y0, y1, y2, y3, xmin, ymin, xmax, ymax,
+                source, px, py, brk_t, brk_e, out_ctrl, out_deg, out_first, out_start,
+                out_from, si, sf, st):
+    """Clip a whole ambiguous segment at its edge crossings (exact mode, level 0).
+
+    The lean form of `_leaf` for the default depth: no pending interval to merge with,
+    so stretches are emitted straight from the break table, neighbours merged.
+    """
+    st[C.CLIPPED] += 1
+    n = edge_breaks(degree, x0, x1, x2, x3, y0, y1, y2, y3, 0.0, 1.0, xmin, ymin, xmax, ymax,
+                    brk_t, brk_e, st)
+    open_k = -1  # first break of the visible stretch being extended
+    for k in range(n - 1):
+        tm = 0.5 * (brk_t[k] + brk_t[k + 1])
+        inside = outcode(point_value(degree, x0, x1, x2, x3, tm),
+                         point_value(degree, y0, y1, y2, y3, tm), xmin, ymin, xmax, ymax) == 0
+        if inside:
+            if open_k < 0:
+                open_k = k
+            continue
+        if open_k >= 0:
+            _emit_stretch(write, fill, degree, x0, x1, x2, x3, y0, y1, y2, y3, brk_t[open_k],
+                          brk_t[k], brk_e[open_k], brk_e[k], xmin, ymin, xmax, ymax, source,
+                          px, py, out_ctrl, out_deg, out_first, out_start, out_from, si, sf)
+            open_k = -1
+        ex, ey = _snap(point_value(degree, x0, x1, x2, x3, brk_t[k + 1]),
+                       point_value(degree, y0, y1, y2, y3, brk_t[k + 1]), brk_e[k + 1], xmin,
+                       ymin, xmax, ymax)
+        _outside(write, fill, ex, ey, xmin, ymin, xmax, ymax, out_ctrl, out_deg, si, sf)
+    if open_k >= 0:
+        _emit_stretch(write, fill, degree, x0, x1, x2, x3, y0, y1, y2, y3, brk_t[open_k],
+                      brk_t[n - 1], brk_e[open_k], brk_e[n - 1], xmin, ymin, xmax, ymax,
+                      source, px, py, out_ctrl, out_deg, out_first, out_start, out_from, si,
+                      sf)
+
+
+@_inline
 def _pend(a, b, edges_a, edges_b, si, sf):
     """Mark [a, b] visible; return whether it continues the pending interval."""
     if si[_PEND] == 1 and sf[_PEND_B] == a:
@@ -874,6 +932,13 @@ def _clip_subpath(write, fill, flatten, exact, controls, degree, first, last, cl
                               sf)
                 else:
                     si[_OPEN] = 0
+                continue
+            if exact and leaf_depth == 0 and not flatten:
+                st[C.EVALUATED] += 1
+                st[C.LEVELS] += 1
+                _emit_exact(write, fill, d, x0, x1, x2, x3, y0, y1, y2, y3, xmin, ymin, xmax,
+                            ymax, source, px, py, brk_t, brk_e, out_ctrl, out_deg, out_first,
+                            out_start, out_from, si, sf, st)
                 continue
             clip_segment(write, fill, flatten, exact, d, x0, x1, x2, x3, y0, y1, y2, y3, xmin,
                          ymin, xmax, ymax, n_split, leaf_depth, tol, source, px, py, brk_t,

@@ -18,7 +18,12 @@ import orjson
 import rnsca
 from rnsca.backends.registry import available_backends
 from rnsca.clip import as_segments
-from rnsca.errors import BackendUnavailableError, InvalidGeometryError, LimitExceededError
+from rnsca.errors import (
+    BackendUnavailableError,
+    InvalidGeometryError,
+    LimitExceededError,
+    RnscaError,
+)
 from rnsca.options import Mode
 from rnsca.stats import ClipStats
 from rnsca.window import Window
@@ -45,7 +50,8 @@ from service.schemas import (
 )
 
 __all__ = ["Outcome", "clip_geojson", "clip_svg", "clip_segments_json",
-           "clip_segments_binary", "svg_available", "backend_report", "SEGMENT_BYTES"]
+           "clip_segments_binary", "svg_available", "warm_up_svg", "backend_report",
+           "SEGMENT_BYTES"]
 
 #: One binary segment: four little-endian float64.
 SEGMENT_BYTES = 32
@@ -219,6 +225,29 @@ def svg_available() -> bool:
     return callable(getattr(rnsca, "clip_svg", None))
 
 
+def warm_up_svg() -> None:
+    """Compile the SVG path kernels (the backends' warm-up covers segments and geometry).
+
+    Clips a few small paths, and enough of them to take the parallel drivers too, in each
+    curve handling and fill rule; a combination the library refuses is skipped.
+    """
+    if not svg_available():
+        return
+    paths = ["M -1 0.5 C 0 2 1 -1 2 0.5 Q 0.5 3 -1 0.5 Z", "M -1 0.25 L 2 0.25 L 2 0.75 Z",
+             "M 0.2 0.2 A 0.3 0.3 0 0 1 0.8 0.8"]
+    # Flattening many paths is slow in itself (arcs at the default tolerance): large
+    # batches warm the parallel drivers with curves kept only.
+    calls = [(1, curves, fill, mode) for curves in ("preserve", "flatten")
+             for fill in (None, "nonzero", "evenodd") for mode in (Mode.EXACT, Mode.APPROX)]
+    calls += [(2000, "preserve", fill, Mode.EXACT) for fill in (None, "nonzero", "evenodd")]
+    for count, curves, fill, mode in calls:
+        try:
+            rnsca.clip_svg(paths * count, (0.0, 0.0, 1.0, 1.0), curves=curves, fill=fill,
+                           mode=mode)
+        except RnscaError:
+            continue  # e.g. approx mode with a fill rule: refused, not needed
+
+
 def clip_svg(body: bytes, settings: Settings) -> Outcome:
     """Answer ``POST /v1/clip/svg`` through `rnsca.clip_svg`.
 
@@ -247,7 +276,12 @@ def _call_clip_svg(request: ClipSVGRequest, window: Window, arguments: dict, ver
             "SVG path clipping is not in this release of rnsca yet (rnsca.clip_svg); "
             "the request was valid. See /v1/capabilities (svg) for when it is.")
     options = request.options
-    paths, stats = rnsca.clip_svg(request.paths, window, curves=options.curves,
-                                  fill=options.fill, **arguments)
+    try:
+        paths, stats = rnsca.clip_svg(request.paths, window, curves=options.curves,
+                                      fill=options.fill, **arguments)
+    except RnscaError as exc:
+        if getattr(exc, "path_index", None) is not None:  # `position` is within that path
+            exc.path = f"paths[{exc.path_index}]"
+        raise
     verification = None  # TODO(issue 5 follow-up): verify SVG output once verify speaks it
     return list(paths), stats, verification

@@ -18,6 +18,7 @@ from starlette.middleware.gzip import GZipMiddleware
 import rnsca
 from rnsca.backends.registry import available_backends, get_backend
 from service.config import Settings
+from service.convert import warm_up_svg
 from service.errors import install_handlers
 from service.logs import configure_logging
 from service.metrics import Metrics
@@ -56,7 +57,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     async def lifespan(app: FastAPI):
         if settings.warm_up:
             backends = [get_backend(kind) for kind in available_backends()]
-            warming = asyncio.create_task(runner.start(backends))
+            warming = asyncio.create_task(runner.start(backends, (warm_up_svg,)))
         else:
             warming = None
             runner.ready.set()

@@ -68,15 +68,18 @@ class ClipRunner:
             return
         numba.config.THREADING_LAYER = layer
 
-    def warm_up(self, backends) -> None:
-        """Compile (or load) the kernels of `backends`, then settle how calls may overlap.
+    def warm_up(self, backends, extra=()) -> None:
+        """Compile (or load) the kernels: `backends`, then each warm-up function of `extra`.
 
-        Runs in a pool thread at start-up; sets `ready` when done.
+        Then settle how calls may overlap. Runs in a pool thread at start-up; sets
+        `ready` when done.
         """
         started = time.perf_counter()
         for engine in backends:
             if hasattr(engine, "warm_up"):
                 engine.warm_up()
+        for function in extra:
+            function()
         self.settle()
         self.warm_up_seconds = time.perf_counter() - started
         self.ready.set()
@@ -101,11 +104,12 @@ class ClipRunner:
         self._serial = None if self.threading_layer in THREAD_SAFE_LAYERS else self._serial
         self._settled = True
 
-    async def start(self, backends) -> None:
+    async def start(self, backends, extra=()) -> None:
         """Warm up in the pool, off the event loop (so `/healthz` answers meanwhile)."""
         loop = asyncio.get_running_loop()
         try:
-            await loop.run_in_executor(self._executor(), self._call, self.warm_up, (backends,))
+            await loop.run_in_executor(self._executor(), self._call, self.warm_up,
+                                       (backends, extra))
         except Exception as exc:  # reported by /readyz; the process keeps answering
             self.failure = f"{type(exc).__name__}: {exc}"
             _log.error("warming up the kernels failed", exc_info=exc)

@@ -494,7 +494,7 @@ def _clamp_to(write, x, y, xmin, ymin, xmax, ymax, out_ctrl, out_deg, si, sf):
         if cx == rx and cy == ry:
             si[_V] -= 1  # back where the line began: drop it
             si[_LAST_RUN] = 0
-        elif write:
+        elif write and si[_V] - 1 < si[_V_END]:
             v = si[_V] - 1
             for k in range(1, 4):
                 out_ctrl[v, k, 0] = cx

@@ -57,13 +57,9 @@ CUTTING = ["left-half", "lower-left-quarter", "h-band", "v-band", "counter", "ba
 #: and the fill rule of each in flatten and approx mode.
 SOME_CUTTING = {"h-band": "nonzero", "counter": "evenodd", "off-grid": "nonzero"}
 
-#: (font, char, window) clips left out until the fill kernel stops writing past the output
-#: it counted: a boundary run that grows and is then dropped is written one slot beyond
-#: the subpath's slice (heap corruption: the process crashes). "quarters": the quarters
-#: test. Empty this set once that is fixed.
-LEFT_OUT = {("nimbus-roman", "S", "lower-left-quarter"), ("nimbus-roman", "S", "off-grid"),
-            ("nimbus-sans", "S", "quarters"), ("nimbus-sans", "a", "quarters"),
-            ("nimbus-roman", "a", "quarters")}
+#: (font, char, window) clips left out of the run; none (the fill kernel's write past its
+#: counted output, which these once hit, is fixed and covered by the unit tests).
+LEFT_OUT: set[tuple[str, str, str]] = set()
 
 GLYPHS = [pytest.param(font, char, id=f"{font}-{char}") for font in FONTS for char in CHARS]
 

@@ -159,3 +159,16 @@ def test_the_public_names_are_exported():
     for name in ("clip_svg", "clip_paths", "flatten_paths", "PathArrays", "parse_path",
                  "write_path", "Curves", "Fill", "clip_svg_document"):
         assert hasattr(rnsca, name)
+
+
+@pytest.mark.parametrize("fill", ["nonzero", "evenodd"])
+def test_a_boundary_run_that_grows_then_vanishes_is_not_written(fill):
+    # The run along the bottom edge goes (2,0) -> (3,0), grows to (1,0), then comes back
+    # to (2,0) and is dropped: the write pass must not write past the counted output.
+    assert clipped("M2 -1L1 1L3 -1L1 -1Z", fill=fill) == "M2 0H1.5L1 1 2 0Z"
+    assert clip_svg("M2 -1L1 1L3 -1L1 -1Z", W, fill=fill, curves="flatten",
+                    precision=6)[0] == "M2 0H1.5L1 1 2 0Z"
+
+
+def test_a_closed_subpath_visible_whole_with_an_implicit_closing_line():
+    assert clipped("M0 0L1 0L1 1Z") == "M0 0H1V1Z"

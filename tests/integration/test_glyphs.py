@@ -180,18 +180,14 @@ def crossing_sines(paths, window: Window) -> np.ndarray:
 
 
 def assert_verified(original: str, result, window: Window, **options) -> None:
-    """`rnsca.verify` passes, or misses only by the flattening's shift at a shallow crossing.
+    """`rnsca.verify` passes: no false positive, valid output, deviation within allowance.
 
-    verify flattens both sides within its tolerance and allows twice that; where a curve
-    crosses an edge at angle θ the two flattenings cross it up to that over sin θ apart
-    (a glyph's near-horizontal curve cut by a horizontal edge), so the deviation allowed
-    there is ``allowed_deviation / sin θ``.
+    verify flattens the original 100 times finer than the clip, so a glyph's
+    near-horizontal curve cut by a horizontal edge (a shallow crossing, where flattening
+    shifts the crossing along the edge by tolerance / sin θ) is judged fairly.
     """
     v = rnsca.verify(original, result, window, **options)
-    assert v.false_positives == 0 and v.valid, v
-    if not v.passed:
-        sine = crossing_sines(parse_paths([original]), window).min(initial=1.0)
-        assert v.max_deviation <= v.allowed_deviation / sine, (v, sine)
+    assert v.passed, v
 
 
 def painted_area(paths, rule: str, tolerance: float) -> float:

@@ -18,7 +18,15 @@ from rnsca.errors import InvalidOptionError
 from rnsca.formats.svgpath import PathArrays, parse_paths, write_paths
 from rnsca.kernels import bezier as BZ
 from rnsca.kernels import counters as C
-from rnsca.options import MAX_DEPTH_LIMIT, Backend, Method, Mode, _ChoiceEnum, _integer
+from rnsca.options import (
+    MAX_DEPTH_LIMIT,
+    Backend,
+    Method,
+    Mode,
+    _ChoiceEnum,
+    _integer,
+    positive_tolerance,
+)
 from rnsca.stats import ClipStats
 from rnsca.window import Window
 
@@ -130,19 +138,8 @@ def _resolve(window: Window, *, curves, fill, tolerance, method, n, max_depth, m
             else MAX_DEPTH_LIMIT
     else:
         depth = _integer("max_depth", max_depth, 0, MAX_DEPTH_LIMIT)
-    if tolerance is None:
-        tol = window.size * CURVE_RELATIVE_TOLERANCE
-    else:
-        if isinstance(tolerance, bool):
-            raise InvalidOptionError(f"tolerance must be a positive number, got {tolerance!r}")
-        try:
-            tol = float(tolerance)
-        except (TypeError, ValueError):
-            raise InvalidOptionError(
-                f"tolerance must be a positive number, got {tolerance!r}") from None
-        if not (tol > 0 and math.isfinite(tol)):
-            raise InvalidOptionError(f"tolerance must be a positive finite number, got "
-                                     f"{tolerance!r}")
+    tol = window.size * CURVE_RELATIVE_TOLERANCE if tolerance is None else \
+        positive_tolerance(tolerance, finite=True)
     return _CurveOptions(curves, fill, mode, n_split, depth, tol)
 
 

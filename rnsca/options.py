@@ -129,16 +129,23 @@ class SegmentOptions:
         if tolerance is None:
             tol = window.size * APPROX_RELATIVE_TOLERANCE if mode is Mode.APPROX else math.inf
         else:
-            if isinstance(tolerance, bool):
-                raise InvalidOptionError(f"tolerance must be a positive number, got {tolerance!r}")
-            try:
-                tol = float(tolerance)
-            except (TypeError, ValueError):
-                raise InvalidOptionError(
-                    f"tolerance must be a positive number, got {tolerance!r}") from None
-            if not tol > 0:  # NaN fails too; +inf means "never subdivide"
-                raise InvalidOptionError(f"tolerance must be > 0, got {tolerance!r}")
+            tol = positive_tolerance(tolerance)  # +inf means "never subdivide"
         return cls(method, mode, n_value, depth, tol, window.size)
+
+
+def positive_tolerance(value, *, finite: bool = False) -> float:
+    """Return `value` as a float > 0 (and finite if asked), else InvalidOptionError."""
+    if isinstance(value, bool):
+        raise InvalidOptionError(f"tolerance must be a positive number, got {value!r}")
+    try:
+        tol = float(value)
+    except (TypeError, ValueError):
+        raise InvalidOptionError(f"tolerance must be a positive number, got {value!r}") from None
+    if not tol > 0:  # NaN fails too
+        raise InvalidOptionError(f"tolerance must be > 0, got {value!r}")
+    if finite and not math.isfinite(tol):
+        raise InvalidOptionError(f"tolerance must be a finite number, got {value!r}")
+    return tol
 
 
 def _integer(name: str, value, low: int, high: int) -> int:

@@ -512,7 +512,7 @@ def test_coordinates_overflowing_under_a_transform_name_the_element():
      "fill_mode must be one of 'auto', 'stroke', 'fill', got 'outline'"),
     ({"curves": "bent"}, InvalidOptionError, "curves must be one of"),
     ({"precision": 0}, InvalidOptionError, "precision must be None or an int"),
-    ({"tolerance": -1}, InvalidOptionError, "tolerance must be a positive"),
+    ({"tolerance": -1}, InvalidOptionError, "tolerance must be > 0"),
     ({"method": "midpoint"}, InvalidOptionError, "method='rnsca' only"),
     ({"window": (0, 0, 0, 1)}, InvalidWindowError, "xmin < xmax"),
 ])

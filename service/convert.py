@@ -283,5 +283,12 @@ def _call_clip_svg(request: ClipSVGRequest, window: Window, arguments: dict, ver
         if getattr(exc, "path_index", None) is not None:  # `position` is within that path
             exc.path = f"paths[{exc.path_index}]"
         raise
-    verification = None  # TODO(issue 5 follow-up): verify SVG output once verify speaks it
+    verification = None
+    # Approx mode has no bound to judge against unless one is set: not verified by default.
+    if (request.paths and Mode(options.mode) is not Mode.APPROX
+            and _verify_wanted(request.verify, vertices, settings)):
+        # A flattened clip strays from the curves by its own tolerance: compare at it.
+        tolerance = arguments.get("tolerance") if options.curves == "flatten" else None
+        verification = rnsca.verify(list(request.paths), list(paths), window,
+                                    fill=options.fill, tolerance=tolerance)
     return list(paths), stats, verification

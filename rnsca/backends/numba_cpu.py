@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from rnsca.clip_svg import clip_paths, flatten_paths
+from rnsca.formats.svgpath import parse_paths, write_paths
 from rnsca.kernels import counters as C
 from rnsca.kernels import polygons as PG
 from rnsca.kernels import polylines as PL
@@ -145,6 +147,18 @@ class NumbaBackend:
                 self.clip_lines(ring, z, offsets, index, windows, options, drop)
             self.clip_polygons(ring, z, offsets, np.array([0, 1], dtype=np.int64), index,
                                windows, options)
+        _warm_up_curves()
+
+
+def _warm_up_curves() -> None:
+    """Compile the Bézier path kernels: parse, clip (each curve handling, fill), write."""
+    paths = parse_paths(["M-1 .5C0 2 1-1 2 .5Q.5 3-1 .5Z", "M-1 .25H2V.75Z", "M.2 .2L.8 .8"])
+    for curves, fill, mode in (("preserve", None, "exact"), ("preserve", "nonzero", "exact"),
+                               ("flatten", None, "exact"), ("preserve", None, "approx")):
+        result = clip_paths(paths, (0.0, 0.0, 1.0, 1.0), curves=curves, fill=fill, mode=mode)
+        write_paths(result.paths, precision=None)
+        write_paths(result.paths, precision=6)
+    flatten_paths(paths, 1e-3, close=True)
 
 
 def _block_size(n_items: int) -> int:

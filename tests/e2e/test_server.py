@@ -111,12 +111,29 @@ def test_clip_segments_binary_in_and_out(client):
     assert orjson.loads(r.headers["x-rnsca-verification"])["passed"] is True
 
 
-def test_clip_svg_answers_501_until_the_library_has_it(client):
-    r = client.post("/v1/clip/svg", json={"window": WINDOW, "paths": ["M -5 5 L 15 5"]})
-    if client.get("/v1/capabilities").json()["svg"]:  # flips once rnsca.clip_svg lands
-        assert r.status_code == 200 and len(r.json()["paths"]) == 1
-    else:
-        assert_problem(r, 501, "not-implemented")
+def test_clip_svg_clips_keeps_curves_and_verifies(client):
+    assert client.get("/v1/capabilities").json()["svg"] is True
+    r = client.post("/v1/clip/svg", json={"window": WINDOW,
+                                          "paths": ["M -5 5 L 15 5", "M-5 5 Q5 15 15 5"]})
+    assert r.status_code == 200
+    body = r.json()
+    assert body["paths"] == ["M0 5H10", "M0 8.75Q5 11.25 10 8.75"]
+    assert body["stats"]["segments_in"] == 2
+    assert body["verification"]["passed"] is True
+
+
+def test_clip_svg_fills_close_along_the_window(client):
+    r = client.post("/v1/clip/svg", json={"window": WINDOW, "paths": ["M-20 -20 h50 v50 h-50 z"],
+                                          "options": {"fill": "evenodd"}})
+    assert r.status_code == 200
+    assert r.json()["paths"] == ["M0 0H10V10H0V0Z"]
+    assert r.json()["verification"]["passed"] is True
+
+
+def test_clip_svg_syntax_error_names_the_path_and_position(client):
+    r = client.post("/v1/clip/svg", json={"window": WINDOW, "paths": ["M0 0 L1 1", "M0 0 L1 x"]})
+    assert_problem(r, 422)
+    assert "paths[1]" in r.text and "position 8" in r.text
 
 
 def test_metrics_count_requests_and_clipping(client):

@@ -450,11 +450,11 @@ def write_paths(p: PathArrays, *, precision: int | None = 6) -> list[str]:
     p : PathArrays
         The paths.
     precision : int or None
-        Significant digits of each number (1 to `MAX_PRECISION`), rounded as ``'%.*g'``
-        rounds: each written number is within ``0.5 * 10**(1 - precision)`` of its value,
-        relative. None writes the shortest decimal that reads back as the same float64
-        (``repr``), so ``parse_paths(write_paths(p, precision=None)) == p`` exactly
-        (arcs excepted: they were already cubics).
+        Significant digits of each number (1 to `MAX_PRECISION`), the digits of
+        ``'%.*g' % (precision, x)``: each written number is within
+        ``0.5 * 10**(1 - precision)`` of its value, relative. None writes the shortest
+        decimal that reads back as the same float64, the digits of ``repr(x)``, so
+        ``parse_paths(write_paths(p, precision=None)) == p`` exactly.
 
     Returns
     -------
@@ -474,8 +474,10 @@ def write_paths(p: PathArrays, *, precision: int | None = 6) -> list[str]:
     as ``2 * current - previous``, or the current point), ``Q``/``C`` otherwise. A
     command letter is left out when it repeats the previous one (``L`` also after
     ``M``), and ``M`` after ``Z`` when the new subpath starts at the closed one's start.
-    Numbers drop leading and trailing zeros (``.5``, ``2``), use an exponent when that
-    is shorter (``1e6``, ``12e-7``), and are separated by a space only where neither a
+    Numbers are formatted by a kernel, except the rare ones it cannot round with
+    certainty (see `rnsca.kernels.svgwrite`), which Python formats. They drop leading
+    and trailing zeros (``.5``, ``2``), use an exponent when that is shorter (``1e6``,
+    ``12e-7``), and are separated by a space only where neither a
     minus sign nor a second decimal point separates them (``1-2``, ``.5.5``). With a
     finite precision the reflections and the points that ``H``, ``V`` and an omitted
     ``M`` take from the current point are computed by the reader from rounded numbers,

@@ -8,15 +8,17 @@ are left (length 0) for the caller, who formats them with Python's correctly rou
 in one byte buffer, in two passes with one body (count, prefix sum, write), one path
 per ``prange`` iteration.
 
-Rounding to p significant digits (Steele & White, "How to print floating-point numbers
-accurately", take the nearest p-digit decimal): with ``|k| <= 22``, ``s = |x| * 10**k``
-is one IEEE operation on exact operands, within half an ulp of the exact product S.
-When no half-integer lies within an ulp of s, ``round(s) == round(S)``: the p digits are
-the correctly rounded ones, the same as ``'%.{p}g' % x``. Otherwise (rare: a tie or a
-near-tie, more often at p = 15 where the ulp of s is 1/8) the number is left to Python.
-The shortest round-trip form tries p = 1, 2, ... 15 and keeps the first whose decimal
-reads back as x (checked with Clinger's exact fast path of the reader); numbers that
-need 16 or 17 digits are left to Python's ``repr``.
+Rounding to p significant digits: ``a * 10**k`` (a = |x|) is computed as a
+double-double from an exact Dekker product with 10**k held as a double-double (error
+below 2**-100 relative), so its nearest integer, the p digits, is the correctly rounded
+one, as in ``'%.{p}g' % x``, unless a half-integer lies within 2**-40 of it (a tie or a
+near tie): then the number is left to Python. The shortest form that reads back (the
+digits of ``repr``): at 17 digits the interval of decimals that round to x (half the
+gap to each neighbouring double, the gap below a power of two being half the gap
+above) always holds an integer; the shortest decimal is the largest power of ten with
+a multiple in that interval, and among those multiples the one nearest x. An interval
+end within the error of an integer (where round-half-even decides) is left to Python.
+Magnitudes outside 1e-280..1e280 are left to Python too.
 """
 
 import math
@@ -76,6 +78,7 @@ _SPLITTER = 134217729.0    # 2**27 + 1
 # table and the Veltkamp split of both factors cannot overflow. Others go to Python.
 _SMALLEST = 1e-280
 _LARGEST = 1e280
+_LOG10_2 = 0.30102999566398120
 
 _M = 77
 _Z = 90
@@ -236,25 +239,20 @@ def _half_gap(a, k, below):
 
 
 @scalar
-def _reads_back(a, n, k, hi, lo):
-    """Return 1 if the decimal ``n * 10**-k`` reads as `a`, 0 if not, -1 if too close.
+def _put_digits(text, row, n, nd, first, split):
+    """Write the nd digits of n at ``text[row, first:]``, a '.' after `split` of them.
 
-    It does when it lies within half the gap from `a` to the neighbouring double on its
-    side (the gap below a power of two is half the gap above). Compared in units of
-    ``10**-k``: ``n - (hi + lo)`` against the half gap times ``10**k``.
+    Digits come out least significant first (division by the constant 10 is cheap);
+    with ``split < nd`` the last ``nd - split`` digits move one place right for the '.'.
     """
-    diff = _minus(n, hi, lo)
-    bound = _half_gap(a, k, diff < 0.0)
-    margin = bound * 2.0**-40 + (hi if hi > 1.0 else 1.0) * 2.0**-90
-    if abs(abs(diff) - bound) <= margin:
-        return -1
-    return 1 if abs(diff) < bound else 0
-
-
-@scalar
-def _digit(n, j):
-    """Return the ASCII code of digit j (0: units) of n >= 0."""
-    return 48 + (n // _POW10_INT[j]) % 10
+    for i in range(nd):           # i: digit index from the right
+        at = first + nd - 1 - i
+        if i < nd - split:
+            at += 1
+        text[row, at] = 48 + n % 10
+        n //= 10
+    if split < nd:
+        text[row, first + split] = 46
 
 
 @scalar
@@ -272,45 +270,113 @@ def _put_text(text, row, negative, n, q):
         nd += 1
     positional = nd + q if q >= 0 else (nd + 1 if -q < nd else 1 - q)
     aq = abs(q)
-    q_len = (1 if aq < 10 else (2 if aq < 100 else 3)) + (1 if q < 0 else 0)
+    q_digits = 1 if aq < 10 else (2 if aq < 100 else 3)
     at = 0
     if negative:
         text[row, 0] = 45          # '-'
         at = 1
-    if positional <= nd + 1 + q_len:
-        if q >= 0:
-            for j in range(nd):
-                text[row, at + j] = _digit(n, nd - 1 - j)
+    if positional <= nd + 1 + q_digits + (1 if q < 0 else 0):
+        if q >= 0:                 # 120
+            _put_digits(text, row, n, nd, at, nd)
             for j in range(q):
                 text[row, at + nd + j] = 48
-            return at + nd + q
-        if -q < nd:
-            point = nd + q         # digits before the decimal point
-            for j in range(point):
-                text[row, at + j] = _digit(n, nd - 1 - j)
-            text[row, at + point] = 46
-            for j in range(point, nd):
-                text[row, at + j + 1] = _digit(n, nd - 1 - j)
-            return at + nd + 1
-        text[row, at] = 46
-        zeros = -q - nd
-        for j in range(zeros):
-            text[row, at + 1 + j] = 48
-        for j in range(nd):
-            text[row, at + 1 + zeros + j] = _digit(n, nd - 1 - j)
-        return at + 1 - q
-    for j in range(nd):
-        text[row, at + j] = _digit(n, nd - 1 - j)
+        elif -q < nd:              # 1.25
+            _put_digits(text, row, n, nd, at, nd + q)
+        else:                      # .0025
+            text[row, at] = 46
+            for j in range(-q - nd):
+                text[row, at + 1 + j] = 48
+            _put_digits(text, row, n, nd, at + 1 - q - nd, nd)
+        return at + positional
+    _put_digits(text, row, n, nd, at, nd)   # 25e-7
     at += nd
     text[row, at] = 101            # 'e'
     at += 1
     if q < 0:
         text[row, at] = 45
         at += 1
-    for j in range(q_len - (1 if q < 0 else 0)):
-        text[row, at + q_len - (1 if q < 0 else 0) - 1 - j] = 48 + aq % 10
+    for j in range(q_digits):
+        text[row, at + q_digits - 1 - j] = 48 + aq % 10
         aq //= 10
-    return at + q_len - (1 if q < 0 else 0)
+    return at + q_digits
+
+
+@scalar
+def _floor_sum(hi, lo, add):
+    """Return (floor, fraction) of ``hi + lo + add``: an int, and a double in [0, 1).
+
+    ``hi + lo`` is a double-double below 2**62, `add` a small correction.
+    """
+    f = math.floor(hi)
+    frac = (hi - f) + lo + add
+    whole = math.floor(frac)
+    return int(f) + int(whole), frac - whole
+
+
+@scalar
+def _widest_power(hi, lo, low_add, up_add, margin):
+    """Return ``(below, u, j, close)``: the largest j with a multiple of 10**j in (L, U).
+
+    L and U are ``hi + lo`` plus `low_add` and `up_add`; the multiples are m * 10**j
+    for m in below + 1 .. u. j is -1 when no integer lies in between. `close` tells
+    whether L or U is within `margin` of an integer.
+    """
+    below, low_frac = _floor_sum(hi, lo, low_add)
+    u, u_frac = _floor_sum(hi, lo, up_add)
+    close = min(low_frac, 1.0 - low_frac, u_frac, 1.0 - u_frac) <= margin
+    if u_frac == 0.0:
+        u -= 1                  # U itself is excluded
+    if below >= u:
+        return 0, 0, -1, close
+    j = 0
+    while u // 10 > below // 10:
+        u //= 10
+        below //= 10
+        j += 1
+    return below, u, j, close
+
+
+@scalar
+def _shortest(a, e):
+    """Return ``(ok, n, q)``: the shortest decimal ``n * 10**q`` that reads as a > 0.
+
+    Among the shortest, the nearest to a (what ``repr`` writes). At 17 digits the
+    doubles' rounding interval of a, ``[L, U]`` in units of the 17th digit, always
+    holds an integer; the shortest decimal is the largest power of ten 10**j with a
+    multiple in it, found by dividing both ends by 10 until no multiple is left
+    between them. ok is False when an end, or the rounding, is too close to tell.
+    """
+    status, n17, k, hi, lo = _nearest_digits(a, 17, e)
+    if status != _DIGITS_OK:
+        return False, 0, 0
+    margin = hi * 2.0**-90 + 2.0**-60
+    up = _half_gap(a, k, False)
+    down = _half_gap(a, k, True)
+    # Integers strictly inside (L, U), and those within the margin of it: a decimal
+    # on an end reads as a only if a's last bit is even, too close to decide here.
+    below, u, j, close = _widest_power(hi, lo, -down + margin, up - margin, 2.0 * margin)
+    if j < 0:
+        return False, 0, 0
+    if close and _widest_power(hi, lo, -down - margin, up + margin, 0.0)[2] != j:
+        return False, 0, 0
+    # Multiples of 10**j in the interval: m * 10**j for m in below+1..u; take the one
+    # nearest a: round(S / 10**j), clamped into that range.
+    r = -_minus(n17, hi, lo)                 # S - n17, within [-1/2, 1/2]
+    if j == 0:
+        m = n17
+    else:
+        power = _POW10_INT[j]
+        m = n17 // power
+        twice = 2 * (n17 - m * power) - power   # 2 * remainder - 10**j, even
+        if twice > 0 or (twice == 0 and r > margin):
+            m += 1
+        elif twice == 0 and r >= -margin:
+            return False, 0, 0               # a tie between two candidates
+    if m <= below:
+        m = below + 1
+    elif m > u:
+        m = u
+    return True, m, j - k
 
 
 @scalar
@@ -326,33 +392,16 @@ def _format(x, precision, text, row):
     a = abs(x)
     if not _SMALLEST <= a <= _LARGEST:
         return 0
-    e = int(math.floor(math.log10(a)))
+    # floor(log10(a)) or one less, from the binary exponent (no log10); the digit
+    # search corrects it.
+    e = int(math.floor((math.frexp(a)[1] - 1) * _LOG10_2))
+    if a >= _P10_HI[e + 1 - _P10_MIN]:
+        e += 1
     if precision > 0:
         status, n, k, hi, lo = _nearest_digits(a, precision, e)
         return _put_text(text, row, x < 0.0, n, -k) if status == _DIGITS_OK else 0
-    for p in range(1, 18):
-        status, n, k, hi, lo = _nearest_digits(a, p, e)
-        if status == _BEYOND:
-            return 0
-        if status == _NEAR_TIE:
-            # Both p-digit neighbours are half a unit away: if that is far beyond half
-            # the gap to the next double (123.25 at 4 digits), neither reads back.
-            if _half_gap(a, k, False) < 0.25:
-                continue
-            return 0
-        fits = _reads_back(a, n, k, hi, lo)
-        if fits < 0:
-            return 0
-        if fits == 0 and math.frexp(a)[0] == 0.5 and _minus(n, hi, lo) < 0.0:
-            # Below a power of two the nearest decimal may miss the narrower gap while
-            # the next one up fits the wider one: repr takes that one, so do we.
-            fits = _reads_back(a, n + 1, k, hi, lo)
-            if fits < 0:
-                return 0
-            n += fits
-        if fits == 1:
-            return _put_text(text, row, x < 0.0, n, -k)
-    return 0
+    ok, n, q = _shortest(a, e)
+    return _put_text(text, row, x < 0.0, n, q) if ok else 0
 
 
 @parallel

@@ -11,7 +11,6 @@ else the first device, in float64 where the device has it.
 from __future__ import annotations
 
 import threading
-from functools import cache
 
 from rnsca.backends.base import ClipBackend
 from rnsca.errors import BackendUnavailableError
@@ -22,6 +21,7 @@ __all__ = ["get_backend", "available_backends", "configure_opencl", "opencl_repo
 _BUILT: dict[Backend, ClipBackend] = {}
 _LOCK = threading.RLock()
 _OPENCL = {"device": None, "precision": Precision.AUTO}
+_OPENCL_FAILURE: list[str] = []  # why the configured OpenCL backend could not be built
 
 
 def get_backend(kind: Backend | str) -> ClipBackend:
@@ -71,6 +71,7 @@ def configure_opencl(device: str | None = None, precision: Precision | str = "au
         _OPENCL["device"] = device
         _OPENCL["precision"] = precision
         _BUILT.pop(Backend.OPENCL, None)
+        _OPENCL_FAILURE.clear()
 
 
 def _opencl_module():
@@ -86,34 +87,49 @@ def _opencl_module():
     return opencl
 
 
-@cache
 def _opencl_reason() -> str | None:
-    """Return why OpenCL cannot run here, or None if some device is present."""
-    try:
-        _opencl_module().list_devices()
-    except BackendUnavailableError as exc:
-        return str(exc)
-    return None
+    """Return why ``backend="opencl"`` cannot run as configured, or None if it can.
+
+    Builds the backend (and its program) once per configuration; a failure is kept too,
+    so asking again costs nothing.
+    """
+    with _LOCK:
+        if Backend.OPENCL in _BUILT:
+            return None
+        if _OPENCL_FAILURE:
+            return _OPENCL_FAILURE[0]
+        try:
+            get_backend(Backend.OPENCL)
+        except BackendUnavailableError as exc:
+            _OPENCL_FAILURE.append(str(exc))
+            return str(exc)
+        return None
 
 
 def opencl_report() -> dict:
-    """Return what OpenCL offers here: ``available``, ``devices`` (or ``reason``), ``selected``.
+    """Return what OpenCL offers here, for listings (CLI, ``/v1/capabilities``).
 
-    Each device: ``id`` ("platform:device"), ``platform``, ``device``, ``type``, ``fp64``,
-    ``version``. ``selected`` is the id the current configuration picks, or the reason
-    it picks none.
+    Keys: ``available`` (the configured device can run the kernels), ``reason`` (if
+    not), ``devices`` (every device found: ``id`` "platform:device", ``platform``,
+    ``device``, ``type``, ``fp64``, ``version``), ``selected`` (the configured device's
+    id, or None) and ``precision`` (the one in use, or the one asked for).
     """
     reason = _opencl_reason()
+    report = {"available": reason is None}
     if reason is not None:
-        return {"available": False, "reason": reason}
-    opencl = _opencl_module()
-    report = {"available": True, "devices": opencl.list_devices()}
+        report["reason"] = reason
     try:
-        report["selected"] = opencl.select_device(_OPENCL["device"])["id"]
-    except BackendUnavailableError as exc:
+        opencl = _opencl_module()
+        report["devices"] = opencl.list_devices()
+    except BackendUnavailableError:
+        report["devices"] = []
+    if reason is None:
+        engine = get_backend(Backend.OPENCL)
+        report["selected"] = engine.device["id"]
+        report["precision"] = engine.precision.value
+    else:
         report["selected"] = None
-        report["reason"] = str(exc)
-    report["precision"] = _OPENCL["precision"].value
+        report["precision"] = _OPENCL["precision"].value
     return report
 
 

@@ -85,7 +85,7 @@ def list_devices() -> list[dict]:
                 "id": f"{p}:{d}",
                 "platform": platform.name.strip(),
                 "device": device.name.strip(),
-                "type": cl.device_type.to_string(device.type).lower(),
+                "type": _device_type(device.type),
                 "fp64": "cl_khr_fp64" in device.extensions,
                 "version": device.version.strip(),
             })
@@ -96,12 +96,20 @@ def list_devices() -> list[dict]:
     return found
 
 
+def _device_type(bits: int) -> str:
+    """Return "gpu", "cpu", "accelerator" or "other" (drivers may set several bits)."""
+    for name in ("gpu", "cpu", "accelerator"):
+        if bits & getattr(cl.device_type, name.upper()):
+            return name
+    return "other"
+
+
 def select_device(spec: str | None = None) -> dict:
     """Return the entry of `list_devices` that `spec` names.
 
     `spec` is ``"platform:device"`` (indices, as `list_devices` numbers them), or a
-    case-insensitive substring of ``"<platform> <device>"``; None picks the first GPU,
-    else the first device.
+    case-insensitive substring of ``"<platform> <device> <version>"`` (the first match);
+    None picks the first GPU, else the first device.
 
     Raises
     ------
@@ -110,14 +118,14 @@ def select_device(spec: str | None = None) -> dict:
     """
     devices = list_devices()
     if spec is None or not spec.strip():
-        gpus = [d for d in devices if "gpu" in d["type"]]
+        gpus = [d for d in devices if d["type"] == "gpu"]
         return (gpus or devices)[0]
     spec = spec.strip()
     for entry in devices:
         if entry["id"] == spec:
             return entry
     for entry in devices:
-        if spec.lower() in f"{entry['platform']} {entry['device']}".lower():
+        if spec.lower() in f"{entry['platform']} {entry['device']} {entry['version']}".lower():
             return entry
     listing = "; ".join(f"{d['id']} {d['platform']} / {d['device']}" for d in devices)
     raise BackendUnavailableError(
@@ -143,18 +151,25 @@ class _Device:
                 options = [f"-DREAL_IS_DOUBLE={int(double)}", f"-DLOCAL_SIZE={LOCAL_SIZE}"]
                 if not double:  # OpenCL's float32 division may be 2.5 ulp otherwise
                     options.append("-cl-fp32-correctly-rounded-divide-sqrt")
-                try:
-                    with warnings.catch_warnings():
-                        # Drivers log progress ("Compilation done"); a failure raises.
-                        warnings.simplefilter("ignore", cl.CompilerWarning)
-                        program = cl.Program(self.context, source).build(options=options)
-                except cl.Error as exc:  # the driver's compiler failed; its log says why
-                    raise BackendUnavailableError(
-                        f"the OpenCL device {self.name!r} could not build the kernels: "
-                        f"{str(exc).strip()}") from None
+                program = _build_program(self.context, self.name, source, options)
                 # Kernel objects hold their arguments: one per program, used under `call_lock`.
                 self.programs[double] = (program.clip_segments, program.write_pieces)
             return self.programs[double]
+
+
+def _build_program(context: cl.Context, name: str, source: str, options: list) -> cl.Program:
+    """Return `source` built, or BackendUnavailableError with the compiler's errors."""
+    try:
+        with warnings.catch_warnings():
+            # Drivers log progress ("Compilation done"); a failure raises.
+            warnings.simplefilter("ignore", cl.CompilerWarning)
+            return cl.Program(context, source).build(options=options)
+    except cl.Error as exc:
+        errors = [line.strip() for line in str(exc).splitlines()
+                  if "error" in line.lower() and "clBuildProgram" not in line]
+        raise BackendUnavailableError(
+            f"the OpenCL device {name!r} could not build the kernels: "
+            f"{'; '.join(errors) or str(exc).strip()}") from None
 
 
 _DEVICES: dict[str, _Device] = {}
@@ -269,7 +284,8 @@ class OpenCLBackend:
         """
         real = self.real
         n = segments.shape[0]
-        data = np.ascontiguousarray(segments, dtype=real)
+        with np.errstate(over="ignore"):  # float32: checked below, with the row named
+            data = np.ascontiguousarray(segments, dtype=real)
         bounds = np.array(window.bounds, dtype=real)
         if real is np.float32:
             _check_float32(data, bounds)

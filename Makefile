@@ -9,10 +9,12 @@ PORT ?= 8000
 
 .PHONY: serve test bench lint clean
 
-$(STAMP): pyproject.toml
+# The client SDK (clients/python, package rnsca-client) is installed beside rnsca so that
+# `make test` tests it against live servers.
+$(STAMP): pyproject.toml clients/python/pyproject.toml
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
-	$(PY) -m pip install --quiet -e '.[dev,bench,service]'
+	$(PY) -m pip install --quiet -e '.[dev,bench,service]' -e clients/python
 	touch $(STAMP)
 
 # The service alone needs only the `service` extra (a full dev install also satisfies it).

@@ -34,7 +34,8 @@ const state = {
   geojson: null,         // the parsed GeoJSON document
   paths: null,           // the SVG path data strings
   inputError: false,     // the text could not be read (the error is shown)
-  window: [0, 0, 1, 1],  // what the numeric inputs hold (maybe invalid: the server says)
+  // What the numeric inputs hold (maybe invalid: the server says); none before an input.
+  window: [NaN, NaN, NaN, NaN],
   capabilities: null,
   examples: [],
   inFlight: false,
@@ -657,7 +658,16 @@ async function chooseExample(id) {
   const ex = state.examples.find((e) => e.id === id);
   if (!ex) return;
   setState("loading");
-  const text = await (await fetch(EXAMPLES + ex.file)).text();
+  let text;
+  try {
+    const response = await fetch(EXAMPLES + ex.file);
+    if (!response.ok) throw new Error(`${response.status} ${response.statusText}`);
+    text = await response.text();
+  } catch (e) {
+    showError({ title: `Could not load the example ${ex.file}`, detail: String(e) });
+    setState("error");
+    return;
+  }
   $("input-text").value = text;
   $("fill").value = ex.options.fill || "";
   $("curves").value = ex.options.curves || "preserve";
@@ -683,6 +693,7 @@ async function main() {
   $("file").addEventListener("change", async (e) => {
     const file = e.target.files[0];
     if (!file) return;
+    setState("loading");
     $("input-text").value = await file.text();
     $("example").value = "";
     $("example-about").textContent = `from ${file.name}`;

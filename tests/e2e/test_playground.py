@@ -276,3 +276,18 @@ def test_errors_are_shown_readably(page):
     shown = settled(page)
     assert "Invalid window" in shown["error"] and "xmin" in shown["error"]
     screenshot(page, "error")
+
+
+def test_an_svg_document_loaded_from_a_file(page, api):
+    document = (b'<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 20 20">'
+                b'<path d="M -5 5 L 15 5"/><g><path d="M 2 -3 Q 5 20 8 -3"/></g></svg>')
+    page.set_input_files("#file", files=[{"name": "shapes.svg", "mimeType": "image/svg+xml",
+                                          "buffer": document}])
+    shown = settled(page)
+    assert "2 path(s)" in page.inner_text("#input-info")
+    assert shown["state"] == "idle" and shown["shownWindow"] == shown["inputs"]
+    answer = api.post("/v1/clip/svg", json={
+        "window": shown["inputs"], "paths": ["M -5 5 L 15 5", "M 2 -3 Q 5 20 8 -3"],
+        "options": {"curves": "preserve", "fill": None}}).json()
+    assert shown["drawn"] == [d for d in answer["paths"] if d] and len(shown["drawn"]) == 2
+    assert shown["stats"]["pieces_out"] == answer["stats"]["pieces_out"]

@@ -34,8 +34,8 @@ DEFAULT_RETRY = Retry()
 
 def _transport_error(exc: httpx.TransportError, attempts: int) -> TransportError:
     """Return the SDK's exception for an httpx network failure."""
-    message = f"{type(exc).__name__}: {exc or 'no detail'} (after {attempts} attempt" \
-              f"{'s' if attempts > 1 else ''})"
+    tries = f"{attempts} attempt{'s' if attempts > 1 else ''}"
+    message = f"{type(exc).__name__}: {exc or 'no detail'} (after {tries})"
     if isinstance(exc, (httpx.ConnectError, httpx.ConnectTimeout)):
         return ConnectError(f"could not connect to the rnsca server: {message}",
                             attempts=attempts)

@@ -53,6 +53,7 @@ __all__ = [
     "run_n_sweep",
     "evaluate_targets",
     "backend_unavailable_reason",
+    "device_split",
 ]
 
 #: The NumPy reference backend is only timed up to this many segments.
@@ -233,7 +234,7 @@ def _record(workload: Workload, c: Contender, kind: dict, memory: tuple[int, obj
     return rec
 
 
-def _device_split(call: Callable[[], object], seconds: float) -> dict:
+def device_split(call: Callable[[], object], seconds: float) -> dict:
     """Return one more OpenCL call's kernel and transfer times, and the host's share."""
     device = call().stats.device
     return {"device": device.device, "precision": device.precision,
@@ -323,7 +324,7 @@ def run_workload(workload: Workload, plan: Plan, numpy_skip: str | None,
             memory = peak_traced_bytes(c.call)
         rec = _record(workload, c, kinds[c.label], memory, segments.nbytes)
         if kinds[c.label]["kind"] == "opencl":
-            rec["device"] = _device_split(c.call, c.best)
+            rec["device"] = device_split(c.call, c.best)
         if kinds[c.label]["kind"] == "shapely":
             rec["note"] = ("peak memory not measured: GEOS allocations are invisible to "
                            "tracemalloc")

@@ -92,8 +92,15 @@ def _workload_table(w: dict) -> Table:
     return table
 
 
-def _device_table(workloads: list[dict]) -> Table | None:
-    """Return the OpenCL runs' split: kernels, host-device transfers, host (or None)."""
+def _numba_twin(label: str) -> str:
+    return "numba:" + label.split(":", 1)[1]
+
+
+def _device_table(workloads: list[dict], twin_of=_numba_twin) -> Table | None:
+    """Return the OpenCL runs' split: kernels, host-device transfers, host (or None).
+
+    `twin_of` names the Numba run each OpenCL run is compared with.
+    """
     rows = [(w["workload"]["name"], r) for w in workloads for r in w["runs"]
             if r.get("device")]
     if not rows:
@@ -107,7 +114,7 @@ def _device_table(workloads: list[dict]) -> Table | None:
     by_label = {(w["workload"]["name"], r["label"]): r for w in workloads for r in w["runs"]}
     for name, r in rows:
         d = r["device"]
-        twin = by_label.get((name, "numba:" + r["label"].split(":", 1)[1]))
+        twin = by_label.get((name, twin_of(r["label"])))
         table.add_row(name, r["label"], _seconds(r["seconds"]), _seconds(d["kernel_seconds"]),
                       _seconds(d["transfer_seconds"]), _seconds(d["host_seconds"]),
                       f"{d['bytes_to_device'] / 1e6:.1f}", f"{d['bytes_from_device'] / 1e6:.1f}",
@@ -321,6 +328,10 @@ def print_geometry_summary(result: dict, console: Console | None = None) -> None
         f"{bbox['outside']:.0%} outside, {bbox['crossing']:.0%} crossing; "
         f"{info['input_invalid']} invalid inputs; load {info.get('load_average_before')} -> "
         f"{info.get('load_average_after')}")))
+    device = _device_table(result["curves"], {"opencl:clip_ragged": "rnsca:clip_ragged",
+                                              "opencl:segments:rnsca": "segments:rnsca"}.get)
+    if device is not None:
+        console.print(device)
     console.print(_geojson_table(result["geojson"]))
     console.print(_targets_table(result["targets"], "Issue 3 targets (rnsca.clip_ragged, "
                                  "defaults; ratios from this run)"))

@@ -154,10 +154,9 @@ def resolve_geometry_options(windows: np.ndarray, dimension: int, *, boundary="c
                                      max_depth=max_depth, tolerance=tolerance, mode=mode)
     side = Boundary(boundary)
     engine = get_backend(backend)
-    if engine.kind is Backend.NUMPY or (engine.kind is Backend.OPENCL and dimension == 2):
-        what = "segments only" if engine.kind is Backend.NUMPY else "segments and lines"
+    if engine.kind is Backend.NUMPY:
         raise BackendUnavailableError(
-            f"backend {engine.kind.value!r} clips {what}; this geometry runs on 'numba'")
+            "backend 'numpy' clips segments only; geometry runs on 'numba' or 'opencl'")
     if dimension == 2 and options.mode is Mode.APPROX:
         raise InvalidOptionError(
             "mode='approx' cannot clip polygons: valid polygon output needs the exact "
@@ -203,8 +202,8 @@ def clip_ragged(geometry_type, coords, offsets, window, *, boundary="closed", ke
         As for `clip_segments`; runs of vertices are pruned by RNSCA with N runs per
         split (``n="auto"``: 16). Polygons need ``mode="exact"``.
     backend : {"numba", "opencl"}
-        Points and lines run on either (OpenCL: the pruning and the clip of segments on
-        the device, the chains assembled on the host); polygons on Numba only.
+        OpenCL: the run pruning of lines and rings and the clip of their undecided
+        segments on the device; chains and polygons assembled on the host (Numba).
 
     Returns
     -------
@@ -217,7 +216,7 @@ def clip_ragged(geometry_type, coords, offsets, window, *, boundary="closed", ke
     UnsupportedGeometryError
         For an unknown geometry type.
     BackendUnavailableError
-        For a backend that does not clip this geometry (NumPy; OpenCL and polygons).
+        For a backend that does not clip geometry (NumPy).
 
     Examples
     --------
@@ -346,7 +345,7 @@ def _clip_polygons(engine, ragged, windows, window_index, options, keep_empty):
     polygon_geometry = np.repeat(np.arange(ragged.count, dtype=np.int64),
                                  np.diff(geometry_polygons))
     polygon_window = np.ascontiguousarray(window_index[polygon_geometry])
-    out_xy, out_z, out_rings, rings_per_output, outputs_per_polygon, counters = \
+    out_xy, out_z, out_rings, rings_per_output, outputs_per_polygon, counters, *device = \
         engine.clip_polygons(xy, z, ring_offsets, polygon_rings, polygon_window, windows,
                              options)
     output_ring_offsets = np.zeros(rings_per_output.shape[0] + 1, dtype=np.int64)
@@ -356,6 +355,8 @@ def _clip_polygons(engine, ragged, windows, window_index, options, keep_empty):
     segments_in = int(np.maximum(np.diff(ring_offsets) - 1, 0).sum())
     stats = _stats(counters, segments_in, out_rings.shape[0] - 1, ragged, out_xy.shape[0],
                    int((per_geometry > 0).sum()))
+    if device:
+        stats = replace(stats, device=device[0])
     coords = _with_z(out_xy, out_z, ragged.has_z)
     count = ragged.count
     source = np.arange(count, dtype=np.int64)

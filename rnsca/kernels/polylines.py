@@ -422,17 +422,19 @@ CHUNK_SEGMENTED = 2
 
 
 @scalar
-def assemble_chains(xy, z, has_z, write, first, last, drop_edge_runs, xmin, ymin, xmax, ymax,
-                    decision, chunk0, piece_start, keep, pieces, out_xy, out_z, out_starts, v,
-                    c):
+def assemble_chains(xy, z, has_z, write, first, last, drop_edge_runs, break_at_boundary, xmin,
+                    ymin, xmax, ymax, decision, chunk0, piece_start, keep, pieces, out_xy, out_z,
+                    out_starts, v, c):
     """Emit the chains of the line ``xy[first..last]`` from decisions made elsewhere.
 
     `decision[chunk0 + k]` says what became of the line's chunk k (``CHUNK_*``); the
     segments of a segmented chunk have ``keep`` and ``pieces`` rows (t0, t1, ax, ay, bx,
     by) from ``piece_start[chunk0 + k]`` on. The chains are the ones `clip_chains` emits
-    for those decisions (its `_emit_run` and `_emit_piece`): an accepted run of chunks
-    copied chunk by chunk is the same chain. Returns ``(v, c)``.
+    for those decisions (its `_emit_run` and `_emit_piece`; an accepted run of chunks
+    copied chunk by chunk is the same chain), and so is the return value:
+    ``(v, c, starts_at_first, ends_at_last)``.
     """
+    c_begin = c
     last_v = -1
     for k in range(chunk_count(first, last)):
         a = first + k * RUN_LEAF_SEGMENTS
@@ -451,11 +453,19 @@ def assemble_chains(xy, z, has_z, write, first, last, drop_edge_runs, xmin, ymin
                     by = pieces[row, 5]
                     if not (drop_edge_runs and on_one_edge(ax, ay, bx, by, xmin, ymin, xmax,
                                                            ymax)):
+                        breaks = break_at_boundary and _edge_bits(
+                            xy[i, 0], xy[i, 1], xmin, ymin, xmax, ymax) != 0
                         v, c, last_v = _emit_piece(xy, z, has_z, write, i, pieces[row, 0],
                                                    pieces[row, 1], ax, ay, bx, by, out_xy,
-                                                   out_z, out_starts, v, c, last_v, False)
+                                                   out_z, out_starts, v, c, last_v, breaks)
                 row += 1
-    return v, c
+    if c == c_begin or not write:
+        return v, c, False, False
+    starts_at_first = out_xy[out_starts[c_begin], 0] == xy[first, 0] and \
+        out_xy[out_starts[c_begin], 1] == xy[first, 1]
+    if break_at_boundary and _edge_bits(xy[first, 0], xy[first, 1], xmin, ymin, xmax, ymax) != 0:
+        starts_at_first = False  # a ring breaks at its closing vertex on the boundary
+    return v, c, starts_at_first, last_v == last
 
 
 @parallel
@@ -475,10 +485,11 @@ def assemble_line_blocks(xy, z, has_z, part_offsets, part_window, windows, drop_
             w = part_window[p]
             v0 = vertex_start[p] if write else 0
             c0 = chain_start[p] if write else 0
-            v, c = assemble_chains(xy, z, has_z, write, part_offsets[p], part_offsets[p + 1] - 1,
-                                   drop_edge_runs, windows[w, 0], windows[w, 1], windows[w, 2],
-                                   windows[w, 3], decision, chunk_start[p], piece_start, keep,
-                                   pieces, out_xy, out_z, out_starts, v0, c0)
+            v, c, _, _ = assemble_chains(xy, z, has_z, write, part_offsets[p],
+                                         part_offsets[p + 1] - 1, drop_edge_runs, False,
+                                         windows[w, 0], windows[w, 1], windows[w, 2],
+                                         windows[w, 3], decision, chunk_start[p], piece_start,
+                                         keep, pieces, out_xy, out_z, out_starts, v0, c0)
             if not write:
                 n_vertices[p] = v
                 n_chains[p] = c

@@ -71,8 +71,7 @@ def test_a_device_that_is_not_there_is_a_422_with_the_reason(opencl, default_con
     assert "no OpenCL device matches" in r.json()["detail"]
 
 
-def test_lines_run_on_opencl_and_polygons_are_refused_with_the_reason(
-        opencl, default_configuration):
+def test_geojson_runs_on_opencl(opencl, default_configuration):
     line = {"type": "LineString", "coordinates": [[-5, 1], [5, 1], [5, 20], [8, 20], [8, 5],
                                                   [15, 5]]}
     square = {"type": "Polygon", "coordinates": [[[-1, -1], [1, -1], [1, 1], [-1, 1], [-1, -1]]]}
@@ -85,6 +84,9 @@ def test_lines_run_on_opencl_and_polygons_are_refused_with_the_reason(
         assert r.json()["stats"]["device"]["device"] == opencl.name
         r = client.post("/v1/clip/geojson", json={
             "window": WINDOW, "geojson": square, "options": {"backend": "opencl"}})
-    assert r.status_code == 422
-    assert r.json()["type"] == "urn:rnsca:problem:backend-unavailable"
-    assert "clips segments and lines" in r.json()["detail"]
+        numba = client.post("/v1/clip/geojson", json={
+            "window": WINDOW, "geojson": square, "options": {"backend": "numba"}})
+    assert r.status_code == 200, r.text
+    assert r.json()["geojson"] == numba.json()["geojson"]
+    assert r.json()["geojson"]["coordinates"][0][0] == [1.0, 0.0]
+    assert r.json()["verification"]["passed"] is True

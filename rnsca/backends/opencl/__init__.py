@@ -33,6 +33,7 @@ import pyopencl.array as cl_array
 
 from rnsca.errors import BackendUnavailableError, InvalidGeometryError, InvalidWindowError
 from rnsca.kernels import counters as C
+from rnsca.kernels import polygons as PG
 from rnsca.kernels import polylines as PL
 from rnsca.kernels import segments as K
 from rnsca.options import Backend, Method, Mode, Precision, SegmentOptions
@@ -355,15 +356,81 @@ class OpenCLBackend:
         """Return ``(xy, z, chain_offsets, chains_per_part, counters, device_stats)``.
 
         See `rnsca.backends.numba_cpu.NumbaBackend.clip_lines` (the same arrays, and the
-        `DeviceStats` too). On the device: the chunk boxes, RNSCA over runs of chunks
-        (one work-item per part) and the clip of the segments of undecided chunks (one
-        work-item per chunk); on the host, with the Numba kernel that does it for the
-        Numba backend, the chains: accepted chunks copied, clipped pieces joined.
+        `DeviceStats` too). On the device (`_prune`): the chunk boxes, RNSCA over runs of
+        chunks (one work-item per part) and the clip of the segments of undecided chunks
+        (one work-item per chunk); on the host, with the Numba kernel that does it for
+        the Numba backend, the chains: accepted chunks copied, clipped pieces joined.
 
         Raises
         ------
         InvalidGeometryError, InvalidWindowError
             In float32, for coordinates beyond its range or a window that collapses.
+        """
+        tables, counters, device_stats = self._prune(xy, part_offsets, part_window, windows,
+                                                     options, drop_edge_runs, None)
+        out = _assemble_lines(xy, z, part_offsets, part_window, windows, drop_edge_runs,
+                              *tables)
+        return (*out, counters, device_stats)
+
+    def clip_polygons(self, xy, z, ring_offsets, polygon_offsets, polygon_window, windows,
+                      options: SegmentOptions):
+        """Return the Numba backend's `clip_polygons` arrays and counters, and `DeviceStats`.
+
+        ``(xy, z, ring_offsets, rings_per_output, outputs_per_polygon, counters,
+        device_stats)``. The shells' boxes classify the polygons on the host
+        (`polygons.classify_polygons`); the rings of the ambiguous ones are pruned and
+        their undecided segments clipped on the device (`_prune`, rings broken along the
+        window's edges); the rings are closed along the window on the host by the Numba
+        polygon kernel, from the device's decisions and pieces.
+        """
+        n_polygons = polygon_offsets.shape[0] - 1
+        polygon_class = np.empty(n_polygons, dtype=np.int8)
+        PG.classify_polygons(xy, ring_offsets, polygon_offsets, polygon_window, windows,
+                             polygon_class)
+        ring_polygon = np.repeat(np.arange(n_polygons, dtype=np.int64),
+                                 np.diff(polygon_offsets))
+        ring_window = np.ascontiguousarray(polygon_window[ring_polygon])
+        active = (polygon_class[ring_polygon] == PG.AMBIGUOUS).astype(np.uint8)
+        tables, device_counters, device_stats = self._prune(
+            xy, ring_offsets, ring_window, windows, options, True, active)
+        has_z = z.shape[0] > 0
+        block = max(1, min(1024, -(-n_polygons // 64)))
+        n_blocks = max(1, -(-n_polygons // block))
+        counters = np.zeros((n_blocks, C.WIDTH), dtype=np.int64)
+        scratch_v = np.zeros(n_polygons, dtype=np.int64)
+        scratch_c = np.zeros(n_polygons, dtype=np.int64)
+        n_vertices = np.empty(n_polygons, dtype=np.int64)
+        n_rings = np.empty(n_polygons, dtype=np.int64)
+        n_polys = np.empty(n_polygons, dtype=np.int64)
+        args = (xy, z, has_z, ring_offsets, polygon_offsets, polygon_window, windows,
+                _METHOD_ID[options.method], options.n, options.max_depth, options.tolerance,
+                options.auto_piece, True, block)
+        nothing_i = np.empty(0, dtype=np.int64)
+        PG.clip_polygon_blocks(*args, False, polygon_class, scratch_v, scratch_c, nothing_i,
+                               nothing_i, nothing_i, np.empty((0, 2)), np.empty(0), nothing_i,
+                               nothing_i, n_vertices, n_rings, n_polys, counters, True, *tables)
+        vertex_start = _exclusive_sum(n_vertices)
+        ring_start = _exclusive_sum(n_rings)
+        poly_start = _exclusive_sum(n_polys)
+        out_xy = np.empty((int(vertex_start[-1]), 2))
+        out_z = np.empty(int(vertex_start[-1]) if has_z else 0)
+        out_rings = np.empty(int(ring_start[-1]) + 1, dtype=np.int64)
+        out_rings[-1] = out_xy.shape[0]
+        out_poly_rings = np.empty(int(poly_start[-1]), dtype=np.int64)
+        PG.clip_polygon_blocks(*args, True, polygon_class, scratch_v, scratch_c, vertex_start,
+                               ring_start, poly_start, out_xy, out_z, out_rings, out_poly_rings,
+                               n_vertices, n_rings, n_polys, counters, True, *tables)
+        return (out_xy, out_z, out_rings, out_poly_rings, n_polys,
+                np.concatenate([counters, device_counters]), device_stats)
+
+    def _prune(self, xy, part_offsets, part_window, windows, options: SegmentOptions,
+               drop_edge_runs: bool, active):
+        """Prune the runs of every part and clip the undecided chunks' segments on the device.
+
+        Returns ``(tables, counters, device_stats)``: `tables` is ``(chunk_start,
+        decision, piece_start, keep, pieces)`` as `polylines.assemble_chains` reads them
+        (pieces in float64, uncut ends the exact input vertices), `counters` the device's
+        counter rows. `active` (uint8 per part, or None for all) leaves parts out.
         """
         real = self.real
         n_parts = part_offsets.shape[0] - 1
@@ -374,8 +441,7 @@ class OpenCLBackend:
             _check_float32_lines(data, bounds)
         segments = np.maximum(np.diff(part_offsets), 1) - 1
         chunks_per_part = -(-segments // PL.RUN_LEAF_SEGMENTS)
-        chunk_start = np.zeros(n_parts + 1, dtype=np.int64)
-        np.cumsum(chunks_per_part, out=chunk_start[1:])
+        chunk_start = _exclusive_sum(chunks_per_part)
         n_chunks = int(chunk_start[-1])
         chunk_part = np.repeat(np.arange(n_parts, dtype=np.int64), chunks_per_part)
         # Each chunk's first vertex and segment count (the host needs them to assemble).
@@ -396,6 +462,8 @@ class OpenCLBackend:
             d_chunk_part = ledger.to_device(queue, chunk_part)
             d_part_window = ledger.to_device(queue, np.ascontiguousarray(part_window, np.int64))
             d_windows = ledger.to_device(queue, bounds.reshape(-1))
+            d_active = ledger.to_device(queue, np.zeros(0, np.uint8) if active is None
+                                        else np.ascontiguousarray(active, np.uint8))
             boxes = cl_array.empty(queue, max(1, 4 * n_chunks), real)
             decision = cl_array.empty(queue, max(1, n_chunks), np.uint8)
             segmented = cl_array.empty(queue, max(1, n_chunks), np.int64)
@@ -403,14 +471,14 @@ class OpenCLBackend:
             chunk_counters = cl_array.empty(queue, chunk_groups * C.WIDTH, np.int64)
             if n_chunks:
                 ledger.kernel_events.append(kernels.chunk_boxes(
-                    queue, (n_chunks,), None, _data(d_xy), _data(d_offsets), _data(d_chunk_start),
-                    _data(d_chunk_part), np.int64(n_chunks), boxes.data))
+                    queue, (n_chunks,), None, _data(d_xy), _data(d_offsets),
+                    _data(d_chunk_start), _data(d_chunk_part), np.int64(n_chunks), boxes.data))
             ledger.kernel_events.append(kernels.classify_runs(
                 queue, (part_groups * LOCAL_SIZE,), (LOCAL_SIZE,), boxes.data, _data(d_offsets),
-                _data(d_chunk_start), _data(d_part_window), _data(d_windows), np.int64(n_parts),
-                np.int32(n_runs), np.int32(drop_edge_runs),
-                np.int32(options.method is Method.RNSCA), decision.data, segmented.data,
-                run_counters.data))
+                _data(d_chunk_start), _data(d_part_window), _data(d_windows),
+                np.int64(n_parts), np.int32(n_runs), np.int32(drop_edge_runs),
+                np.int32(options.method is Method.RNSCA), _data(d_active),
+                np.int32(active is None), decision.data, segmented.data, run_counters.data))
             total = 0
             position = segmented
             if n_chunks:
@@ -421,13 +489,13 @@ class OpenCLBackend:
             keep = cl_array.empty(queue, max(1, total), np.uint8)
             result = cl_array.empty(queue, max(1, 6 * total), real)
             ledger.kernel_events.append(kernels.clip_chunk_segments(
-                queue, (chunk_groups * LOCAL_SIZE,), (LOCAL_SIZE,), _data(d_xy), _data(d_offsets),
-                _data(d_chunk_start), _data(d_chunk_part), _data(d_part_window), _data(d_windows),
-                np.int64(n_chunks), decision.data, segmented.data, position.data,
-                np.int32(_METHOD_ID[options.method]), np.int32(options.n),
-                np.int32(options.max_depth), real(options.tolerance), real(options.auto_piece),
-                np.int32(options.mode is Mode.EXACT), keep.data, result.data,
-                chunk_counters.data))
+                queue, (chunk_groups * LOCAL_SIZE,), (LOCAL_SIZE,), _data(d_xy),
+                _data(d_offsets), _data(d_chunk_start), _data(d_chunk_part),
+                _data(d_part_window), _data(d_windows), np.int64(n_chunks), decision.data,
+                segmented.data, position.data, np.int32(_METHOD_ID[options.method]),
+                np.int32(options.n), np.int32(options.max_depth), real(options.tolerance),
+                real(options.auto_piece), np.int32(options.mode is Mode.EXACT), keep.data,
+                result.data, chunk_counters.data))
             chunk_decision = ledger.from_device(queue, decision[:n_chunks])
             kept = ledger.from_device(queue, keep[:total]).view(np.bool_)
             pieces = ledger.from_device(queue, result[:6 * total]).reshape(total, 6)
@@ -442,9 +510,8 @@ class OpenCLBackend:
         if real is np.float32:
             _exact_float32_ends(pieces, xy, windows, part_window, chunk_part, chunk_first,
                                 segmented_rows)
-        out = _assemble_lines(xy, z, part_offsets, part_window, windows, drop_edge_runs,
-                              chunk_start, chunk_decision, piece_start, kept, pieces)
-        return (*out, counters, device_stats)
+        tables = (chunk_start[:-1].copy(), chunk_decision, piece_start, kept, pieces)
+        return tables, counters, device_stats
 
     def warm_up(self) -> None:
         """Build the program (or load it from the on-disk caches) and run every method."""
@@ -457,6 +524,13 @@ class OpenCLBackend:
 def _data(array):
     """Return the buffer of a device array (the empty ones included: 1 byte then)."""
     return array.data if array.size else cl.Buffer(array.context, cl.mem_flags.READ_ONLY, 1)
+
+
+def _exclusive_sum(counts: np.ndarray) -> np.ndarray:
+    """Return the exclusive prefix sum of `counts`, with the total appended."""
+    out = np.zeros(counts.shape[0] + 1, dtype=np.int64)
+    np.cumsum(counts, out=out[1:])
+    return out
 
 
 def _assemble_lines(xy, z, part_offsets, part_window, windows, drop_edge_runs, chunk_start,

@@ -1106,13 +1106,15 @@ inline void mark_chunks(__global uchar *decision, __global long *segmented, long
 }
 
 /* Part p: RNSCA over runs of chunks (`clip_chains`); without `prune` (the baselines)
- * every chunk is clipped segment by segment. */
+ * every chunk is clipped segment by segment. A part not `active` (unless `all_active`:
+ * a ring of a polygon its shell's box decided) is skipped and not counted. */
 __kernel __attribute__((reqd_work_group_size(LOCAL_SIZE, 1, 1)))
 void classify_runs(__global const REAL *boxes, __global const long *part_offsets,
                    __global const long *chunk_start, __global const long *part_window,
                    __global const REAL *windows, const long n_parts, const int n_runs,
-                   const int drop_edge_runs, const int prune, __global uchar *decision,
-                   __global long *segmented, __global long *counters) {
+                   const int drop_edge_runs, const int prune, __global const uchar *active,
+                   const int all_active, __global uchar *decision, __global long *segmented,
+                   __global long *counters) {
     __local int st[COUNTERS_WIDTH];
     for (int k = get_local_id(0); k < COUNTERS_WIDTH; k += LOCAL_SIZE)
         st[k] = 0;
@@ -1126,7 +1128,9 @@ void classify_runs(__global const REAL *boxes, __global const long *part_offsets
         long w = part_window[p];
         REAL xmin = windows[4 * w], ymin = windows[4 * w + 1];
         REAL xmax = windows[4 * w + 2], ymax = windows[4 * w + 3];
-        if (!prune) {
+        if (!all_active && !active[p]) {
+            mark_chunks(decision, segmented, chunk0, 0, chunks, CHUNK_REJECTED, first, last);
+        } else if (!prune) {
             mark_chunks(decision, segmented, chunk0, 0, chunks, CHUNK_SEGMENTED, first, last);
         } else if (chunks > 0) {
             int stack[RUN_STACK_CAPACITY][2];

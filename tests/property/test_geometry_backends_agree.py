@@ -1,12 +1,13 @@
-"""Lines on OpenCL give what the Numba backend gives: the same chains, bit for bit in
-float64 up to 1e-12, the same sources, offsets and counters (runs and segments).
+"""Lines and polygons on OpenCL give what the Numba backend gives: the same chains and
+rings, coordinates equal to 1e-12 in float64, the same sources, offsets and counters.
 
-On OpenCL the run-level pruning (chunk boxes, RNSCA over runs of chunks) and the clip of
-the undecided chunks' segments run on the device and the chains are assembled on the
-host; on Numba all of it runs in one kernel. Inputs: the adversarial line strategies of
-the geometry tests (vertices on edges and corners, an ulp either side, frames from 1e-300
-to 1e300), every method, mode and boundary rule, with and without Z, and long random
-walks whose runs are pruned several levels deep.
+On OpenCL the run-level pruning of lines and rings (chunk boxes, RNSCA over runs of
+chunks) and the clip of the undecided chunks' segments run on the device, and the chains
+(and, for polygons, the walk along the window) are assembled on the host; on Numba all
+of it runs in one kernel. Inputs: the adversarial strategies of the geometry tests
+(vertices on edges and corners, an ulp either side, frames from 1e-300 to 1e300; stars
+with holes, combs), every method, mode and boundary rule, with and without Z, and long
+random walks whose runs are pruned several levels deep.
 """
 
 from __future__ import annotations
@@ -27,7 +28,7 @@ from tests.property.geometry_strategies import cases
 pytestmark = pytest.mark.opencl
 
 
-def assert_lines_agree(triple, window, **options):
+def assert_geometry_agrees(triple, window, **options):
     """The ragged clip of `triple` is the same on Numba and OpenCL."""
     where = f"{options} window={window}"
     ref = clip_ragged(*triple, window, backend="numba", **options)
@@ -49,7 +50,7 @@ def assert_lines_agree(triple, window, **options):
 def test_drawn_lines_agree(opencl, data, kind, method, mode, boundary, z):
     geometries, window = data.draw(cases(kind, z=z))
     triple = shapely.to_ragged_array(np.array(geometries, dtype=object), include_z=z)
-    assert_lines_agree(triple, window, method=method, mode=mode, boundary=boundary,
+    assert_geometry_agrees(triple, window, method=method, mode=mode, boundary=boundary,
                        keep_empty=True)
 
 
@@ -67,7 +68,7 @@ def test_long_walks_pruned_deep_agree(opencl, rng, window, n):
                                     shapely.LineString([(-5, 1), (5, 1), (5, 20), (8, 20)])]
     triple = shapely.to_ragged_array(np.array(lines, dtype=object))
     for boundary in ("closed", "interior"):
-        assert_lines_agree(triple, window, n=n, boundary=boundary)
+        assert_geometry_agrees(triple, window, n=n, boundary=boundary)
     r = clip_ragged(*triple, window, n=n, backend="opencl")
     assert r.stats.runs_subdivided > 0 or window[2] >= 1e4
 
@@ -77,7 +78,7 @@ def test_a_window_per_geometry_agrees(opencl, rng):
     triple = shapely.to_ragged_array(np.array(lines, dtype=object))
     windows = rng.uniform(-10.0, 0.0, size=(20, 2))
     windows = np.hstack([windows, windows + rng.uniform(1.0, 20.0, size=(20, 2))])
-    assert_lines_agree(triple, windows)
+    assert_geometry_agrees(triple, windows)
 
 
 def test_lines_through_rnsca_clip_on_opencl():
@@ -89,12 +90,40 @@ def test_lines_through_rnsca_clip_on_opencl():
 def test_empty_lines_agree(opencl):
     triple = shapely.to_ragged_array(np.array([shapely.LineString(), shapely.LineString(
         [(1, 1), (2, 2)]), shapely.LineString()], dtype=object))
-    assert_lines_agree(triple, (0.0, 0.0, 10.0, 10.0), keep_empty=True)
+    assert_geometry_agrees(triple, (0.0, 0.0, 10.0, 10.0), keep_empty=True)
     nothing = shapely.to_ragged_array(np.array([shapely.LineString()], dtype=object))
-    assert_lines_agree(nothing, (0.0, 0.0, 10.0, 10.0), keep_empty=True)
+    assert_geometry_agrees(nothing, (0.0, 0.0, 10.0, 10.0), keep_empty=True)
 
 
-def test_polygons_on_opencl_are_refused_with_the_reason(opencl):
-    square = shapely.box(-1, -1, 1, 1)
-    with pytest.raises(rnsca.BackendUnavailableError, match="clips segments and lines"):
-        rnsca.clip(square, (0, 0, 10, 10), backend="opencl")
+@settings(max_examples=40, deadline=None)
+@given(data=st.data(), kind=st.sampled_from(["polygon", "multipolygon"]),
+       method=st.sampled_from(list(Method)), z=st.booleans())
+def test_drawn_polygons_agree(opencl, data, kind, method, z):
+    geometries, window = data.draw(cases(kind, z=z))
+    triple = shapely.to_ragged_array(np.array(geometries, dtype=object), include_z=z)
+    assert_geometry_agrees(triple, window, method=method, keep_empty=True)
+
+
+def test_many_polygons_with_holes_agree(opencl, rng):
+    polygons = []
+    for _ in range(300):
+        centre = rng.uniform(0.0, 100.0, 2)
+        radius = rng.uniform(1.0, 30.0)
+        angles = np.sort(rng.uniform(0.0, 2 * np.pi, 80))
+        r = radius * rng.uniform(0.5, 1.0, 80)
+        shell = np.c_[centre[0] + r * np.cos(angles), centre[1] + r * np.sin(angles)]
+        hole = np.c_[centre[0] + 0.2 * radius * np.cos(angles[::8]),
+                     centre[1] + 0.2 * radius * np.sin(angles[::8])]
+        polygons.append(shapely.Polygon(shell, [hole]))
+    polygons.append(shapely.box(-10.0, -10.0, 200.0, 200.0))  # contains the window
+    triple = shapely.to_ragged_array(np.array(polygons, dtype=object))
+    for window in [(25.0, 25.0, 75.0, 75.0), (10.0, 30.0, 13.0, 90.0), (-1.0, -1.0, 101.0, 101.0)]:
+        for n in ("auto", 3):
+            assert_geometry_agrees(triple, window, n=n)
+
+
+def test_polygons_through_rnsca_clip_on_opencl(opencl):
+    square = shapely.Polygon([(-5, -5), (5, -5), (5, 5), (-5, 5)], [[(1, 1), (1, 2), (2, 2),
+                                                                      (2, 1)]])
+    assert rnsca.clip(square, (0, 0, 10, 10), backend="opencl").normalize().equals(
+        rnsca.clip(square, (0, 0, 10, 10), backend="numba").normalize())

@@ -17,10 +17,11 @@ geometry:
   dimension; all of that is timed, since it is what a caller has to do;
 - ``shapely:intersection``: the same with ``shapely.intersection(geoms, box)``
   (``boundary="closed"`` semantics);
-- ``opencl:clip_ragged`` and ``opencl:segments:rnsca`` (lines only, where OpenCL is
-  available): `rnsca.clip_ragged` and `rnsca.clip_segments` with ``backend="opencl"``
-  (run pruning and segment clipping on the device, chains assembled on the host); the
-  record's ``device`` holds the kernel, transfer and host times of one more call;
+- ``opencl:clip_ragged`` (lines and polygons) and ``opencl:segments:rnsca`` (lines),
+  where OpenCL is available: `rnsca.clip_ragged` and `rnsca.clip_segments` with
+  ``backend="opencl"`` (run pruning of lines and rings and segment clipping on the
+  device, chains and polygons assembled on the host); the record's ``device`` holds
+  the wall, kernel, transfer and host times of one more call;
 - ``segments:cohen_sutherland`` and ``segments:rnsca`` (lines only): per-segment
   clipping of the same lines with `rnsca.clip_segments`, on the (m, 4) segment array of
   the lines built beforehand (the explosion is not timed);
@@ -314,7 +315,7 @@ def _record(c: Contender, kind: str, n_coords: int) -> dict:
     if stats is not None:
         rec["stats"] = stats.to_dict()
         if stats.device is not None:
-            rec["device"] = device_split(c.call, c.best)
+            rec["device"] = device_split(c.call)
     return rec
 
 
@@ -455,7 +456,10 @@ def run_polygons(plan: GeometryPlan, log: Callable[[str], None] = print) -> dict
         (OBJ_CLIP_BY_RECT, "objects", _objects_call(_clip_by_rect(window), geoms)),
         (OBJ_INTERSECTION, "objects", _objects_call(_intersection(window), geoms)),
         (OBJ_RNSCA, "objects", _rnsca_objects(geoms, window)),
-    ]
+    ] + ([] if backend_unavailable_reason("opencl") else [
+        (OPENCL_RAGGED, "opencl",
+         _rnsca_ragged(geometry_type, coords, offsets, window, backend="opencl")),
+    ])
     log(f"workload {name}")
     info["load_average_before"] = load_average()
     runs = _time_workload(name, contenders, plan.policy, plan.n_polygons,

@@ -31,6 +31,7 @@ included), compiled beforehand, interleaved with the others (see `benchmarks.tim
 from __future__ import annotations
 
 import statistics
+import time
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -234,16 +235,22 @@ def _record(workload: Workload, c: Contender, kind: dict, memory: tuple[int, obj
     return rec
 
 
-def device_split(call: Callable[[], object], seconds: float) -> dict:
-    """Return one more OpenCL call's kernel and transfer times, and the host's share."""
+def device_split(call: Callable[[], object]) -> dict:
+    """Return one more OpenCL call's wall time, kernel and transfer times, and the rest.
+
+    The kernel and transfer times come from OpenCL event profiling; ``host_seconds`` is
+    the same call's wall time minus both (validation, allocation, Python, waiting). Read
+    them as shares of ``call_seconds``, not of the best time of the timed repeats.
+    """
+    start = time.perf_counter()
     device = call().stats.device
+    wall = time.perf_counter() - start
     return {"device": device.device, "precision": device.precision,
-            "kernel_seconds": device.kernel_seconds,
+            "call_seconds": wall, "kernel_seconds": device.kernel_seconds,
             "transfer_seconds": device.transfer_seconds,
             "bytes_to_device": device.bytes_to_device,
             "bytes_from_device": device.bytes_from_device,
-            "host_seconds": max(0.0, seconds - device.kernel_seconds
-                                - device.transfer_seconds)}
+            "host_seconds": max(0.0, wall - device.kernel_seconds - device.transfer_seconds)}
 
 
 def run_workload(workload: Workload, plan: Plan, numpy_skip: str | None,
@@ -324,7 +331,7 @@ def run_workload(workload: Workload, plan: Plan, numpy_skip: str | None,
             memory = peak_traced_bytes(c.call)
         rec = _record(workload, c, kinds[c.label], memory, segments.nbytes)
         if kinds[c.label]["kind"] == "opencl":
-            rec["device"] = device_split(c.call, c.best)
+            rec["device"] = device_split(c.call)
         if kinds[c.label]["kind"] == "shapely":
             rec["note"] = ("peak memory not measured: GEOS allocations are invisible to "
                            "tracemalloc")

@@ -563,8 +563,9 @@ def _exact_float32_ends(pieces, xy, windows, part_window, chunk_part, chunk_firs
     """Give float32 pieces their input vertices back, and keep them in their windows.
 
     An end not cut (t = 0 or 1) is an input vertex, but rounded to float32: the host
-    puts the float64 vertex back, so chains join at it as on the other backends. Cut
-    ends are clamped into the float64 window.
+    puts the float64 vertex back, so chains join at it as on the other backends. A cut
+    end lies exactly on the float32 edge line: it is put on the float64 one (the polygon
+    walk compares boundary positions exactly), and every end is clamped into the window.
     """
     segment = np.repeat(chunk_first, rows) + (np.arange(pieces.shape[0])
                                               - np.repeat(np.cumsum(rows) - rows, rows))
@@ -573,9 +574,13 @@ def _exact_float32_ends(pieces, xy, windows, part_window, chunk_part, chunk_firs
     end = pieces[:, 1] == 1.0
     pieces[start, 2:4] = xy[segment[start]]
     pieces[end, 4:6] = xy[segment[end] + 1]
+    rounded = window.astype(np.float32).astype(np.float64)
     for column, bound in ((2, 0), (3, 1), (4, 0), (5, 1)):
-        np.clip(pieces[:, column], window[:, bound], window[:, bound + 2],
-                out=pieces[:, column])
+        values = pieces[:, column]
+        for side in (bound, bound + 2):
+            on_edge = values == rounded[:, side]
+            values[on_edge] = window[on_edge, side]
+        np.clip(values, window[:, bound], window[:, bound + 2], out=values)
 
 
 def _check_float32_lines(xy: np.ndarray, windows: np.ndarray) -> None:

@@ -13,6 +13,7 @@ import threading
 import numpy as np
 import pytest
 
+import rnsca
 from rnsca import Window, clip_segments
 from rnsca.backends import registry
 from rnsca.errors import BackendUnavailableError, InvalidGeometryError, InvalidWindowError
@@ -339,3 +340,31 @@ def test_float32_lines_refuse_coordinates_beyond_its_range(opencl, default_confi
     coords = np.array([[0.0, 0.0], [1.0, 1.0], [1e300, 1.0]])
     with pytest.raises(InvalidGeometryError, match="coordinate 2 does not fit float32"):
         clip_ragged("linestring", coords, (np.array([0, 3]),), W, backend="opencl")
+
+
+def test_float32_polygons_are_valid_and_within_the_bound(opencl, rng, default_configuration):
+    import shapely
+
+    from rnsca.backends.opencl import FLOAT32_RELATIVE_BOUND
+
+    polygons = []
+    for _ in range(200):
+        centre = rng.uniform(0.0, 10.0, 2)
+        angles = np.sort(rng.uniform(0.0, 2 * np.pi, 40))
+        r = rng.uniform(0.5, 3.0) * rng.uniform(0.5, 1.0, 40)
+        polygons.append(shapely.Polygon(np.c_[centre[0] + r * np.cos(angles),
+                                              centre[1] + r * np.sin(angles)]))
+    polygons = np.array(polygons, dtype=object)
+    window = (2.1, 2.3, 7.7, 7.9)  # bounds not representable in float32
+    ref = rnsca.clip(polygons, window, backend="numba")
+    registry.configure_opencl(opencl.device["id"], "float32")
+    got = rnsca.clip(polygons, window, backend="opencl")
+    assert shapely.is_valid(got).all()
+    bound = FLOAT32_RELATIVE_BOUND * 14.0
+    distance = shapely.hausdorff_distance(got, ref)
+    both = ~shapely.is_empty(ref)
+    assert (shapely.is_empty(got) == ~both).all()
+    assert (distance[both] <= bound).all(), distance[both].max()
+    xmin, ymin, xmax, ymax = shapely.bounds(got[both]).T
+    assert (xmin >= 2.1).all() and (ymin >= 2.3).all() and (xmax <= 7.7).all() \
+        and (ymax <= 7.9).all()

@@ -92,6 +92,29 @@ def _workload_table(w: dict) -> Table:
     return table
 
 
+def _device_table(workloads: list[dict]) -> Table | None:
+    """Return the OpenCL runs' split: kernels, host-device transfers, host (or None)."""
+    rows = [(w["workload"]["name"], r) for w in workloads for r in w["runs"]
+            if r.get("device")]
+    if not rows:
+        return None
+    device = rows[0][1]["device"]
+    table = Table(title=f"OpenCL on {device['device']} ({device['precision']}): where the "
+                        "time goes (event profiling of one more call)")
+    for col in ("workload", "contender", "time", "kernels", "transfers", "host", "MB up",
+                "MB down", "t/numba"):
+        table.add_column(col, justify="left" if col in ("workload", "contender") else "right")
+    by_label = {(w["workload"]["name"], r["label"]): r for w in workloads for r in w["runs"]}
+    for name, r in rows:
+        d = r["device"]
+        twin = by_label.get((name, "numba:" + r["label"].split(":", 1)[1]))
+        table.add_row(name, r["label"], _seconds(r["seconds"]), _seconds(d["kernel_seconds"]),
+                      _seconds(d["transfer_seconds"]), _seconds(d["host_seconds"]),
+                      f"{d['bytes_to_device'] / 1e6:.1f}", f"{d['bytes_from_device'] / 1e6:.1f}",
+                      _x(r["seconds"] / twin["seconds"] if twin else None))
+    return table
+
+
 def _sweep_table(sweeps: list[dict]) -> Table:
     table = Table(title='n sweep: rnsca on numba, fixed N vs n="auto" (time / auto time)')
     table.add_column("workload")
@@ -183,6 +206,9 @@ def print_summary(result: dict, console: Console | None = None) -> None:
         info = w["workload"]
         if info["family"] != "uniform" or info["n"] >= min(1_000_000, largest_uniform):
             console.print(_workload_table(w))
+    device = _device_table(workloads)
+    if device is not None:
+        console.print(device)
     if result["n_sweep"]:
         console.print(_sweep_table(result["n_sweep"]))
     console.print(_startup_table(result["startup"]))

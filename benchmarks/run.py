@@ -30,6 +30,11 @@ from pathlib import Path
 
 import numba
 
+# OpenCL drivers the install step registered beside PoCL (see the Makefile); the ICD
+# loader reads this once, before the first OpenCL call.
+if (Path(sys.prefix) / "opencl-vendors").is_dir():
+    os.environ.setdefault("OCL_ICD_VENDORS", str(Path(sys.prefix) / "opencl-vendors"))
+
 from benchmarks import bench_curves, bench_geometry, bench_svg, datasets
 from benchmarks.bench_segments import (
     Plan,
@@ -114,6 +119,9 @@ def run(quick: bool, out_dir: Path, sizes: list[int] | None = None,
     numpy_skip = backend_unavailable_reason("numpy")
     if numpy_skip:
         _log(f"numpy backend unavailable, recorded as skipped: {numpy_skip}")
+    opencl_skip = backend_unavailable_reason("opencl")
+    if opencl_skip:
+        _log(f"opencl backend unavailable, recorded as skipped: {opencl_skip}")
 
     workloads = [*datasets.table2(config["uniform_sizes"]), *datasets.shaped(config["shaped_n"])]
     by_name = {w.name: w for w in workloads}
@@ -121,7 +129,8 @@ def run(quick: bool, out_dir: Path, sizes: list[int] | None = None,
     shapely_per_segment: dict[str, float] = {}
     for w in workloads:
         _log(f"workload {w.name}")
-        res = run_workload(w, plan, numpy_skip, shapely_per_segment, log=_log)
+        res = run_workload(w, plan, numpy_skip, shapely_per_segment, log=_log,
+                           opencl_skip=opencl_skip)
         if w.family == "uniform":
             for r in res["runs"]:
                 if r["kind"] == "shapely" and r["measured"]:

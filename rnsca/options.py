@@ -67,7 +67,7 @@ class Backend(_ChoiceEnum):
     NUMPY = "numpy"
     """Vectorized NumPy reference; slow, written to be read, used as a second opinion."""
     OPENCL = "opencl"
-    """OpenCL kernels (pyopencl) on a GPU or any other OpenCL device; segments only."""
+    """OpenCL kernels (pyopencl) on a GPU or any other OpenCL device; segments and lines."""
 
 
 class Precision(_ChoiceEnum):

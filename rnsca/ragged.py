@@ -154,9 +154,10 @@ def resolve_geometry_options(windows: np.ndarray, dimension: int, *, boundary="c
                                      max_depth=max_depth, tolerance=tolerance, mode=mode)
     side = Boundary(boundary)
     engine = get_backend(backend)
-    if engine.kind is not Backend.NUMBA:
+    if engine.kind is Backend.NUMPY or (engine.kind is Backend.OPENCL and dimension == 2):
+        what = "segments only" if engine.kind is Backend.NUMPY else "segments and lines"
         raise BackendUnavailableError(
-            f"backend {engine.kind.value!r} clips segments only; geometry runs on 'numba'")
+            f"backend {engine.kind.value!r} clips {what}; this geometry runs on 'numba'")
     if dimension == 2 and options.mode is Mode.APPROX:
         raise InvalidOptionError(
             "mode='approx' cannot clip polygons: valid polygon output needs the exact "
@@ -201,8 +202,9 @@ def clip_ragged(geometry_type, coords, offsets, window, *, boundary="closed", ke
     method, n, max_depth, tolerance, mode
         As for `clip_segments`; runs of vertices are pruned by RNSCA with N runs per
         split (``n="auto"``: 16). Polygons need ``mode="exact"``.
-    backend : {"numba"}
-        Geometry clipping runs on the Numba backend.
+    backend : {"numba", "opencl"}
+        Points and lines run on either (OpenCL: the pruning and the clip of segments on
+        the device, the chains assembled on the host); polygons on Numba only.
 
     Returns
     -------
@@ -215,7 +217,7 @@ def clip_ragged(geometry_type, coords, offsets, window, *, boundary="closed", ke
     UnsupportedGeometryError
         For an unknown geometry type.
     BackendUnavailableError
-        For a backend that does not clip geometry.
+        For a backend that does not clip this geometry (NumPy; OpenCL and polygons).
 
     Examples
     --------
@@ -301,13 +303,16 @@ def _clip_lines(engine, ragged, windows, window_index, options, side, keep_empty
         part_offsets, geometry_parts = ragged.offsets
     part_geometry = np.repeat(np.arange(ragged.count, dtype=np.int64), np.diff(geometry_parts))
     part_window = np.ascontiguousarray(window_index[part_geometry])
-    out_xy, out_z, chain_offsets, chains_per_part, counters = engine.clip_lines(
+    # OpenCL also says where it ran and what it moved (a sixth value).
+    out_xy, out_z, chain_offsets, chains_per_part, counters, *device = engine.clip_lines(
         xy, z, part_offsets, part_window, windows, options, side is Boundary.INTERIOR)
     geometry_offsets = _group(chains_per_part, geometry_parts)
     chains_per_geometry = np.diff(geometry_offsets)
     segments_in = int(np.maximum(np.diff(part_offsets) - 1, 0).sum())
     stats = _stats(counters, segments_in, chain_offsets.shape[0] - 1, ragged, out_xy.shape[0],
                    int((chains_per_geometry > 0).sum()))
+    if device:
+        stats = replace(stats, device=device[0])
     coords = _with_z(out_xy, out_z, ragged.has_z)
     return _finish_lines(ragged.kind, coords, chain_offsets, geometry_offsets,
                          chains_per_geometry, keep_empty, stats)

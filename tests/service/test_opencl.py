@@ -71,10 +71,20 @@ def test_a_device_that_is_not_there_is_a_422_with_the_reason(opencl, default_con
     assert "no OpenCL device matches" in r.json()["detail"]
 
 
-def test_geometry_on_opencl_is_refused_with_the_reason(opencl, default_configuration):
-    line = {"type": "LineString", "coordinates": [[-5, 1], [15, 1]]}
+def test_lines_run_on_opencl_and_polygons_are_refused_with_the_reason(
+        opencl, default_configuration):
+    line = {"type": "LineString", "coordinates": [[-5, 1], [5, 1], [5, 20], [8, 20], [8, 5],
+                                                  [15, 5]]}
+    square = {"type": "Polygon", "coordinates": [[[-1, -1], [1, -1], [1, 1], [-1, 1], [-1, -1]]]}
     with make_client(warm_up=False) as client:
         r = client.post("/v1/clip/geojson", json={
             "window": WINDOW, "geojson": line, "options": {"backend": "opencl"}})
+        assert r.status_code == 200, r.text
+        assert r.json()["geojson"]["coordinates"] == [
+            [[0.0, 1.0], [5.0, 1.0], [5.0, 10.0]], [[8.0, 10.0], [8.0, 5.0], [10.0, 5.0]]]
+        assert r.json()["stats"]["device"]["device"] == opencl.name
+        r = client.post("/v1/clip/geojson", json={
+            "window": WINDOW, "geojson": square, "options": {"backend": "opencl"}})
     assert r.status_code == 422
     assert r.json()["type"] == "urn:rnsca:problem:backend-unavailable"
+    assert "clips segments and lines" in r.json()["detail"]

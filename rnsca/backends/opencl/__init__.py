@@ -33,6 +33,7 @@ import pyopencl.array as cl_array
 
 from rnsca.errors import BackendUnavailableError, InvalidGeometryError, InvalidWindowError
 from rnsca.kernels import counters as C
+from rnsca.kernels import polylines as PL
 from rnsca.kernels import segments as K
 from rnsca.options import Backend, Method, Mode, Precision, SegmentOptions
 from rnsca.stats import ClipStats, DeviceStats
@@ -153,7 +154,9 @@ class _Device:
                     options.append("-cl-fp32-correctly-rounded-divide-sqrt")
                 program = _build_program(self.context, self.name, source, options)
                 # Kernel objects hold their arguments: one per program, used under `call_lock`.
-                self.programs[double] = (program.clip_segments, program.write_pieces)
+                self.programs[double] = _Kernels(
+                    program.clip_segments, program.write_pieces, program.chunk_boxes,
+                    program.classify_runs, program.clip_chunk_segments)
             return self.programs[double]
 
 
@@ -170,6 +173,17 @@ def _build_program(context: cl.Context, name: str, source: str, options: list) -
         raise BackendUnavailableError(
             f"the OpenCL device {name!r} could not build the kernels: "
             f"{'; '.join(errors) or str(exc).strip()}") from None
+
+
+@dataclass(frozen=True)
+class _Kernels:
+    """The kernels of one built ``clip.cl``."""
+
+    clip_segments: cl.Kernel
+    write_pieces: cl.Kernel
+    chunk_boxes: cl.Kernel
+    classify_runs: cl.Kernel
+    clip_chunk_segments: cl.Kernel
 
 
 _DEVICES: dict[str, _Device] = {}
@@ -294,7 +308,8 @@ class OpenCLBackend:
         ledger = _Ledger()
         groups = max(1, -(-n // LOCAL_SIZE))
         with self._call_lock:
-            clip_kernel, write_kernel = self._device.program(real is np.float64)
+            kernels = self._device.program(real is np.float64)
+            clip_kernel, write_kernel = kernels.clip_segments, kernels.write_pieces
             device_segments = ledger.to_device(queue, data.reshape(-1))
             result = cl_array.empty(queue, max(1, 6 * n), real)
             keep = cl_array.empty(queue, max(1, n), np.int64)
@@ -335,12 +350,177 @@ class OpenCLBackend:
         stats = ClipStats.from_counters(full, n, m, device=device_stats)
         return out_pieces, out_source, out_t.astype(np.float64), stats
 
+    def clip_lines(self, xy, z, part_offsets, part_window, windows, options: SegmentOptions,
+                   drop_edge_runs: bool):
+        """Return ``(xy, z, chain_offsets, chains_per_part, counters, device_stats)``.
+
+        See `rnsca.backends.numba_cpu.NumbaBackend.clip_lines` (the same arrays, and the
+        `DeviceStats` too). On the device: the chunk boxes, RNSCA over runs of chunks
+        (one work-item per part) and the clip of the segments of undecided chunks (one
+        work-item per chunk); on the host, with the Numba kernel that does it for the
+        Numba backend, the chains: accepted chunks copied, clipped pieces joined.
+
+        Raises
+        ------
+        InvalidGeometryError, InvalidWindowError
+            In float32, for coordinates beyond its range or a window that collapses.
+        """
+        real = self.real
+        n_parts = part_offsets.shape[0] - 1
+        with np.errstate(over="ignore"):
+            data = np.ascontiguousarray(xy, dtype=real)
+            bounds = np.ascontiguousarray(windows, dtype=real)
+        if real is np.float32:
+            _check_float32_lines(data, bounds)
+        segments = np.maximum(np.diff(part_offsets), 1) - 1
+        chunks_per_part = -(-segments // PL.RUN_LEAF_SEGMENTS)
+        chunk_start = np.zeros(n_parts + 1, dtype=np.int64)
+        np.cumsum(chunks_per_part, out=chunk_start[1:])
+        n_chunks = int(chunk_start[-1])
+        chunk_part = np.repeat(np.arange(n_parts, dtype=np.int64), chunks_per_part)
+        # Each chunk's first vertex and segment count (the host needs them to assemble).
+        chunk_first = (part_offsets[chunk_part]
+                       + (np.arange(n_chunks) - chunk_start[chunk_part]) * PL.RUN_LEAF_SEGMENTS)
+        chunk_length = np.minimum(chunk_first + PL.RUN_LEAF_SEGMENTS,
+                                  part_offsets[chunk_part + 1] - 1) - chunk_first
+        queue = self._device.queue
+        ledger = _Ledger()
+        part_groups = max(1, -(-n_parts // LOCAL_SIZE))
+        chunk_groups = max(1, -(-n_chunks // LOCAL_SIZE))
+        n_runs = options.n if options.n > 0 else PL.RUN_N_AUTO
+        with self._call_lock:
+            kernels = self._device.program(real is np.float64)
+            d_xy = ledger.to_device(queue, data.reshape(-1))
+            d_offsets = ledger.to_device(queue, np.ascontiguousarray(part_offsets, np.int64))
+            d_chunk_start = ledger.to_device(queue, chunk_start)
+            d_chunk_part = ledger.to_device(queue, chunk_part)
+            d_part_window = ledger.to_device(queue, np.ascontiguousarray(part_window, np.int64))
+            d_windows = ledger.to_device(queue, bounds.reshape(-1))
+            boxes = cl_array.empty(queue, max(1, 4 * n_chunks), real)
+            decision = cl_array.empty(queue, max(1, n_chunks), np.uint8)
+            segmented = cl_array.empty(queue, max(1, n_chunks), np.int64)
+            run_counters = cl_array.empty(queue, part_groups * C.WIDTH, np.int64)
+            chunk_counters = cl_array.empty(queue, chunk_groups * C.WIDTH, np.int64)
+            if n_chunks:
+                ledger.kernel_events.append(kernels.chunk_boxes(
+                    queue, (n_chunks,), None, _data(d_xy), _data(d_offsets), _data(d_chunk_start),
+                    _data(d_chunk_part), np.int64(n_chunks), boxes.data))
+            ledger.kernel_events.append(kernels.classify_runs(
+                queue, (part_groups * LOCAL_SIZE,), (LOCAL_SIZE,), boxes.data, _data(d_offsets),
+                _data(d_chunk_start), _data(d_part_window), _data(d_windows), np.int64(n_parts),
+                np.int32(n_runs), np.int32(drop_edge_runs),
+                np.int32(options.method is Method.RNSCA), decision.data, segmented.data,
+                run_counters.data))
+            total = 0
+            position = segmented
+            if n_chunks:
+                event, position = cl_array.cumsum(segmented[:n_chunks], queue=queue,
+                                                  return_event=True)
+                ledger.kernel_events.append(event)
+                total = int(ledger.from_device(queue, position[n_chunks - 1:n_chunks])[0])
+            keep = cl_array.empty(queue, max(1, total), np.uint8)
+            result = cl_array.empty(queue, max(1, 6 * total), real)
+            ledger.kernel_events.append(kernels.clip_chunk_segments(
+                queue, (chunk_groups * LOCAL_SIZE,), (LOCAL_SIZE,), _data(d_xy), _data(d_offsets),
+                _data(d_chunk_start), _data(d_chunk_part), _data(d_part_window), _data(d_windows),
+                np.int64(n_chunks), decision.data, segmented.data, position.data,
+                np.int32(_METHOD_ID[options.method]), np.int32(options.n),
+                np.int32(options.max_depth), real(options.tolerance), real(options.auto_piece),
+                np.int32(options.mode is Mode.EXACT), keep.data, result.data,
+                chunk_counters.data))
+            chunk_decision = ledger.from_device(queue, decision[:n_chunks])
+            kept = ledger.from_device(queue, keep[:total]).view(np.bool_)
+            pieces = ledger.from_device(queue, result[:6 * total]).reshape(total, 6)
+            counters = np.concatenate([
+                ledger.from_device(queue, run_counters).reshape(-1, C.WIDTH),
+                ledger.from_device(queue, chunk_counters).reshape(-1, C.WIDTH)])
+            device_stats = ledger.stats(self.name, self.precision)
+        segmented_rows = np.where(chunk_decision == PL.CHUNK_SEGMENTED, chunk_length, 0)
+        piece_start = np.zeros(n_chunks, dtype=np.int64)
+        np.cumsum(segmented_rows[:-1], out=piece_start[1:])
+        pieces = pieces.astype(np.float64)
+        if real is np.float32:
+            _exact_float32_ends(pieces, xy, windows, part_window, chunk_part, chunk_first,
+                                segmented_rows)
+        out = _assemble_lines(xy, z, part_offsets, part_window, windows, drop_edge_runs,
+                              chunk_start, chunk_decision, piece_start, kept, pieces)
+        return (*out, counters, device_stats)
+
     def warm_up(self) -> None:
         """Build the program (or load it from the on-disk caches) and run every method."""
         window = Window(0.0, 0.0, 1.0, 1.0)
         segments = np.array([[-1.0, 0.5, 2.0, 0.5], [0.2, 0.2, 0.8, 0.8]])
         for method in Method:
             self.clip_segments(segments, window, SegmentOptions.resolve(window, method=method))
+
+
+def _data(array):
+    """Return the buffer of a device array (the empty ones included: 1 byte then)."""
+    return array.data if array.size else cl.Buffer(array.context, cl.mem_flags.READ_ONLY, 1)
+
+
+def _assemble_lines(xy, z, part_offsets, part_window, windows, drop_edge_runs, chunk_start,
+                    decision, piece_start, keep, pieces):
+    """Return ``(xy, z, chain_offsets, chains_per_part)``: count, prefix sum, write."""
+    n_parts = part_offsets.shape[0] - 1
+    has_z = z.shape[0] > 0
+    block = max(1, min(1024, -(-n_parts // 64)))
+    n_vertices = np.empty(n_parts, dtype=np.int64)
+    n_chains = np.empty(n_parts, dtype=np.int64)
+    nothing_i = np.empty(0, dtype=np.int64)
+    args = (xy, z, has_z, part_offsets, part_window, windows, drop_edge_runs, block)
+    tables = (chunk_start, decision, piece_start, keep, pieces)
+    PL.assemble_line_blocks(*args, False, *tables, nothing_i, nothing_i, np.empty((0, 2)),
+                            np.empty(0), nothing_i, n_vertices, n_chains)
+    vertex_start = np.zeros(n_parts + 1, dtype=np.int64)
+    np.cumsum(n_vertices, out=vertex_start[1:])
+    chain_start = np.zeros(n_parts + 1, dtype=np.int64)
+    np.cumsum(n_chains, out=chain_start[1:])
+    out_xy = np.empty((int(vertex_start[-1]), 2))
+    out_z = np.empty(int(vertex_start[-1]) if has_z else 0)
+    chain_offsets = np.empty(int(chain_start[-1]) + 1, dtype=np.int64)
+    chain_offsets[-1] = out_xy.shape[0]
+    PL.assemble_line_blocks(*args, True, *tables, vertex_start, chain_start, out_xy, out_z,
+                            chain_offsets, n_vertices, n_chains)
+    return out_xy, out_z, chain_offsets, n_chains
+
+
+def _exact_float32_ends(pieces, xy, windows, part_window, chunk_part, chunk_first, rows):
+    """Give float32 pieces their input vertices back, and keep them in their windows.
+
+    An end not cut (t = 0 or 1) is an input vertex, but rounded to float32: the host
+    puts the float64 vertex back, so chains join at it as on the other backends. Cut
+    ends are clamped into the float64 window.
+    """
+    segment = np.repeat(chunk_first, rows) + (np.arange(pieces.shape[0])
+                                              - np.repeat(np.cumsum(rows) - rows, rows))
+    window = windows[part_window[np.repeat(chunk_part, rows)]]
+    start = pieces[:, 0] == 0.0
+    end = pieces[:, 1] == 1.0
+    pieces[start, 2:4] = xy[segment[start]]
+    pieces[end, 4:6] = xy[segment[end] + 1]
+    for column, bound in ((2, 0), (3, 1), (4, 0), (5, 1)):
+        np.clip(pieces[:, column], window[:, bound], window[:, bound + 2],
+                out=pieces[:, column])
+
+
+def _check_float32_lines(xy: np.ndarray, windows: np.ndarray) -> None:
+    """Refuse float32 lines whose coordinates, steps or windows do not fit float32."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        bad = ~np.isfinite(xy).all(axis=1)
+        bad[1:] |= ~np.isfinite(np.diff(xy, axis=0)).all(axis=1)
+    if bad.any():
+        raise InvalidGeometryError(
+            f"coordinate {int(np.argmax(bad))} does not fit float32, the OpenCL backend's "
+            f"precision here (|coordinates| and their differences must stay below "
+            f"{_F32.max:.3g})")
+    good = (np.isfinite(windows).all(axis=1) & (windows[:, 0] < windows[:, 2])
+            & (windows[:, 1] < windows[:, 3]))
+    if not good.all():
+        row = int(np.argmin(good))
+        raise InvalidWindowError(
+            f"window {row} {windows[row].tolist()} is empty or infinite in float32, the "
+            "OpenCL backend's precision here; use a float64 device or another backend")
 
 
 def _check_float32(data: np.ndarray, bounds: np.ndarray) -> None:

@@ -1037,3 +1037,229 @@ __kernel void write_pieces(__global const REAL *result, __global const long *kee
     t[2 * k] = r[0];
     t[2 * k + 1] = r[1];
 }
+
+/* --- kernels/polylines.py: run-level pruning of lines ------------------------------- */
+/* Lines are cut into chunks of RUN_LEAF_SEGMENTS segments. `chunk_boxes` stores each
+ * chunk's bounding box; `classify_runs` runs RNSCA on runs of chunks (one work-item per
+ * part: `clip_chains`' run stack) and stores each chunk's decision, and how many of its
+ * segments must be clipped one by one; `clip_chunk_segments` clips those (one work-item
+ * per chunk: `_clip_segments`). The chains are assembled on the host from the decisions
+ * and the pieces (rnsca.kernels.polylines.assemble_line_blocks). */
+
+#define RUN_LEAF_SEGMENTS 16
+/* Pending runs: at most N - 1 siblings per level plus the current one; a run of fewer than
+ * 2**31 chunks is down to one chunk within 32 levels (each split at least halves it), so
+ * 63 * 32 + 1 entries suffice for every N <= 64 (the Numba kernel's 4096 is never reached
+ * either: both always split). */
+#define RUN_STACK_CAPACITY (64 * 34)
+#define CHUNK_REJECTED 0
+#define CHUNK_ACCEPTED 1
+#define CHUNK_SEGMENTED 2
+
+/* The rest of the counter row (rnsca/kernels/counters.py). */
+#define RUNS_EVALUATED SEGMENT_COUNTERS
+#define RUNS_ACCEPTED (RUNS_EVALUATED + 1)
+#define RUNS_REJECTED (RUNS_EVALUATED + 2)
+#define RUNS_SUBDIVIDED (RUNS_EVALUATED + 3)
+#define RUNS_SEGMENTED (RUNS_EVALUATED + 4)
+#define RUN_DEEPEST (RUNS_EVALUATED + 5)
+#define RUN_LEVELS (RUNS_EVALUATED + 7)
+#define SEGMENT_LEVELS (RUN_LEVELS + N_LEVELS)
+#define COUNTERS_WIDTH (SEGMENT_LEVELS + N_LEVELS)
+
+inline long chunk_count(long first, long last) {
+    return last <= first ? 0 : (last - first + RUN_LEAF_SEGMENTS - 1) / RUN_LEAF_SEGMENTS;
+}
+
+/* Chunk k (of part chunk_part[k]): the box of its vertices, [xmin, ymin, xmax, ymax]. */
+__kernel void chunk_boxes(__global const REAL *xy, __global const long *part_offsets,
+                          __global const long *chunk_start, __global const long *chunk_part,
+                          const long n_chunks, __global REAL *boxes) {
+    long k = get_global_id(0);
+    if (k >= n_chunks)
+        return;
+    long p = chunk_part[k];
+    long first = part_offsets[p];
+    long last = part_offsets[p + 1] - 1;
+    long a = first + (k - chunk_start[p]) * RUN_LEAF_SEGMENTS;
+    long b = min(a + RUN_LEAF_SEGMENTS, last);
+    REAL lo_x = xy[2 * a], hi_x = lo_x, lo_y = xy[2 * a + 1], hi_y = lo_y;
+    for (long i = a + 1; i <= b; i++) {
+        lo_x = py_min(lo_x, xy[2 * i]);
+        hi_x = py_max(hi_x, xy[2 * i]);
+        lo_y = py_min(lo_y, xy[2 * i + 1]);
+        hi_y = py_max(hi_y, xy[2 * i + 1]);
+    }
+    boxes[4 * k] = lo_x;
+    boxes[4 * k + 1] = lo_y;
+    boxes[4 * k + 2] = hi_x;
+    boxes[4 * k + 3] = hi_y;
+}
+
+inline void mark_chunks(__global uchar *decision, __global long *segmented, long chunk0,
+                        long ca, long cb, uchar d, long first, long last) {
+    for (long k = ca; k < cb; k++) {
+        long a = first + k * RUN_LEAF_SEGMENTS;
+        decision[chunk0 + k] = d;
+        segmented[chunk0 + k] = d == CHUNK_SEGMENTED ? min(a + RUN_LEAF_SEGMENTS, last) - a : 0;
+    }
+}
+
+/* Part p: RNSCA over runs of chunks (`clip_chains`); without `prune` (the baselines)
+ * every chunk is clipped segment by segment. */
+__kernel __attribute__((reqd_work_group_size(LOCAL_SIZE, 1, 1)))
+void classify_runs(__global const REAL *boxes, __global const long *part_offsets,
+                   __global const long *chunk_start, __global const long *part_window,
+                   __global const REAL *windows, const long n_parts, const int n_runs,
+                   const int drop_edge_runs, const int prune, __global uchar *decision,
+                   __global long *segmented, __global long *counters) {
+    __local int st[COUNTERS_WIDTH];
+    for (int k = get_local_id(0); k < COUNTERS_WIDTH; k += LOCAL_SIZE)
+        st[k] = 0;
+    barrier(CLK_LOCAL_MEM_FENCE);
+    long p = get_global_id(0);
+    if (p < n_parts) {
+        long first = part_offsets[p];
+        long last = part_offsets[p + 1] - 1;
+        long chunk0 = chunk_start[p];
+        int chunks = (int)chunk_count(first, last);
+        long w = part_window[p];
+        REAL xmin = windows[4 * w], ymin = windows[4 * w + 1];
+        REAL xmax = windows[4 * w + 2], ymax = windows[4 * w + 3];
+        if (!prune) {
+            mark_chunks(decision, segmented, chunk0, 0, chunks, CHUNK_SEGMENTED, first, last);
+        } else if (chunks > 0) {
+            int stack[RUN_STACK_CAPACITY][2];
+            uchar levels[RUN_STACK_CAPACITY];
+            stack[0][0] = 0;
+            stack[0][1] = chunks;
+            levels[0] = 0;
+            int sp = 1;
+            while (sp > 0) {
+                sp -= 1;
+                int ca = stack[sp][0], cb = stack[sp][1];
+                int level = levels[sp];
+                long a = first + (long)ca * RUN_LEAF_SEGMENTS;
+                long b = min(first + (long)cb * RUN_LEAF_SEGMENTS, last);
+                int slot = level >= N_LEVELS ? N_LEVELS - 1 : level;
+                atomic_max(&st[RUN_DEEPEST], level);
+                COUNT(st, RUNS_EVALUATED, 1);
+                __global const REAL *box = boxes + 4 * (chunk0 + ca);
+                REAL lo_x = box[0], lo_y = box[1], hi_x = box[2], hi_y = box[3];
+                for (long k = chunk0 + ca + 1; k < chunk0 + cb; k++) {
+                    lo_x = py_min(lo_x, boxes[4 * k]);
+                    lo_y = py_min(lo_y, boxes[4 * k + 1]);
+                    hi_x = py_max(hi_x, boxes[4 * k + 2]);
+                    hi_y = py_max(hi_y, boxes[4 * k + 3]);
+                }
+                int strict = lo_x > xmin && hi_x < xmax && lo_y > ymin && hi_y < ymax;
+                int lo = outcode(lo_x, lo_y, xmin, ymin, xmax, ymax);
+                int hi = outcode(hi_x, hi_y, xmin, ymin, xmax, ymax);
+                if ((lo | hi) == 0 && (strict || !drop_edge_runs)) {
+                    COUNT(st, RUNS_ACCEPTED, 1);
+                    COUNT(st, RUN_LEVELS + slot, 1);
+                    COUNT(st, SEGMENT_LEVELS + slot, b - a);
+                    mark_chunks(decision, segmented, chunk0, ca, cb, CHUNK_ACCEPTED, first, last);
+                } else if (lo & hi) {
+                    COUNT(st, RUNS_REJECTED, 1);
+                    COUNT(st, RUN_LEVELS + slot, 1);
+                    COUNT(st, SEGMENT_LEVELS + slot, b - a);
+                    mark_chunks(decision, segmented, chunk0, ca, cb, CHUNK_REJECTED, first, last);
+                } else if (cb - ca <= 1 || sp + n_runs > RUN_STACK_CAPACITY) {
+                    COUNT(st, RUNS_SEGMENTED, 1);
+                    COUNT(st, RUN_LEVELS + slot, 1);
+                    COUNT(st, SEGMENT_LEVELS + slot, b - a);
+                    mark_chunks(decision, segmented, chunk0, ca, cb, CHUNK_SEGMENTED, first,
+                                last);
+                } else {
+                    COUNT(st, RUNS_SUBDIVIDED, 1);
+                    int k = min(n_runs, cb - ca);
+                    for (int j = k; j > 0; j--) {
+                        stack[sp][0] = ca + (int)((long)(cb - ca) * (j - 1) / k);
+                        stack[sp][1] = ca + (int)((long)(cb - ca) * j / k);
+                        levels[sp] = (uchar)(level + 1);
+                        sp += 1;
+                    }
+                }
+            }
+        }
+    }
+    barrier(CLK_LOCAL_MEM_FENCE);
+    __global long *row = counters + get_group_id(0) * COUNTERS_WIDTH;
+    for (int k = get_local_id(0); k < COUNTERS_WIDTH; k += LOCAL_SIZE)
+        row[k] = st[k];
+}
+
+/* Chunk k, if it is to be clipped segment by segment: clip each of its segments
+ * (`_clip_segments`: RNSCA's level 0 inline, then `rnsca_segment`, or the baseline) and
+ * store keep and (t0, t1, ax, ay, bx, by) from slot position[k] - segmented[k] on. */
+__kernel __attribute__((reqd_work_group_size(LOCAL_SIZE, 1, 1)))
+void clip_chunk_segments(__global const REAL *xy, __global const long *part_offsets,
+                         __global const long *chunk_start, __global const long *chunk_part,
+                         __global const long *part_window, __global const REAL *windows,
+                         const long n_chunks, __global const uchar *decision,
+                         __global const long *segmented, __global const long *position,
+                         const int method, const int n_fixed, const int max_depth,
+                         const REAL tol, const REAL auto_piece, const int exact,
+                         __global uchar *keep, __global REAL *result,
+                         __global long *counters) {
+    __local int st[COUNTERS_WIDTH];
+    for (int k = get_local_id(0); k < COUNTERS_WIDTH; k += LOCAL_SIZE)
+        st[k] = 0;
+    barrier(CLK_LOCAL_MEM_FENCE);
+    long k = get_global_id(0);
+    if (k < n_chunks && decision[k] == CHUNK_SEGMENTED) {
+        long p = chunk_part[k];
+        long first = part_offsets[p];
+        long last = part_offsets[p + 1] - 1;
+        long a = first + (k - chunk_start[p]) * RUN_LEAF_SEGMENTS;
+        long b = min(a + RUN_LEAF_SEGMENTS, last);
+        long slot = position[k] - segmented[k];
+        long w = part_window[p];
+        REAL xmin = windows[4 * w], ymin = windows[4 * w + 1];
+        REAL xmax = windows[4 * w + 2], ymax = windows[4 * w + 3];
+        Stack stack;
+        for (long i = a; i < b; i++, slot++) {
+            REAL x0 = xy[2 * i], y0 = xy[2 * i + 1], x1 = xy[2 * i + 2], y1 = xy[2 * i + 3];
+            REAL out[6];
+            int kept;
+            if (method == RNSCA) {
+                int c0 = outcode(x0, y0, xmin, ymin, xmax, ymax);
+                int c1 = outcode(x1, y1, xmin, ymin, xmax, ymax);
+                if ((c0 | c1) == 0 || (c0 & c1) != 0) {
+                    COUNT(st, EVALUATED, 1);
+                    COUNT(st, LEVELS, 1);
+                    if (c0 & c1) {
+                        COUNT(st, REJECTED, 1);
+                        kept = 0;
+                    } else {
+                        COUNT(st, ACCEPTED, 1);
+                        out[0] = 0; out[1] = 1; out[2] = x0; out[3] = y0; out[4] = x1;
+                        out[5] = y1;
+                        kept = 1;
+                    }
+                } else {
+                    kept = rnsca_segment(x0, y0, x1, y1, xmin, ymin, xmax, ymax, n_fixed,
+                                         max_depth, tol, auto_piece, exact, st, &stack, out);
+                }
+            } else if (method == COHEN_SUTHERLAND) {
+                kept = cohen_sutherland_segment(x0, y0, x1, y1, xmin, ymin, xmax, ymax, st, out);
+            } else if (method == LIANG_BARSKY) {
+                kept = liang_barsky_segment(x0, y0, x1, y1, xmin, ymin, xmax, ymax, st, out);
+            } else if (method == NICHOLL_LEE_NICHOLL) {
+                kept = nicholl_lee_nicholl_segment(x0, y0, x1, y1, xmin, ymin, xmax, ymax, st,
+                                                   out);
+            } else {
+                kept = midpoint_segment(x0, y0, x1, y1, xmin, ymin, xmax, ymax, max_depth, tol,
+                                        exact, st, out);
+            }
+            keep[slot] = (uchar)kept;
+            for (int j = 0; j < 6; j++)
+                result[6 * slot + j] = kept ? out[j] : 0;
+        }
+    }
+    barrier(CLK_LOCAL_MEM_FENCE);
+    __global long *row = counters + get_group_id(0) * COUNTERS_WIDTH;
+    for (int j = get_local_id(0); j < COUNTERS_WIDTH; j += LOCAL_SIZE)
+        row[j] = st[j];
+}

@@ -303,3 +303,39 @@ def test_float32_gives_the_same_decisions_on_exact_inputs(float32):
             np.testing.assert_allclose(pieces, ref.segments, rtol=0, atol=2.0 ** -22 * 20)
             if mode is Mode.EXACT:
                 assert stats == dataclasses.replace(ref.stats, device=stats.device)
+
+
+def test_float32_lines_keep_the_input_vertices_and_cut_within_the_bound(
+        opencl, rng, default_configuration):
+    import shapely
+
+    from rnsca.backends.opencl import FLOAT32_RELATIVE_BOUND
+    from rnsca.ragged import clip_ragged
+
+    walks = rng.normal(size=(4000, 2)).cumsum(axis=0) * 0.5 + 5.0
+    lines = np.array([shapely.LineString(walks[i:i + 500]) for i in range(0, 4000, 500)],
+                     dtype=object)
+    triple = shapely.to_ragged_array(lines)
+    window = (0.0, 0.0, 10.0, 10.0)
+    ref = clip_ragged(*triple, window, backend="numba")
+    registry.configure_opencl(opencl.device["id"], "float32")
+    got = clip_ragged(*triple, window, backend="opencl")
+    assert got.stats.device.precision == "float32"
+    for a, b in zip(got.offsets, ref.offsets, strict=True):
+        np.testing.assert_array_equal(a, b)
+    size = max(np.abs(walks).max(), 10.0)
+    np.testing.assert_allclose(got.coords, ref.coords, rtol=0,
+                               atol=FLOAT32_RELATIVE_BOUND * size)
+    # Vertices the clip did not cut are the float64 input vertices, bit for bit.
+    inside = (ref.coords > 0.0).all(axis=1) & (ref.coords < 10.0).all(axis=1)
+    np.testing.assert_array_equal(got.coords[inside], ref.coords[inside])
+    assert (got.coords >= 0.0).all() and (got.coords <= 10.0).all()
+
+
+def test_float32_lines_refuse_coordinates_beyond_its_range(opencl, default_configuration):
+    from rnsca.ragged import clip_ragged
+
+    registry.configure_opencl(opencl.device["id"], "float32")
+    coords = np.array([[0.0, 0.0], [1.0, 1.0], [1e300, 1.0]])
+    with pytest.raises(InvalidGeometryError, match="coordinate 2 does not fit float32"):
+        clip_ragged("linestring", coords, (np.array([0, 3]),), W, backend="opencl")

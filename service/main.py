@@ -23,7 +23,7 @@ from service.errors import install_handlers
 from service.logs import configure_logging
 from service.metrics import Metrics
 from service.middleware import AccessMiddleware, BodyLimitMiddleware
-from service.routes import api_router, playground
+from service.routes import api_router
 from service.runner import ClipRunner
 from service.schemas import REQUEST_MODELS
 
@@ -87,7 +87,6 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.state.metrics = metrics
     install_handlers(app)
     app.include_router(api_router)
-    app.mount("/playground", playground.assets(), name="playground")
     app.openapi = lambda: _openapi(app)
     return app
 

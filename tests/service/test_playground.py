@@ -27,10 +27,21 @@ def test_the_page_is_served_at_the_root(client):
         "text/javascript", "application/javascript")
 
 
-def test_a_missing_asset_is_a_problem_404(client):
-    answer = client.get("/playground/nothing.js")
+@pytest.mark.parametrize("path", ["nothing.js", "", "examples", "../main.py",
+                                  "%2e%2e/main.py", "..%2fconfig.py"])
+def test_anything_but_an_asset_is_a_problem_404(client, path):
+    answer = client.get("/playground/" + path)
     assert answer.status_code == 404
     assert answer.headers["content-type"] == "application/problem+json"
+
+
+def test_assets_are_cached_by_etag_and_counted_under_their_route(client):
+    first = client.get("/playground/playground.css")
+    again = client.get("/playground/playground.css",
+                       headers={"If-None-Match": first.headers["etag"]})
+    assert again.status_code == 304
+    metrics = client.get("/metrics").text
+    assert 'route="/playground/{path:path}",status="304"' in metrics
 
 
 def test_the_playground_is_not_in_the_api_schema(client):

@@ -40,7 +40,7 @@ def default_configuration():
 
 def fake_devices(*entries):
     return [{"id": f"{p}:{d}", "platform": platform, "device": name, "type": kind,
-             "fp64": fp64, "version": "OpenCL 3.0"}
+             "fp64": fp64, "version": "OpenCL 3.0", "max_work_group_size": 256}
             for p, d, platform, name, kind, fp64 in entries]
 
 
@@ -88,11 +88,24 @@ def test_float64_on_a_device_without_fp64_is_an_error_not_float32(opencl_module,
         opencl_module.OpenCLBackend(precision="float64")
 
 
+def test_a_device_with_small_work_groups_is_unavailable(opencl_module, monkeypatch):
+    devices = fake_devices((0, 0, "Tiny platform", "tiny", "accelerator", True))
+    devices[0]["max_work_group_size"] = 32
+    monkeypatch.setattr(opencl_module, "list_devices", lambda: devices)
+    with pytest.raises(BackendUnavailableError, match="at most 32 work-items per group"):
+        opencl_module.OpenCLBackend()
+
+
+def test_warm_up_runs_segments_lines_and_polygons(opencl):
+    opencl.warm_up()
+
+
 def test_the_listing_names_every_device_with_its_fp64_support(opencl_module, opencl):
     devices = opencl_module.list_devices()
     assert opencl.device in devices
     for device in devices:
-        assert set(device) == {"id", "platform", "device", "type", "fp64", "version"}
+        assert set(device) == {"id", "platform", "device", "type", "fp64", "version",
+                               "max_work_group_size"}
         assert device["type"] in ("gpu", "cpu", "accelerator", "other")
 
 

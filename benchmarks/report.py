@@ -329,8 +329,9 @@ def print_geometry_summary(result: dict, console: Console | None = None) -> None
         f"{bbox['outside']:.0%} outside, {bbox['crossing']:.0%} crossing; "
         f"{info['input_invalid']} invalid inputs; load {info.get('load_average_before')} -> "
         f"{info.get('load_average_after')}")))
-    device = _device_table(result["curves"], {"opencl:clip_ragged": "rnsca:clip_ragged",
-                                              "opencl:segments:rnsca": "segments:rnsca"}.get)
+    device = _device_table([*result["curves"], result["polygons"]],
+                           {"opencl:clip_ragged": "rnsca:clip_ragged",
+                            "opencl:segments:rnsca": "segments:rnsca"}.get)
     if device is not None:
         console.print(device)
     console.print(_geojson_table(result["geojson"]))

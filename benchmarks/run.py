@@ -6,6 +6,7 @@ Usage::
     python -m benchmarks.run --quick            # small sizes only, a smoke test
     python -m benchmarks.run --suite svg        # one suite: segments, geometry or svg
     RNSCA_BENCH_QUICK=1 python -m benchmarks.run
+    RNSCA_OPENCL_DEVICE=1:0 python -m benchmarks.run   # OpenCL contenders on that device
 
 The segment suite writes ``<out>/segments-<timestamp>.json`` and ``.png``, and copies
 both to ``<out>/latest.json`` and ``latest.png``; a full run into the default directory
@@ -48,6 +49,7 @@ from benchmarks.plot import draw_figure5
 from benchmarks.report import print_geometry_summary, print_summary
 from benchmarks.startup import measure_startup
 from benchmarks.timing import Policy
+from rnsca.backends.registry import configure_opencl
 
 SCHEMA = "rnsca-bench-segments/1"
 GEOMETRY_SCHEMA = "rnsca-bench-geometry/1"
@@ -303,6 +305,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--no-figure-copy", action="store_true",
                         help="do not update benchmarks/figure5.png")
     args = parser.parse_args(argv)
+    # The OpenCL device and precision, named as for the command line (README).
+    configure_opencl(os.environ.get("RNSCA_OPENCL_DEVICE"),
+                     os.environ.get("RNSCA_OPENCL_PRECISION", "auto"))
     copy_figure = not args.no_figure_copy and args.out.resolve() == DEFAULT_OUT
     if args.suite in ("all", "segments"):
         print_summary(run(args.quick, args.out, args.sizes, args.shapely_10m, copy_figure))

@@ -89,6 +89,7 @@ def list_devices() -> list[dict]:
                 "device": device.name.strip(),
                 "type": _device_type(device.type),
                 "fp64": "cl_khr_fp64" in device.extensions,
+                "max_work_group_size": int(device.max_work_group_size),
                 "version": device.version.strip(),
             })
     if not found:
@@ -272,6 +273,11 @@ class OpenCLBackend:
             raise BackendUnavailableError(
                 f"OpenCL device {self.device['device']!r} has no float64 (cl_khr_fp64); "
                 "ask for precision='float32' or 'auto'")
+        if self.device["max_work_group_size"] < LOCAL_SIZE:
+            raise BackendUnavailableError(
+                f"OpenCL device {self.device['device']!r} runs at most "
+                f"{self.device['max_work_group_size']} work-items per group; the kernels "
+                f"need {LOCAL_SIZE}")
         if precision is Precision.AUTO:
             precision = Precision.FLOAT64 if self.device["fp64"] else Precision.FLOAT32
         self.precision = precision
@@ -514,11 +520,25 @@ class OpenCLBackend:
         return tables, counters, device_stats
 
     def warm_up(self) -> None:
-        """Build the program (or load it from the on-disk caches) and run every method."""
+        """Build the program (or load it from the caches), run every method, lines, rings.
+
+        Also compiles (or loads from Numba's cache) the host kernels that assemble lines
+        and polygons.
+        """
         window = Window(0.0, 0.0, 1.0, 1.0)
         segments = np.array([[-1.0, 0.5, 2.0, 0.5], [0.2, 0.2, 0.8, 0.8]])
         for method in Method:
             self.clip_segments(segments, window, SegmentOptions.resolve(window, method=method))
+        ring = np.array([[-1.0, 0.25], [2.0, 0.25], [2.0, 0.75], [-1.0, 0.75], [-1.0, 0.25]])
+        offsets = np.array([0, 5], dtype=np.int64)
+        windows = np.array([[0.0, 0.0, 1.0, 1.0]])
+        index = np.zeros(1, dtype=np.int64)
+        options = SegmentOptions.resolve(window)
+        for z in (np.empty(0), np.zeros(5)):
+            for drop in (False, True):
+                self.clip_lines(ring, z, offsets, index, windows, options, drop)
+            self.clip_polygons(ring, z, offsets, np.array([0, 1], dtype=np.int64), index,
+                               windows, options)
 
 
 def _data(array):

@@ -1,4 +1,5 @@
-/* Segment clipping in OpenCL C: RNSCA (exact and approx leaves) and the baselines.
+/* Segment clipping in OpenCL C: RNSCA (exact and approx leaves) and the baselines, and
+ * the run-level pruning of lines and rings (at the end of the file).
  *
  * One source for every device and precision, parameterised by build options:
  *   -DREAL_IS_DOUBLE=1   float64 (needs cl_khr_fp64); 0: float32

@@ -18,6 +18,7 @@ from rnsca.arrays import GeometryKind, Ragged
 from rnsca.backends.registry import get_backend
 from rnsca.errors import BackendUnavailableError, InvalidOptionError, InvalidWindowError
 from rnsca.kernels import counters as C
+from rnsca.kernels.validate import all_finite
 from rnsca.options import Backend, Boundary, Mode, SegmentOptions
 from rnsca.stats import ClipStats
 from rnsca.window import Window
@@ -225,7 +226,9 @@ def clip_ragged(geometry_type, coords, offsets, window, *, boundary="closed", ke
     >>> r.to_shapely()[0].wkt
     'MULTILINESTRING ((0 1, 5 1, 5 10), (8 10, 8 5, 10 5))'
     """
-    ragged = Ragged.of(geometry_type, coords, offsets)
+    kind = GeometryKind.of(geometry_type)
+    # Lines are checked for non-finite coordinates by the clip's first pass over them.
+    ragged = Ragged.of(kind, coords, offsets, check_finite=kind.dimension != 1)
     windows, window_index = window_table(window, ragged.count)
     options, side, engine = resolve_geometry_options(
         windows, ragged.kind.dimension, boundary=boundary, method=method, n=n,
@@ -285,6 +288,9 @@ def _clip_points(ragged: Ragged, windows, window_index, side: Boundary, keep_emp
                             source, stats)
 
 
+_NO_INDEX = np.empty(0, dtype=np.int64)
+
+
 def _split_z(ragged: Ragged):
     if ragged.has_z:
         return (np.ascontiguousarray(ragged.coords[:, :2]),
@@ -294,15 +300,22 @@ def _split_z(ragged: Ragged):
 
 def _clip_lines(engine, ragged, windows, window_index, options, side, keep_empty):
     xy, z = _split_z(ragged)
+    if ragged.has_z and not all_finite(z):
+        ragged.check_finite()  # raises, naming the first bad coordinate
     if ragged.kind is GeometryKind.LINESTRING:
         part_offsets = ragged.offsets[0]
         geometry_parts = np.arange(ragged.count + 1, dtype=np.int64)
     else:
         part_offsets, geometry_parts = ragged.offsets
-    part_geometry = np.repeat(np.arange(ragged.count, dtype=np.int64), np.diff(geometry_parts))
-    part_window = np.ascontiguousarray(window_index[part_geometry])
-    out_xy, out_z, chain_offsets, chains_per_part, counters = engine.clip_lines(
-        xy, z, part_offsets, part_window, windows, options, side is Boundary.INTERIOR)
+    # One window for all: the kernel takes row 0 of `windows` for every geometry.
+    geometry_window = window_index if windows.shape[0] > 1 else _NO_INDEX
+    out_xy, out_z, chain_offsets, chains_per_part, counters, bad_part = engine.clip_lines(
+        xy, z, part_offsets, geometry_parts, geometry_window, windows, options,
+        side is Boundary.INTERIOR)
+    if bad_part >= 0:
+        ragged.check_finite()  # raises, naming the first bad coordinate
+        raise AssertionError(f"the line kernel found a non-finite coordinate in part "
+                             f"{bad_part} that the full check did not")
     geometry_offsets = _group(chains_per_part, geometry_parts)
     chains_per_geometry = np.diff(geometry_offsets)
     segments_in = int(np.maximum(np.diff(part_offsets) - 1, 0).sum())

@@ -33,7 +33,7 @@ import numpy as np
 from numba import prange
 
 from rnsca.kernels import counters as C
-from rnsca.kernels.jit import inlined, parallel, scalar
+from rnsca.kernels.jit import borrowing, inlined, parallel, scalar
 from rnsca.kernels.outcode import outcode
 from rnsca.kernels.segments import (
     RNSCA,
@@ -187,7 +187,7 @@ def _emit_run(flat_xy, z, has_z, write, a, b, flat_out, out_z, out_starts, v, c,
     return v + count, c, b
 
 
-@inlined
+@borrowing
 def _clip_segments(xy, z, has_z, write, a, b, xmin, ymin, xmax, ymax, method, n_fixed,
                    max_depth, tol, auto_piece, exact, drop_edge_runs, break_at_boundary, out_xy,
                    out_z, out_starts, v, c, last_v, st, stack_f, stack_i, flat_xy, flat_out):
@@ -319,7 +319,7 @@ def chunk_count(first, last):
     return 0 if last <= first else (last - first + RUN_LEAF_SEGMENTS - 1) // RUN_LEAF_SEGMENTS
 
 
-@scalar
+@borrowing
 def code_chunks(flat, first, last, xmin, ymin, xmax, ymax, strict, codes, chunk_or, chunk_and,
                 c0):
     """Store the OR and AND of each chunk's vertex codes; return those of the whole line.
@@ -347,11 +347,16 @@ def code_chunks(flat, first, last, xmin, ymin, xmax, ymax, strict, codes, chunk_
         for i in range(n_codes, n_chunks * RUN_LEAF_SEGMENTS + 1):
             codes[i] = end
         # Codes use bits 0-5 only, so the words are non-negative and shifts bring in zeros.
-        words = codes[:n_chunks * RUN_LEAF_SEGMENTS].view(np.int64)
+        # Chunk k's codes are words 2k and 2k+1; its closing vertex is the first byte of
+        # word 2k+2 (the scratch holds that word for the last chunk too).
+        words = codes[:8 * (2 * n_chunks + 1)].view(np.int64)
         k0 = c0 + s // RUN_LEAF_SEGMENTS
+        out_or = chunk_or[k0:k0 + n_chunks]
+        out_and = chunk_and[k0:k0 + n_chunks]
         for k in range(n_chunks):
             lo = words[2 * k]
             hi = words[2 * k + 1]
+            closing = words[2 * k + 2] & 0xFF
             any_ = lo | hi
             every = lo & hi
             any_ |= any_ >> 32
@@ -360,11 +365,12 @@ def code_chunks(flat, first, last, xmin, ymin, xmax, ymax, strict, codes, chunk_
             every &= every >> 32
             every &= every >> 16
             every &= every >> 8
-            closing = codes[(k + 1) * RUN_LEAF_SEGMENTS]  # the chunk's last vertex
-            chunk_or[k0 + k] = (any_ | closing) & 0xFF
-            chunk_and[k0 + k] = (every & closing) & 0xFF
-            line_or |= chunk_or[k0 + k]
-            line_and &= chunk_and[k0 + k]
+            any_ = (any_ | closing) & 0xFF
+            every &= closing
+            out_or[k] = any_
+            out_and[k] = every
+            line_or |= any_
+            line_and &= every
     return line_or, line_and
 
 
@@ -399,7 +405,7 @@ def _vertex_run_codes(xy, a, b, xmin, ymin, xmax, ymax, strict):
     return any_, every
 
 
-@scalar
+@borrowing
 def clip_chains(xy, z, has_z, write, first, last, xmin, ymin, xmax, ymax, method, n_fixed,
                 max_depth, tol, auto_piece, exact, drop_edge_runs, break_at_boundary, out_xy,
                 out_z, out_starts, v, c, st, run_stack, stack_f, stack_i, chunk_or, chunk_and,
@@ -541,7 +547,7 @@ def clip_chains(xy, z, has_z, write, first, last, xmin, ymin, xmax, ymax, method
     return v, c, starts_at_first, last_v == last, n_plan
 
 
-@scalar
+@borrowing
 def emit_plan(xy, z, has_z, first, last, xmin, ymin, xmax, ymax, method, n_fixed, max_depth,
               tol, auto_piece, exact, drop_edge_runs, out_xy, out_z, out_starts, v, c, st,
               stack_f, stack_i, plan, plan0, plan_end):

@@ -309,39 +309,36 @@ def _clip_lines(engine, ragged, windows, window_index, options, side, keep_empty
         part_offsets, geometry_parts = ragged.offsets
     # One window for all: the kernel takes row 0 of `windows` for every geometry.
     geometry_window = window_index if windows.shape[0] > 1 else _NO_INDEX
-    out_xy, out_z, chain_offsets, chains_per_part, counters, bad_part = engine.clip_lines(
+    out_xy, out_z, chain_offsets, geometry_chains, counters, bad_part = engine.clip_lines(
         xy, z, part_offsets, geometry_parts, geometry_window, windows, options,
         side is Boundary.INTERIOR)
     if bad_part >= 0:
         ragged.check_finite()  # raises, naming the first bad coordinate
         raise AssertionError(f"the line kernel found a non-finite coordinate in part "
                              f"{bad_part} that the full check did not")
-    geometry_offsets = _group(chains_per_part, geometry_parts)
-    chains_per_geometry = np.diff(geometry_offsets)
-    segments_in = int(np.maximum(np.diff(part_offsets) - 1, 0).sum())
+    chains_per_geometry = np.diff(geometry_chains)
+    # Parts of one position are refused by `Ragged.of`: every part but an empty one has
+    # one segment fewer than positions.
+    segments_in = xy.shape[0] - int(np.count_nonzero(np.diff(part_offsets)))
+    count = chains_per_geometry.shape[0]
+    source = np.flatnonzero(chains_per_geometry)
     stats = _stats(counters, segments_in, chain_offsets.shape[0] - 1, ragged, out_xy.shape[0],
-                   int((chains_per_geometry > 0).sum()))
+                   source.shape[0])
     coords = _with_z(out_xy, out_z, ragged.has_z)
-    return _finish_lines(ragged.kind, coords, chain_offsets, geometry_offsets,
-                         chains_per_geometry, keep_empty, stats)
-
-
-def _finish_lines(kind, coords, part_offsets, geometry_offsets, parts_per_geometry, keep_empty,
-                  stats):
-    count = parts_per_geometry.shape[0]
-    source = np.arange(count, dtype=np.int64)
-    if not keep_empty:
-        source = np.flatnonzero(parts_per_geometry > 0).astype(np.int64)
-        # Dropped geometries own no part: the part offsets stay as they are.
-        geometry_offsets = np.concatenate([[0], np.cumsum(parts_per_geometry[source])])
-    geometry_offsets = np.asarray(geometry_offsets, dtype=np.int64)
-    if kind is GeometryKind.LINESTRING and (count == 0 or parts_per_geometry.max() <= 1):
-        # At most one part each: the part offsets, one per geometry (empty ones repeat).
-        starts = part_offsets[geometry_offsets]
-        return RaggedClipResult(kind.shapely_type, coords, (np.asarray(starts, np.int64),),
-                                source, stats)
+    if keep_empty or source.shape[0] == count:
+        source = np.arange(count, dtype=np.int64)
+        geometry_offsets = geometry_chains
+    else:
+        # Dropped geometries own no chain: the chain offsets stay as they are.
+        geometry_offsets = np.empty(source.shape[0] + 1, dtype=np.int64)
+        geometry_offsets[0] = 0
+        geometry_offsets[1:] = geometry_chains[source + 1]
+    if ragged.kind is GeometryKind.LINESTRING and (count == 0 or chains_per_geometry.max() <= 1):
+        # At most one chain each: the chain offsets, one per geometry (empty ones repeat).
+        return RaggedClipResult(ragged.kind.shapely_type, coords,
+                                (chain_offsets[geometry_offsets],), source, stats)
     return RaggedClipResult(GeometryKind.MULTILINESTRING.shapely_type, coords,
-                            (part_offsets, geometry_offsets), source, stats)
+                            (chain_offsets, geometry_offsets), source, stats)
 
 
 def _clip_polygons(engine, ragged, windows, window_index, options, keep_empty):

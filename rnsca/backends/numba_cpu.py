@@ -61,7 +61,7 @@ class NumbaBackend:
 
     def clip_lines(self, xy, z, part_offsets, geometry_parts, geometry_window, windows,
                    options: SegmentOptions, drop_edge_runs: bool):
-        """Return ``(xy, z, chain_offsets, chains_per_part, counters, bad_part)``.
+        """Return ``(xy, z, chain_offsets, geometry_chains, counters, bad_part)``.
 
         Geometry g owns parts ``geometry_parts[g]..geometry_parts[g+1]-1`` and is clipped
         against ``windows[geometry_window[g]]`` (`geometry_window` empty: row 0 for

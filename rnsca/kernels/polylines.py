@@ -695,7 +695,8 @@ def clip_lines(xy, z, part_offsets, geometry_parts, geometry_window, windows, me
     out_xy : float64 (m, 2)
     out_z : float64 (m,) or (0,)
     chain_offsets : int64 (chains + 1,)
-    chains_per_part : int64 (parts,)
+    geometry_chains : int64 (G + 1,)
+        Geometry g's chains are ``geometry_chains[g]`` to ``geometry_chains[g+1] - 1``.
     counters : int64 (blocks, counters.WIDTH)
         Stats, one row per block.
     bad_part : int
@@ -742,7 +743,7 @@ def clip_lines(xy, z, part_offsets, geometry_parts, geometry_window, windows, me
     for p in range(n_parts):
         if n_vertices[p] < 0:
             return nothing_xy, nothing_z, np.zeros(1, dtype=np.int64), \
-                np.zeros(n_parts, dtype=np.int64), counters, p
+                np.zeros(n_geometries + 1, dtype=np.int64), counters, p
     vertex_start = _exclusive_sum(n_vertices)
     chain_start = _exclusive_sum(n_chains)
     m = vertex_start[n_parts]
@@ -758,4 +759,8 @@ def clip_lines(xy, z, part_offsets, geometry_parts, geometry_window, windows, me
         _line_pass_serial(*args_write)
     else:
         _line_pass(*args_write)
-    return out_xy, out_z, chain_offsets, n_chains, counters, -1
+    geometry_chains = np.empty(n_geometries + 1, dtype=np.int64)
+    geometry_chains[0] = 0
+    for g in range(n_geometries):
+        geometry_chains[g + 1] = chain_start[geometry_parts[g + 1]]
+    return out_xy, out_z, chain_offsets, geometry_chains, counters, -1

@@ -220,9 +220,11 @@ def clip_paths(paths: PathArrays, window, *, curves="preserve", fill=None, toler
         out_first = np.append(out_first[:-1][kept], m)
         out_start, out_closed, out_from = out_start[kept], out_closed[kept], out_from[kept]
     path_offsets = _exclusive_sum(np.bincount(out_from, minlength=len(paths)))
-    clipped = PathArrays(controls=out_ctrl, degree=out_deg, subpath_offsets=out_first,
-                         closed=out_closed, start=out_start, path_offsets=path_offsets)
-    segments_in = paths.degree.shape[0] + _closing_edges(paths, options.fill is not None)
+    clipped = PathArrays.from_kernel(controls=out_ctrl, degree=out_deg,
+                                     subpath_offsets=out_first, closed=out_closed,
+                                     start=out_start, path_offsets=path_offsets)
+    segments_in = paths.degree.shape[0] + BZ.closing_edges(
+        paths.controls, paths.subpath_offsets, paths.closed, paths.start, options.fill is not None)
     non_empty = int((np.diff(path_offsets) > 0).sum())
     stats = ClipStats.from_counters(counters, segments_in, m, geometries_in=len(paths),
                                     geometries_out=non_empty,
@@ -231,17 +233,6 @@ def clip_paths(paths: PathArrays, window, *, curves="preserve", fill=None, toler
     return PathClipResult(clipped, stats, options.curves.value,
                           None if options.fill is None else options.fill.value,
                           options.mode.value, options.tolerance)
-
-
-def _closing_edges(paths: PathArrays, fill: bool) -> int:
-    """Return how many subpaths have a closing edge that is clipped as a segment."""
-    has = np.diff(paths.subpath_offsets) > 0
-    if not fill:
-        has &= paths.closed
-    if not has.any():
-        return 0
-    ends = paths.controls[paths.subpath_offsets[1:][has] - 1, 3]
-    return int((ends != paths.start[has]).any(axis=1).sum())
 
 
 def _exclusive_sum(counts: np.ndarray) -> np.ndarray:

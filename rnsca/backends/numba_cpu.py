@@ -95,9 +95,12 @@ class NumbaBackend:
                 _METHOD_ID[options.method], options.n, options.max_depth, options.tolerance,
                 options.auto_piece, True, block)
         nothing_i = np.empty(0, dtype=np.int64)
+        # Runs and segments are clipped here, not decided elsewhere: no decision tables.
+        undecided = (False, nothing_i, np.empty(0, dtype=np.uint8), nothing_i,
+                     np.empty(0, dtype=np.bool_), np.empty((0, 6)))
         PG.clip_polygon_blocks(*args, False, polygon_class, scratch_v, scratch_c, nothing_i,
                                nothing_i, nothing_i, np.empty((0, 2)), np.empty(0), nothing_i,
-                               nothing_i, n_vertices, n_rings, n_polys, counters)
+                               nothing_i, n_vertices, n_rings, n_polys, counters, *undecided)
         vertex_start = _exclusive_sum(n_vertices)
         ring_start = _exclusive_sum(n_rings)
         poly_start = _exclusive_sum(n_polys)
@@ -108,7 +111,7 @@ class NumbaBackend:
         out_poly_rings = np.empty(int(poly_start[-1]), dtype=np.int64)
         PG.clip_polygon_blocks(*args, True, polygon_class, scratch_v, scratch_c, vertex_start,
                                ring_start, poly_start, out_xy, out_z, out_rings, out_poly_rings,
-                               n_vertices, n_rings, n_polys, counters)
+                               n_vertices, n_rings, n_polys, counters, *undecided)
         return out_xy, out_z, out_rings, out_poly_rings, n_polys, counters
 
     def warm_up(self) -> None:

@@ -159,6 +159,22 @@ class PathArrays:
             raise error
 
     @classmethod
+    def from_kernel(cls, *, controls, degree, subpath_offsets, closed, start,
+                    path_offsets) -> PathArrays:
+        """Return the arrays a kernel built to this layout as they are, unchecked.
+
+        For library code whose kernel writes the layout by construction (the clip's
+        output): the checks of the constructor would cost a third of a clip. The arrays
+        must already have the dtypes, shapes and contents the class describes.
+        """
+        paths = object.__new__(cls)
+        for name, value in (("controls", controls), ("degree", degree),
+                            ("subpath_offsets", subpath_offsets), ("closed", closed),
+                            ("start", start), ("path_offsets", path_offsets)):
+            object.__setattr__(paths, name, value)
+        return paths
+
+    @classmethod
     def empty(cls) -> PathArrays:
         """Return a `PathArrays` of no paths."""
         return cls(controls=np.empty((0, 4, 2)), degree=np.empty(0, np.int8),

@@ -32,7 +32,7 @@ import numpy as np
 from numba import prange
 
 from rnsca.kernels import counters as C
-from rnsca.kernels.jit import parallel, scalar
+from rnsca.kernels.jit import borrowing, parallel, scalar
 from rnsca.kernels.outcode import BOTTOM, LEFT, RIGHT, TOP, clamp, outcode
 
 # Helpers that take many arrays are inlined by Numba itself (LLVM does not inline them):
@@ -47,6 +47,7 @@ __all__ = [
     "RUN_SEGMENTS",
     "EXACT_LEAF_DEPTH",
     "clip_path_blocks",
+    "closing_edges",
     "edge_breaks",
     "flatten_count",
     "flatten_into",
@@ -224,7 +225,7 @@ def _critical_points(degree, a0, a1, a2, a3):
     return r0, r1
 
 
-@scalar
+@borrowing
 def _solve_monotone(degree, a0, a1, a2, a3, level, u, v, gu, gv, st):
     """Return the root of ``B(t) = level`` in [u, v], B monotone there.
 
@@ -259,7 +260,7 @@ def _solve_monotone(degree, a0, a1, a2, a3, level, u, v, gu, gv, st):
         abs(point_value(degree, a0, a1, a2, a3, v) - level) else v
 
 
-@scalar
+@borrowing
 def _add_break(brk_t, brk_e, n, t, edge_bit):
     if n < brk_t.shape[0]:
         brk_t[n] = t
@@ -268,7 +269,7 @@ def _add_break(brk_t, brk_e, n, t, edge_bit):
     return n
 
 
-@scalar
+@borrowing
 def _line_roots(degree, a0, a1, a2, a3, level, edge_bit, lo, hi, brk_t, brk_e, n, st):
     """Add to the break table the parameters in [lo, hi] where B(t) crosses `level`."""
     s0, s1, s2, s3 = piece_values(degree, a0, a1, a2, a3, lo, hi)
@@ -303,7 +304,7 @@ def _line_roots(degree, a0, a1, a2, a3, level, edge_bit, lo, hi, brk_t, brk_e, n
     return n
 
 
-@scalar
+@borrowing
 def edge_breaks(degree, x0, x1, x2, x3, y0, y1, y2, y3, lo, hi, xmin, ymin, xmax, ymax,
                 brk_t, brk_e, st):
     """Fill the break table of the piece [lo, hi]; return its length.
@@ -369,7 +370,7 @@ def _put_segment(write, degree, px, py, out_ctrl, out_deg, si, sf):
     sf[_CUR_Y] = py[3]
 
 
-@scalar
+@borrowing
 def _put_whole(write, degree, x0, x1, x2, x3, y0, y1, y2, y3, out_ctrl, out_deg, si, sf):
     """Append an input segment accepted whole (unused slots already repeat its end)."""
     v = si[_V]
@@ -390,7 +391,7 @@ def _put_whole(write, degree, x0, x1, x2, x3, y0, y1, y2, y3, out_ctrl, out_deg,
     sf[_CUR_Y] = y3
 
 
-@scalar
+@borrowing
 def _run_box(controls, a, b):
     """Return the bounding box (lo_x, lo_y, hi_x, hi_y) of the control points of a..b-1."""
     lo_x = controls[a, 0, 0]
@@ -408,7 +409,7 @@ def _run_box(controls, a, b):
     return lo_x, lo_y, hi_x, hi_y
 
 
-@scalar
+@borrowing
 def _put_run(write, controls, degree, a, b, out_ctrl, out_deg, si, sf):
     """Append the input segments a..b-1, accepted whole (a continuous run)."""
     v = si[_V]
@@ -519,7 +520,7 @@ def _outside(write, fill, x, y, xmin, ymin, xmax, ymax, out_ctrl, out_deg, si, s
         si[_OPEN] = 0
 
 
-@scalar
+@borrowing
 def _flush(write, fill, flatten, degree, x0, x1, x2, x3, y0, y1, y2, y3, xmin, ymin, xmax,
            ymax, tol, source, px, py, out_ctrl, out_deg, out_first, out_start, out_from, si, sf):
     """Output the pending visible interval of the segment, if any."""
@@ -588,7 +589,7 @@ def _emit_stretch(write, fill, degree, x0, x1, x2, x3, y0, y1, y2, y3, a, b, edg
                 out_from, si, sf)
 
 
-@scalar
+@borrowing
 def _emit_exact(write, fill, degree, x0, x1, x2, x3, y0, y1, y2, y3, xmin, ymin, xmax, ymax,
                 source, px, py, brk_t, brk_e, out_ctrl, out_deg, out_first, out_start,
                 out_from, si, sf, st):
@@ -635,7 +636,7 @@ def _pend(a, b, edges_a, edges_b, si, sf):
     return False
 
 
-@scalar
+@borrowing
 def _visible(write, fill, flatten, degree, x0, x1, x2, x3, y0, y1, y2, y3, a, b, edges_a,
              edges_b, xmin, ymin, xmax, ymax, tol, source, px, py, out_ctrl, out_deg,
              out_first, out_start, out_from, si, sf):
@@ -650,7 +651,7 @@ def _visible(write, fill, flatten, degree, x0, x1, x2, x3, y0, y1, y2, y3, a, b,
     si[_PEND_EB] = edges_b
 
 
-@scalar
+@borrowing
 def _leaf(write, fill, flatten, degree, x0, x1, x2, x3, y0, y1, y2, y3, a, b, xmin, ymin,
           xmax, ymax, tol, source, px, py, brk_t, brk_e, out_ctrl, out_deg, out_first,
           out_start, out_from, si, sf, st):
@@ -679,7 +680,7 @@ def _leaf(write, fill, flatten, degree, x0, x1, x2, x3, y0, y1, y2, y3, a, b, xm
                      si, sf)
 
 
-@scalar
+@borrowing
 def clip_segment(write, fill, flatten, exact, degree, x0, x1, x2, x3, y0, y1, y2, y3, xmin,
                  ymin, xmax, ymax, n_split, leaf_depth, tol, source, px, py, brk_t, brk_e,
                  stack, out_ctrl, out_deg, out_first, out_start, out_from, si, sf, st):
@@ -785,7 +786,25 @@ def clip_segment(write, fill, flatten, exact, degree, x0, x1, x2, x3, y0, y1, y2
            ymax, tol, source, px, py, out_ctrl, out_deg, out_first, out_start, out_from, si, sf)
 
 
-@scalar
+@borrowing
+def _reverse_segments(out_ctrl, out_deg, a, b):
+    """Reverse the order of the output segments a..b-1."""
+    i = a
+    j = b - 1
+    while i < j:
+        for r in range(4):
+            for c in range(2):
+                tmp = out_ctrl[i, r, c]
+                out_ctrl[i, r, c] = out_ctrl[j, r, c]
+                out_ctrl[j, r, c] = tmp
+        d = out_deg[i]
+        out_deg[i] = out_deg[j]
+        out_deg[j] = d
+        i += 1
+        j -= 1
+
+
+@borrowing
 def _rotate_last_chain(s0, s_end, v0, v_end, out_ctrl, out_deg, out_first, out_start):
     """Move the last chain of a closed stroke in front of its first one, joining them.
 
@@ -794,20 +813,17 @@ def _rotate_last_chain(s0, s_end, v0, v_end, out_ctrl, out_deg, out_first, out_s
     """
     last_first = out_first[s_end - 1]
     k = v_end - last_first
-    moved_ctrl = out_ctrl[last_first:v_end].copy()
-    moved_deg = out_deg[last_first:v_end].copy()
-    for v in range(v_end - 1, v0 + k - 1, -1):
-        out_ctrl[v] = out_ctrl[v - k]
-        out_deg[v] = out_deg[v - k]
-    out_ctrl[v0:v0 + k] = moved_ctrl
-    out_deg[v0:v0 + k] = moved_deg
+    # Rotate v0..v_end-1 right by k in place (three reversals: no scratch array).
+    _reverse_segments(out_ctrl, out_deg, v0, v_end)
+    _reverse_segments(out_ctrl, out_deg, v0, v0 + k)
+    _reverse_segments(out_ctrl, out_deg, v0 + k, v_end)
     for s in range(s0 + 1, s_end - 1):
         out_first[s] += k
     out_start[s0, 0] = out_start[s_end - 1, 0]
     out_start[s0, 1] = out_start[s_end - 1, 1]
 
 
-@scalar
+@borrowing
 def _clip_subpath(write, fill, flatten, exact, controls, degree, first, last, closed, sx, sy,
                   source, xmin, ymin, xmax, ymax, n_split, leaf_depth, tol, v0, v_end, s0, px,
                   py, brk_t, brk_e, stack, out_ctrl, out_deg, out_first, out_start, out_closed,
@@ -980,6 +996,32 @@ def _clip_subpath(write, fill, flatten, exact, controls, degree, first, last, cl
             out_from[si[_S] - 1] = -1
 
 
+@borrowing
+def _clip_block(write, fill, flatten, exact, controls, degree, subpath_offsets, closed, start,
+                subpath_source, xmin, ymin, xmax, ymax, n_split, leaf_depth, tol, k0, k1,
+                segment_start, subpath_start, px, py, brk_t, brk_e, stack, out_ctrl, out_deg,
+                out_first, out_start, out_closed, out_from, n_segments, n_subpaths, si, sf, st):
+    """Count or write the subpaths k0..k1-1 (one block of `clip_path_blocks`)."""
+    for k in range(k0, k1):
+        v0 = 0
+        v_end = np.iinfo(np.int64).max
+        s0 = 0
+        if write:
+            if n_subpaths[k] == 0:
+                continue
+            v0 = segment_start[k]
+            v_end = v0 + n_segments[k]
+            s0 = subpath_start[k]
+        _clip_subpath(write, fill, flatten, exact, controls, degree, subpath_offsets[k],
+                      subpath_offsets[k + 1], closed[k], start[k, 0], start[k, 1],
+                      subpath_source[k], xmin, ymin, xmax, ymax, n_split, leaf_depth, tol,
+                      v0, v_end, s0, px, py, brk_t, brk_e, stack, out_ctrl, out_deg, out_first,
+                      out_start, out_closed, out_from, si, sf, st)
+        if not write:
+            n_segments[k] = si[_V]
+            n_subpaths[k] = si[_S]
+
+
 @parallel
 def clip_path_blocks(controls, degree, subpath_offsets, closed, start, subpath_source, xmin,
                      ymin, xmax, ymax, fill, flatten, exact, n_split, leaf_depth, tol,
@@ -1007,24 +1049,28 @@ def clip_path_blocks(controls, degree, subpath_offsets, closed, start, subpath_s
         brk_t = np.empty(BREAK_CAPACITY, dtype=np.float64)
         brk_e = np.empty(BREAK_CAPACITY, dtype=np.int64)
         stack = np.empty((CURVE_STACK_CAPACITY, 3), dtype=np.float64)
-        for k in range(blk * block_size, min(n, (blk + 1) * block_size)):
-            v0 = 0
-            v_end = np.iinfo(np.int64).max
-            s0 = 0
-            if write:
-                if n_subpaths[k] == 0:
-                    continue
-                v0 = segment_start[k]
-                v_end = v0 + n_segments[k]
-                s0 = subpath_start[k]
-            _clip_subpath(write, fill, flatten, exact, controls, degree, subpath_offsets[k],
-                          subpath_offsets[k + 1], closed[k], start[k, 0], start[k, 1],
-                          subpath_source[k], xmin, ymin, xmax, ymax, n_split, leaf_depth, tol,
-                          v0, v_end, s0, px, py, brk_t, brk_e, stack, out_ctrl, out_deg, out_first,
-                          out_start, out_closed, out_from, si, sf, st)
-            if not write:
-                n_segments[k] = si[_V]
-                n_subpaths[k] = si[_S]
+        _clip_block(write, fill, flatten, exact, controls, degree, subpath_offsets, closed,
+                    start, subpath_source, xmin, ymin, xmax, ymax, n_split, leaf_depth, tol,
+                    blk * block_size, min(n, (blk + 1) * block_size), segment_start,
+                    subpath_start, px, py, brk_t, brk_e, stack, out_ctrl, out_deg, out_first,
+                    out_start, out_closed, out_from, n_segments, n_subpaths, si, sf, st)
+
+
+@scalar
+def closing_edges(controls, subpath_offsets, closed, start, fill):
+    """Return how many subpaths have a closing line that is clipped as a segment.
+
+    A subpath with segments has one when it is closed (or `fill` closes every subpath)
+    and its last segment does not end at its start point.
+    """
+    count = 0
+    for s in range(closed.shape[0]):
+        last = subpath_offsets[s + 1]
+        if last == subpath_offsets[s] or not (fill or closed[s]):
+            continue
+        if controls[last - 1, 3, 0] != start[s, 0] or controls[last - 1, 3, 1] != start[s, 1]:
+            count += 1
+    return count
 
 
 @parallel

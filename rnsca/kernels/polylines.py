@@ -43,12 +43,17 @@ from rnsca.kernels.segments import (
 )
 
 __all__ = [
+    "CHUNK_ACCEPTED",
+    "CHUNK_REJECTED",
+    "CHUNK_SEGMENTED",
     "RUN_LEAF_SEGMENTS",
     "RUN_STACK_CAPACITY",
     "RUN_N_AUTO",
     "OUTSIDE",
     "NOT_STRICTLY_INSIDE",
     "NOT_FINITE",
+    "assemble_chains",
+    "assemble_line_blocks",
     "bound_chains",
     "chunk_count",
     "clip_chains",
@@ -764,3 +769,86 @@ def clip_lines(xy, z, part_offsets, geometry_parts, geometry_window, windows, me
     for g in range(n_geometries):
         geometry_chains[g + 1] = chain_start[geometry_parts[g + 1]]
     return out_xy, out_z, chain_offsets, geometry_chains, counters, -1
+
+
+# Decisions of chunks made on a device (the OpenCL backend's `classify_runs`): skipped,
+# copied whole, or clipped segment by segment.
+CHUNK_REJECTED = 0
+CHUNK_ACCEPTED = 1
+CHUNK_SEGMENTED = 2
+
+
+@scalar
+def assemble_chains(xy, z, has_z, write, first, last, drop_edge_runs, break_at_boundary, xmin,
+                    ymin, xmax, ymax, decision, chunk0, piece_start, keep, pieces, out_xy, out_z,
+                    out_starts, v, c):
+    """Emit the chains of the line ``xy[first..last]`` from decisions made elsewhere.
+
+    `decision[chunk0 + k]` says what became of the line's chunk k (``CHUNK_*``); the
+    segments of a segmented chunk have ``keep`` and ``pieces`` rows (t0, t1, ax, ay, bx,
+    by) from ``piece_start[chunk0 + k]`` on. The chains are the ones `clip_chains` emits
+    for those decisions (its `_emit_run` and `_emit_piece`; an accepted run of chunks
+    copied chunk by chunk is the same chain), and so is the return value:
+    ``(v, c, starts_at_first, ends_at_last)``.
+    """
+    c_begin = c
+    last_v = -1
+    flat_xy = xy.reshape(-1)
+    flat_out = out_xy.reshape(-1)
+    for k in range(chunk_count(first, last)):
+        a = first + k * RUN_LEAF_SEGMENTS
+        b = min(a + RUN_LEAF_SEGMENTS, last)
+        d = decision[chunk0 + k]
+        if d == CHUNK_ACCEPTED:
+            v, c, last_v = _emit_run(flat_xy, z, has_z, write, a, b, flat_out, out_z,
+                                     out_starts, v, c, last_v)
+        elif d == CHUNK_SEGMENTED:
+            row = piece_start[chunk0 + k]
+            for i in range(a, b):
+                if keep[row]:
+                    ax = pieces[row, 2]
+                    ay = pieces[row, 3]
+                    bx = pieces[row, 4]
+                    by = pieces[row, 5]
+                    if not (drop_edge_runs and on_one_edge(ax, ay, bx, by, xmin, ymin, xmax,
+                                                           ymax)):
+                        breaks = break_at_boundary and _edge_bits(
+                            xy[i, 0], xy[i, 1], xmin, ymin, xmax, ymax) != 0
+                        v, c, last_v = _emit_piece(xy, z, has_z, write, i, pieces[row, 0],
+                                                   pieces[row, 1], ax, ay, bx, by, out_xy,
+                                                   out_z, out_starts, v, c, last_v, breaks)
+                row += 1
+    if c == c_begin or not write:
+        return v, c, False, False
+    starts_at_first = out_xy[out_starts[c_begin], 0] == xy[first, 0] and \
+        out_xy[out_starts[c_begin], 1] == xy[first, 1]
+    if break_at_boundary and _edge_bits(xy[first, 0], xy[first, 1], xmin, ymin, xmax, ymax) != 0:
+        starts_at_first = False  # a ring breaks at its closing vertex on the boundary
+    return v, c, starts_at_first, last_v == last
+
+
+@parallel
+def assemble_line_blocks(xy, z, has_z, part_offsets, part_window, windows, drop_edge_runs,
+                         block_size, write, chunk_start, decision, piece_start, keep, pieces,
+                         vertex_start, chain_start, out_xy, out_z, out_starts, n_vertices,
+                         n_chains):
+    """Count (``write=False``) or write the chains of every part from device decisions.
+
+    The host half of the OpenCL line clip (`assemble_chains` per part); the counts and
+    the layout are those of `clip_lines`.
+    """
+    n_parts = part_offsets.shape[0] - 1
+    n_blocks = -(-n_parts // block_size)
+    for blk in prange(n_blocks):
+        for p in range(blk * block_size, min(n_parts, (blk + 1) * block_size)):
+            w = part_window[p]
+            v0 = vertex_start[p] if write else 0
+            c0 = chain_start[p] if write else 0
+            v, c, _, _ = assemble_chains(xy, z, has_z, write, part_offsets[p],
+                                         part_offsets[p + 1] - 1, drop_edge_runs, False,
+                                         windows[w, 0], windows[w, 1], windows[w, 2],
+                                         windows[w, 3], decision, chunk_start[p], piece_start,
+                                         keep, pieces, out_xy, out_z, out_starts, v0, c0)
+            if not write:
+                n_vertices[p] = v
+                n_chains[p] = c

@@ -172,3 +172,35 @@ def test_a_boundary_run_that_grows_then_vanishes_is_not_written(fill):
 
 def test_a_closed_subpath_visible_whole_with_an_implicit_closing_line():
     assert clipped("M0 0L1 0L1 1Z") == "M0 0H1V1Z"
+
+
+def _blobs(rng, n):
+    """Return closed cubic outlines of 3 to 9 segments scattered around W."""
+    paths = []
+    for _ in range(n):
+        k = int(rng.integers(3, 10))
+        knots = rng.uniform(-8, 18, 2) + rng.uniform(-6, 6, (k, 2))
+        pts = [f"M{knots[0, 0]:.3f} {knots[0, 1]:.3f}"]
+        for j in range(k):
+            a, b = knots[j], knots[(j + 1) % k]
+            c1, c2 = a + rng.uniform(-4, 4, 2), b + rng.uniform(-4, 4, 2)
+            pts.append(f"C{c1[0]:.3f} {c1[1]:.3f} {c2[0]:.3f} {c2[1]:.3f} {b[0]:.3f} {b[1]:.3f}")
+        paths.append(" ".join(pts) + ("Z" if rng.random() < 0.5 else ""))
+    return parse_paths(paths)
+
+
+@pytest.mark.parametrize("options", [{}, {"fill": "nonzero"}, {"fill": "evenodd"},
+                                     {"curves": "flatten", "tolerance": 1e-3},
+                                     {"mode": "approx"}, {"max_depth": 3}])
+def test_the_output_keeps_the_path_layout(options):
+    # clip_paths builds its output unchecked (PathArrays.from_kernel): the constructor's
+    # checks (continuity, unused rows, offsets, finiteness) must all pass on it.
+    out = clip_paths(_blobs(np.random.default_rng(7), 300), W, **options).paths
+    assert out.degree.shape[0] > 100
+    checked = rnsca.PathArrays(controls=out.controls, degree=out.degree,
+                               subpath_offsets=out.subpath_offsets, closed=out.closed,
+                               start=out.start, path_offsets=out.path_offsets)
+    assert checked == out
+    assert out.controls.dtype == np.float64 and out.degree.dtype == np.int8
+    assert out.subpath_offsets.dtype == np.int64 and out.path_offsets.dtype == np.int64
+    assert out.closed.dtype == np.bool_ and out.start.dtype == np.float64

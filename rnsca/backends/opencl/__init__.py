@@ -1,11 +1,20 @@
-"""The OpenCL backend: the segment kernels of ``clip.cl`` run through pyopencl.
+"""The OpenCL backend: the kernels of ``clip.cl`` run through pyopencl.
 
-One work-item clips one segment (RNSCA with its depth-first stack, or a baseline) and
-the output, at most one piece per segment, is compacted in three steps, as a GPU wants
-it: ``clip_segments`` stores each segment's result and a 0/1 count, pyopencl's prefix
-sum (``pyopencl.array.cumsum``) turns the counts into slots, and ``write_pieces``
-copies the kept results there. Only the segments go to the device and only the pieces
-(and one counter row per work-group) come back.
+Segments: one work-item clips one segment (RNSCA with its depth-first stack, or a
+baseline) and the output, at most one piece per segment, is compacted in three steps,
+as a GPU wants it: ``clip_segments`` stores each segment's result and a 0/1 count,
+pyopencl's prefix sum (``pyopencl.array.cumsum``) turns the counts into slots, and
+``write_pieces`` copies the kept results there. Only the segments go to the device and
+only the pieces (and one counter row per work-group) come back.
+
+Lines and rings (`OpenCLBackend._prune`): ``chunk_boxes`` (one work-item per chunk of
+16 segments), ``classify_runs`` (RNSCA over runs of chunks, one work-item per line or
+ring) and ``clip_chunk_segments`` (the segments of undecided chunks, one work-item per
+chunk, into slots from a prefix sum) run on the device; the chains, and for polygons
+the walk along the window, are assembled on the host by the Numba kernels that do it
+for the Numba backend (`polylines.assemble_line_blocks`, `polygons.clip_polygon_blocks`
+with decided chunks). The split keeps the sequential, data-dependent assembly (output
+order, joins, the boundary walk) on the host, and the per-segment work on the device.
 
 Devices and programs: the device is picked once per backend (`select_device`); each
 device gets one context and one profiling queue per process, and ``clip.cl`` is built

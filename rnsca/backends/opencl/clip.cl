@@ -1,4 +1,5 @@
-/* Segment clipping in OpenCL C: RNSCA (exact and approx leaves) and the baselines.
+/* Segment clipping in OpenCL C: RNSCA (exact and approx leaves) and the baselines, and
+ * the run-level pruning of lines and rings (at the end of the file).
  *
  * One source for every device and precision, parameterised by build options:
  *   -DREAL_IS_DOUBLE=1   float64 (needs cl_khr_fp64); 0: float32
@@ -93,23 +94,26 @@ typedef float REAL;
 typedef __local int *Counters;
 #define COUNT(st, k, v) atomic_add(&(st)[k], (int)(v))
 
+/* Helpers are plain functions, not `inline`: C99 inline semantics would leave some
+ * compilers without a definition at -cl-opt-disable; the optimizers inline them anyway. */
+
 /* Python's min and max (the first argument wins ties), not fmin/fmax. */
-inline REAL py_min(REAL a, REAL b) { return b < a ? b : a; }
-inline REAL py_max(REAL a, REAL b) { return b > a ? b : a; }
+REAL py_min(REAL a, REAL b) { return b < a ? b : a; }
+REAL py_max(REAL a, REAL b) { return b > a ? b : a; }
 
 /* --- outcode.py ------------------------------------------------------------------- */
 
-inline int outcode(REAL x, REAL y, REAL xmin, REAL ymin, REAL xmax, REAL ymax) {
+int outcode(REAL x, REAL y, REAL xmin, REAL ymin, REAL xmax, REAL ymax) {
     return ((x < xmin) * LEFT) | ((x > xmax) * RIGHT) | ((y < ymin) * BOTTOM)
            | ((y > ymax) * TOP);
 }
 
-inline int wide(int code) { return code | (code << SURE_SHIFT); }
+int wide(int code) { return code | (code << SURE_SHIFT); }
 
-inline REAL clamp_real(REAL v, REAL low, REAL high) { return py_min(py_max(v, low), high); }
+REAL clamp_real(REAL v, REAL low, REAL high) { return py_min(py_max(v, low), high); }
 
 /* a = a0 + t * da as rounded, and its error (TwoProduct, TwoSum). */
-inline REAL interpolate_dd(REAL a0, REAL da, REAL da_err, REAL t, REAL *err) {
+REAL interpolate_dd(REAL a0, REAL da, REAL da_err, REAL t, REAL *err) {
     REAL p = t * da;
     REAL c = SPLITTER * t;
     REAL th = c - (c - t);
@@ -125,7 +129,7 @@ inline REAL interpolate_dd(REAL a0, REAL da, REAL da_err, REAL t, REAL *err) {
     return a;
 }
 
-inline REAL interpolation_margin(REAL err, REAL a0, REAL da, REAL *margin) {
+REAL interpolation_margin(REAL err, REAL a0, REAL da, REAL *margin) {
     if (!isfinite(err)) {
         *margin = EPS4 * fabs(a0) + EPS4 * fabs(da) + SUBNORMAL_STEP;
         return 0;
@@ -135,7 +139,7 @@ inline REAL interpolation_margin(REAL err, REAL a0, REAL da, REAL *margin) {
     return err;
 }
 
-inline void interpolated_point(REAL x0, REAL y0, REAL dx, REAL dx_err, REAL dy, REAL dy_err,
+void interpolated_point(REAL x0, REAL y0, REAL dx, REAL dx_err, REAL dy, REAL dy_err,
                                REAL t, REAL *x, REAL *y, REAL *cx, REAL *mx, REAL *cy,
                                REAL *my) {
     REAL x_err, y_err;
@@ -145,7 +149,7 @@ inline void interpolated_point(REAL x0, REAL y0, REAL dx, REAL dx_err, REAL dy, 
     *cy = interpolation_margin(y_err, y0, dy, my);
 }
 
-inline int wide_outcode(REAL x, REAL y, REAL cx, REAL mx, REAL cy, REAL my, REAL xmin,
+int wide_outcode(REAL x, REAL y, REAL cx, REAL mx, REAL cy, REAL my, REAL xmin,
                         REAL ymin, REAL xmax, REAL ymax) {
     REAL dl = (x - xmin) + cx;
     REAL dr = (xmax - x) - cx;
@@ -159,7 +163,7 @@ inline int wide_outcode(REAL x, REAL y, REAL cx, REAL mx, REAL cy, REAL my, REAL
 }
 
 /* (d, d_err) with d + d_err == x1 - x0 exactly (Knuth's TwoSum). */
-inline REAL difference_dd(REAL x1, REAL x0, REAL *d_err) {
+REAL difference_dd(REAL x1, REAL x0, REAL *d_err) {
     REAL d = x1 - x0;
     REAL v = d - x1;
     *d_err = (x1 - (d - v)) + (-x0 - v);
@@ -167,7 +171,7 @@ inline REAL difference_dd(REAL x1, REAL x0, REAL *d_err) {
 }
 
 /* b + ((e - a) / da) * db in double-double; returns the rounded value, *residual the rest. */
-inline REAL line_coordinate_dd(REAL e, REAL a, REAL b, REAL da, REAL da_err, REAL db,
+REAL line_coordinate_dd(REAL e, REAL a, REAL b, REAL da, REAL da_err, REAL db,
                                REAL db_err, REAL *residual) {
     REAL s = e - a;
     REAL v = s - e;
@@ -197,7 +201,7 @@ inline REAL line_coordinate_dd(REAL e, REAL a, REAL b, REAL da, REAL da_err, REA
     return z;
 }
 
-inline REAL line_coordinate_residual(REAL e, REAL a0, REAL b0, REAL a1, REAL b1,
+REAL line_coordinate_residual(REAL e, REAL a0, REAL b0, REAL a1, REAL b1,
                                      REAL *residual) {
     int near1 = fabs(e - a1) < fabs(e - a0);
     REAL a = near1 ? a1 : a0;
@@ -215,7 +219,7 @@ inline REAL line_coordinate_residual(REAL e, REAL a0, REAL b0, REAL a1, REAL b1,
     return b + (e - a) / da * db;
 }
 
-inline REAL line_coordinate(REAL e, REAL a0, REAL b0, REAL a1, REAL b1) {
+REAL line_coordinate(REAL e, REAL a0, REAL b0, REAL a1, REAL b1) {
     int near1 = fabs(e - a1) < fabs(e - a0);
     REAL a = near1 ? a1 : a0;
     REAL b = near1 ? b1 : b0;
@@ -228,7 +232,7 @@ inline REAL line_coordinate(REAL e, REAL a0, REAL b0, REAL a1, REAL b1) {
 }
 
 /* edge_point and the outcode of the true point it rounds (Cohen–Sutherland's moves). */
-inline int edge_point_code(REAL x0, REAL y0, REAL x1, REAL y1, int edge, REAL xmin, REAL ymin,
+int edge_point_code(REAL x0, REAL y0, REAL x1, REAL y1, int edge, REAL xmin, REAL ymin,
                            REAL xmax, REAL ymax, REAL *x, REAL *y) {
     REAL r;
     if (edge == EDGE_LEFT || edge == EDGE_RIGHT) {
@@ -241,7 +245,7 @@ inline int edge_point_code(REAL x0, REAL y0, REAL x1, REAL y1, int edge, REAL xm
     return wide_outcode(*x, *y, r, 0, 0, 0, xmin, ymin, xmax, ymax) & UNSURE_BITS;
 }
 
-inline void edge_point(REAL x0, REAL y0, REAL x1, REAL y1, int edge, REAL xmin, REAL ymin,
+void edge_point(REAL x0, REAL y0, REAL x1, REAL y1, int edge, REAL xmin, REAL ymin,
                        REAL xmax, REAL ymax, REAL *x, REAL *y) {
     if (edge == EDGE_LEFT) {
         *x = xmin;
@@ -258,7 +262,7 @@ inline void edge_point(REAL x0, REAL y0, REAL x1, REAL y1, int edge, REAL xmin, 
     }
 }
 
-inline void snap_into_window(REAL *x, REAL *y, REAL x0, REAL y0, REAL x1, REAL y1, REAL xmin,
+void snap_into_window(REAL *x, REAL *y, REAL x0, REAL y0, REAL x1, REAL y1, REAL xmin,
                              REAL ymin, REAL xmax, REAL ymax) {
     if (*y > ymax || *y < ymin) {
         REAL edge = *y > ymax ? ymax : ymin;
@@ -274,7 +278,7 @@ inline void snap_into_window(REAL *x, REAL *y, REAL x0, REAL y0, REAL x1, REAL y
     *y = clamp_real(*y, ymin, ymax);
 }
 
-inline void end_point(REAL x0, REAL y0, REAL x1, REAL y1, int edge, REAL px, REAL py,
+void end_point(REAL x0, REAL y0, REAL x1, REAL y1, int edge, REAL px, REAL py,
                       REAL xmin, REAL ymin, REAL xmax, REAL ymax, REAL *x, REAL *y) {
     *x = px;
     *y = py;
@@ -283,14 +287,14 @@ inline void end_point(REAL x0, REAL y0, REAL x1, REAL y1, int edge, REAL px, REA
     snap_into_window(x, y, x0, y0, x1, y1, xmin, ymin, xmax, ymax);
 }
 
-inline int is_piece(int degenerate, REAL t0, REAL t1, REAL ax, REAL ay, REAL bx, REAL by) {
+int is_piece(int degenerate, REAL t0, REAL t1, REAL ax, REAL ay, REAL bx, REAL by) {
     return (t0 <= t1) && (degenerate || ax != bx || ay != by);
 }
 
 /* --- baselines/liang_barsky.py ------------------------------------------------------ */
 
 /* One half-plane p t <= q applied to [u0, u1]; returns ok. */
-inline int clipt(REAL p, REAL q, int edge, REAL *u0, int *e0, REAL *u1, int *e1, Counters st) {
+int clipt(REAL p, REAL q, int edge, REAL *u0, int *e0, REAL *u1, int *e1, Counters st) {
     if (p == 0)
         return q >= 0;
     REAL r = q / p;
@@ -313,7 +317,7 @@ inline int clipt(REAL p, REAL q, int edge, REAL *u0, int *e0, REAL *u1, int *e1,
     return 1;
 }
 
-inline int liang_barsky_segment(REAL x0, REAL y0, REAL x1, REAL y1, REAL xmin, REAL ymin,
+int liang_barsky_segment(REAL x0, REAL y0, REAL x1, REAL y1, REAL xmin, REAL ymin,
                                 REAL xmax, REAL ymax, Counters st, REAL *out) {
     REAL dx = x1 - x0;
     REAL dy = y1 - y0;
@@ -342,7 +346,7 @@ inline int liang_barsky_segment(REAL x0, REAL y0, REAL x1, REAL y1, REAL xmin, R
 }
 
 /* The half-plane of edge `bit`, applied when `flags` has that bit (selects, no branches). */
-inline void leaf_cut(int bit, int flags, REAL *u0, int *e0, REAL *u1, int *e1, REAL x0,
+void leaf_cut(int bit, int flags, REAL *u0, int *e0, REAL *u1, int *e1, REAL x0,
                      REAL y0, REAL x1, REAL y1, REAL xmin, REAL ymin, REAL xmax, REAL ymax) {
     REAL dx = x1 - x0, dy = y1 - y0, p, q;
     int edge;
@@ -363,12 +367,12 @@ inline void leaf_cut(int bit, int flags, REAL *u0, int *e0, REAL *u1, int *e1, R
     if (leave) { *u1 = r; *e1 = edge; }
 }
 
-inline int count_divisions(int flags) {
+int count_divisions(int flags) {
     return (flags & 1) + ((flags >> 1) & 1) + ((flags >> 2) & 1) + ((flags >> 3) & 1);
 }
 
 /* Clip the leaf [ta, tb] on the flagged half-planes; out = (u0, u1, ax, ay, bx, by). */
-inline int liang_barsky_leaf(REAL x0, REAL y0, REAL x1, REAL y1, REAL ta, REAL tb, REAL xa,
+int liang_barsky_leaf(REAL x0, REAL y0, REAL x1, REAL y1, REAL ta, REAL tb, REAL xa,
                              REAL ya, REAL xb, REAL yb, int flags, REAL xmin, REAL ymin,
                              REAL xmax, REAL ymax, REAL *out) {
     REAL u0 = ta, u1 = tb;
@@ -386,7 +390,7 @@ inline int liang_barsky_leaf(REAL x0, REAL y0, REAL x1, REAL y1, REAL ta, REAL t
 
 /* --- baselines/cohen_sutherland.py -------------------------------------------------- */
 
-inline REAL cs_edge_parameter(int code, REAL x0, REAL y0, REAL dx, REAL dy, REAL xmin,
+REAL cs_edge_parameter(int code, REAL x0, REAL y0, REAL dx, REAL dy, REAL xmin,
                               REAL ymin, REAL xmax, REAL ymax, int *edge, int *bit) {
     if (code & TOP) {
         *edge = EDGE_TOP; *bit = TOP;
@@ -404,7 +408,7 @@ inline REAL cs_edge_parameter(int code, REAL x0, REAL y0, REAL dx, REAL dy, REAL
     return (xmin - x0) / dx;
 }
 
-inline int cohen_sutherland_segment(REAL x0, REAL y0, REAL x1, REAL y1, REAL xmin, REAL ymin,
+int cohen_sutherland_segment(REAL x0, REAL y0, REAL x1, REAL y1, REAL xmin, REAL ymin,
                                     REAL xmax, REAL ymax, Counters st, REAL *out) {
     REAL dx = x1 - x0;
     REAL dy = y1 - y0;
@@ -452,12 +456,12 @@ inline int cohen_sutherland_segment(REAL x0, REAL y0, REAL x1, REAL y1, REAL xmi
 
 /* --- baselines/nicholl_lee_nicholl.py ----------------------------------------------- */
 
-inline int nln_extreme(REAL x, REAL y) {
+int nln_extreme(REAL x, REAL y) {
     REAL ax = fabs(x), ay = fabs(y);
     return py_max(ax, ay) > NLN_BIG || (0 < ax && ax < NLN_SMALL) || (0 < ay && ay < NLN_SMALL);
 }
 
-inline void nln_normalized(REAL *x, REAL *y) {
+void nln_normalized(REAL *x, REAL *y) {
     REAL m = py_max(fabs(*x), fabs(*y));
     if (m > 0) {
         *x = *x / m;
@@ -465,7 +469,7 @@ inline void nln_normalized(REAL *x, REAL *y) {
     }
 }
 
-inline int nln_turn(REAL ax, REAL ay, REAL bx, REAL by) {
+int nln_turn(REAL ax, REAL ay, REAL bx, REAL by) {
     if (nln_extreme(ax, ay) || nln_extreme(bx, by)) {
         nln_normalized(&ax, &ay);
         nln_normalized(&bx, &by);
@@ -474,14 +478,14 @@ inline int nln_turn(REAL ax, REAL ay, REAL bx, REAL by) {
     return c > 0 ? 1 : (c < 0 ? -1 : 0);
 }
 
-inline int nln_single_edge(int code) {
+int nln_single_edge(int code) {
     if (code == LEFT) return EDGE_LEFT;
     if (code == RIGHT) return EDGE_RIGHT;
     if (code == BOTTOM) return EDGE_BOTTOM;
     return EDGE_TOP;
 }
 
-inline REAL nln_parameter(int edge, REAL px, REAL py, REAL ex, REAL ey, REAL left, REAL bottom,
+REAL nln_parameter(int edge, REAL px, REAL py, REAL ex, REAL ey, REAL left, REAL bottom,
                           REAL right, REAL top, Counters st) {
     COUNT(st, INTERSECTIONS, 1);
     if (edge == EDGE_LEFT) return (left - px) / ex;
@@ -490,7 +494,7 @@ inline REAL nln_parameter(int edge, REAL px, REAL py, REAL ex, REAL ey, REAL lef
     return (top - py) / ey;
 }
 
-inline int nln_exit_from_inside(int c1, REAL px, REAL py, REAL ex, REAL ey, REAL left,
+int nln_exit_from_inside(int c1, REAL px, REAL py, REAL ex, REAL ey, REAL left,
                                 REAL bottom, REAL right, REAL top) {
     if (c1 == LEFT || c1 == RIGHT || c1 == BOTTOM || c1 == TOP)
         return nln_single_edge(c1);
@@ -503,14 +507,14 @@ inline int nln_exit_from_inside(int c1, REAL px, REAL py, REAL ex, REAL ey, REAL
     return ccw ? EDGE_RIGHT : EDGE_BOTTOM;
 }
 
-inline int nln_exit_from_left(REAL px, REAL py, REAL ex, REAL ey, REAL bottom, REAL right,
+int nln_exit_from_left(REAL px, REAL py, REAL ex, REAL ey, REAL bottom, REAL right,
                               REAL top) {
     if (nln_turn(right - px, top - py, ex, ey) > 0) return EDGE_TOP;
     if (nln_turn(right - px, bottom - py, ex, ey) < 0) return EDGE_BOTTOM;
     return EDGE_RIGHT;
 }
 
-inline int nln_canonical_clip(REAL px, REAL py, REAL qx, REAL qy, REAL left, REAL bottom,
+int nln_canonical_clip(REAL px, REAL py, REAL qx, REAL qy, REAL left, REAL bottom,
                               REAL right, REAL top, Counters st, REAL *u0, int *e0, REAL *u1,
                               int *e1) {
     REAL ex = qx - px;
@@ -551,7 +555,7 @@ inline int nln_canonical_clip(REAL px, REAL py, REAL qx, REAL qy, REAL left, REA
     return t0 <= *u1;
 }
 
-inline int nln_original_edge(int edge, int flip_x, int flip_y, int swap) {
+int nln_original_edge(int edge, int flip_x, int flip_y, int swap) {
     if (edge == NO_EDGE) return NO_EDGE;
     if (swap) edge ^= 2;
     if (flip_x && edge < EDGE_BOTTOM) edge ^= 1;
@@ -559,7 +563,7 @@ inline int nln_original_edge(int edge, int flip_x, int flip_y, int swap) {
     return edge;
 }
 
-inline int nicholl_lee_nicholl_segment(REAL x0, REAL y0, REAL x1, REAL y1, REAL xmin,
+int nicholl_lee_nicholl_segment(REAL x0, REAL y0, REAL x1, REAL y1, REAL xmin,
                                        REAL ymin, REAL xmax, REAL ymax, Counters st,
                                        REAL *out) {
     REAL dx = x1 - x0;
@@ -623,7 +627,7 @@ typedef struct {
     int level;
 } Bracket;
 
-inline Bracket midpoint_search(REAL x0, REAL y0, REAL dx, REAL dy, REAL x1, REAL y1, int c0,
+Bracket midpoint_search(REAL x0, REAL y0, REAL dx, REAL dy, REAL x1, REAL y1, int c0,
                                int c1, REAL length, int toward_end, int max_depth, REAL tol,
                                int exact, REAL xmin, REAL ymin, REAL xmax, REAL ymax,
                                Counters st) {
@@ -703,7 +707,7 @@ inline Bracket midpoint_search(REAL x0, REAL y0, REAL dx, REAL dy, REAL x1, REAL
 }
 
 /* Decide a final bracket; out = (u0, u1, ax, ay, bx, by) of its visible part. */
-inline int midpoint_leaf(REAL x0, REAL y0, REAL x1, REAL y1, Bracket k, int exact, REAL xmin,
+int midpoint_leaf(REAL x0, REAL y0, REAL x1, REAL y1, Bracket k, int exact, REAL xmin,
                          REAL ymin, REAL xmax, REAL ymax, Counters st, REAL *out) {
     COUNT(st, EVALUATED, 1);
     COUNT(st, LEVELS + k.level, 1);
@@ -751,7 +755,7 @@ inline int midpoint_leaf(REAL x0, REAL y0, REAL x1, REAL y1, Bracket k, int exac
     return 1;
 }
 
-inline int midpoint_segment(REAL x0, REAL y0, REAL x1, REAL y1, REAL xmin, REAL ymin,
+int midpoint_segment(REAL x0, REAL y0, REAL x1, REAL y1, REAL xmin, REAL ymin,
                             REAL xmax, REAL ymax, int max_depth, REAL tol, int exact,
                             Counters st, REAL *out) {
     REAL dx = x1 - x0;
@@ -796,7 +800,7 @@ inline int midpoint_segment(REAL x0, REAL y0, REAL x1, REAL y1, REAL xmin, REAL 
 
 /* --- kernels/segments.py: RNSCA ----------------------------------------------------- */
 
-inline int auto_n(REAL piece_length, REAL auto_piece) {
+int auto_n(REAL piece_length, REAL auto_piece) {
     if (!(piece_length > AUTO_N_MIN * auto_piece))
         return AUTO_N_MIN;
     REAL k = piece_length / auto_piece;
@@ -810,7 +814,7 @@ typedef struct {
 } Stack;
 
 /* Fold a clipped leaf (or accepted child) into the merged interval [lo, hi]. */
-inline int rnsca_segment(REAL x0, REAL y0, REAL x1, REAL y1, REAL xmin, REAL ymin, REAL xmax,
+int rnsca_segment(REAL x0, REAL y0, REAL x1, REAL y1, REAL xmin, REAL ymin, REAL xmax,
                          REAL ymax, int n_fixed, int max_depth, REAL tol, REAL auto_piece,
                          int exact, Counters st, Stack *stack, REAL *out) {
     REAL dx = x1 - x0;
@@ -938,7 +942,7 @@ inline int rnsca_segment(REAL x0, REAL y0, REAL x1, REAL y1, REAL xmin, REAL ymi
 /* RNSCA's level 0 as the Numba block driver runs it (`_rnsca_block`): a segment that is
  * accepted, rejected, or a leaf (short, or max_depth 0) is decided here; only the
  * others go through the depth-first `rnsca_segment`. Same pieces, same counters. */
-inline int rnsca_level0(REAL x0, REAL y0, REAL x1, REAL y1, REAL xmin, REAL ymin, REAL xmax,
+int rnsca_level0(REAL x0, REAL y0, REAL x1, REAL y1, REAL xmin, REAL ymin, REAL xmax,
                         REAL ymax, int n_fixed, int max_depth, REAL tol, REAL auto_piece,
                         int exact, Counters st, Stack *stack, REAL *out) {
     int c0 = outcode(x0, y0, xmin, ymin, xmax, ymax);
@@ -1067,7 +1071,7 @@ __kernel void write_pieces(__global const REAL *result, __global const long *kee
 #define SEGMENT_LEVELS (RUN_LEVELS + N_LEVELS)
 #define COUNTERS_WIDTH (SEGMENT_LEVELS + N_LEVELS)
 
-inline long chunk_count(long first, long last) {
+long chunk_count(long first, long last) {
     return last <= first ? 0 : (last - first + RUN_LEAF_SEGMENTS - 1) / RUN_LEAF_SEGMENTS;
 }
 
@@ -1096,7 +1100,7 @@ __kernel void chunk_boxes(__global const REAL *xy, __global const long *part_off
     boxes[4 * k + 3] = hi_y;
 }
 
-inline void mark_chunks(__global uchar *decision, __global long *segmented, long chunk0,
+void mark_chunks(__global uchar *decision, __global long *segmented, long chunk0,
                         long ca, long cb, uchar d, long first, long last) {
     for (long k = ca; k < cb; k++) {
         long a = first + k * RUN_LEAF_SEGMENTS;

@@ -160,31 +160,33 @@ class ClipStats:
         `geometry` holds the counts only the caller knows (``geometries_in``, ...).
         """
         rows = np.asarray(rows, dtype=np.int64).reshape(-1, C.WIDTH)
-        total = rows.sum(axis=0)
-        deepest = int(rows[:, C.DEEPEST].max()) if rows.shape[0] else 0
+        # One conversion to Python ints, then slices: this runs on every clip call, and
+        # per-value conversions cost more than small clips themselves.
+        total = rows.sum(axis=0).tolist()
+        deepest = rows.max(axis=0)[[C.DEEPEST, C.RUN_DEEPEST]].tolist() if rows.shape[0] \
+            else [0, 0]
         return cls(
             segments_in=int(segments_in),
             pieces_out=int(pieces_out),
-            fragments_evaluated=int(total[C.EVALUATED]),
-            accepted=int(total[C.ACCEPTED]),
-            rejected=int(total[C.REJECTED]),
-            subdivided=int(total[C.SUBDIVIDED]),
-            clipped=int(total[C.CLIPPED]),
-            dropped=int(total[C.DROPPED]),
-            intersections=int(total[C.INTERSECTIONS]),
-            deepest_level=deepest,
-            decided_per_level=tuple(int(v) for v in total[C.LEVELS:C.LEVELS + C.N_LEVELS]),
-            runs_evaluated=int(total[C.RUNS_EVALUATED]),
-            runs_accepted=int(total[C.RUNS_ACCEPTED]),
-            runs_rejected=int(total[C.RUNS_REJECTED]),
-            runs_subdivided=int(total[C.RUNS_SUBDIVIDED]),
-            runs_segmented=int(total[C.RUNS_SEGMENTED]),
-            runs_deepest_level=int(rows[:, C.RUN_DEEPEST].max()) if rows.shape[0] else 0,
-            runs_decided_per_level=tuple(
-                int(v) for v in total[C.RUN_LEVELS:C.RUN_LEVELS + C.N_LEVELS]),
+            fragments_evaluated=total[C.EVALUATED],
+            accepted=total[C.ACCEPTED],
+            rejected=total[C.REJECTED],
+            subdivided=total[C.SUBDIVIDED],
+            clipped=total[C.CLIPPED],
+            dropped=total[C.DROPPED],
+            intersections=total[C.INTERSECTIONS],
+            deepest_level=deepest[0],
+            decided_per_level=tuple(total[C.LEVELS:C.LEVELS + C.N_LEVELS]),
+            runs_evaluated=total[C.RUNS_EVALUATED],
+            runs_accepted=total[C.RUNS_ACCEPTED],
+            runs_rejected=total[C.RUNS_REJECTED],
+            runs_subdivided=total[C.RUNS_SUBDIVIDED],
+            runs_segmented=total[C.RUNS_SEGMENTED],
+            runs_deepest_level=deepest[1],
+            runs_decided_per_level=tuple(total[C.RUN_LEVELS:C.RUN_LEVELS + C.N_LEVELS]),
             segments_decided_per_level=tuple(
-                int(v) for v in total[C.SEGMENT_LEVELS:C.SEGMENT_LEVELS + C.N_LEVELS]),
-            invalid_polygons=int(total[C.INVALID_POLYGONS]),
+                total[C.SEGMENT_LEVELS:C.SEGMENT_LEVELS + C.N_LEVELS]),
+            invalid_polygons=total[C.INVALID_POLYGONS],
             **geometry,
         )
 

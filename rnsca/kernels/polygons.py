@@ -555,7 +555,8 @@ def clip_polygon(xy, z, has_z, ring_offsets, r_begin, r_end, xmin, ymin, xmax, y
     n_r = r_end - r_begin
     if n_r == 0:
         return v, n_rings, n_polys, True
-    no_boxes = np.empty((0, 4), dtype=np.float64)  # rings are short: boxes from vertices
+    no_codes = np.empty(0, dtype=np.uint8)  # rings are short: runs coded from vertices
+    no_plan = np.empty((0, 2), dtype=np.int64)  # and their chains written as decided
     v_ch = 0
     c_ch = 0
     n_lc = 0
@@ -575,10 +576,10 @@ def clip_polygon(xy, z, has_z, ring_offsets, r_begin, r_end, xmin, ymin, xmax, y
                 xy, z, has_z, True, first, last, True, True, xmin, ymin, xmax, ymax, decision,
                 chunk_start[r], piece_start, keep, pieces, ch_xy, ch_z, ch_starts, v_ch, c_ch)
         else:
-            v_ch, c_ch, at_first, at_last = clip_chains(
+            v_ch, c_ch, at_first, at_last, _ = clip_chains(
                 xy, z, has_z, True, first, last, xmin, ymin, xmax, ymax, method, n_fixed,
                 max_depth, tol, auto_piece, exact, True, True, ch_xy, ch_z, ch_starts, v_ch,
-                c_ch, st, run_stack, stack_f, stack_i, no_boxes, 0)
+                c_ch, st, run_stack, stack_f, stack_i, no_codes, no_codes, 0, no_plan, 0)
         ch_starts[c_ch] = v_ch
         n_chains = c_ch - c0
         if last > first and area == 0.0:

@@ -46,6 +46,9 @@ __all__ = [
     "CURVE_N_AUTO",
     "RUN_SEGMENTS",
     "EXACT_LEAF_DEPTH",
+    "SEGMENT_ACCEPTED",
+    "SEGMENT_AMBIGUOUS",
+    "SEGMENT_REJECTED",
     "clip_path_blocks",
     "closing_edges",
     "edge_breaks",
@@ -71,6 +74,11 @@ BREAK_CAPACITY = 16
 # before any segment is (run-level RNSCA, as for polylines): a path that lies mostly
 # inside or outside is copied or skipped a run at a time.
 RUN_SEGMENTS = 16
+# Classes of a segment decided elsewhere (the OpenCL backend's ``classify_bezier``) by
+# the outcodes of its control points: all beyond one edge, all inside, or neither.
+SEGMENT_REJECTED = 0
+SEGMENT_ACCEPTED = 1
+SEGMENT_AMBIGUOUS = 2
 # Depth-first stack: at most N - 1 pending siblings per level, 33 levels, N <= 64.
 CURVE_STACK_CAPACITY = 64 * 34
 
@@ -824,11 +832,41 @@ def _rotate_last_chain(s0, s_end, v0, v_end, out_ctrl, out_deg, out_first, out_s
 
 
 @borrowing
+def _emit_flattened(write, fill, x0, y0, a, b, points, source, px, py, out_ctrl, out_deg,
+                    out_first, out_start, out_from, si, sf, st):
+    """Output an accepted curve (flatten mode) as lines from (x0, y0) through points a..b-1.
+
+    What `clip_segment` does with an accepted curve, from points computed elsewhere: the
+    same counters, the same lines.
+    """
+    st[C.EVALUATED] += 1
+    st[C.ACCEPTED] += 1
+    st[C.LEVELS] += 1
+    prev_x = x0
+    prev_y = y0
+    for p in range(a, b):
+        px[0] = prev_x
+        py[0] = prev_y
+        for j in range(1, 4):
+            px[j] = points[p, 0]
+            py[j] = points[p, 1]
+        _emit_piece(write, fill, 1, px, py, source, out_ctrl, out_deg, out_first, out_start,
+                    out_from, si, sf)
+        prev_x = points[p, 0]
+        prev_y = points[p, 1]
+
+
+@borrowing
 def _clip_subpath(write, fill, flatten, exact, controls, degree, first, last, closed, sx, sy,
                   source, xmin, ymin, xmax, ymax, n_split, leaf_depth, tol, v0, v_end, s0, px,
                   py, brk_t, brk_e, stack, out_ctrl, out_deg, out_first, out_start, out_closed,
-                  out_from, si, sf, st):
+                  out_from, si, sf, st, decided, segment_class, point_start, points):
     """Clip the subpath of segments first..last-1 starting at (sx, sy) into the output.
+
+    With `decided`, each input segment's class is ``segment_class`` (`SEGMENT_*`) and,
+    in flatten mode, an accepted curve's lines end at ``points[point_start[k]:
+    point_start[k + 1]]`` (`flatten_into`'s points), computed elsewhere (the OpenCL
+    backend); the closing line and the ambiguous segments are done here.
 
     Strokes: the visible parts as open subpaths (the subpath itself, closed, if it is
     visible whole; a closed subpath's last and first parts are joined at its start).
@@ -921,9 +959,15 @@ def _clip_subpath(write, fill, flatten, exact, controls, degree, first, last, cl
                 continue  # a point: nothing to draw, nothing to clamp
             # Level 0 inline: most segments are decided here, and every call that passes
             # arrays costs their reference counting (more than the test itself).
-            c_or, c_and = _hull_codes(d, x0, x1, x2, x3, y0, y1, y2, y3, xmin, ymin, xmax,
-                                      ymax)
-            if c_or == 0 and not (flatten and d > 1):
+            if decided and k < last:
+                accepted = segment_class[k] == SEGMENT_ACCEPTED
+                rejected = segment_class[k] == SEGMENT_REJECTED
+            else:
+                c_or, c_and = _hull_codes(d, x0, x1, x2, x3, y0, y1, y2, y3, xmin, ymin,
+                                          xmax, ymax)
+                accepted = c_or == 0
+                rejected = c_and != 0
+            if accepted and not (flatten and d > 1):
                 st[C.EVALUATED] += 1
                 st[C.ACCEPTED] += 1
                 st[C.LEVELS] += 1
@@ -938,7 +982,12 @@ def _clip_subpath(write, fill, flatten, exact, controls, degree, first, last, cl
                 _put_whole(write, d, x0, x1, x2, x3, y0, y1, y2, y3, out_ctrl, out_deg, si,
                            sf)
                 continue
-            if c_and != 0:
+            if accepted and decided and k < last:
+                _emit_flattened(write, fill, x0, y0, point_start[k], point_start[k + 1],
+                                points, source, px, py, out_ctrl, out_deg, out_first,
+                                out_start, out_from, si, sf, st)
+                continue
+            if rejected:
                 st[C.EVALUATED] += 1
                 st[C.REJECTED] += 1
                 st[C.LEVELS] += 1
@@ -1000,7 +1049,8 @@ def _clip_subpath(write, fill, flatten, exact, controls, degree, first, last, cl
 def _clip_block(write, fill, flatten, exact, controls, degree, subpath_offsets, closed, start,
                 subpath_source, xmin, ymin, xmax, ymax, n_split, leaf_depth, tol, k0, k1,
                 segment_start, subpath_start, px, py, brk_t, brk_e, stack, out_ctrl, out_deg,
-                out_first, out_start, out_closed, out_from, n_segments, n_subpaths, si, sf, st):
+                out_first, out_start, out_closed, out_from, n_segments, n_subpaths, si, sf, st,
+                decided, segment_class, point_start, points):
     """Count or write the subpaths k0..k1-1 (one block of `clip_path_blocks`)."""
     for k in range(k0, k1):
         v0 = 0
@@ -1016,7 +1066,8 @@ def _clip_block(write, fill, flatten, exact, controls, degree, subpath_offsets, 
                       subpath_offsets[k + 1], closed[k], start[k, 0], start[k, 1],
                       subpath_source[k], xmin, ymin, xmax, ymax, n_split, leaf_depth, tol,
                       v0, v_end, s0, px, py, brk_t, brk_e, stack, out_ctrl, out_deg, out_first,
-                      out_start, out_closed, out_from, si, sf, st)
+                      out_start, out_closed, out_from, si, sf, st, decided, segment_class,
+                      point_start, points)
         if not write:
             n_segments[k] = si[_V]
             n_subpaths[k] = si[_S]
@@ -1027,7 +1078,7 @@ def clip_path_blocks(controls, degree, subpath_offsets, closed, start, subpath_s
                      ymin, xmax, ymax, fill, flatten, exact, n_split, leaf_depth, tol,
                      block_size, write, segment_start, subpath_start, out_ctrl, out_deg,
                      out_first, out_start, out_closed, out_from, n_segments, n_subpaths,
-                     counters):
+                     counters, decided, segment_class, point_start, points):
     """Count (``write=False``) or write the clipped subpaths of a path array.
 
     Subpath k is the segments ``subpath_offsets[k]:subpath_offsets[k+1]`` of `controls`
@@ -1037,6 +1088,9 @@ def clip_path_blocks(controls, degree, subpath_offsets, closed, start, subpath_s
     ``subpath_start[k]`` on: control points and degrees, and for each output subpath
     its first segment, start point, closed flag and source (``subpath_source[k]``, or
     -1 for an entry freed by joining the ends of a closed stroke: drop those).
+    With `decided`, the segments' classes and accepted curves' flattened points come
+    from `segment_class`, `point_start`, `points` (see `_clip_subpath`); otherwise those
+    are empty and unused.
     """
     n = subpath_offsets.shape[0] - 1
     n_blocks = counters.shape[0]
@@ -1053,7 +1107,8 @@ def clip_path_blocks(controls, degree, subpath_offsets, closed, start, subpath_s
                     start, subpath_source, xmin, ymin, xmax, ymax, n_split, leaf_depth, tol,
                     blk * block_size, min(n, (blk + 1) * block_size), segment_start,
                     subpath_start, px, py, brk_t, brk_e, stack, out_ctrl, out_deg, out_first,
-                    out_start, out_closed, out_from, n_segments, n_subpaths, si, sf, st)
+                    out_start, out_closed, out_from, n_segments, n_subpaths, si, sf, st,
+                    decided, segment_class, point_start, points)
 
 
 @scalar

@@ -415,12 +415,14 @@ def _put_run(write, controls, degree, a, b, out_ctrl, out_deg, si, sf):
     v = si[_V]
     n = b - a
     if write:
-        for i in range(n):
-            if v + i < si[_V_END]:
-                for k in range(4):
-                    out_ctrl[v + i, k, 0] = controls[a + i, k, 0]
-                    out_ctrl[v + i, k, 1] = controls[a + i, k, 1]
-                out_deg[v + i] = degree[a + i]
+        # One loop over the rows without a test per row: LLVM vectorizes the copy.
+        n_copy = min(n, si[_V_END] - v)
+        for i in range(n_copy):
+            for k in range(4):
+                out_ctrl[v + i, k, 0] = controls[a + i, k, 0]
+                out_ctrl[v + i, k, 1] = controls[a + i, k, 1]
+        for i in range(n_copy):
+            out_deg[v + i] = degree[a + i]
     si[_V] = v + n
     si[_LAST_RUN] = 0
     si[_VISIBLE] = 1
@@ -824,146 +826,14 @@ def _rotate_last_chain(s0, s_end, v0, v_end, out_ctrl, out_deg, out_first, out_s
 
 
 @borrowing
-def _clip_subpath(write, fill, flatten, exact, controls, degree, first, last, closed, sx, sy,
-                  source, xmin, ymin, xmax, ymax, n_split, leaf_depth, tol, v0, v_end, s0, px,
-                  py, brk_t, brk_e, stack, out_ctrl, out_deg, out_first, out_start, out_closed,
-                  out_from, si, sf, st):
-    """Clip the subpath of segments first..last-1 starting at (sx, sy) into the output.
+def _end_subpath(write, fill, closed, controls, last, sx, sy, xmin, ymin, xmax, ymax, v0, s0,
+                 out_ctrl, out_deg, out_first, out_start, out_closed, out_from, si, sf):
+    """Finish the output of a subpath whose segments first..last-1 have been clipped.
 
-    Strokes: the visible parts as open subpaths (the subpath itself, closed, if it is
-    visible whole; a closed subpath's last and first parts are joined at its start).
-    Fill (`fill`): one closed subpath, the visible parts joined by the boundary, or
-    nothing if no part is visible and the boundary path winds around no point.
+    Fill: return to the clamped start and keep the closed subpath, unless it is only
+    boundary lines winding around no point. Strokes: a closed subpath visible whole
+    stays closed; otherwise its last chain is joined to its first at the start point.
     """
-    si[:] = 0
-    sf[:] = 0.0
-    si[_V] = v0
-    si[_V_END] = v_end
-    si[_S] = s0
-    sf[_START_X] = sx
-    sf[_START_Y] = sy
-    if first == last:
-        # A lone moveto: nothing to fill; as a stroke, a dot (caps) if in the window.
-        if not fill and outcode(sx, sy, xmin, ymin, xmax, ymax) == 0:
-            _begin_subpath(write, sx, sy, source, out_first, out_start, out_from, si, sf)
-            if write:
-                out_closed[s0] = closed
-        return
-    if fill:
-        _begin_subpath(write, clamp(sx, xmin, xmax), clamp(sy, ymin, ymax), source,
-                       out_first, out_start, out_from, si, sf)
-    end = last + 1 if (fill or closed) else last  # index `last`: the closing line
-    i = first
-    while i < end:
-        j = min(i + RUN_SEGMENTS, last)
-        if j - i >= 2:
-            # Run level: the box of the run's control points decides it whole, as a
-            # piece's hull decides a piece (copy it, or skip it: no per-segment work).
-            lo_x, lo_y, hi_x, hi_y = _run_box(controls, i, j)
-            c_lo = outcode(lo_x, lo_y, xmin, ymin, xmax, ymax)
-            c_hi = outcode(hi_x, hi_y, xmin, ymin, xmax, ymax)
-            st[C.RUNS_EVALUATED] += 1
-            if (c_lo | c_hi) == 0 and not flatten:
-                st[C.RUNS_ACCEPTED] += 1
-                st[C.RUN_LEVELS] += 1
-                st[C.SEGMENT_LEVELS] += j - i
-                x0 = controls[i, 0, 0]
-                y0 = controls[i, 0, 1]
-                if fill or (si[_OPEN] == 1 and x0 == sf[_CUR_X] and y0 == sf[_CUR_Y]):
-                    if fill and (x0 != sf[_CUR_X] or y0 != sf[_CUR_Y]):
-                        _put_line(write, x0, y0, out_ctrl, out_deg, si, sf)
-                else:
-                    if si[_VISIBLE] == 0 and si[_BROKEN] == 0:
-                        si[_FIRST_AT_START] = 1
-                    _begin_subpath(write, x0, y0, source, out_first, out_start, out_from,
-                                   si, sf)
-                _put_run(write, controls, degree, i, j, out_ctrl, out_deg, si, sf)
-                i = j
-                continue
-            if (c_lo & c_hi) != 0:
-                st[C.RUNS_REJECTED] += 1
-                st[C.RUN_LEVELS] += 1
-                st[C.SEGMENT_LEVELS] += j - i
-                si[_BROKEN] = 1
-                if fill:
-                    _clamp_to(write, controls[j - 1, 3, 0], controls[j - 1, 3, 1], xmin, ymin,
-                              xmax, ymax, out_ctrl, out_deg, si, sf)
-                else:
-                    si[_OPEN] = 0
-                i = j
-                continue
-            st[C.RUNS_SEGMENTED] += 1
-        else:
-            j = i + 1
-        for k in range(i, j):
-            if k < last:
-                d = degree[k]
-                x0 = controls[k, 0, 0]
-                x1 = controls[k, 1, 0]
-                x2 = controls[k, 2, 0]
-                x3 = controls[k, 3, 0]
-                y0 = controls[k, 0, 1]
-                y1 = controls[k, 1, 1]
-                y2 = controls[k, 2, 1]
-                y3 = controls[k, 3, 1]
-            else:
-                # The closing line back to the start: filled subpaths are always closed.
-                d = 1
-                x0 = controls[last - 1, 3, 0]
-                y0 = controls[last - 1, 3, 1]
-                x1 = sx
-                y1 = sy
-                x2 = sx
-                y2 = sy
-                x3 = sx
-                y3 = sy
-            if x0 == x1 == x2 == x3 and y0 == y1 == y2 == y3:
-                continue  # a point: nothing to draw, nothing to clamp
-            # Level 0 inline: most segments are decided here, and every call that passes
-            # arrays costs their reference counting (more than the test itself).
-            c_or, c_and = _hull_codes(d, x0, x1, x2, x3, y0, y1, y2, y3, xmin, ymin, xmax,
-                                      ymax)
-            if c_or == 0 and not (flatten and d > 1):
-                st[C.EVALUATED] += 1
-                st[C.ACCEPTED] += 1
-                st[C.LEVELS] += 1
-                if fill or (si[_OPEN] == 1 and x0 == sf[_CUR_X] and y0 == sf[_CUR_Y]):
-                    if fill and (x0 != sf[_CUR_X] or y0 != sf[_CUR_Y]):
-                        _put_line(write, x0, y0, out_ctrl, out_deg, si, sf)
-                else:
-                    if si[_VISIBLE] == 0 and si[_BROKEN] == 0:
-                        si[_FIRST_AT_START] = 1
-                    _begin_subpath(write, x0, y0, source, out_first, out_start, out_from, si,
-                                   sf)
-                _put_whole(write, d, x0, x1, x2, x3, y0, y1, y2, y3, out_ctrl, out_deg, si,
-                           sf)
-                continue
-            if c_and != 0:
-                st[C.EVALUATED] += 1
-                st[C.REJECTED] += 1
-                st[C.LEVELS] += 1
-                si[_BROKEN] = 1
-                if fill:
-                    _clamp_to(write, x3, y3, xmin, ymin, xmax, ymax, out_ctrl, out_deg, si,
-                              sf)
-                else:
-                    si[_OPEN] = 0
-                continue
-            if exact and leaf_depth == 0 and not flatten:
-                st[C.EVALUATED] += 1
-                st[C.LEVELS] += 1
-                _emit_exact(write, fill, d, x0, x1, x2, x3, y0, y1, y2, y3, xmin, ymin, xmax,
-                            ymax, source, px, py, brk_t, brk_e, out_ctrl, out_deg, out_first,
-                            out_start, out_from, si, sf, st)
-                continue
-            clip_segment(write, fill, flatten, exact, d, x0, x1, x2, x3, y0, y1, y2, y3, xmin,
-                         ymin, xmax, ymax, n_split, leaf_depth, tol, source, px, py, brk_t,
-                         brk_e, stack, out_ctrl, out_deg, out_first, out_start, out_from, si,
-                         sf, st)
-        i = j
-    if write:
-        for s in range(s0, si[_S]):
-            out_closed[s] = False
     if fill:
         cx = clamp(sx, xmin, xmax)
         cy = clamp(sy, ymin, ymax)
@@ -996,12 +866,22 @@ def _clip_subpath(write, fill, flatten, exact, controls, degree, first, last, cl
             out_from[si[_S] - 1] = -1
 
 
+
 @borrowing
-def _clip_block(write, fill, flatten, exact, controls, degree, subpath_offsets, closed, start,
-                subpath_source, xmin, ymin, xmax, ymax, n_split, leaf_depth, tol, k0, k1,
-                segment_start, subpath_start, px, py, brk_t, brk_e, stack, out_ctrl, out_deg,
-                out_first, out_start, out_closed, out_from, n_segments, n_subpaths, si, sf, st):
-    """Count or write the subpaths k0..k1-1 (one block of `clip_path_blocks`)."""
+def _clip_subpaths(write, fill, flatten, exact, controls, degree, subpath_offsets, closed,
+                   start, subpath_source, xmin, ymin, xmax, ymax, n_split, leaf_depth, tol, k0,
+                   k1, segment_start, subpath_start, n_segments, n_subpaths, px, py, brk_t,
+                   brk_e, stack, out_ctrl, out_deg, out_first, out_start, out_closed, out_from,
+                   si, sf, st):
+    """Count or write the clipped output of subpaths k0..k1-1 (one block).
+
+    Subpath k, segments ``first..last-1`` starting at (sx, sy), gives as strokes its
+    visible parts as open subpaths (the subpath itself, closed, if it is visible whole;
+    a closed subpath's last and first parts are joined at its start); with `fill`, one
+    closed subpath, the visible parts joined by the boundary, or nothing if no part is
+    visible and the boundary path winds around no point. One function for the whole
+    block: a call per subpath passing these arrays cost more than a short subpath's clip.
+    """
     for k in range(k0, k1):
         v0 = 0
         v_end = np.iinfo(np.int64).max
@@ -1012,11 +892,149 @@ def _clip_block(write, fill, flatten, exact, controls, degree, subpath_offsets, 
             v0 = segment_start[k]
             v_end = v0 + n_segments[k]
             s0 = subpath_start[k]
-        _clip_subpath(write, fill, flatten, exact, controls, degree, subpath_offsets[k],
-                      subpath_offsets[k + 1], closed[k], start[k, 0], start[k, 1],
-                      subpath_source[k], xmin, ymin, xmax, ymax, n_split, leaf_depth, tol,
-                      v0, v_end, s0, px, py, brk_t, brk_e, stack, out_ctrl, out_deg, out_first,
-                      out_start, out_closed, out_from, si, sf, st)
+        first = subpath_offsets[k]
+        last = subpath_offsets[k + 1]
+        sx = start[k, 0]
+        sy = start[k, 1]
+        source = subpath_source[k]
+        for q in range(_INT_STATE_WIDTH):
+            si[q] = 0
+        for q in range(_FLOAT_STATE_WIDTH):
+            sf[q] = 0.0
+        si[_V] = v0
+        si[_V_END] = v_end
+        si[_S] = s0
+        sf[_START_X] = sx
+        sf[_START_Y] = sy
+        if first == last:
+            # A lone moveto: nothing to fill; as a stroke, a dot (caps) if in the window.
+            if not fill and outcode(sx, sy, xmin, ymin, xmax, ymax) == 0:
+                _begin_subpath(write, sx, sy, source, out_first, out_start, out_from, si, sf)
+                if write:
+                    out_closed[s0] = closed[k]
+            if not write:
+                n_segments[k] = si[_V]
+                n_subpaths[k] = si[_S]
+            continue
+        if fill:
+            _begin_subpath(write, clamp(sx, xmin, xmax), clamp(sy, ymin, ymax), source,
+                           out_first, out_start, out_from, si, sf)
+        end = last + 1 if (fill or closed[k]) else last  # index `last`: the closing line
+        i = first
+        while i < end:
+            j = min(i + RUN_SEGMENTS, last)
+            if j - i >= 2:
+                # Run level: the box of the run's control points decides it whole, as a
+                # piece's hull decides a piece (copy it, or skip it: no per-segment work).
+                lo_x, lo_y, hi_x, hi_y = _run_box(controls, i, j)
+                c_lo = outcode(lo_x, lo_y, xmin, ymin, xmax, ymax)
+                c_hi = outcode(hi_x, hi_y, xmin, ymin, xmax, ymax)
+                st[C.RUNS_EVALUATED] += 1
+                if (c_lo | c_hi) == 0 and not flatten:
+                    st[C.RUNS_ACCEPTED] += 1
+                    st[C.RUN_LEVELS] += 1
+                    st[C.SEGMENT_LEVELS] += j - i
+                    x0 = controls[i, 0, 0]
+                    y0 = controls[i, 0, 1]
+                    if fill or (si[_OPEN] == 1 and x0 == sf[_CUR_X] and y0 == sf[_CUR_Y]):
+                        if fill and (x0 != sf[_CUR_X] or y0 != sf[_CUR_Y]):
+                            _put_line(write, x0, y0, out_ctrl, out_deg, si, sf)
+                    else:
+                        if si[_VISIBLE] == 0 and si[_BROKEN] == 0:
+                            si[_FIRST_AT_START] = 1
+                        _begin_subpath(write, x0, y0, source, out_first, out_start, out_from,
+                                       si, sf)
+                    _put_run(write, controls, degree, i, j, out_ctrl, out_deg, si, sf)
+                    i = j
+                    continue
+                if (c_lo & c_hi) != 0:
+                    st[C.RUNS_REJECTED] += 1
+                    st[C.RUN_LEVELS] += 1
+                    st[C.SEGMENT_LEVELS] += j - i
+                    si[_BROKEN] = 1
+                    if fill:
+                        _clamp_to(write, controls[j - 1, 3, 0], controls[j - 1, 3, 1], xmin, ymin,
+                                  xmax, ymax, out_ctrl, out_deg, si, sf)
+                    else:
+                        si[_OPEN] = 0
+                    i = j
+                    continue
+                st[C.RUNS_SEGMENTED] += 1
+            else:
+                j = i + 1
+            for g in range(i, j):
+                if g < last:
+                    d = degree[g]
+                    x0 = controls[g, 0, 0]
+                    x1 = controls[g, 1, 0]
+                    x2 = controls[g, 2, 0]
+                    x3 = controls[g, 3, 0]
+                    y0 = controls[g, 0, 1]
+                    y1 = controls[g, 1, 1]
+                    y2 = controls[g, 2, 1]
+                    y3 = controls[g, 3, 1]
+                else:
+                    # The closing line back to the start: filled subpaths are always closed.
+                    d = 1
+                    x0 = controls[last - 1, 3, 0]
+                    y0 = controls[last - 1, 3, 1]
+                    x1 = sx
+                    y1 = sy
+                    x2 = sx
+                    y2 = sy
+                    x3 = sx
+                    y3 = sy
+                if x0 == x1 == x2 == x3 and y0 == y1 == y2 == y3:
+                    continue  # a point: nothing to draw, nothing to clamp
+                # Level 0 inline: most segments are decided here, and a call would pass every
+                # array's fields (more than the test itself costs).
+                c_or, c_and = _hull_codes(d, x0, x1, x2, x3, y0, y1, y2, y3, xmin, ymin, xmax,
+                                          ymax)
+                if c_or == 0 and not (flatten and d > 1):
+                    st[C.EVALUATED] += 1
+                    st[C.ACCEPTED] += 1
+                    st[C.LEVELS] += 1
+                    if fill or (si[_OPEN] == 1 and x0 == sf[_CUR_X] and y0 == sf[_CUR_Y]):
+                        if fill and (x0 != sf[_CUR_X] or y0 != sf[_CUR_Y]):
+                            _put_line(write, x0, y0, out_ctrl, out_deg, si, sf)
+                    else:
+                        if si[_VISIBLE] == 0 and si[_BROKEN] == 0:
+                            si[_FIRST_AT_START] = 1
+                        _begin_subpath(write, x0, y0, source, out_first, out_start, out_from, si,
+                                       sf)
+                    _put_whole(write, d, x0, x1, x2, x3, y0, y1, y2, y3, out_ctrl, out_deg, si,
+                               sf)
+                    continue
+                if c_and != 0:
+                    st[C.EVALUATED] += 1
+                    st[C.REJECTED] += 1
+                    st[C.LEVELS] += 1
+                    si[_BROKEN] = 1
+                    if fill:
+                        _clamp_to(write, x3, y3, xmin, ymin, xmax, ymax, out_ctrl, out_deg, si,
+                                  sf)
+                    else:
+                        si[_OPEN] = 0
+                    continue
+                if exact and leaf_depth == 0 and not flatten:
+                    st[C.EVALUATED] += 1
+                    st[C.LEVELS] += 1
+                    _emit_exact(write, fill, d, x0, x1, x2, x3, y0, y1, y2, y3, xmin, ymin, xmax,
+                                ymax, source, px, py, brk_t, brk_e, out_ctrl, out_deg, out_first,
+                                out_start, out_from, si, sf, st)
+                    continue
+                clip_segment(write, fill, flatten, exact, d, x0, x1, x2, x3, y0, y1, y2, y3, xmin,
+                             ymin, xmax, ymax, n_split, leaf_depth, tol, source, px, py, brk_t,
+                             brk_e, stack, out_ctrl, out_deg, out_first, out_start, out_from, si,
+                             sf, st)
+            i = j
+        if write:
+            for s in range(s0, si[_S]):
+                out_closed[s] = False
+        if fill or (closed[k] and si[_S] != s0):
+            _end_subpath(write, fill, closed[k], controls, last, sx, sy, xmin, ymin, xmax,
+                         ymax, v0, s0, out_ctrl, out_deg, out_first, out_start,
+                         out_closed, out_from, si, sf)
         if not write:
             n_segments[k] = si[_V]
             n_subpaths[k] = si[_S]
@@ -1049,11 +1067,11 @@ def clip_path_blocks(controls, degree, subpath_offsets, closed, start, subpath_s
         brk_t = np.empty(BREAK_CAPACITY, dtype=np.float64)
         brk_e = np.empty(BREAK_CAPACITY, dtype=np.int64)
         stack = np.empty((CURVE_STACK_CAPACITY, 3), dtype=np.float64)
-        _clip_block(write, fill, flatten, exact, controls, degree, subpath_offsets, closed,
-                    start, subpath_source, xmin, ymin, xmax, ymax, n_split, leaf_depth, tol,
-                    blk * block_size, min(n, (blk + 1) * block_size), segment_start,
-                    subpath_start, px, py, brk_t, brk_e, stack, out_ctrl, out_deg, out_first,
-                    out_start, out_closed, out_from, n_segments, n_subpaths, si, sf, st)
+        _clip_subpaths(write, fill, flatten, exact, controls, degree, subpath_offsets, closed,
+                       start, subpath_source, xmin, ymin, xmax, ymax, n_split, leaf_depth, tol,
+                       blk * block_size, min(n, (blk + 1) * block_size), segment_start,
+                       subpath_start, n_segments, n_subpaths, px, py, brk_t, brk_e, stack,
+                       out_ctrl, out_deg, out_first, out_start, out_closed, out_from, si, sf, st)
 
 
 @scalar

@@ -46,8 +46,11 @@ __all__ = [
 CURVE_RELATIVE_TOLERANCE = 1e-6
 
 # Subpaths per block of the parallel kernel: enough work per block to pay for its
-# scratch arrays, enough blocks to balance the threads.
+# scratch arrays, enough blocks to balance the threads (at most _BLOCK subpaths, and at
+# least _MIN_BLOCKS blocks when there are that many subpaths: a few long paths, such as
+# the 200 curves of 500 cubics of the benchmark, are still shared out evenly).
 _BLOCK = 64
+_MIN_BLOCKS = 32
 
 
 class Curves(_ChoiceEnum):
@@ -189,18 +192,20 @@ def clip_paths(paths: PathArrays, window, *, curves="preserve", fill=None, toler
     n_subpaths = paths.closed.shape[0]
     subpath_source = np.repeat(np.arange(len(paths), dtype=np.int64),
                                np.diff(paths.path_offsets))
-    n_blocks = max(1, -(-n_subpaths // _BLOCK))
+    block = max(1, min(_BLOCK, n_subpaths // _MIN_BLOCKS))
+    n_blocks = max(1, -(-n_subpaths // block))
     counters = np.zeros((n_blocks, C.WIDTH), dtype=np.int64)
     n_segments = np.zeros(n_subpaths, dtype=np.int64)
     n_out = np.zeros(n_subpaths, dtype=np.int64)
     args = (paths.controls, paths.degree, paths.subpath_offsets, paths.closed, paths.start,
             subpath_source, *window.bounds, options.fill is not None,
             options.curves is Curves.FLATTEN, options.mode is Mode.EXACT, options.n_split,
-            options.leaf_depth, options.tolerance, _BLOCK)
+            options.leaf_depth, options.tolerance, block)
     nothing = np.empty(0, dtype=np.int64)
+    run_decisions = np.empty(paths.degree.shape[0], dtype=np.int8)
     BZ.clip_path_blocks(*args, False, nothing, nothing, np.empty((0, 4, 2)),
                         np.empty(0, np.int8), nothing, np.empty((0, 2)), np.empty(0, bool),
-                        nothing, n_segments, n_out, counters)
+                        nothing, n_segments, n_out, run_decisions, counters)
     segment_start = _exclusive_sum(n_segments)
     subpath_start = _exclusive_sum(n_out)
     m = int(segment_start[-1])
@@ -214,7 +219,7 @@ def clip_paths(paths: PathArrays, window, *, curves="preserve", fill=None, toler
     out_from = np.empty(k, dtype=np.int64)
     BZ.clip_path_blocks(*args, True, segment_start, subpath_start, out_ctrl, out_deg,
                         out_first, out_start, out_closed, out_from, n_segments, n_out,
-                        np.zeros((n_blocks, C.WIDTH), dtype=np.int64))
+                        run_decisions, np.zeros((n_blocks, C.WIDTH), dtype=np.int64))
     kept = out_from >= 0
     if not kept.all():  # entries freed by joining the two ends of a closed stroke
         out_first = np.append(out_first[:-1][kept], m)

@@ -99,6 +99,10 @@ _FIRST_AT_START = 9  # the subpath's first chain starts at its start point (stro
 _V_END = 10       # end of the subpath's counted output: a closing line dropped later
                   # (a whole closed stroke: Z draws it) is not written past it
 _INT_STATE_WIDTH = 11
+# Decisions of a run of segments, kept by the count pass for the write pass.
+_RUN_ACCEPTED = 0
+_RUN_REJECTED = 1
+_RUN_SEGMENTED = 2
 
 
 @scalar
@@ -270,9 +274,13 @@ def _add_break(brk_t, brk_e, n, t, edge_bit):
 
 
 @borrowing
-def _line_roots(degree, a0, a1, a2, a3, level, edge_bit, lo, hi, brk_t, brk_e, n, st):
-    """Add to the break table the parameters in [lo, hi] where B(t) crosses `level`."""
-    s0, s1, s2, s3 = piece_values(degree, a0, a1, a2, a3, lo, hi)
+def _line_roots(degree, a0, a1, a2, a3, s0, s1, s2, s3, level, edge_bit, lo, hi, brk_t,
+                brk_e, n, st):
+    """Add to the break table the parameters in [lo, hi] where B(t) crosses `level`.
+
+    s0..s3 are the control values of the piece [lo, hi] (shared by the two edge lines
+    of an axis).
+    """
     below = (s0 < level) | (s1 < level) | (s2 < level) | (s3 < level)
     above = (s0 > level) | (s1 > level) | (s2 > level) | (s3 > level)
     if not (below and above) and not (s0 == level or s3 == level):
@@ -314,10 +322,22 @@ def edge_breaks(degree, x0, x1, x2, x3, y0, y1, y2, y3, lo, hi, xmin, ymin, xmax
     two breaks the piece lies in one of the nine regions the edge lines make.
     """
     n = _add_break(brk_t, brk_e, 0, lo, 0)
-    n = _line_roots(degree, x0, x1, x2, x3, xmin, LEFT, lo, hi, brk_t, brk_e, n, st)
-    n = _line_roots(degree, x0, x1, x2, x3, xmax, RIGHT, lo, hi, brk_t, brk_e, n, st)
-    n = _line_roots(degree, y0, y1, y2, y3, ymin, BOTTOM, lo, hi, brk_t, brk_e, n, st)
-    n = _line_roots(degree, y0, y1, y2, y3, ymax, TOP, lo, hi, brk_t, brk_e, n, st)
+    if lo == 0.0 and hi == 1.0:
+        # The whole segment: its control values are the piece's (unused rows repeat
+        # the end, as piece_values does), no blossoms needed.
+        sx0, sx1, sx2, sx3 = x0, x1, x2, x3
+        sy0, sy1, sy2, sy3 = y0, y1, y2, y3
+    else:
+        sx0, sx1, sx2, sx3 = piece_values(degree, x0, x1, x2, x3, lo, hi)
+        sy0, sy1, sy2, sy3 = piece_values(degree, y0, y1, y2, y3, lo, hi)
+    n = _line_roots(degree, x0, x1, x2, x3, sx0, sx1, sx2, sx3, xmin, LEFT, lo, hi, brk_t,
+                    brk_e, n, st)
+    n = _line_roots(degree, x0, x1, x2, x3, sx0, sx1, sx2, sx3, xmax, RIGHT, lo, hi, brk_t,
+                    brk_e, n, st)
+    n = _line_roots(degree, y0, y1, y2, y3, sy0, sy1, sy2, sy3, ymin, BOTTOM, lo, hi, brk_t,
+                    brk_e, n, st)
+    n = _line_roots(degree, y0, y1, y2, y3, sy0, sy1, sy2, sy3, ymax, TOP, lo, hi, brk_t,
+                    brk_e, n, st)
     n = _add_break(brk_t, brk_e, n, hi, 0)
     # Insertion sort (at most BREAK_CAPACITY entries), then merge equal parameters.
     for i in range(1, n):
@@ -870,9 +890,9 @@ def _end_subpath(write, fill, closed, controls, last, sx, sy, xmin, ymin, xmax, 
 @borrowing
 def _clip_subpaths(write, fill, flatten, exact, controls, degree, subpath_offsets, closed,
                    start, subpath_source, xmin, ymin, xmax, ymax, n_split, leaf_depth, tol, k0,
-                   k1, segment_start, subpath_start, n_segments, n_subpaths, px, py, brk_t,
-                   brk_e, stack, out_ctrl, out_deg, out_first, out_start, out_closed, out_from,
-                   si, sf, st):
+                   k1, segment_start, subpath_start, n_segments, n_subpaths, run_decisions, px,
+                   py, brk_t, brk_e, stack, out_ctrl, out_deg, out_first, out_start, out_closed,
+                   out_from, si, sf, st):
     """Count or write the clipped output of subpaths k0..k1-1 (one block).
 
     Subpath k, segments ``first..last-1`` starting at (sx, sy), gives as strokes its
@@ -926,11 +946,17 @@ def _clip_subpaths(write, fill, flatten, exact, controls, degree, subpath_offset
             if j - i >= 2:
                 # Run level: the box of the run's control points decides it whole, as a
                 # piece's hull decides a piece (copy it, or skip it: no per-segment work).
-                lo_x, lo_y, hi_x, hi_y = _run_box(controls, i, j)
-                c_lo = outcode(lo_x, lo_y, xmin, ymin, xmax, ymax)
-                c_hi = outcode(hi_x, hi_y, xmin, ymin, xmax, ymax)
+                if write:
+                    decision = run_decisions[i]  # the count pass's: the same box, the same test
+                else:
+                    lo_x, lo_y, hi_x, hi_y = _run_box(controls, i, j)
+                    c_lo = outcode(lo_x, lo_y, xmin, ymin, xmax, ymax)
+                    c_hi = outcode(hi_x, hi_y, xmin, ymin, xmax, ymax)
+                    decision = _RUN_ACCEPTED if (c_lo | c_hi) == 0 and not flatten else (
+                        _RUN_REJECTED if (c_lo & c_hi) != 0 else _RUN_SEGMENTED)
+                    run_decisions[i] = decision
                 st[C.RUNS_EVALUATED] += 1
-                if (c_lo | c_hi) == 0 and not flatten:
+                if decision == _RUN_ACCEPTED:
                     st[C.RUNS_ACCEPTED] += 1
                     st[C.RUN_LEVELS] += 1
                     st[C.SEGMENT_LEVELS] += j - i
@@ -947,7 +973,7 @@ def _clip_subpaths(write, fill, flatten, exact, controls, degree, subpath_offset
                     _put_run(write, controls, degree, i, j, out_ctrl, out_deg, si, sf)
                     i = j
                     continue
-                if (c_lo & c_hi) != 0:
+                if decision == _RUN_REJECTED:
                     st[C.RUNS_REJECTED] += 1
                     st[C.RUN_LEVELS] += 1
                     st[C.SEGMENT_LEVELS] += j - i
@@ -1045,7 +1071,7 @@ def clip_path_blocks(controls, degree, subpath_offsets, closed, start, subpath_s
                      ymin, xmax, ymax, fill, flatten, exact, n_split, leaf_depth, tol,
                      block_size, write, segment_start, subpath_start, out_ctrl, out_deg,
                      out_first, out_start, out_closed, out_from, n_segments, n_subpaths,
-                     counters):
+                     run_decisions, counters):
     """Count (``write=False``) or write the clipped subpaths of a path array.
 
     Subpath k is the segments ``subpath_offsets[k]:subpath_offsets[k+1]`` of `controls`
@@ -1055,6 +1081,8 @@ def clip_path_blocks(controls, degree, subpath_offsets, closed, start, subpath_s
     ``subpath_start[k]`` on: control points and degrees, and for each output subpath
     its first segment, start point, closed flag and source (``subpath_source[k]``, or
     -1 for an entry freed by joining the ends of a closed stroke: drop those).
+    `run_decisions` (int8, one per input segment) keeps the count pass's decision of
+    each run (at its first segment) for the write pass, which does not test runs again.
     """
     n = subpath_offsets.shape[0] - 1
     n_blocks = counters.shape[0]
@@ -1070,8 +1098,9 @@ def clip_path_blocks(controls, degree, subpath_offsets, closed, start, subpath_s
         _clip_subpaths(write, fill, flatten, exact, controls, degree, subpath_offsets, closed,
                        start, subpath_source, xmin, ymin, xmax, ymax, n_split, leaf_depth, tol,
                        blk * block_size, min(n, (blk + 1) * block_size), segment_start,
-                       subpath_start, n_segments, n_subpaths, px, py, brk_t, brk_e, stack,
-                       out_ctrl, out_deg, out_first, out_start, out_closed, out_from, si, sf, st)
+                       subpath_start, n_segments, n_subpaths, run_decisions, px, py, brk_t,
+                       brk_e, stack, out_ctrl, out_deg, out_first, out_start, out_closed,
+                       out_from, si, sf, st)
 
 
 @scalar

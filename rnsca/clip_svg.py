@@ -24,8 +24,9 @@ from rnsca.options import (
     Method,
     Mode,
     _ChoiceEnum,
-    _integer,
     positive_tolerance,
+    subdivision_depth,
+    subdivision_n,
 )
 from rnsca.stats import ClipStats
 from rnsca.window import Window
@@ -130,17 +131,11 @@ def _resolve(window: Window, *, curves, fill, tolerance, method, n, max_depth, m
             "baselines clip curves after flatten_paths)")
     if Backend(backend) is not Backend.NUMBA:
         raise InvalidOptionError(f"curves are clipped on backend='numba' only, got {backend!r}")
-    if isinstance(n, str):
-        if n.lower() != "auto":
-            raise InvalidOptionError(f"n must be an integer 2..64 or 'auto', got {n!r}")
+    n_split = subdivision_n(n)
+    if n_split is None:
         n_split = BZ.CURVE_N_AUTO
-    else:
-        n_split = _integer("n", n, 2, 64)
-    if max_depth is None:
-        depth = BZ.EXACT_LEAF_DEPTH if (mode is Mode.EXACT and curves is Curves.PRESERVE) \
-            else MAX_DEPTH_LIMIT
-    else:
-        depth = _integer("max_depth", max_depth, 0, MAX_DEPTH_LIMIT)
+    depth = subdivision_depth(max_depth, BZ.EXACT_LEAF_DEPTH if (
+        mode is Mode.EXACT and curves is Curves.PRESERVE) else MAX_DEPTH_LIMIT)
     tol = window.size * CURVE_RELATIVE_TOLERANCE if tolerance is None else \
         positive_tolerance(tolerance, finite=True)
     return _CurveOptions(curves, fill, mode, n_split, depth, tol)

@@ -21,6 +21,7 @@ import typer
 
 import rnsca
 from rnsca.backends.registry import available_backends, get_backend
+from rnsca.clip_svgdoc import clip_svg_document
 from rnsca.errors import (
     BackendUnavailableError,
     InvalidOptionError,
@@ -28,7 +29,6 @@ from rnsca.errors import (
     RnscaError,
 )
 from rnsca.formats.geojson import dumps, loads
-from rnsca.formats.svgdoc import clip_svg_document
 from rnsca.options import Boundary, Mode
 
 __all__ = ["app", "PROGRESS_MIN_BYTES"]

@@ -27,7 +27,6 @@ ends, and consecutive such lines along one edge are merged.
 Two passes (count, write) over one body per subpath, `prange` over blocks of subpaths.
 """
 
-import numba
 import numpy as np
 from numba import prange
 
@@ -35,11 +34,9 @@ from rnsca.kernels import counters as C
 from rnsca.kernels.jit import borrowing, parallel, scalar
 from rnsca.kernels.outcode import BOTTOM, LEFT, RIGHT, TOP, clamp, outcode
 
-# Helpers that take many arrays are inlined by Numba itself (LLVM does not inline them):
-# each call's passing of the arrays cost more than the helper's work (measured: 4.5 ->
-# 2.8 us per ambiguous segment). Numba's inliner fails on the larger callers, which stay
-# calls.
-_inline = numba.njit(cache=True, nogil=True, error_model="numpy", inline="always")
+# Helpers that take arrays are `borrowing` (no reference counting of their arrays): a
+# call then costs no more than passing the arrays' fields, and LLVM inlines the small
+# ones (measured: Numba's own inlining of them, which this module used, gains nothing).
 
 __all__ = [
     "BREAK_CAPACITY",
@@ -376,23 +373,19 @@ def _snap(x, y, edges, xmin, ymin, xmax, ymax):
     return x, y
 
 
-@_inline
-def _put_segment(write, degree, px, py, out_ctrl, out_deg, si, sf):
-    """Append one output segment with control points px[0..3], py[0..3]."""
-    v = si[_V]
-    if write and v < si[_V_END]:
-        for k in range(4):
-            out_ctrl[v, k, 0] = px[k]
-            out_ctrl[v, k, 1] = py[k]
-        out_deg[v] = degree
-    si[_V] = v + 1
-    sf[_CUR_X] = px[3]
-    sf[_CUR_Y] = py[3]
+@borrowing
+def _advance(n, x, y, si, sf):
+    """Count `n` visible segments appended to the output, ending at (x, y)."""
+    si[_V] += n
+    si[_LAST_RUN] = 0
+    si[_VISIBLE] = 1
+    sf[_CUR_X] = x
+    sf[_CUR_Y] = y
 
 
 @borrowing
-def _put_whole(write, degree, x0, x1, x2, x3, y0, y1, y2, y3, out_ctrl, out_deg, si, sf):
-    """Append an input segment accepted whole (unused slots already repeat its end)."""
+def _put_segment(write, degree, x0, x1, x2, x3, y0, y1, y2, y3, out_ctrl, out_deg, si, sf):
+    """Append a visible segment (unused control slots repeat its end)."""
     v = si[_V]
     if write and v < si[_V_END]:
         out_ctrl[v, 0, 0] = x0
@@ -404,11 +397,7 @@ def _put_whole(write, degree, x0, x1, x2, x3, y0, y1, y2, y3, out_ctrl, out_deg,
         out_ctrl[v, 2, 1] = y2
         out_ctrl[v, 3, 1] = y3
         out_deg[v] = degree
-    si[_V] = v + 1
-    si[_LAST_RUN] = 0
-    si[_VISIBLE] = 1
-    sf[_CUR_X] = x3
-    sf[_CUR_Y] = y3
+    _advance(1, x3, y3, si, sf)
 
 
 @borrowing
@@ -443,14 +432,10 @@ def _put_run(write, controls, degree, a, b, out_ctrl, out_deg, si, sf):
                 out_ctrl[v + i, k, 1] = controls[a + i, k, 1]
         for i in range(n_copy):
             out_deg[v + i] = degree[a + i]
-    si[_V] = v + n
-    si[_LAST_RUN] = 0
-    si[_VISIBLE] = 1
-    sf[_CUR_X] = controls[b - 1, 3, 0]
-    sf[_CUR_Y] = controls[b - 1, 3, 1]
+    _advance(n, controls[b - 1, 3, 0], controls[b - 1, 3, 1], si, sf)
 
 
-@_inline
+@borrowing
 def _put_line(write, x, y, out_ctrl, out_deg, si, sf):
     """Append a line from the current point to (x, y)."""
     v = si[_V]
@@ -466,7 +451,7 @@ def _put_line(write, x, y, out_ctrl, out_deg, si, sf):
     sf[_CUR_Y] = y
 
 
-@_inline
+@borrowing
 def _begin_subpath(write, x, y, source, out_first, out_start, out_from, si, sf):
     s = si[_S]
     if write:
@@ -481,24 +466,22 @@ def _begin_subpath(write, x, y, source, out_first, out_start, out_from, si, sf):
     sf[_CUR_Y] = y
 
 
-@_inline
-def _emit_piece(write, fill, degree, px, py, source, out_ctrl, out_deg, out_first, out_start,
-                out_from, si, sf):
-    """Add a visible piece (control points px, py) to the output."""
+@borrowing
+def _emit_piece(write, fill, degree, x0, x1, x2, x3, y0, y1, y2, y3, source, out_ctrl,
+                out_deg, out_first, out_start, out_from, si, sf):
+    """Add a visible piece (control points x0..x3, y0..y3) to the output."""
     if fill:
-        if px[0] != sf[_CUR_X] or py[0] != sf[_CUR_Y]:
+        if x0 != sf[_CUR_X] or y0 != sf[_CUR_Y]:
             # Rounding left a gap between the clamped path and the piece: bridge it.
-            _put_line(write, px[0], py[0], out_ctrl, out_deg, si, sf)
-    elif si[_OPEN] == 0 or px[0] != sf[_CUR_X] or py[0] != sf[_CUR_Y]:
+            _put_line(write, x0, y0, out_ctrl, out_deg, si, sf)
+    elif si[_OPEN] == 0 or x0 != sf[_CUR_X] or y0 != sf[_CUR_Y]:
         if si[_VISIBLE] == 0 and si[_BROKEN] == 0:
             si[_FIRST_AT_START] = 1  # nothing before it: it starts at t = 0
-        _begin_subpath(write, px[0], py[0], source, out_first, out_start, out_from, si, sf)
-    _put_segment(write, degree, px, py, out_ctrl, out_deg, si, sf)
-    si[_LAST_RUN] = 0
-    si[_VISIBLE] = 1
+        _begin_subpath(write, x0, y0, source, out_first, out_start, out_from, si, sf)
+    _put_segment(write, degree, x0, x1, x2, x3, y0, y1, y2, y3, out_ctrl, out_deg, si, sf)
 
 
-@_inline
+@borrowing
 def _clamp_to(write, x, y, xmin, ymin, xmax, ymax, out_ctrl, out_deg, si, sf):
     """Fill: continue the output along the boundary to the clamp of (x, y)."""
     cx = clamp(x, xmin, xmax)
@@ -532,7 +515,7 @@ def _clamp_to(write, x, y, xmin, ymin, xmax, ymax, out_ctrl, out_deg, si, sf):
     si[_LAST_RUN] = 1
 
 
-@_inline
+@borrowing
 def _outside(write, fill, x, y, xmin, ymin, xmax, ymax, out_ctrl, out_deg, si, sf):
     """Mark the part ending at (x, y) not visible: clamp to it (fill), or end the chain."""
     si[_BROKEN] = 1
@@ -544,30 +527,22 @@ def _outside(write, fill, x, y, xmin, ymin, xmax, ymax, out_ctrl, out_deg, si, s
 
 @borrowing
 def _flush(write, fill, flatten, degree, x0, x1, x2, x3, y0, y1, y2, y3, xmin, ymin, xmax,
-           ymax, tol, source, px, py, out_ctrl, out_deg, out_first, out_start, out_from, si, sf):
+           ymax, tol, source, out_ctrl, out_deg, out_first, out_start, out_from, si, sf):
     """Output the pending visible interval of the segment, if any."""
     if si[_PEND] == 0:
         return
     si[_PEND] = 0
     a = sf[_PEND_A]
     b = sf[_PEND_B]
+    if not flatten or degree == 1:
+        _emit_stretch(write, fill, degree, x0, x1, x2, x3, y0, y1, y2, y3, a, b, si[_PEND_EA],
+                      si[_PEND_EB], xmin, ymin, xmax, ymax, source, out_ctrl, out_deg,
+                      out_first, out_start, out_from, si, sf)
+        return
     qx0, qx1, qx2, qx3 = piece_values(degree, x0, x1, x2, x3, a, b)
     qy0, qy1, qy2, qy3 = piece_values(degree, y0, y1, y2, y3, a, b)
     sx, sy = _snap(qx0, qy0, si[_PEND_EA], xmin, ymin, xmax, ymax)
-    # piece_values repeats the end in the unused slots: qx3, qy3 is the end.
     ex, ey = _snap(qx3, qy3, si[_PEND_EB], xmin, ymin, xmax, ymax)
-    if not flatten or degree == 1:
-        px[0] = sx
-        py[0] = sy
-        px[1] = ex if degree == 1 else qx1
-        py[1] = ey if degree == 1 else qy1
-        px[2] = qx2 if degree == 3 else ex
-        py[2] = qy2 if degree == 3 else ey
-        px[3] = ex
-        py[3] = ey
-        _emit_piece(write, fill, degree, px, py, source, out_ctrl, out_deg, out_first,
-                    out_start, out_from, si, sf)
-        return
     steps = flatten_count(degree, qx0, qx1, qx2, qx3, qy0, qy1, qy2, qy3, tol)
     prev_x = sx
     prev_y = sy
@@ -579,41 +554,31 @@ def _flush(write, fill, flatten, degree, x0, x1, x2, x3, y0, y1, y2, y3, xmin, y
             t = a + (b - a) * k / steps
             nx = point_value(degree, x0, x1, x2, x3, t)
             ny = point_value(degree, y0, y1, y2, y3, t)
-        px[0] = prev_x
-        py[0] = prev_y
-        for j in range(1, 4):
-            px[j] = nx
-            py[j] = ny
-        _emit_piece(write, fill, 1, px, py, source, out_ctrl, out_deg, out_first, out_start,
-                    out_from, si, sf)
+        _emit_piece(write, fill, 1, prev_x, nx, nx, nx, prev_y, ny, ny, ny, source, out_ctrl,
+                    out_deg, out_first, out_start, out_from, si, sf)
         prev_x = nx
         prev_y = ny
 
 
-@_inline
+@borrowing
 def _emit_stretch(write, fill, degree, x0, x1, x2, x3, y0, y1, y2, y3, a, b, edges_a, edges_b,
-                  xmin, ymin, xmax, ymax, source, px, py, out_ctrl, out_deg, out_first,
+                  xmin, ymin, xmax, ymax, source, out_ctrl, out_deg, out_first,
                   out_start, out_from, si, sf):
     """Output the visible stretch [a, b] of a segment as a piece of its degree."""
     qx0, qx1, qx2, qx3 = piece_values(degree, x0, x1, x2, x3, a, b)
     qy0, qy1, qy2, qy3 = piece_values(degree, y0, y1, y2, y3, a, b)
     sx, sy = _snap(qx0, qy0, edges_a, xmin, ymin, xmax, ymax)
+    # piece_values repeats the end in the unused slots: qx3, qy3 is the end.
     ex, ey = _snap(qx3, qy3, edges_b, xmin, ymin, xmax, ymax)
-    px[0] = sx
-    py[0] = sy
-    px[1] = ex if degree == 1 else qx1
-    py[1] = ey if degree == 1 else qy1
-    px[2] = qx2 if degree == 3 else ex
-    py[2] = qy2 if degree == 3 else ey
-    px[3] = ex
-    py[3] = ey
-    _emit_piece(write, fill, degree, px, py, source, out_ctrl, out_deg, out_first, out_start,
+    _emit_piece(write, fill, degree, sx, ex if degree == 1 else qx1,
+                qx2 if degree == 3 else ex, ex, sy, ey if degree == 1 else qy1,
+                qy2 if degree == 3 else ey, ey, source, out_ctrl, out_deg, out_first, out_start,
                 out_from, si, sf)
 
 
 @borrowing
 def _emit_exact(write, fill, degree, x0, x1, x2, x3, y0, y1, y2, y3, xmin, ymin, xmax, ymax,
-                source, px, py, brk_t, brk_e, out_ctrl, out_deg, out_first, out_start,
+                source, brk_t, brk_e, out_ctrl, out_deg, out_first, out_start,
                 out_from, si, sf, st):
     """Clip a whole ambiguous segment at its edge crossings (exact mode, level 0).
 
@@ -635,7 +600,7 @@ def _emit_exact(write, fill, degree, x0, x1, x2, x3, y0, y1, y2, y3, xmin, ymin,
         if open_k >= 0:
             _emit_stretch(write, fill, degree, x0, x1, x2, x3, y0, y1, y2, y3, brk_t[open_k],
                           brk_t[k], brk_e[open_k], brk_e[k], xmin, ymin, xmax, ymax, source,
-                          px, py, out_ctrl, out_deg, out_first, out_start, out_from, si, sf)
+                          out_ctrl, out_deg, out_first, out_start, out_from, si, sf)
             open_k = -1
         ex, ey = _snap(point_value(degree, x0, x1, x2, x3, brk_t[k + 1]),
                        point_value(degree, y0, y1, y2, y3, brk_t[k + 1]), brk_e[k + 1], xmin,
@@ -644,11 +609,11 @@ def _emit_exact(write, fill, degree, x0, x1, x2, x3, y0, y1, y2, y3, xmin, ymin,
     if open_k >= 0:
         _emit_stretch(write, fill, degree, x0, x1, x2, x3, y0, y1, y2, y3, brk_t[open_k],
                       brk_t[n - 1], brk_e[open_k], brk_e[n - 1], xmin, ymin, xmax, ymax,
-                      source, px, py, out_ctrl, out_deg, out_first, out_start, out_from, si,
+                      source, out_ctrl, out_deg, out_first, out_start, out_from, si,
                       sf)
 
 
-@_inline
+@borrowing
 def _pend(a, b, edges_a, edges_b, si, sf):
     """Mark [a, b] visible; return whether it continues the pending interval."""
     if si[_PEND] == 1 and sf[_PEND_B] == a:
@@ -660,12 +625,12 @@ def _pend(a, b, edges_a, edges_b, si, sf):
 
 @borrowing
 def _visible(write, fill, flatten, degree, x0, x1, x2, x3, y0, y1, y2, y3, a, b, edges_a,
-             edges_b, xmin, ymin, xmax, ymax, tol, source, px, py, out_ctrl, out_deg,
+             edges_b, xmin, ymin, xmax, ymax, tol, source, out_ctrl, out_deg,
              out_first, out_start, out_from, si, sf):
     if _pend(a, b, edges_a, edges_b, si, sf):
         return
     _flush(write, fill, flatten, degree, x0, x1, x2, x3, y0, y1, y2, y3, xmin, ymin, xmax,
-           ymax, tol, source, px, py, out_ctrl, out_deg, out_first, out_start, out_from, si, sf)
+           ymax, tol, source, out_ctrl, out_deg, out_first, out_start, out_from, si, sf)
     si[_PEND] = 1
     sf[_PEND_A] = a
     sf[_PEND_B] = b
@@ -675,7 +640,7 @@ def _visible(write, fill, flatten, degree, x0, x1, x2, x3, y0, y1, y2, y3, a, b,
 
 @borrowing
 def _leaf(write, fill, flatten, degree, x0, x1, x2, x3, y0, y1, y2, y3, a, b, xmin, ymin,
-          xmax, ymax, tol, source, px, py, brk_t, brk_e, out_ctrl, out_deg, out_first,
+          xmax, ymax, tol, source, brk_t, brk_e, out_ctrl, out_deg, out_first,
           out_start, out_from, si, sf, st):
     """Clip the piece [a, b] exactly at its crossings with the edge lines."""
     st[C.CLIPPED] += 1
@@ -689,11 +654,11 @@ def _leaf(write, fill, flatten, degree, x0, x1, x2, x3, y0, y1, y2, y3, a, b, xm
                        point_value(degree, y0, y1, y2, y3, tm), xmin, ymin, xmax, ymax)
         if code == 0:
             _visible(write, fill, flatten, degree, x0, x1, x2, x3, y0, y1, y2, y3, t0, t1,
-                     brk_e[k], brk_e[k + 1], xmin, ymin, xmax, ymax, tol, source, px, py,
+                     brk_e[k], brk_e[k + 1], xmin, ymin, xmax, ymax, tol, source,
                      out_ctrl, out_deg, out_first, out_start, out_from, si, sf)
         else:
             _flush(write, fill, flatten, degree, x0, x1, x2, x3, y0, y1, y2, y3, xmin, ymin,
-                   xmax, ymax, tol, source, px, py, out_ctrl, out_deg, out_first, out_start,
+                   xmax, ymax, tol, source, out_ctrl, out_deg, out_first, out_start,
                    out_from, si, sf)
             ex, ey = _snap(point_value(degree, x0, x1, x2, x3, t1),
                            point_value(degree, y0, y1, y2, y3, t1), brk_e[k + 1], xmin, ymin,
@@ -704,7 +669,7 @@ def _leaf(write, fill, flatten, degree, x0, x1, x2, x3, y0, y1, y2, y3, a, b, xm
 
 @borrowing
 def clip_segment(write, fill, flatten, exact, degree, x0, x1, x2, x3, y0, y1, y2, y3, xmin,
-                 ymin, xmax, ymax, n_split, leaf_depth, tol, source, px, py, brk_t, brk_e,
+                 ymin, xmax, ymax, n_split, leaf_depth, tol, source, brk_t, brk_e,
                  stack, out_ctrl, out_deg, out_first, out_start, out_from, si, sf, st):
     """Clip one segment (degree 1..3, control points x0..x3, y0..y3) into the output."""
     st[C.EVALUATED] += 1
@@ -713,10 +678,10 @@ def clip_segment(write, fill, flatten, exact, degree, x0, x1, x2, x3, y0, y1, y2
         st[C.ACCEPTED] += 1
         st[C.LEVELS] += 1
         _visible(write, fill, flatten, degree, x0, x1, x2, x3, y0, y1, y2, y3, 0.0, 1.0, 0, 0,
-                 xmin, ymin, xmax, ymax, tol, source, px, py, out_ctrl, out_deg, out_first,
+                 xmin, ymin, xmax, ymax, tol, source, out_ctrl, out_deg, out_first,
                  out_start, out_from, si, sf)
         _flush(write, fill, flatten, degree, x0, x1, x2, x3, y0, y1, y2, y3, xmin, ymin, xmax,
-               ymax, tol, source, px, py, out_ctrl, out_deg, out_first, out_start, out_from,
+               ymax, tol, source, out_ctrl, out_deg, out_first, out_start, out_from,
                si, sf)
         return
     if c_and != 0:
@@ -749,14 +714,14 @@ def clip_segment(write, fill, flatten, exact, degree, x0, x1, x2, x3, y0, y1, y2
             st[C.ACCEPTED] += 1
             st[C.LEVELS + slot] += 1
             _visible(write, fill, flatten, degree, x0, x1, x2, x3, y0, y1, y2, y3, a, b, 0, 0,
-                     xmin, ymin, xmax, ymax, tol, source, px, py, out_ctrl, out_deg,
+                     xmin, ymin, xmax, ymax, tol, source, out_ctrl, out_deg,
                      out_first, out_start, out_from, si, sf)
             continue
         if c_and != 0:
             st[C.REJECTED] += 1
             st[C.LEVELS + slot] += 1
             _flush(write, fill, flatten, degree, x0, x1, x2, x3, y0, y1, y2, y3, xmin, ymin,
-                   xmax, ymax, tol, source, px, py, out_ctrl, out_deg, out_first, out_start,
+                   xmax, ymax, tol, source, out_ctrl, out_deg, out_first, out_start,
                    out_from, si, sf)
             _outside(write, fill, qx3, qy3, xmin, ymin, xmax, ymax, out_ctrl,
                      out_deg, si, sf)
@@ -785,27 +750,27 @@ def clip_segment(write, fill, flatten, exact, degree, x0, x1, x2, x3, y0, y1, y2
         if flatten:
             # The piece is flat: clip its chord as a line.
             _flush(write, fill, flatten, degree, x0, x1, x2, x3, y0, y1, y2, y3, xmin, ymin,
-                   xmax, ymax, tol, source, px, py, out_ctrl, out_deg, out_first, out_start,
+                   xmax, ymax, tol, source, out_ctrl, out_deg, out_first, out_start,
                    out_from, si, sf)
             _leaf(write, fill, False, 1, qx0, qx3, qx3, qx3, qy0, qy3, qy3, qy3, 0.0, 1.0,
-                  xmin, ymin, xmax, ymax, tol, source, px, py, brk_t, brk_e, out_ctrl, out_deg,
+                  xmin, ymin, xmax, ymax, tol, source, brk_t, brk_e, out_ctrl, out_deg,
                   out_first, out_start, out_from, si, sf, st)
             _flush(write, fill, False, 1, qx0, qx3, qx3, qx3, qy0, qy3, qy3, qy3, xmin, ymin,
-                   xmax, ymax, tol, source, px, py, out_ctrl, out_deg, out_first, out_start,
+                   xmax, ymax, tol, source, out_ctrl, out_deg, out_first, out_start,
                    out_from, si, sf)
         elif exact:
             _leaf(write, fill, flatten, degree, x0, x1, x2, x3, y0, y1, y2, y3, a, b, xmin,
-                  ymin, xmax, ymax, tol, source, px, py, brk_t, brk_e, out_ctrl, out_deg,
+                  ymin, xmax, ymax, tol, source, brk_t, brk_e, out_ctrl, out_deg,
                   out_first, out_start, out_from, si, sf, st)
         else:
             st[C.DROPPED] += 1
             _flush(write, fill, flatten, degree, x0, x1, x2, x3, y0, y1, y2, y3, xmin, ymin,
-                   xmax, ymax, tol, source, px, py, out_ctrl, out_deg, out_first, out_start,
+                   xmax, ymax, tol, source, out_ctrl, out_deg, out_first, out_start,
                    out_from, si, sf)
             _outside(write, fill, qx3, qy3, xmin, ymin, xmax, ymax, out_ctrl,
                      out_deg, si, sf)
     _flush(write, fill, flatten, degree, x0, x1, x2, x3, y0, y1, y2, y3, xmin, ymin, xmax,
-           ymax, tol, source, px, py, out_ctrl, out_deg, out_first, out_start, out_from, si, sf)
+           ymax, tol, source, out_ctrl, out_deg, out_first, out_start, out_from, si, sf)
 
 
 @borrowing
@@ -890,8 +855,8 @@ def _end_subpath(write, fill, closed, controls, last, sx, sy, xmin, ymin, xmax, 
 @borrowing
 def _clip_subpaths(write, fill, flatten, exact, controls, degree, subpath_offsets, closed,
                    start, subpath_source, xmin, ymin, xmax, ymax, n_split, leaf_depth, tol, k0,
-                   k1, segment_start, subpath_start, n_segments, n_subpaths, run_decisions, px,
-                   py, brk_t, brk_e, stack, out_ctrl, out_deg, out_first, out_start, out_closed,
+                   k1, segment_start, subpath_start, n_segments, n_subpaths, run_decisions,
+                   brk_t, brk_e, stack, out_ctrl, out_deg, out_first, out_start, out_closed,
                    out_from, si, sf, st):
     """Count or write the clipped output of subpaths k0..k1-1 (one block).
 
@@ -1028,8 +993,8 @@ def _clip_subpaths(write, fill, flatten, exact, controls, degree, subpath_offset
                             si[_FIRST_AT_START] = 1
                         _begin_subpath(write, x0, y0, source, out_first, out_start, out_from, si,
                                        sf)
-                    _put_whole(write, d, x0, x1, x2, x3, y0, y1, y2, y3, out_ctrl, out_deg, si,
-                               sf)
+                    _put_segment(write, d, x0, x1, x2, x3, y0, y1, y2, y3, out_ctrl, out_deg, si,
+                                 sf)
                     continue
                 if c_and != 0:
                     st[C.EVALUATED] += 1
@@ -1046,11 +1011,11 @@ def _clip_subpaths(write, fill, flatten, exact, controls, degree, subpath_offset
                     st[C.EVALUATED] += 1
                     st[C.LEVELS] += 1
                     _emit_exact(write, fill, d, x0, x1, x2, x3, y0, y1, y2, y3, xmin, ymin, xmax,
-                                ymax, source, px, py, brk_t, brk_e, out_ctrl, out_deg, out_first,
+                                ymax, source, brk_t, brk_e, out_ctrl, out_deg, out_first,
                                 out_start, out_from, si, sf, st)
                     continue
                 clip_segment(write, fill, flatten, exact, d, x0, x1, x2, x3, y0, y1, y2, y3, xmin,
-                             ymin, xmax, ymax, n_split, leaf_depth, tol, source, px, py, brk_t,
+                             ymin, xmax, ymax, n_split, leaf_depth, tol, source, brk_t,
                              brk_e, stack, out_ctrl, out_deg, out_first, out_start, out_from, si,
                              sf, st)
             i = j
@@ -1090,15 +1055,13 @@ def clip_path_blocks(controls, degree, subpath_offsets, closed, start, subpath_s
         st = np.zeros(C.WIDTH, dtype=np.int64) if write else counters[blk]
         si = np.zeros(_INT_STATE_WIDTH, dtype=np.int64)
         sf = np.zeros(_FLOAT_STATE_WIDTH, dtype=np.float64)
-        px = np.empty(4, dtype=np.float64)
-        py = np.empty(4, dtype=np.float64)
         brk_t = np.empty(BREAK_CAPACITY, dtype=np.float64)
         brk_e = np.empty(BREAK_CAPACITY, dtype=np.int64)
         stack = np.empty((CURVE_STACK_CAPACITY, 3), dtype=np.float64)
         _clip_subpaths(write, fill, flatten, exact, controls, degree, subpath_offsets, closed,
                        start, subpath_source, xmin, ymin, xmax, ymax, n_split, leaf_depth, tol,
                        blk * block_size, min(n, (blk + 1) * block_size), segment_start,
-                       subpath_start, n_segments, n_subpaths, run_decisions, px, py, brk_t,
+                       subpath_start, n_segments, n_subpaths, run_decisions, brk_t,
                        brk_e, stack, out_ctrl, out_deg, out_first, out_start, out_closed,
                        out_from, si, sf, st)
 

@@ -9,10 +9,16 @@ PORT ?= 8000
 
 .PHONY: serve test bench lint clean
 
-$(STAMP): pyproject.toml
+# The client SDK (clients/python, package rnsca-client) is installed beside rnsca so that
+# `make test` tests it against live servers.
+$(STAMP): pyproject.toml clients/python/pyproject.toml
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
-	$(PY) -m pip install --quiet -e '.[dev,bench,service]'
+	$(PY) -m pip install --quiet -e '.[dev,bench,service,opencl]' -e clients/python
+	# The ICD file for Intel's CPU OpenCL driver (the dev extra): its wheel's own names a
+	# conda path. tests/conftest.py and benchmarks/run.py point OCL_ICD_VENDORS here.
+	if [ -e $(VENV)/lib/libintelocl.so ]; then mkdir -p $(VENV)/opencl-vendors && \
+	  echo "$(abspath $(VENV))/lib/libintelocl.so" > $(VENV)/opencl-vendors/intel-cpu.icd; fi
 	touch $(STAMP)
 
 # The service alone needs only the `service` extra (a full dev install also satisfies it).

@@ -17,6 +17,11 @@ geometry:
   dimension; all of that is timed, since it is what a caller has to do;
 - ``shapely:intersection``: the same with ``shapely.intersection(geoms, box)``
   (``boundary="closed"`` semantics);
+- ``opencl:clip_ragged`` (lines and polygons) and ``opencl:segments:rnsca`` (lines),
+  where OpenCL is available: `rnsca.clip_ragged` and `rnsca.clip_segments` with
+  ``backend="opencl"`` (run pruning of lines and rings and segment clipping on the
+  device, chains and polygons assembled on the host); the record's ``device`` holds
+  the wall, kernel, transfer and host times of one more call;
 - ``segments:cohen_sutherland`` and ``segments:rnsca`` (lines only): per-segment
   clipping of the same lines with `rnsca.clip_segments`, on the (m, 4) segment array of
   the lines built beforehand (the explosion is not timed);
@@ -48,6 +53,7 @@ import shapely
 
 import rnsca
 from benchmarks import datasets
+from benchmarks.bench_segments import backend_unavailable_reason, device_split
 from benchmarks.machine import load_average
 from benchmarks.timing import Contender, Policy, time_round_robin
 from rnsca.formats import geojson as geojson_format
@@ -78,6 +84,8 @@ SEG_RNSCA = "segments:rnsca"
 OBJ_CLIP_BY_RECT = "objects:shapely:clip_by_rect"
 OBJ_INTERSECTION = "objects:shapely:intersection"
 OBJ_RNSCA = "objects:rnsca:clip"
+OPENCL_RAGGED = "opencl:clip_ragged"
+OPENCL_SEGMENTS = "opencl:segments:rnsca"
 
 #: Which output each contender's geometry should match (same boundary semantics).
 _REFERENCE_OF = {
@@ -90,6 +98,8 @@ _REFERENCE_OF = {
     OBJ_CLIP_BY_RECT: REF_SHAPELY,
     OBJ_INTERSECTION: REF_INTERSECTION,
     OBJ_RNSCA: REF_INTERSECTION,
+    OPENCL_RAGGED: REF_INTERSECTION,
+    OPENCL_SEGMENTS: REF_INTERSECTION,
 }
 
 _MULTI_OF = {shapely.GeometryType.LINESTRING: shapely.GeometryType.MULTILINESTRING,
@@ -222,9 +232,10 @@ def _intersection(window) -> Callable[[np.ndarray], np.ndarray]:
     return lambda geoms: shapely.intersection(geoms, box)
 
 
-def _segments_call(segments, window, method: str) -> Callable[[], object]:
+def _segments_call(segments, window, method: str, backend: str = "numba"
+                   ) -> Callable[[], object]:
     def call():
-        return rnsca.clip_segments(segments, window, method=method)
+        return rnsca.clip_segments(segments, window, method=method, backend=backend)
     return call
 
 
@@ -303,6 +314,8 @@ def _record(c: Contender, kind: str, n_coords: int) -> dict:
     stats = getattr(c.last, "stats", None)
     if stats is not None:
         rec["stats"] = stats.to_dict()
+        if stats.device is not None:
+            rec["device"] = device_split(c.call)
     return rec
 
 
@@ -362,7 +375,11 @@ def _curve_contenders(geometry_type, coords, offsets, segments, geoms, window):
         (OBJ_CLIP_BY_RECT, "objects", _objects_call(_clip_by_rect(window), geoms)),
         (OBJ_INTERSECTION, "objects", _objects_call(_intersection(window), geoms)),
         (OBJ_RNSCA, "objects", _rnsca_objects(geoms, window)),
-    ]
+    ] + ([] if backend_unavailable_reason("opencl") else [
+        (OPENCL_RAGGED, "opencl",
+         _rnsca_ragged(geometry_type, coords, offsets, window, backend="opencl")),
+        (OPENCL_SEGMENTS, "opencl", _segments_call(segments, window, "rnsca", "opencl")),
+    ])
 
 
 def run_curves(plan: GeometryPlan, log: Callable[[str], None] = print) -> list[dict]:
@@ -439,7 +456,10 @@ def run_polygons(plan: GeometryPlan, log: Callable[[str], None] = print) -> dict
         (OBJ_CLIP_BY_RECT, "objects", _objects_call(_clip_by_rect(window), geoms)),
         (OBJ_INTERSECTION, "objects", _objects_call(_intersection(window), geoms)),
         (OBJ_RNSCA, "objects", _rnsca_objects(geoms, window)),
-    ]
+    ] + ([] if backend_unavailable_reason("opencl") else [
+        (OPENCL_RAGGED, "opencl",
+         _rnsca_ragged(geometry_type, coords, offsets, window, backend="opencl")),
+    ])
     log(f"workload {name}")
     info["load_average_before"] = load_average()
     runs = _time_workload(name, contenders, plan.policy, plan.n_polygons,

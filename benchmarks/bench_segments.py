@@ -6,6 +6,12 @@ For one workload the contenders are
   in exact mode, plus rnsca and midpoint in approx mode;
 - ``numpy:<method>[:<mode>]``: the same on the NumPy reference backend, for inputs of at
   most `NUMPY_MAX_N` segments;
+- ``opencl:<method>[:<mode>]``: the same on the OpenCL backend (default device, or
+  ``RNSCA_OPENCL_DEVICE``), where OpenCL is available. Its record also holds
+  ``device``: the kernel time and the host-device transfer time of one more call, from
+  OpenCL event profiling (`rnsca.stats.DeviceStats`), and the rest of the call's wall
+  time (``host_seconds``: validation, allocation, Python), so a run on a GPU can be read
+  against a run on a CPU driver;
 - ``shapely:clip_by_rect`` and ``shapely:intersection``: Shapely end to end, from the
   (n, 4) array to an (m, 4) array of pieces and their (m,) source indices, through
   ``shapely.linestrings``, ``clip_by_rect`` (or ``intersection`` with a box) and
@@ -25,6 +31,7 @@ included), compiled beforehand, interleaved with the others (see `benchmarks.tim
 from __future__ import annotations
 
 import statistics
+import time
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -47,6 +54,7 @@ __all__ = [
     "run_n_sweep",
     "evaluate_targets",
     "backend_unavailable_reason",
+    "device_split",
 ]
 
 #: The NumPy reference backend is only timed up to this many segments.
@@ -227,14 +235,34 @@ def _record(workload: Workload, c: Contender, kind: dict, memory: tuple[int, obj
     return rec
 
 
+def device_split(call: Callable[[], object]) -> dict:
+    """Return one more OpenCL call's wall time, kernel and transfer times, and the rest.
+
+    The kernel and transfer times come from OpenCL event profiling; ``host_seconds`` is
+    the same call's wall time minus both (validation, allocation, Python, waiting). Read
+    them as shares of ``call_seconds``, not of the best time of the timed repeats.
+    """
+    start = time.perf_counter()
+    device = call().stats.device
+    wall = time.perf_counter() - start
+    return {"device": device.device, "precision": device.precision,
+            "call_seconds": wall, "kernel_seconds": device.kernel_seconds,
+            "transfer_seconds": device.transfer_seconds,
+            "bytes_to_device": device.bytes_to_device,
+            "bytes_from_device": device.bytes_from_device,
+            "host_seconds": max(0.0, wall - device.kernel_seconds - device.transfer_seconds)}
+
+
 def run_workload(workload: Workload, plan: Plan, numpy_skip: str | None,
                  shapely_estimate: dict[str, float] | None = None,
-                 log: Callable[[str], None] = print) -> dict:
+                 log: Callable[[str], None] = print, opencl_skip: str | None = "not asked"
+                 ) -> dict:
     """Time every contender on `workload`; return ``{"workload": ..., "runs": [...]}``.
 
     `numpy_skip` is the reason the NumPy backend is unavailable (None: it runs, up to
-    `NUMPY_MAX_N`). `shapely_estimate` maps a Shapely label to seconds per segment
-    measured on a smaller uniform set, used when the plan extrapolates at this size.
+    `NUMPY_MAX_N`); `opencl_skip` the same for OpenCL (None: it runs at every size).
+    `shapely_estimate` maps a Shapely label to seconds per segment measured on a smaller
+    uniform set, used when the plan extrapolates at this size.
     """
     segments = workload.segments()
     window = workload.window
@@ -253,6 +281,10 @@ def run_workload(workload: Workload, plan: Plan, numpy_skip: str | None,
             backends.append("numpy")
         else:
             skipped.append({"label": "numpy:*", "reason": numpy_skip})
+    if opencl_skip is None:
+        backends.append("opencl")
+    else:
+        skipped.append({"label": "opencl:*", "reason": opencl_skip})
     for backend in backends:
         for variant in VARIANTS:
             label = variant.label(backend)
@@ -298,6 +330,8 @@ def run_workload(workload: Workload, plan: Plan, numpy_skip: str | None,
         if c.label in traced:
             memory = peak_traced_bytes(c.call)
         rec = _record(workload, c, kinds[c.label], memory, segments.nbytes)
+        if kinds[c.label]["kind"] == "opencl":
+            rec["device"] = device_split(c.call)
         if kinds[c.label]["kind"] == "shapely":
             rec["note"] = ("peak memory not measured: GEOS allocations are invisible to "
                            "tracemalloc")
@@ -347,7 +381,7 @@ def _check_pieces(runs: list[dict]) -> None:
     """
     ref = next((r["pieces_out"] for r in runs if r["label"] == REF_CS), None)
     for r in runs:
-        if r["kind"] in ("numba", "numpy", "shapely") and r["pieces_out"] is not None:
+        if r["kind"] in ("numba", "numpy", "opencl", "shapely") and r["pieces_out"] is not None:
             r["pieces_match_reference"] = r["pieces_out"] == ref
         else:
             r["pieces_match_reference"] = None

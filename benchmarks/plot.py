@@ -30,7 +30,8 @@ def draw_figure5(workload_results: list[dict], path: Path, title_note: str = "")
     """Draw time and throughput against input size for the uniform sets; return `path`.
 
     One line per contender. NumPy-backend lines are thin, dotted, in the colour of their
-    Numba twin (they stop at the NumPy size limit); extrapolated points are drawn hollow.
+    Numba twin (they stop at the NumPy size limit), OpenCL lines dashed in the same
+    colour; extrapolated points are drawn hollow.
     """
     series: dict[str, list[tuple[int, float, bool]]] = {}
     for wr in workload_results:
@@ -47,6 +48,9 @@ def draw_figure5(workload_results: list[dict], path: Path, title_note: str = "")
         if label.startswith("numpy:"):
             twin = _STYLE.get("numba:" + label.split(":", 1)[1], {})
             style = dict(color=twin.get("color"), lw=1.0, ls=":", marker=".", alpha=0.6)
+        elif label.startswith("opencl:"):  # dashed, in the colour of the Numba twin
+            twin = _STYLE.get("numba:" + label.split(":", 1)[1], {})
+            style = dict(color=twin.get("color"), lw=1.2, ls="--", marker="x", alpha=0.8)
         style.setdefault("lw", 1.3)
         style.setdefault("markersize", 4)
         for ax, ys in ((ax_t, ts), (ax_r, [x / t for x, t in zip(xs, ts, strict=True)])):

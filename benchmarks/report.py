@@ -92,6 +92,37 @@ def _workload_table(w: dict) -> Table:
     return table
 
 
+def _numba_twin(label: str) -> str:
+    return "numba:" + label.split(":", 1)[1]
+
+
+def _device_table(workloads: list[dict], twin_of=_numba_twin) -> Table | None:
+    """Return the OpenCL runs' split: kernels, host-device transfers, host (or None).
+
+    `twin_of` names the Numba run each OpenCL run is compared with.
+    """
+    rows = [(w["workload"]["name"], r) for w in workloads for r in w["runs"]
+            if r.get("device")]
+    if not rows:
+        return None
+    device = rows[0][1]["device"]
+    table = Table(title=f"OpenCL on {device['device']} ({device['precision']}): where the "
+                        "time of one more (profiled) call goes")
+    for col in ("workload", "contender", "best time", "t/numba", "profiled call", "kernels",
+                "transfers", "host", "MB up", "MB down"):
+        table.add_column(col, justify="left" if col in ("workload", "contender") else "right")
+    by_label = {(w["workload"]["name"], r["label"]): r for w in workloads for r in w["runs"]}
+    for name, r in rows:
+        d = r["device"]
+        twin = by_label.get((name, twin_of(r["label"])))
+        table.add_row(name, r["label"], _seconds(r["seconds"]),
+                      _x(r["seconds"] / twin["seconds"] if twin else None),
+                      _seconds(d["call_seconds"]), _seconds(d["kernel_seconds"]),
+                      _seconds(d["transfer_seconds"]), _seconds(d["host_seconds"]),
+                      f"{d['bytes_to_device'] / 1e6:.1f}", f"{d['bytes_from_device'] / 1e6:.1f}")
+    return table
+
+
 def _sweep_table(sweeps: list[dict]) -> Table:
     table = Table(title='n sweep: rnsca on numba, fixed N vs n="auto" (time / auto time)')
     table.add_column("workload")
@@ -183,6 +214,9 @@ def print_summary(result: dict, console: Console | None = None) -> None:
         info = w["workload"]
         if info["family"] != "uniform" or info["n"] >= min(1_000_000, largest_uniform):
             console.print(_workload_table(w))
+    device = _device_table(workloads)
+    if device is not None:
+        console.print(device)
     if result["n_sweep"]:
         console.print(_sweep_table(result["n_sweep"]))
     console.print(_startup_table(result["startup"]))
@@ -295,6 +329,11 @@ def print_geometry_summary(result: dict, console: Console | None = None) -> None
         f"{bbox['outside']:.0%} outside, {bbox['crossing']:.0%} crossing; "
         f"{info['input_invalid']} invalid inputs; load {info.get('load_average_before')} -> "
         f"{info.get('load_average_after')}")))
+    device = _device_table([*result["curves"], result["polygons"]],
+                           {"opencl:clip_ragged": "rnsca:clip_ragged",
+                            "opencl:segments:rnsca": "segments:rnsca"}.get)
+    if device is not None:
+        console.print(device)
     console.print(_geojson_table(result["geojson"]))
     console.print(_targets_table(result["targets"], "Issue 3 targets (rnsca.clip_ragged, "
                                  "defaults; ratios from this run)"))

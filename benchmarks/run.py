@@ -6,6 +6,7 @@ Usage::
     python -m benchmarks.run --quick            # small sizes only, a smoke test
     python -m benchmarks.run --suite svg        # one suite: segments, geometry or svg
     RNSCA_BENCH_QUICK=1 python -m benchmarks.run
+    RNSCA_OPENCL_DEVICE=1:0 python -m benchmarks.run   # OpenCL contenders on that device
 
 The segment suite writes ``<out>/segments-<timestamp>.json`` and ``.png``, and copies
 both to ``<out>/latest.json`` and ``latest.png``; a full run into the default directory
@@ -30,6 +31,11 @@ from pathlib import Path
 
 import numba
 
+# OpenCL drivers the install step registered beside PoCL (see the Makefile); the ICD
+# loader reads this once, before the first OpenCL call.
+if (Path(sys.prefix) / "opencl-vendors").is_dir():
+    os.environ.setdefault("OCL_ICD_VENDORS", str(Path(sys.prefix) / "opencl-vendors"))
+
 from benchmarks import bench_curves, bench_geometry, bench_svg, datasets
 from benchmarks.bench_segments import (
     Plan,
@@ -43,6 +49,7 @@ from benchmarks.plot import draw_figure5
 from benchmarks.report import print_geometry_summary, print_summary
 from benchmarks.startup import measure_startup
 from benchmarks.timing import Policy
+from rnsca.backends.registry import configure_opencl
 
 SCHEMA = "rnsca-bench-segments/1"
 GEOMETRY_SCHEMA = "rnsca-bench-geometry/1"
@@ -114,6 +121,9 @@ def run(quick: bool, out_dir: Path, sizes: list[int] | None = None,
     numpy_skip = backend_unavailable_reason("numpy")
     if numpy_skip:
         _log(f"numpy backend unavailable, recorded as skipped: {numpy_skip}")
+    opencl_skip = backend_unavailable_reason("opencl")
+    if opencl_skip:
+        _log(f"opencl backend unavailable, recorded as skipped: {opencl_skip}")
 
     workloads = [*datasets.table2(config["uniform_sizes"]), *datasets.shaped(config["shaped_n"])]
     by_name = {w.name: w for w in workloads}
@@ -121,7 +131,8 @@ def run(quick: bool, out_dir: Path, sizes: list[int] | None = None,
     shapely_per_segment: dict[str, float] = {}
     for w in workloads:
         _log(f"workload {w.name}")
-        res = run_workload(w, plan, numpy_skip, shapely_per_segment, log=_log)
+        res = run_workload(w, plan, numpy_skip, shapely_per_segment, log=_log,
+                           opencl_skip=opencl_skip)
         if w.family == "uniform":
             for r in res["runs"]:
                 if r["kind"] == "shapely" and r["measured"]:
@@ -294,6 +305,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--no-figure-copy", action="store_true",
                         help="do not update benchmarks/figure5.png")
     args = parser.parse_args(argv)
+    # The OpenCL device and precision, named as for the command line (README).
+    configure_opencl(os.environ.get("RNSCA_OPENCL_DEVICE"),
+                     os.environ.get("RNSCA_OPENCL_PRECISION", "auto"))
     copy_figure = not args.no_figure_copy and args.out.resolve() == DEFAULT_OUT
     if args.suite in ("all", "segments"):
         print_summary(run(args.quick, args.out, args.sizes, args.shapely_10m, copy_figure))

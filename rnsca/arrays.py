@@ -142,8 +142,12 @@ class Ragged:
     offsets: tuple
 
     @classmethod
-    def of(cls, geometry_type, coords, offsets) -> Ragged:
+    def of(cls, geometry_type, coords, offsets, *, check_finite: bool = True) -> Ragged:
         """Return a validated `Ragged` from the triple ``shapely.to_ragged_array`` gives.
+
+        With ``check_finite=False`` the caller takes over the finiteness check (it must
+        call `check_finite` itself, or check as it reads the coordinates): the line
+        clip does it in its first pass over the coordinates.
 
         Raises
         ------
@@ -176,7 +180,8 @@ class Ragged:
             levels.append(level)
             length = level.shape[0] - 1
         ragged = cls(kind, xy, tuple(levels))
-        ragged._check_coordinates()
+        if check_finite:
+            ragged.check_finite()
         ragged._check_shapes()
         return ragged
 
@@ -219,7 +224,11 @@ class Ragged:
             g = int(np.searchsorted(level, g, side="right")) - 1
         return g
 
-    def _check_coordinates(self) -> None:
+    def check_finite(self) -> None:
+        """Raise `InvalidGeometryError` naming the first non-finite coordinate, if any.
+
+        An all-NaN row of a POINT array is an empty point, not an error.
+        """
         if all_finite(self.coords):
             return
         finite = np.isfinite(self.coords)

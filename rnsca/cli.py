@@ -20,7 +20,12 @@ import numpy as np
 import typer
 
 import rnsca
-from rnsca.backends.registry import available_backends, get_backend
+from rnsca.backends.registry import (
+    available_backends,
+    configure_opencl,
+    get_backend,
+    opencl_report,
+)
 from rnsca.clip_svgdoc import clip_svg_document
 from rnsca.errors import (
     BackendUnavailableError,
@@ -29,7 +34,7 @@ from rnsca.errors import (
     RnscaError,
 )
 from rnsca.formats.geojson import dumps, loads
-from rnsca.options import Boundary, Mode
+from rnsca.options import Backend, Boundary, Mode
 
 __all__ = ["app", "PROGRESS_MIN_BYTES"]
 
@@ -53,11 +58,41 @@ _NON_SPACE = re.compile(rb"[^ \t\r\n]")
 app = typer.Typer(help="Clip geometry against a rectangular window.", no_args_is_help=True)
 
 
+@app.callback()
+def main(
+    opencl_device: Annotated[str | None, typer.Option(
+        envvar="RNSCA_OPENCL_DEVICE", help="OpenCL device for --backend opencl: "
+        "'platform:device' (see `rnsca backends`) or part of its name [default: the first "
+        "GPU, else the first device]")] = None,
+    opencl_precision: Annotated[str, typer.Option(
+        envvar="RNSCA_OPENCL_PRECISION", help="auto (float64 where the device has it, "
+        "else float32), float64 or float32")] = "auto",
+) -> None:
+    """Clip geometry against a rectangular window."""
+    try:
+        configure_opencl(opencl_device, opencl_precision)
+    except InvalidOptionError as exc:
+        _fail(str(exc), EXIT_USAGE)
+
+
 @app.command()
 def backends() -> None:
-    """List the backends that can run here."""
-    for kind in available_backends():
+    """List the backends that can run here, and the OpenCL devices found.
+
+    One backend per line on stdout; each OpenCL device indented below ``opencl``
+    (``*`` marks the one selected). Why OpenCL is unavailable goes to stderr.
+    """
+    present = available_backends()
+    for kind in present:
         typer.echo(kind.value)
+    report = opencl_report()
+    if Backend.OPENCL not in present:
+        typer.echo(f"opencl is not available: {report['reason']}", err=True)
+    for device in report["devices"]:
+        mark = "*" if device["id"] == report["selected"] else " "
+        precision = f", {report['precision']}" if mark == "*" else ""
+        typer.echo(f" {mark}{device['id']} {device['platform']} / {device['device']} "
+                   f"({device['type']}, {'fp64' if device['fp64'] else 'no fp64'}{precision})")
 
 
 @app.command()
@@ -110,7 +145,7 @@ def segments(
     max_depth: Annotated[int | None, typer.Option(help="0..32")] = None,
     tolerance: Annotated[float | None, typer.Option(help="leaf length")] = None,
     mode: Annotated[str, typer.Option(help="exact or approx")] = "exact",
-    backend: Annotated[str, typer.Option(help="numba or numpy")] = "numba",
+    backend: Annotated[str, typer.Option(help="numba, numpy or opencl")] = "numba",
     verify: Annotated[bool, typer.Option(help="compare with Shapely")] = False,
 ) -> None:
     """Clip the segments of a .npy file and print the statistics as JSON."""

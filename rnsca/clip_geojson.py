@@ -7,7 +7,7 @@ from itertools import zip_longest
 
 from rnsca.formats.geojson import from_geojson, to_geojson
 from rnsca.ragged import clip_ragged
-from rnsca.stats import ClipStats
+from rnsca.stats import ClipStats, DeviceStats
 from rnsca.window import Window
 
 __all__ = ["clip_geojson", "combine_stats"]
@@ -115,7 +115,9 @@ def combine_stats(stats) -> ClipStats:
     values = {}
     for field in fields(ClipStats):
         parts = [getattr(s, field.name) for s in stats]
-        if field.name.endswith("deepest_level"):
+        if field.name == "device":
+            values[field.name] = DeviceStats.combine(parts)
+        elif field.name.endswith("deepest_level"):
             values[field.name] = max(parts)
         elif isinstance(parts[0], tuple):
             values[field.name] = tuple(sum(level) for level in zip_longest(*parts, fillvalue=0))

@@ -9,8 +9,8 @@ from enum import Enum
 from rnsca.errors import InvalidOptionError
 from rnsca.window import Window
 
-__all__ = ["Method", "Mode", "Backend", "Boundary", "SegmentOptions", "N_MIN", "N_MAX",
-           "MAX_DEPTH_LIMIT"]
+__all__ = ["Method", "Mode", "Backend", "Boundary", "Precision", "SegmentOptions", "N_MIN",
+           "N_MAX", "MAX_DEPTH_LIMIT"]
 
 N_MIN = 2
 N_MAX = 64
@@ -66,6 +66,19 @@ class Backend(_ChoiceEnum):
     """Numba-compiled, parallel over blocks of primitives (default)."""
     NUMPY = "numpy"
     """Vectorized NumPy reference; slow, written to be read, used as a second opinion."""
+    OPENCL = "opencl"
+    """OpenCL kernels (pyopencl) on a GPU or any other OpenCL device; segments and lines."""
+
+
+class Precision(_ChoiceEnum):
+    """Floating-point precision of the OpenCL kernels."""
+
+    AUTO = "auto"
+    """float64 where the device has ``cl_khr_fp64``, else float32 (reported in the stats)."""
+    FLOAT64 = "float64"
+    """float64, the Numba backend's results; a device without fp64 is an error."""
+    FLOAT32 = "float32"
+    """float32 on any device, within the error bound documented in the README."""
 
 
 class Boundary(_ChoiceEnum):

@@ -18,6 +18,7 @@ from rnsca.arrays import GeometryKind, Ragged
 from rnsca.backends.registry import get_backend
 from rnsca.errors import BackendUnavailableError, InvalidOptionError, InvalidWindowError
 from rnsca.kernels import counters as C
+from rnsca.kernels.validate import all_finite
 from rnsca.options import Backend, Boundary, Mode, SegmentOptions
 from rnsca.stats import ClipStats
 from rnsca.window import Window
@@ -154,9 +155,9 @@ def resolve_geometry_options(windows: np.ndarray, dimension: int, *, boundary="c
                                      max_depth=max_depth, tolerance=tolerance, mode=mode)
     side = Boundary(boundary)
     engine = get_backend(backend)
-    if engine.kind is not Backend.NUMBA:
+    if engine.kind is Backend.NUMPY:
         raise BackendUnavailableError(
-            f"backend {engine.kind.value!r} clips segments only; geometry runs on 'numba'")
+            "backend 'numpy' clips segments only; geometry runs on 'numba' or 'opencl'")
     if dimension == 2 and options.mode is Mode.APPROX:
         raise InvalidOptionError(
             "mode='approx' cannot clip polygons: valid polygon output needs the exact "
@@ -201,8 +202,9 @@ def clip_ragged(geometry_type, coords, offsets, window, *, boundary="closed", ke
     method, n, max_depth, tolerance, mode
         As for `clip_segments`; runs of vertices are pruned by RNSCA with N runs per
         split (``n="auto"``: 16). Polygons need ``mode="exact"``.
-    backend : {"numba"}
-        Geometry clipping runs on the Numba backend.
+    backend : {"numba", "opencl"}
+        OpenCL: the run pruning of lines and rings and the clip of their undecided
+        segments on the device; chains and polygons assembled on the host (Numba).
 
     Returns
     -------
@@ -215,7 +217,7 @@ def clip_ragged(geometry_type, coords, offsets, window, *, boundary="closed", ke
     UnsupportedGeometryError
         For an unknown geometry type.
     BackendUnavailableError
-        For a backend that does not clip geometry.
+        For a backend that does not clip geometry (NumPy).
 
     Examples
     --------
@@ -225,7 +227,9 @@ def clip_ragged(geometry_type, coords, offsets, window, *, boundary="closed", ke
     >>> r.to_shapely()[0].wkt
     'MULTILINESTRING ((0 1, 5 1, 5 10), (8 10, 8 5, 10 5))'
     """
-    ragged = Ragged.of(geometry_type, coords, offsets)
+    kind = GeometryKind.of(geometry_type)
+    # Lines are checked for non-finite coordinates by the clip's first pass over them.
+    ragged = Ragged.of(kind, coords, offsets, check_finite=kind.dimension != 1)
     windows, window_index = window_table(window, ragged.count)
     options, side, engine = resolve_geometry_options(
         windows, ragged.kind.dimension, boundary=boundary, method=method, n=n,
@@ -285,6 +289,9 @@ def _clip_points(ragged: Ragged, windows, window_index, side: Boundary, keep_emp
                             source, stats)
 
 
+_NO_INDEX = np.empty(0, dtype=np.int64)
+
+
 def _split_z(ragged: Ragged):
     if ragged.has_z:
         return (np.ascontiguousarray(ragged.coords[:, :2]),
@@ -294,41 +301,58 @@ def _split_z(ragged: Ragged):
 
 def _clip_lines(engine, ragged, windows, window_index, options, side, keep_empty):
     xy, z = _split_z(ragged)
+    if ragged.has_z and not all_finite(z):
+        ragged.check_finite()  # raises, naming the first bad coordinate
     if ragged.kind is GeometryKind.LINESTRING:
         part_offsets = ragged.offsets[0]
         geometry_parts = np.arange(ragged.count + 1, dtype=np.int64)
     else:
         part_offsets, geometry_parts = ragged.offsets
-    part_geometry = np.repeat(np.arange(ragged.count, dtype=np.int64), np.diff(geometry_parts))
-    part_window = np.ascontiguousarray(window_index[part_geometry])
-    out_xy, out_z, chain_offsets, chains_per_part, counters = engine.clip_lines(
-        xy, z, part_offsets, part_window, windows, options, side is Boundary.INTERIOR)
-    geometry_offsets = _group(chains_per_part, geometry_parts)
-    chains_per_geometry = np.diff(geometry_offsets)
-    segments_in = int(np.maximum(np.diff(part_offsets) - 1, 0).sum())
+    device = None
+    if engine.kind is Backend.NUMBA:
+        # One window for all: the kernel takes row 0 of `windows` for every geometry.
+        geometry_window = window_index if windows.shape[0] > 1 else _NO_INDEX
+        out_xy, out_z, chain_offsets, geometry_chains, counters, bad_part = engine.clip_lines(
+            xy, z, part_offsets, geometry_parts, geometry_window, windows, options,
+            side is Boundary.INTERIOR)
+        if bad_part >= 0:
+            ragged.check_finite()  # raises, naming the first bad coordinate
+            raise AssertionError(f"the line kernel found a non-finite coordinate in part "
+                                 f"{bad_part} that the full check did not")
+    else:
+        ragged.check_finite()  # the device kernels take finite coordinates
+        part_geometry = np.repeat(np.arange(ragged.count, dtype=np.int64),
+                                  np.diff(geometry_parts))
+        part_window = np.ascontiguousarray(window_index[part_geometry])
+        # OpenCL also says where it ran and what it moved (a sixth value).
+        out_xy, out_z, chain_offsets, chains_per_part, counters, device = engine.clip_lines(
+            xy, z, part_offsets, part_window, windows, options, side is Boundary.INTERIOR)
+        geometry_chains = _group(chains_per_part, geometry_parts)
+    chains_per_geometry = np.diff(geometry_chains)
+    # Parts of one position are refused by `Ragged.of`: every part but an empty one has
+    # one segment fewer than positions.
+    segments_in = xy.shape[0] - int(np.count_nonzero(np.diff(part_offsets)))
+    count = chains_per_geometry.shape[0]
+    source = np.flatnonzero(chains_per_geometry)
     stats = _stats(counters, segments_in, chain_offsets.shape[0] - 1, ragged, out_xy.shape[0],
-                   int((chains_per_geometry > 0).sum()))
+                   source.shape[0])
+    if device is not None:
+        stats = replace(stats, device=device)
     coords = _with_z(out_xy, out_z, ragged.has_z)
-    return _finish_lines(ragged.kind, coords, chain_offsets, geometry_offsets,
-                         chains_per_geometry, keep_empty, stats)
-
-
-def _finish_lines(kind, coords, part_offsets, geometry_offsets, parts_per_geometry, keep_empty,
-                  stats):
-    count = parts_per_geometry.shape[0]
-    source = np.arange(count, dtype=np.int64)
-    if not keep_empty:
-        source = np.flatnonzero(parts_per_geometry > 0).astype(np.int64)
-        # Dropped geometries own no part: the part offsets stay as they are.
-        geometry_offsets = np.concatenate([[0], np.cumsum(parts_per_geometry[source])])
-    geometry_offsets = np.asarray(geometry_offsets, dtype=np.int64)
-    if kind is GeometryKind.LINESTRING and (count == 0 or parts_per_geometry.max() <= 1):
-        # At most one part each: the part offsets, one per geometry (empty ones repeat).
-        starts = part_offsets[geometry_offsets]
-        return RaggedClipResult(kind.shapely_type, coords, (np.asarray(starts, np.int64),),
-                                source, stats)
+    if keep_empty or source.shape[0] == count:
+        source = np.arange(count, dtype=np.int64)
+        geometry_offsets = geometry_chains
+    else:
+        # Dropped geometries own no chain: the chain offsets stay as they are.
+        geometry_offsets = np.empty(source.shape[0] + 1, dtype=np.int64)
+        geometry_offsets[0] = 0
+        geometry_offsets[1:] = geometry_chains[source + 1]
+    if ragged.kind is GeometryKind.LINESTRING and (count == 0 or chains_per_geometry.max() <= 1):
+        # At most one chain each: the chain offsets, one per geometry (empty ones repeat).
+        return RaggedClipResult(ragged.kind.shapely_type, coords,
+                                (chain_offsets[geometry_offsets],), source, stats)
     return RaggedClipResult(GeometryKind.MULTILINESTRING.shapely_type, coords,
-                            (part_offsets, geometry_offsets), source, stats)
+                            (chain_offsets, geometry_offsets), source, stats)
 
 
 def _clip_polygons(engine, ragged, windows, window_index, options, keep_empty):
@@ -341,7 +365,7 @@ def _clip_polygons(engine, ragged, windows, window_index, options, keep_empty):
     polygon_geometry = np.repeat(np.arange(ragged.count, dtype=np.int64),
                                  np.diff(geometry_polygons))
     polygon_window = np.ascontiguousarray(window_index[polygon_geometry])
-    out_xy, out_z, out_rings, rings_per_output, outputs_per_polygon, counters = \
+    out_xy, out_z, out_rings, rings_per_output, outputs_per_polygon, counters, *device = \
         engine.clip_polygons(xy, z, ring_offsets, polygon_rings, polygon_window, windows,
                              options)
     output_ring_offsets = np.zeros(rings_per_output.shape[0] + 1, dtype=np.int64)
@@ -351,6 +375,8 @@ def _clip_polygons(engine, ragged, windows, window_index, options, keep_empty):
     segments_in = int(np.maximum(np.diff(ring_offsets) - 1, 0).sum())
     stats = _stats(counters, segments_in, out_rings.shape[0] - 1, ragged, out_xy.shape[0],
                    int((per_geometry > 0).sum()))
+    if device:
+        stats = replace(stats, device=device[0])
     coords = _with_z(out_xy, out_z, ragged.has_z)
     count = ragged.count
     source = np.arange(count, dtype=np.int64)

@@ -2,13 +2,63 @@
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import asdict, dataclass, fields
 
 import numpy as np
 
 from rnsca.kernels import counters as C
 
-__all__ = ["ClipStats"]
+__all__ = ["ClipStats", "DeviceStats"]
+
+
+@dataclass(frozen=True, slots=True)
+class DeviceStats:
+    """Where an OpenCL clip ran, in what precision, and what moved between host and device.
+
+    Times come from OpenCL event profiling (device clock), so they exclude Python's own
+    overhead; their sum is below the call's wall time.
+
+    Attributes
+    ----------
+    device : str
+        ``"<platform> / <device>"`` of the device that ran the kernels.
+    precision : str
+        ``"float64"`` or ``"float32"`` (see README, "OpenCL backend").
+    transfers : int
+        Host-device copies, both directions.
+    bytes_to_device, bytes_from_device : int
+        Bytes copied each way.
+    transfer_seconds : float
+        Time the copies took.
+    kernel_seconds : float
+        Time the kernels took (clip, prefix sum, write).
+    """
+
+    device: str
+    precision: str
+    transfers: int = 0
+    bytes_to_device: int = 0
+    bytes_from_device: int = 0
+    # Times vary run to run: two stats of the same work compare equal without them.
+    transfer_seconds: float = dataclasses.field(default=0.0, compare=False)
+    kernel_seconds: float = dataclasses.field(default=0.0, compare=False)
+
+    @classmethod
+    def combine(cls, parts) -> DeviceStats | None:
+        """Return the sum of several calls' device stats (None if there are none)."""
+        parts = [part for part in parts if part is not None]
+        if not parts:
+            return None
+        names = {part.device for part in parts}
+        precisions = {part.precision for part in parts}
+        return cls(
+            device=parts[0].device if len(names) == 1 else ", ".join(sorted(names)),
+            precision=parts[0].precision if len(precisions) == 1
+            else ", ".join(sorted(precisions)),
+            **{name: sum(getattr(part, name) for part in parts)
+               for name in ("transfers", "bytes_to_device", "bytes_from_device",
+                            "transfer_seconds", "kernel_seconds")})
 
 
 @dataclass(frozen=True, slots=True)
@@ -66,6 +116,8 @@ class ClipStats:
     invalid_polygons : int
         Polygons whose cut rings could not be closed consistently (invalid input:
         self-intersecting or with stray holes); clipped ring by ring, not repaired.
+    device : DeviceStats or None
+        The OpenCL backend's device, precision, transfers and times; None elsewhere.
     """
 
     segments_in: int
@@ -92,6 +144,7 @@ class ClipStats:
     runs_decided_per_level: tuple[int, ...] = (0,) * C.N_LEVELS
     segments_decided_per_level: tuple[int, ...] = (0,) * C.N_LEVELS
     invalid_polygons: int = 0
+    device: DeviceStats | None = None
 
     @property
     def decided_shallow_fraction(self) -> float:
@@ -107,31 +160,33 @@ class ClipStats:
         `geometry` holds the counts only the caller knows (``geometries_in``, ...).
         """
         rows = np.asarray(rows, dtype=np.int64).reshape(-1, C.WIDTH)
-        total = rows.sum(axis=0)
-        deepest = int(rows[:, C.DEEPEST].max()) if rows.shape[0] else 0
+        # One conversion to Python ints, then slices: this runs on every clip call, and
+        # per-value conversions cost more than small clips themselves.
+        total = rows.sum(axis=0).tolist()
+        deepest = rows.max(axis=0)[[C.DEEPEST, C.RUN_DEEPEST]].tolist() if rows.shape[0] \
+            else [0, 0]
         return cls(
             segments_in=int(segments_in),
             pieces_out=int(pieces_out),
-            fragments_evaluated=int(total[C.EVALUATED]),
-            accepted=int(total[C.ACCEPTED]),
-            rejected=int(total[C.REJECTED]),
-            subdivided=int(total[C.SUBDIVIDED]),
-            clipped=int(total[C.CLIPPED]),
-            dropped=int(total[C.DROPPED]),
-            intersections=int(total[C.INTERSECTIONS]),
-            deepest_level=deepest,
-            decided_per_level=tuple(int(v) for v in total[C.LEVELS:C.LEVELS + C.N_LEVELS]),
-            runs_evaluated=int(total[C.RUNS_EVALUATED]),
-            runs_accepted=int(total[C.RUNS_ACCEPTED]),
-            runs_rejected=int(total[C.RUNS_REJECTED]),
-            runs_subdivided=int(total[C.RUNS_SUBDIVIDED]),
-            runs_segmented=int(total[C.RUNS_SEGMENTED]),
-            runs_deepest_level=int(rows[:, C.RUN_DEEPEST].max()) if rows.shape[0] else 0,
-            runs_decided_per_level=tuple(
-                int(v) for v in total[C.RUN_LEVELS:C.RUN_LEVELS + C.N_LEVELS]),
+            fragments_evaluated=total[C.EVALUATED],
+            accepted=total[C.ACCEPTED],
+            rejected=total[C.REJECTED],
+            subdivided=total[C.SUBDIVIDED],
+            clipped=total[C.CLIPPED],
+            dropped=total[C.DROPPED],
+            intersections=total[C.INTERSECTIONS],
+            deepest_level=deepest[0],
+            decided_per_level=tuple(total[C.LEVELS:C.LEVELS + C.N_LEVELS]),
+            runs_evaluated=total[C.RUNS_EVALUATED],
+            runs_accepted=total[C.RUNS_ACCEPTED],
+            runs_rejected=total[C.RUNS_REJECTED],
+            runs_subdivided=total[C.RUNS_SUBDIVIDED],
+            runs_segmented=total[C.RUNS_SEGMENTED],
+            runs_deepest_level=deepest[1],
+            runs_decided_per_level=tuple(total[C.RUN_LEVELS:C.RUN_LEVELS + C.N_LEVELS]),
             segments_decided_per_level=tuple(
-                int(v) for v in total[C.SEGMENT_LEVELS:C.SEGMENT_LEVELS + C.N_LEVELS]),
-            invalid_polygons=int(total[C.INVALID_POLYGONS]),
+                total[C.SEGMENT_LEVELS:C.SEGMENT_LEVELS + C.N_LEVELS]),
+            invalid_polygons=total[C.INVALID_POLYGONS],
             **geometry,
         )
 
@@ -154,7 +209,9 @@ class ClipStats:
         values = {}
         for field in fields(cls):
             column = [getattr(part, field.name) for part in parts]
-            if field.name in ("deepest_level", "runs_deepest_level"):
+            if field.name == "device":
+                values[field.name] = DeviceStats.combine(column)
+            elif field.name in ("deepest_level", "runs_deepest_level"):
                 values[field.name] = max(column, default=0)
             elif field.name.endswith("per_level"):
                 total = np.sum(column, axis=0, dtype=np.int64) if column \

@@ -7,7 +7,7 @@ from typing import Annotated, Literal
 from pydantic import Field, PositiveFloat, PositiveInt, field_validator, model_validator
 from pydantic_settings import BaseSettings, NoDecode, SettingsConfigDict
 
-from rnsca.options import Backend
+from rnsca.options import Backend, Precision
 
 __all__ = ["Settings", "LogLevel", "ThreadingLayer"]
 
@@ -58,6 +58,12 @@ class Settings(BaseSettings):
     """``verify`` defaults to true for inputs of at most this many vertices."""
     default_backend: Backend = Backend.NUMBA
     """Backend of requests that name none."""
+    opencl_device: str | None = None
+    """OpenCL device of ``backend: opencl``: "platform:device" (as `rnsca backends` lists
+    them) or part of its name; unset: the first GPU, else the first device."""
+    opencl_precision: Precision = Precision.AUTO
+    """OpenCL precision: auto (float64 where the device has it, else float32), float64 or
+    float32."""
     cors_origins: Annotated[list[str], NoDecode] = []
     """Origins allowed by CORS, comma-separated (``*`` for any); empty: no CORS headers."""
     gzip_min_bytes: PositiveInt = 1024

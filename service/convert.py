@@ -16,7 +16,7 @@ import numpy as np
 import orjson
 
 import rnsca
-from rnsca.backends.registry import available_backends
+from rnsca.backends.registry import available_backends, opencl_report
 from rnsca.clip import as_segments
 from rnsca.errors import (
     BackendUnavailableError,
@@ -68,12 +68,23 @@ class Outcome:
 
 
 def backend_report() -> list[dict]:
-    """Return each backend the API names, whether it is present here, and why not."""
+    """Return each backend the API names, whether it is present here, and why not.
+
+    OpenCL also lists every device found (``id`` "platform:device", names, type, fp64),
+    the one selected and its precision.
+    """
     present = {kind.value for kind in available_backends()}
     report = []
     for name in BackendName:
         entry = {"name": name.value, "available": name.value in present}
-        if name.value in present:
+        if name is BackendName.OPENCL:
+            opencl = opencl_report()
+            entry["devices"] = opencl["devices"]
+            entry["selected"] = opencl["selected"]
+            entry["precision"] = opencl["precision"]
+            if not opencl["available"]:
+                entry["reason"] = opencl["reason"]
+        elif name.value in present:
             entry["devices"] = ["cpu"]
         else:
             entry["reason"] = _missing_reason(name)
@@ -82,6 +93,8 @@ def backend_report() -> list[dict]:
 
 
 def _missing_reason(name: BackendName) -> str:
+    if name is BackendName.OPENCL:
+        return opencl_report()["reason"]
     return (f"backend {name.value!r} is not part of this build of rnsca "
             f"(available: {', '.join(k.value for k in available_backends())})")
 

@@ -16,7 +16,7 @@ from starlette.middleware.cors import CORSMiddleware
 from starlette.middleware.gzip import GZipMiddleware
 
 import rnsca
-from rnsca.backends.registry import available_backends, get_backend
+from rnsca.backends.registry import available_backends, configure_opencl, get_backend
 from service.config import Settings
 from service.convert import warm_up_svg
 from service.errors import install_handlers
@@ -49,6 +49,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     """
     settings = settings or Settings()
     configure_logging(settings.log_level)
+    configure_opencl(settings.opencl_device, settings.opencl_precision)
     runner = ClipRunner(settings.clip_threads, settings.request_time_limit)
     runner.prepare(settings.threading_layer)
     metrics = Metrics()

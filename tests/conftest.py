@@ -13,13 +13,25 @@ from Numba's cache), which would blow any per-example deadline.
 """
 
 import os
+import sys
+from pathlib import Path
 
-import numpy as np
-import pytest
-from hypothesis import HealthCheck, settings
+# OpenCL drivers the install step registered beside PoCL (see the Makefile); the ICD
+# loader reads this once, before the first OpenCL call.
+_VENDORS = Path(sys.prefix) / "opencl-vendors"
+if _VENDORS.is_dir():
+    os.environ.setdefault("OCL_ICD_VENDORS", str(_VENDORS))
 
-from rnsca import Method, Mode
-from rnsca.backends.registry import available_backends
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+from hypothesis import HealthCheck, settings  # noqa: E402
+
+from rnsca import Backend, Method, Mode  # noqa: E402
+from rnsca.backends.registry import get_backend  # noqa: E402
+from rnsca.errors import BackendUnavailableError  # noqa: E402
+
+#: Whether a missing optional backend fails the run (CI) instead of skipping its tests.
+IN_CI = os.environ.get("CI", "").lower() == "true"
 
 _COMMON = dict(deadline=None, print_blob=True,
                suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
@@ -41,10 +53,31 @@ def rng() -> np.random.Generator:
 
 # Session scope: Hypothesis refuses function-scoped fixtures in @given tests (they would
 # not be reset between examples); these are plain values, so nothing needs resetting.
-@pytest.fixture(scope="session", params=available_backends(), ids=lambda b: b.value)
+def require_backend(kind: Backend) -> Backend:
+    """Return `kind` if it can run here; else skip with the reason (in CI: fail)."""
+    try:
+        get_backend(kind)
+    except BackendUnavailableError as exc:
+        if IN_CI:
+            pytest.fail(f"backend {kind.value!r} is missing in CI: {exc}")
+        pytest.skip(f"backend {kind.value!r} is not available here: {exc}")
+    return kind
+
+
+_BACKEND_PARAMS = [pytest.param(kind, marks=pytest.mark.opencl) if kind is Backend.OPENCL
+                   else kind for kind in Backend]
+
+
+@pytest.fixture(scope="session", params=_BACKEND_PARAMS, ids=lambda b: b.value)
 def backend(request):
-    """Each backend that can run here (a missing one fails its tests, never skips)."""
-    return request.param
+    """Each backend; OpenCL (marker ``opencl``) skips where it is missing, fails in CI."""
+    return require_backend(request.param)
+
+
+@pytest.fixture(scope="session")
+def opencl():
+    """The OpenCL backend (default device), skipped where missing, a failure in CI."""
+    return get_backend(require_backend(Backend.OPENCL))
 
 
 @pytest.fixture(scope="session", params=list(Method), ids=lambda m: m.value)

@@ -59,38 +59,20 @@ class NumbaBackend:
                               np.empty(n_blocks, dtype=np.int64), np.zeros_like(counters))
         return pieces, source, t, ClipStats.from_counters(counters, n, m)
 
-    def clip_lines(self, xy, z, part_offsets, part_window, windows, options: SegmentOptions,
-                   drop_edge_runs: bool):
-        """Return ``(xy, z, chain_offsets, chains_per_part, counters)``.
+    def clip_lines(self, xy, z, part_offsets, geometry_parts, geometry_window, windows,
+                   options: SegmentOptions, drop_edge_runs: bool):
+        """Return ``(xy, z, chain_offsets, geometry_chains, counters, bad_part)``.
 
-        See `ClipBackend.clip_lines`; count, prefix sum, write.
+        Geometry g owns parts ``geometry_parts[g]..geometry_parts[g+1]-1`` and is clipped
+        against ``windows[geometry_window[g]]`` (`geometry_window` empty: row 0 for
+        all). `bad_part` is -1, or the first part with a non-finite coordinate (nothing
+        is clipped then). Count, prefix sum and write run in one kernel call
+        (`polylines.clip_lines`).
         """
-        n_parts = part_offsets.shape[0] - 1
-        has_z = z.shape[0] > 0
-        block = _block_size(n_parts)
-        n_blocks = max(1, -(-n_parts // block))
-        counters = np.zeros((n_blocks, C.WIDTH), dtype=np.int64)
-        n_vertices = np.empty(n_parts, dtype=np.int64)
-        n_chains = np.empty(n_parts, dtype=np.int64)
-        args = (xy, z, has_z, part_offsets, part_window, windows, _METHOD_ID[options.method],
-                options.n, options.max_depth, options.tolerance, options.auto_piece,
-                options.mode is Mode.EXACT, drop_edge_runs, block)
-        segments = np.maximum(np.diff(part_offsets), 1) - 1
-        chunk_start = _exclusive_sum(-(-segments // PL.RUN_LEAF_SEGMENTS))
-        boxes = np.empty((int(chunk_start[-1]), 4))
-        nothing_i = np.empty(0, dtype=np.int64)
-        PL.clip_line_blocks(*args, False, chunk_start, boxes, nothing_i, nothing_i,
-                            np.empty((0, 2)), np.empty(0), nothing_i, n_vertices, n_chains,
-                            counters)
-        vertex_start = _exclusive_sum(n_vertices)
-        chain_start = _exclusive_sum(n_chains)
-        out_xy = np.empty((int(vertex_start[-1]), 2))
-        out_z = np.empty(int(vertex_start[-1]) if has_z else 0)
-        chain_offsets = np.empty(int(chain_start[-1]) + 1, dtype=np.int64)
-        chain_offsets[-1] = out_xy.shape[0]
-        PL.clip_line_blocks(*args, True, chunk_start, boxes, vertex_start, chain_start, out_xy,
-                            out_z, chain_offsets, n_vertices, n_chains, counters)
-        return out_xy, out_z, chain_offsets, n_chains, counters
+        return PL.clip_lines(xy, z, part_offsets, geometry_parts, geometry_window, windows,
+                             _METHOD_ID[options.method], options.n, options.max_depth,
+                             options.tolerance, options.auto_piece, options.mode is Mode.EXACT,
+                             drop_edge_runs)
 
     def clip_polygons(self, xy, z, ring_offsets, polygon_offsets, polygon_window, windows,
                       options: SegmentOptions):
@@ -113,9 +95,12 @@ class NumbaBackend:
                 _METHOD_ID[options.method], options.n, options.max_depth, options.tolerance,
                 options.auto_piece, True, block)
         nothing_i = np.empty(0, dtype=np.int64)
+        # Runs and segments are clipped here, not decided elsewhere: no decision tables.
+        undecided = (False, nothing_i, np.empty(0, dtype=np.uint8), nothing_i,
+                     np.empty(0, dtype=np.bool_), np.empty((0, 6)))
         PG.clip_polygon_blocks(*args, False, polygon_class, scratch_v, scratch_c, nothing_i,
                                nothing_i, nothing_i, np.empty((0, 2)), np.empty(0), nothing_i,
-                               nothing_i, n_vertices, n_rings, n_polys, counters)
+                               nothing_i, n_vertices, n_rings, n_polys, counters, *undecided)
         vertex_start = _exclusive_sum(n_vertices)
         ring_start = _exclusive_sum(n_rings)
         poly_start = _exclusive_sum(n_polys)
@@ -126,7 +111,7 @@ class NumbaBackend:
         out_poly_rings = np.empty(int(poly_start[-1]), dtype=np.int64)
         PG.clip_polygon_blocks(*args, True, polygon_class, scratch_v, scratch_c, vertex_start,
                                ring_start, poly_start, out_xy, out_z, out_rings, out_poly_rings,
-                               n_vertices, n_rings, n_polys, counters)
+                               n_vertices, n_rings, n_polys, counters, *undecided)
         return out_xy, out_z, out_rings, out_poly_rings, n_polys, counters
 
     def warm_up(self) -> None:
@@ -144,7 +129,8 @@ class NumbaBackend:
         options = SegmentOptions.resolve(window)
         for z in (np.empty(0), np.zeros(5)):
             for drop in (False, True):
-                self.clip_lines(ring, z, offsets, index, windows, options, drop)
+                self.clip_lines(ring, z, offsets, np.array([0, 1], dtype=np.int64), index,
+                                windows, options, drop)
             self.clip_polygons(ring, z, offsets, np.array([0, 1], dtype=np.int64), index,
                                windows, options)
         _warm_up_curves()

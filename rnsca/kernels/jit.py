@@ -1,20 +1,26 @@
-"""The two jit presets every kernel uses.
+"""The jit presets every kernel uses.
 
 ``scalar`` is for small per-primitive functions that LLVM inlines into the drivers;
 ``parallel`` is for drivers that ``prange`` over blocks of primitives; ``borrowing`` is
-for helpers that take arrays from a driver and allocate none (see below). Both cache to
-disk (a second process loads instead of compiling), release the GIL (the service runs
-kernels from a thread pool), and use NumPy's error model so a division does not carry a
-Python-style zero check (every division in the kernels is guarded where it matters).
-Under ``NUMBA_DISABLE_JIT=1`` all become the plain Python function.
+for helpers that take arrays from a driver and allocate none, ``inlined`` for tiny ones
+that run per run or per segment (see below). All cache to disk (a second process loads
+instead of compiling), release the GIL (the service runs kernels from a thread pool),
+and use NumPy's error model so a division does not carry a Python-style zero check
+(every division in the kernels is guarded where it matters). Under
+``NUMBA_DISABLE_JIT=1`` all become the plain Python function.
 
 ``borrowing`` compiles without Numba's runtime (NRT), so the function borrows the arrays
 it is given instead of counting references to them. With NRT, a call that is not
 inlined increments and decrements the shared reference count of every array argument
 (an atomic operation on a cache line both threads write): in the Bézier clip, whose
 per-subpath helpers take about 15 arrays, that was half of the time and kept a second
-thread from helping (measured: 2.3 -> 0.86 ms on the glyph benchmark, 2 threads). Such a
-function cannot create or return arrays (Numba refuses to compile it if it tries).
+thread from helping (measured: 2.3 -> 0.86 ms on the glyph benchmark, 2 threads); in
+the line clip, whose per-run helpers take about ten, the same (the curve workload: 1.2
+-> 0.58 ms on one thread). Such a function cannot create or return arrays (Numba
+refuses to compile it if it tries), nor keep a view of an argument beyond the call.
+
+``inlined`` helpers are inlined by Numba into each caller before compiling; inside a
+``borrowing`` caller they count no references either.
 """
 
 import os
@@ -27,8 +33,9 @@ os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 
 import numba  # noqa: E402
 
-__all__ = ["scalar", "parallel", "borrowing"]
+__all__ = ["scalar", "parallel", "borrowing", "inlined"]
 
 scalar = numba.njit(cache=True, nogil=True, error_model="numpy")
 parallel = numba.njit(cache=True, nogil=True, parallel=True, error_model="numpy")
 borrowing = numba.njit(cache=True, nogil=True, error_model="numpy", _nrt=False)
+inlined = numba.njit(cache=True, nogil=True, error_model="numpy", inline="always")

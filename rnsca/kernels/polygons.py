@@ -28,6 +28,7 @@ from rnsca.kernels.jit import parallel, scalar
 from rnsca.kernels.outcode import line_coordinate
 from rnsca.kernels.polylines import (
     RUN_STACK_CAPACITY,
+    assemble_chains,
     bound_chains,
     clip_chains,
     run_box_codes,
@@ -35,9 +36,12 @@ from rnsca.kernels.polylines import (
 from rnsca.kernels.segments import STACK_CAPACITY
 
 __all__ = [
+    "AMBIGUOUS",
     "boundary_key",
+    "classify_polygons",
     "clip_polygon_blocks",
     "point_in_ring",
+    "polygon_class_of",
     "signed_area",
     "sutherland_hodgman",
 ]
@@ -532,7 +536,7 @@ def clip_polygon(xy, z, has_z, ring_offsets, r_begin, r_end, xmin, ymin, xmax, y
                  out_poly_rings, v, n_rings, n_polys, st, run_stack, stack_f, stack_i,
                  ch_xy, ch_z, ch_starts, lc, ev_key, ev_chain, order, ring_state, ring_rev,
                  ring_first, ring_last, tmp_xy, tmp_z, stk, rg_xy, rg_z, rg_start, rg_sign,
-                 rg_done, write):
+                 rg_done, write, decided, chunk_start, decision, piece_start, keep, pieces):
     """Clip the polygon of rings ``r_begin..r_end-1`` (shell first); write valid pieces.
 
     Output polygons are written from ``out_xy[v]``, their rings' starts from
@@ -543,12 +547,16 @@ def clip_polygon(xy, z, has_z, ring_offsets, r_begin, r_end, xmin, ymin, xmax, y
     whose entries and exits do not alternate along the boundary (the rings cross); the
     polygon is then clipped ring by ring (`sutherland_hodgman`), not repaired. `write`
     is False in the counting pass (the fallback then only counts; the rest writes to
-    the caller's scratch).
+    the caller's scratch). With `decided` the rings' runs were pruned and their segments
+    clipped elsewhere (the OpenCL backend): ring r's chains are assembled from
+    ``decision[chunk_start[r]:]``, ``piece_start``, ``keep`` and ``pieces``
+    (`polylines.assemble_chains`) instead of cut by `polylines.clip_chains`.
     """
     n_r = r_end - r_begin
     if n_r == 0:
         return v, n_rings, n_polys, True
-    no_boxes = np.empty((0, 4), dtype=np.float64)  # rings are short: boxes from vertices
+    no_codes = np.empty(0, dtype=np.uint8)  # rings are short: runs coded from vertices
+    no_plan = np.empty((0, 2), dtype=np.int64)  # and their chains written as decided
     v_ch = 0
     c_ch = 0
     n_lc = 0
@@ -563,10 +571,15 @@ def clip_polygon(xy, z, has_z, ring_offsets, r_begin, r_end, xmin, ymin, xmax, y
         area = signed_area(xy, first, last) if last > first else 0.0
         ring_rev[j] = (area < 0.0) if j == 0 else (area > 0.0)
         c0 = c_ch
-        v_ch, c_ch, at_first, at_last = clip_chains(
-            xy, z, has_z, True, first, last, xmin, ymin, xmax, ymax, method, n_fixed, max_depth,
-            tol, auto_piece, exact, True, True, ch_xy, ch_z, ch_starts, v_ch, c_ch, st, run_stack,
-            stack_f, stack_i, no_boxes, 0)
+        if decided:
+            v_ch, c_ch, at_first, at_last = assemble_chains(
+                xy, z, has_z, True, first, last, True, True, xmin, ymin, xmax, ymax, decision,
+                chunk_start[r], piece_start, keep, pieces, ch_xy, ch_z, ch_starts, v_ch, c_ch)
+        else:
+            v_ch, c_ch, at_first, at_last, _ = clip_chains(
+                xy, z, has_z, True, first, last, xmin, ymin, xmax, ymax, method, n_fixed,
+                max_depth, tol, auto_piece, exact, True, True, ch_xy, ch_z, ch_starts, v_ch,
+                c_ch, st, run_stack, stack_f, stack_i, no_codes, no_codes, 0, no_plan, 0)
         ch_starts[c_ch] = v_ch
         n_chains = c_ch - c0
         if last > first and area == 0.0:
@@ -837,6 +850,8 @@ def clip_polygon(xy, z, has_z, ring_offsets, r_begin, r_end, xmin, ymin, xmax, y
 
 
 _OUTSIDE, _INSIDE, _AMBIGUOUS = 0, 1, 2
+#: Class of a polygon whose rings must be cut (`polygon_class_of`).
+AMBIGUOUS = _AMBIGUOUS
 
 
 @scalar
@@ -849,12 +864,41 @@ def _output_bound(scratch_vertices, scratch_chains, n_r):
     return scratch_vertices + 7 * scratch_chains + n_r + 6
 
 
+@scalar
+def polygon_class_of(xy, ring_offsets, r_begin, r_end, xmin, ymin, xmax, ymax):
+    """Return what the shell's bounding box says of a polygon: outside, inside, ambiguous.
+
+    The run test of `clip_chains` on the whole shell: beyond an edge, nothing is left;
+    strictly inside the window, every ring stays as it is; otherwise it must be cut.
+    """
+    if r_end <= r_begin:
+        return _OUTSIDE
+    first = ring_offsets[r_begin]
+    last = ring_offsets[r_begin + 1] - 1
+    if last <= first:
+        return _OUTSIDE
+    lo, hi, strict = run_box_codes(xy, first, last, xmin, ymin, xmax, ymax)
+    return _OUTSIDE if lo & hi else (_INSIDE if strict else _AMBIGUOUS)
+
+
+@parallel
+def classify_polygons(xy, ring_offsets, polygon_offsets, polygon_window, windows,
+                      polygon_class):
+    """Store `polygon_class_of` of every polygon (as `clip_polygon_blocks` decides it)."""
+    for p in prange(polygon_offsets.shape[0] - 1):
+        w = polygon_window[p]
+        polygon_class[p] = polygon_class_of(xy, ring_offsets, polygon_offsets[p],
+                                            polygon_offsets[p + 1], windows[w, 0],
+                                            windows[w, 1], windows[w, 2], windows[w, 3])
+
+
 @parallel
 def clip_polygon_blocks(xy, z, has_z, ring_offsets, polygon_offsets, polygon_window, windows,
                         method, n_fixed, max_depth, tol, auto_piece, exact, block_size, write,
                         polygon_class, scratch_vertices, scratch_chains, vertex_start,
                         ring_start, poly_start, out_xy, out_z, out_ring_starts, out_poly_rings,
-                        n_vertices, n_rings, n_polys, counters):
+                        n_vertices, n_rings, n_polys, counters, decided, chunk_start, decision,
+                        piece_start, keep, pieces):
     """Count (``write=False``) or write (``write=True``) every polygon of a ragged array.
 
     Polygon ``p`` has rings ``polygon_offsets[p]..polygon_offsets[p+1]-1`` (the shell
@@ -869,6 +913,8 @@ def clip_polygon_blocks(xy, z, has_z, ring_offsets, polygon_offsets, polygon_win
     ``poly_start[p]`` (exclusive sums of the counts), cutting the ambiguous ones again.
     Ambiguous polygons are few where it matters, so cutting them twice costs less than
     over-allocating every output and compacting it. Stats are counted in the write pass.
+    With `decided`, the runs of the ambiguous polygons' rings were pruned and their
+    segments clipped elsewhere (see `clip_polygon`; those counters are the caller's).
     """
     n_polygons = polygon_offsets.shape[0] - 1
     n_blocks = counters.shape[0]
@@ -888,13 +934,8 @@ def clip_polygon_blocks(xy, z, has_z, ring_offsets, polygon_offsets, polygon_win
             n_r = r_end - r_begin
             if not write:
                 w = polygon_window[p]
-                cls = _OUTSIDE
-                first = ring_offsets[r_begin] if n_r > 0 else 0
-                last = ring_offsets[r_begin + 1] - 1 if n_r > 0 else 0
-                if last > first:
-                    lo, hi, strict = run_box_codes(xy, first, last, windows[w, 0],
-                                                   windows[w, 1], windows[w, 2], windows[w, 3])
-                    cls = _OUTSIDE if lo & hi else (_INSIDE if strict else _AMBIGUOUS)
+                cls = polygon_class_of(xy, ring_offsets, r_begin, r_end, windows[w, 0],
+                                       windows[w, 1], windows[w, 2], windows[w, 3])
                 polygon_class[p] = cls
                 n_vertices[p] = 0
                 n_rings[p] = 0
@@ -1000,7 +1041,8 @@ def clip_polygon_blocks(xy, z, has_z, ring_offsets, polygon_offsets, polygon_win
                 exact, dst_xy, dst_z, dst_rings, dst_polys, v0, r0, q0, st, run_stack,
                 stack_f, stack_i, ch_xy, ch_z, ch_starts, lc, ev_key, ev_chain, order,
                 ring_state, ring_rev, ring_first, ring_last, tmp_xy, tmp_z, stk, rg_xy, rg_z,
-                rg_start, rg_sign, rg_done, write)
+                rg_start, rg_sign, rg_done, write, decided, chunk_start, decision, piece_start,
+                keep, pieces)
             if not ok:
                 st[C.INVALID_POLYGONS] += 1
             if not write:

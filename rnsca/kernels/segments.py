@@ -26,7 +26,7 @@ from rnsca.baselines.liang_barsky import (
 from rnsca.baselines.midpoint import midpoint_segment
 from rnsca.baselines.nicholl_lee_nicholl import nicholl_lee_nicholl_segment
 from rnsca.kernels import counters as C
-from rnsca.kernels.jit import parallel, scalar
+from rnsca.kernels.jit import borrowing, parallel, scalar
 from rnsca.kernels.outcode import (
     BOTTOM,
     LEFT,
@@ -84,7 +84,7 @@ def auto_n(piece_length, auto_piece):
     return N_MAX if k > N_MAX else int(math.ceil(k))
 
 
-@scalar
+@borrowing
 def _clip_leaf(x0, y0, x1, y1, ta, tb, xa, ya, xb, yb, flags, xmin, ymin, xmax, ymax, st):
     """Clip the leaf [ta, tb] (ends (xa, ya), (xb, yb)); return (ok, u0, ax, ay, u1, bx, by)."""
     ok, u0, ax, ay, u1, bx, by, divisions = liang_barsky_leaf(
@@ -93,7 +93,7 @@ def _clip_leaf(x0, y0, x1, y1, ta, tb, xa, ya, xb, yb, flags, xmin, ymin, xmax, 
     return ok and is_piece(False, u0, u1, ax, ay, bx, by), u0, ax, ay, u1, bx, by
 
 
-@scalar
+@borrowing
 def rnsca_segment(x0, y0, x1, y1, xmin, ymin, xmax, ymax, n_fixed, max_depth, tol, auto_piece,
                   exact, st, stack_f, stack_i):
     """Clip one segment with RNSCA; return (keep, t0, t1, ax, ay, bx, by).

@@ -1,8 +1,8 @@
-"""The routers: ``/v1`` (clipping, capabilities) and the operational endpoints."""
+"""The routers: ``/v1`` (clipping, capabilities), the operational endpoints, the playground."""
 
 from fastapi import APIRouter
 
-from service.routes import clip, health, meta
+from service.routes import clip, health, meta, playground
 
 __all__ = ["api_router"]
 
@@ -13,3 +13,4 @@ api_router.include_router(clip.router)
 api_router.include_router(meta.v1_router)
 api_router.include_router(health.router)
 api_router.include_router(meta.router)
+api_router.include_router(playground.router)

@@ -11,6 +11,9 @@ from pathlib import Path
 
 import pytest
 
+from rnsca import Backend
+from rnsca.backends.registry import available_backends
+
 ROOT = Path(__file__).resolve().parents[2]
 LABELS = {
     "numba:rnsca:exact", "numba:rnsca:approx", "numba:cohen_sutherland", "numba:liang_barsky",
@@ -32,6 +35,9 @@ GEOMETRY_LABELS = {
     "objects:rnsca:clip",
 }
 SEGMENT_LABELS = {"segments:cohen_sutherland", "segments:rnsca"}
+# OpenCL contenders run where OpenCL does (the benchmarks record the reason otherwise).
+OPENCL_LABELS = ({"opencl:clip_ragged", "opencl:segments:rnsca"}
+                 if Backend.OPENCL in available_backends() else set())
 GEOMETRY_RUN_KEYS = {"label", "kind", "seconds", "seconds_median", "repeats", "number",
                      "coords_per_s", "stats", "time_ratio", "output"}
 OUTPUT_KEYS = {"geometries", "coords", "invalid", "reference", "measure", "reference_measure",
@@ -140,8 +146,11 @@ def test_curves_run_at_three_centred_windows_with_every_contender(geometry):
         assert 2000 <= info["vertices_per_line"][0] <= info["vertices_per_line"][1] <= 5000
         assert info["segments"] == info["coords"] - info["geometries"]
         runs = {r["label"]: r for r in w["runs"]}
-        assert runs.keys() == GEOMETRY_LABELS | SEGMENT_LABELS
+        assert runs.keys() == GEOMETRY_LABELS | SEGMENT_LABELS | OPENCL_LABELS
         assert runs["segments:cohen_sutherland"]["time_ratio"]["segments_cohen_sutherland"] == 1
+        for label in OPENCL_LABELS:
+            assert {"call_seconds", "kernel_seconds", "transfer_seconds",
+                    "host_seconds"} <= runs[label]["device"].keys()
 
 
 def test_polygon_run_checks_validity_of_every_output(geometry):
@@ -149,7 +158,7 @@ def test_polygon_run_checks_validity_of_every_output(geometry):
     assert (info["geometries"], info["rings"], info["coords"]) == (2000, 4000, 2000 * 52)
     assert info["input_invalid"] == 0
     runs = {r["label"]: r for r in geometry["polygons"]["runs"]}
-    assert runs.keys() == GEOMETRY_LABELS
+    assert runs.keys() == GEOMETRY_LABELS | (OPENCL_LABELS & {"opencl:clip_ragged"})
     for r in runs.values():
         assert isinstance(r["output"]["invalid"], int)
 

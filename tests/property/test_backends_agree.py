@@ -1,6 +1,7 @@
-"""The NumPy reference and the Numba backend give the same pieces and the same stats.
+"""The NumPy reference, the Numba and the OpenCL backend give the same pieces and stats.
 
-Every method and mode runs on both backends with the same options: the sources must be
+Every method and mode runs on the reference and on each candidate backend (Numba,
+OpenCL on the default device in float64) with the same options: the sources must be
 identical, the parameter intervals and coordinates equal up to rounding (the reference
 evaluates the same formulas in the same order, so in practice they are bit-identical),
 and every counter of `ClipStats` equal.
@@ -11,13 +12,16 @@ segments, lattice points where subdivision points fall exactly on an edge, and
 coordinates from 1e-300 to 1e300.
 """
 
+import dataclasses
 import math
 
 import numpy as np
+import pytest
 from hypothesis import HealthCheck, assume, example, given, settings
 from hypothesis import strategies as st
 
-from rnsca import Method, Mode, Window, clip_segments
+from rnsca import Backend, Method, Mode, Window, clip_segments
+from tests.conftest import require_backend
 
 SETTINGS = settings(max_examples=60, deadline=None,
                     suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
@@ -133,23 +137,34 @@ def options(draw, w: Window):
 
 # --- the comparison --------------------------------------------------------------------
 
-def assert_backends_agree(segments, window: Window, opts: dict) -> None:
+@pytest.fixture(scope="module", params=[Backend.NUMBA,
+                                        pytest.param(Backend.OPENCL, marks=pytest.mark.opencl)],
+                ids=lambda b: b.value)
+def candidate(request):
+    """Each backend checked against the NumPy reference."""
+    return require_backend(request.param)
+
+
+def assert_backends_agree(segments, window: Window, opts: dict, candidate=Backend.NUMBA) -> None:
     """The method and mode in `opts` give the same pieces and stats on both backends."""
     ref = clip_segments(segments, window, backend="numpy", **opts)
-    got = clip_segments(segments, window, backend="numba", **opts)
-    where = f"{opts} window={window.bounds}"
+    got = clip_segments(segments, window, backend=candidate, **opts)
+    where = f"{candidate.value}: {opts} window={window.bounds}"
     np.testing.assert_array_equal(ref.source, got.source, err_msg=where)
     np.testing.assert_allclose(ref.t, got.t, rtol=1e-12, atol=1e-300, err_msg=where)
     np.testing.assert_allclose(ref.segments, got.segments, rtol=1e-12,
                                atol=1e-12 * window.size, err_msg=where)
-    assert ref.stats == got.stats, where
+    # Only OpenCL reports a device; every counter of the work itself must agree.
+    assert ref.stats == dataclasses.replace(got.stats, device=None), where
 
 
-def assert_all_methods_agree(segments, window: Window, opts: dict) -> None:
+def assert_all_methods_agree(segments, window: Window, opts: dict,
+                             candidate=Backend.NUMBA) -> None:
     """Every method x mode gives the same pieces and stats on both backends."""
     for method in Method:
         for mode in Mode:
-            assert_backends_agree(segments, window, {**opts, "method": method, "mode": mode})
+            assert_backends_agree(segments, window, {**opts, "method": method, "mode": mode},
+                                  candidate)
 
 
 def _draw_case(data, segment_strategy, **window_kwargs):
@@ -173,26 +188,27 @@ UNIT = Window(0.0, 0.0, 1.0, 1.0)
 
 @SETTINGS
 @given(st.data())
-def test_random_segments_agree(data):
-    assert_backends_agree(*_draw_case(data, random_segments))
+def test_random_segments_agree(candidate, data):
+    assert_backends_agree(*_draw_case(data, random_segments), candidate)
 
 
 @SETTINGS
 @given(st.data())
-def test_segments_on_edges_and_corners_agree(data):
-    assert_backends_agree(*_draw_case(data, boundary_segments))
+def test_segments_on_edges_and_corners_agree(candidate, data):
+    assert_backends_agree(*_draw_case(data, boundary_segments), candidate)
 
 
 @SETTINGS
 @given(st.data())
-def test_lattice_segments_agree(data):
-    assert_backends_agree(*_draw_case(data, lattice_segments, min_exponent=-3, max_exponent=3))
+def test_lattice_segments_agree(candidate, data):
+    assert_backends_agree(*_draw_case(data, lattice_segments, min_exponent=-3, max_exponent=3),
+                          candidate)
 
 
 @SETTINGS
 @given(st.data())
-def test_segments_from_1e_minus_300_to_1e300_agree(data):
-    assert_backends_agree(*_draw_case(data, wide_segments))
+def test_segments_from_1e_minus_300_to_1e300_agree(candidate, data):
+    assert_backends_agree(*_draw_case(data, wide_segments), candidate)
 
 
 @settings(max_examples=8, deadline=None)
@@ -200,7 +216,7 @@ def test_segments_from_1e_minus_300_to_1e300_agree(data):
        st.sampled_from(TOLERANCE_CHOICES))
 @example("auto", 32, 1e-12)
 @example(64, 32, 1e-12)
-def test_a_mixed_batch_agrees_for_every_option(n, max_depth, tolerance):
+def test_a_mixed_batch_agrees_for_every_option(candidate, n, max_depth, tolerance):
     # One batch with every kind of segment, so each option setting meets all of them.
     rng = np.random.default_rng(7)
     batch = np.concatenate([
@@ -212,35 +228,37 @@ def test_a_mixed_batch_agrees_for_every_option(n, max_depth, tolerance):
     ])
     opts = {"n": n, "max_depth": max_depth,
             "tolerance": None if tolerance is None else tolerance * UNIT.size}
-    assert_all_methods_agree(batch, UNIT, opts)
+    assert_all_methods_agree(batch, UNIT, opts, candidate)
 
 
-def test_auto_split_count_of_a_segment_2e63_windows_long_is_capped():
+def test_auto_split_count_of_a_segment_2e63_windows_long_is_capped(candidate):
     # n="auto" splits a piece into ceil(length / window size) pieces, at most 64. The
     # kernel's `auto_n` converts that ceiling to int64 before capping it, which overflows
     # past 2**63 (to a negative N: no children), so the segment vanishes from the output.
     segs = np.array([[-1e19, 0.5, 1e19, 0.5], [1.0, 0.0, 0.0, 0.0]])
-    assert_all_methods_agree(segs[:1], UNIT, {"n": "auto"})
-    assert_all_methods_agree(segs[1:], Window(0.0, 0.0, 1e-19, 1e-19), {"n": "auto"})
+    assert_all_methods_agree(segs[:1], UNIT, {"n": "auto"}, candidate)
+    assert_all_methods_agree(segs[1:], Window(0.0, 0.0, 1e-19, 1e-19), {"n": "auto"},
+                             candidate)
 
 
-def test_ties_between_equal_parameters_agree():
+def test_ties_between_equal_parameters_agree(candidate):
     # Candidate ends of equal t from different subtrees (see the unit test of the same
     # segment): only the kernel's depth-first order picks between them.
     segs = np.array([[0.5, -0.875, 2.25, 2.25]])
     for n in (2, 3, 5, 7):
         for max_depth in (3, 8, 32):
             assert_backends_agree(segs, UNIT, {"method": "rnsca", "mode": "exact", "n": n,
-                                               "max_depth": max_depth, "tolerance": 1e-9})
+                                               "max_depth": max_depth, "tolerance": 1e-9},
+                                  candidate)
 
 
-def test_empty_input_agrees():
-    assert_all_methods_agree(np.empty((0, 4)), UNIT, {})
+def test_empty_input_agrees(candidate):
+    assert_all_methods_agree(np.empty((0, 4)), UNIT, {}, candidate)
 
 
-def test_long_segments_split_in_many_pieces_agree():
+def test_long_segments_split_in_many_pieces_agree(candidate):
     # A segment far longer than the window: n="auto" cuts it into up to 64 pieces at once.
     segs = np.array([[-1e6, 0.3, 1e6, 0.7], [-1e6, -1e6, 1e6, 1e6], [0.5, -1e12, 0.5, 1e12],
                      [-math.pi * 1e5, 0.0, math.e * 1e5, 1.0]])
     for tolerance in (None, 1e-12, 1e-6):
-        assert_all_methods_agree(segs, UNIT, {"tolerance": tolerance})
+        assert_all_methods_agree(segs, UNIT, {"tolerance": tolerance}, candidate)

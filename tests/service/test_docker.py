@@ -103,3 +103,7 @@ def test_image_install_and_start_steps_in_a_fresh_environment(tmp_path):
         r = httpx.post(live.url + "/v1/clip/segments", timeout=30,
                        json={"window": [0, 0, 10, 10], "segments": [[-5, 5, 15, 5]]})
         assert r.status_code == 200 and r.json()["segments"] == [[0.0, 5.0, 10.0, 5.0]]
+        # The playground's files are package data of the installed (not editable) service.
+        assert "playground.js" in httpx.get(live.url + "/", timeout=5).text
+        example = httpx.get(live.url + "/playground/examples/index.json", timeout=5)
+        assert example.status_code == 200 and example.json()

@@ -136,7 +136,37 @@ def test_segments_clips_an_empty_file_to_an_empty_result(runner, tmp_path):
 def test_backends_lists_each_available_backend(runner):
     result = runner.invoke(app, ["backends"])
     assert result.exit_code == 0
-    assert result.stdout.split() == [b.value for b in available_backends()]
+    names = [line for line in result.stdout.splitlines() if not line.startswith(" ")]
+    assert names == [b.value for b in available_backends()]
+
+
+@pytest.mark.opencl
+def test_backends_lists_the_opencl_devices_and_marks_the_selected_one(runner, opencl):
+    result = runner.invoke(app, ["backends"])
+    assert result.exit_code == 0, result.output
+    devices = [line for line in result.stdout.splitlines() if line.startswith(" ")]
+    selected = [line for line in devices if line.startswith(" *")]
+    assert len(selected) == 1
+    assert selected[0].startswith(f" *{opencl.device['id']} {opencl.name} (")
+    assert selected[0].endswith(f", {opencl.precision.value})")
+
+
+@pytest.mark.opencl
+def test_an_opencl_device_matching_nothing_is_explained(runner, opencl):
+    try:
+        result = runner.invoke(app, ["--opencl-device", "no such device", "backends"])
+        assert result.exit_code == 0
+        assert "opencl" not in result.stdout.split()
+        assert "opencl is not available: no OpenCL device matches 'no such device'" in \
+            result.stderr
+    finally:
+        runner.invoke(app, ["backends"])  # back to the default device
+
+
+def test_an_unknown_opencl_precision_is_a_usage_error(runner):
+    result = runner.invoke(app, ["--opencl-precision", "float16", "backends"])
+    assert result.exit_code == 2
+    assert "precision must be one of 'auto', 'float64', 'float32'" in result.stderr
 
 
 def test_warm_up_compiles_the_kernels(runner):

@@ -11,7 +11,7 @@ import json
 import numpy as np
 import pytest
 
-from rnsca import ClipStats, Method, Mode, clip_segments
+from rnsca import Backend, ClipStats, Method, Mode, clip_segments
 from rnsca.kernels import counters as C
 from rnsca.options import MAX_DEPTH_LIMIT
 
@@ -218,6 +218,13 @@ def test_to_dict_is_json_ready_and_complete(backend):
                       "geometries_in", "geometries_out", "vertices_in", "vertices_out",
                       "runs_evaluated", "runs_accepted", "runs_rejected", "runs_subdivided",
                       "runs_segmented", "runs_deepest_level", "runs_decided_per_level",
-                      "segments_decided_per_level", "invalid_polygons"}
+                      "segments_decided_per_level", "invalid_polygons", "device"}
     # Segment clips leave the geometry counters at zero.
     assert d["runs_evaluated"] == 0 and d["runs_decided_per_level"] == [0] * 33
+    # Only OpenCL says where it ran and what it moved.
+    if backend is Backend.OPENCL:
+        assert set(d["device"]) == {"device", "precision", "transfers", "bytes_to_device",
+                                    "bytes_from_device", "transfer_seconds", "kernel_seconds"}
+        assert d["device"]["precision"] in ("float64", "float32")
+    else:
+        assert d["device"] is None

@@ -1,0 +1,55 @@
+"""Python client of the rnsca HTTP API: clip GeoJSON, SVG paths and segments remotely.
+
+Examples
+--------
+>>> import rnsca_client
+>>> rnsca_client.Retry.of(2).attempts
+3
+"""
+
+from rnsca_client.client import DEFAULT_RETRY, DEFAULT_TIMEOUT, DEFAULT_URL, AsyncClient, Client
+from rnsca_client.errors import (
+    ApiError,
+    BackendUnavailableError,
+    BadRequestError,
+    ConnectError,
+    InvalidInputError,
+    InvalidRequestError,
+    MethodNotAllowedError,
+    NotFoundError,
+    NotImplementedOnServerError,
+    PayloadTooLargeError,
+    RequestTimeoutError,
+    ResponseFormatError,
+    RnscaClientError,
+    ServerError,
+    ServiceUnavailableError,
+    TransportError,
+    UnsupportedMediaTypeError,
+    WorkOverBudgetError,
+)
+from rnsca_client.results import (
+    Backend,
+    Capabilities,
+    ClipStats,
+    GeoJSONResult,
+    Health,
+    Limits,
+    SegmentsResult,
+    SVGResult,
+    Verification,
+)
+from rnsca_client.retry import Retry
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "Client", "AsyncClient", "Retry", "DEFAULT_URL", "DEFAULT_TIMEOUT", "DEFAULT_RETRY",
+    "GeoJSONResult", "SVGResult", "SegmentsResult", "ClipStats", "Verification",
+    "Capabilities", "Backend", "Limits", "Health",
+    "RnscaClientError", "InvalidInputError", "ResponseFormatError", "TransportError",
+    "ConnectError", "RequestTimeoutError", "ApiError", "BadRequestError", "NotFoundError",
+    "MethodNotAllowedError", "PayloadTooLargeError", "UnsupportedMediaTypeError",
+    "InvalidRequestError", "BackendUnavailableError", "WorkOverBudgetError", "ServerError",
+    "NotImplementedOnServerError", "ServiceUnavailableError",
+]

@@ -1,0 +1,195 @@
+"""The API's calls, free of I/O: each builds a request and knows how to read its answer.
+
+`Client` and `AsyncClient` only send a `Call` (with retries) and hand the response to
+`Call.finish`, so the two clients cannot drift apart.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from enum import Enum
+from typing import Any, Generic, TypeVar
+
+import httpx
+
+from rnsca_client.errors import InvalidInputError, ResponseFormatError, api_error
+from rnsca_client.inputs import (
+    encode_json,
+    geojson_document,
+    is_numpy_array,
+    segment_rows,
+    svg_paths,
+    window_bounds,
+)
+from rnsca_client.results import (
+    Capabilities,
+    ClipStats,
+    GeoJSONResult,
+    Health,
+    SegmentsResult,
+    SVGResult,
+    Verification,
+)
+
+__all__ = ["Call", "clip_geojson", "clip_svg", "clip_segments", "capabilities", "health",
+           "readiness", "BINARY_OPTIONS"]
+
+T = TypeVar("T")
+_JSON = {"Content-Type": "application/json", "Accept": "application/json"}
+#: Options the binary segments form takes as query parameters (the JSON form's options).
+BINARY_OPTIONS = ("method", "n", "max_depth", "tolerance", "mode", "backend")
+
+
+@dataclass(frozen=True)
+class Call(Generic[T]):
+    """One request to the API and the reader of its success answer.
+
+    `retry_unavailable` is False where a 503 is an answer rather than a failure
+    (``/readyz``).
+    """
+
+    method: str
+    path: str
+    read: Callable[[httpx.Response], T]
+    content: bytes | None = None
+    params: dict[str, str] | None = None
+    headers: Mapping[str, str] = field(default_factory=lambda: {"Accept": "application/json"})
+    retry_unavailable: bool = True
+    accept: tuple[int, ...] = ()
+
+    def finish(self, response: httpx.Response) -> T:
+        """Return the result read from `response`, or raise its `ApiError`."""
+        if response.status_code >= 400 and response.status_code not in self.accept:
+            raise api_error(response)
+        return self.read(response)
+
+
+def _json(response: httpx.Response) -> Any:
+    try:
+        return response.json()
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise ResponseFormatError(
+            f"{response.request.method} {response.request.url.path} answered "
+            f"{response.status_code} with a body that is not JSON: {exc}") from None
+
+
+def _reader(build: Callable[[dict], T]) -> Callable[[httpx.Response], T]:
+    def read(response: httpx.Response) -> T:
+        data = _json(response)
+        try:
+            return build(data)
+        except (KeyError, TypeError, AttributeError) as exc:
+            raise ResponseFormatError(
+                f"{response.request.url.path} answered JSON without the documented "
+                f"members ({type(exc).__name__}: {exc}); is this an rnsca server?") from None
+    return read
+
+
+def _plain(value: Any) -> Any:
+    """Return an option value as JSON sends it (enums by their value)."""
+    return value.value if isinstance(value, Enum) else value
+
+
+def _options(options: Mapping[str, Any]) -> dict[str, Any]:
+    """Return the options object: None means the server's default, so it is left out."""
+    return {name: _plain(value) for name, value in options.items() if value is not None}
+
+
+def _post_json(path: str, payload: dict[str, Any], build: Callable[[dict], T]) -> Call[T]:
+    return Call("POST", path, _reader(build), content=encode_json(payload), headers=_JSON)
+
+
+def clip_geojson(obj: Any, window: Any, *, verify: bool | None, approx_bound: float | None,
+                 options: Mapping[str, Any]) -> Call[GeoJSONResult]:
+    """Return the call ``POST /v1/clip/geojson``."""
+    payload = {"window": window_bounds(window), "geojson": geojson_document(obj),
+               "options": _options(options)}
+    if verify is not None:
+        payload["verify"] = verify
+    if approx_bound is not None:
+        payload["approx_bound"] = approx_bound
+    return _post_json("/v1/clip/geojson", payload, GeoJSONResult.from_dict)
+
+
+def clip_svg(paths: str | Sequence[str], window: Any, *, verify: bool | None,
+             options: Mapping[str, Any]) -> Call[SVGResult]:
+    """Return the call ``POST /v1/clip/svg``."""
+    payload = {"window": window_bounds(window), "paths": svg_paths(paths),
+               "options": _options(options)}
+    if verify is not None:
+        payload["verify"] = verify
+    return _post_json("/v1/clip/svg", payload, SVGResult.from_dict)
+
+
+def clip_segments(segments: Any, window: Any, *, binary: bool | None, verify: bool | None,
+                  options: Mapping[str, Any]) -> Call[SegmentsResult]:
+    """Return the call ``POST /v1/clip/segments``: binary for NumPy input, else JSON."""
+    if binary is None:
+        binary = is_numpy_array(segments)
+    if not binary:
+        rows = segments.tolist() if is_numpy_array(segments) else [list(s) for s in segments]
+        payload = {"window": window_bounds(window), "segments": rows,
+                   "options": _options(options)}
+        if verify is not None:
+            payload["verify"] = verify
+        return _post_json("/v1/clip/segments", payload, SegmentsResult.from_dict)
+    unknown = sorted(set(options) - set(BINARY_OPTIONS))
+    if unknown:
+        raise InvalidInputError(
+            f"unknown option(s) {', '.join(unknown)} for segments; accepted: "
+            f"{', '.join(BINARY_OPTIONS)}")
+    params = dict(zip(("xmin", "ymin", "xmax", "ymax"),
+                      (repr(b) for b in window_bounds(window)), strict=True))
+    for name, value in _options(options).items():
+        if not (name == "n" and value == "auto"):  # the binary form's default is auto
+            params[name] = str(value)
+    if verify is not None:
+        params["verify"] = "true" if verify else "false"
+    return Call("POST", "/v1/clip/segments", _read_binary_segments,
+                content=segment_rows(segments).tobytes(), params=params,
+                headers={"Content-Type": "application/octet-stream",
+                         "Accept": "application/octet-stream"})
+
+
+def _read_binary_segments(response: httpx.Response) -> SegmentsResult:
+    """Return the pieces of a binary answer: rows of 4 float64, int64 sources, t rows of 2."""
+    import numpy as np
+
+    headers = response.headers
+    try:
+        count = int(headers["x-rnsca-pieces"])
+        stats = ClipStats.from_dict(json.loads(headers["x-rnsca-stats"]))
+        verified = headers.get("x-rnsca-verification")
+        verification = None if verified is None else Verification.from_dict(
+            json.loads(verified))
+        method, mode, backend = (headers["x-rnsca-method"], headers["x-rnsca-mode"],
+                                 headers["x-rnsca-backend"])
+    except (KeyError, ValueError, TypeError) as exc:
+        raise ResponseFormatError(
+            f"the binary segments answer lacks a readable header ({exc})") from None
+    body = response.content
+    if len(body) != 56 * count:
+        raise ResponseFormatError(
+            f"the binary segments answer has {len(body)} bytes, not 56 x {count} pieces")
+    segments = np.frombuffer(body, "<f8", 4 * count, 0).reshape(count, 4)
+    source = np.frombuffer(body, "<i8", count, 32 * count)
+    t = np.frombuffer(body, "<f8", 2 * count, 40 * count).reshape(count, 2)
+    return SegmentsResult(segments, source, t, stats, verification, method, mode, backend)
+
+
+def capabilities() -> Call[Capabilities]:
+    """Return the call ``GET /v1/capabilities``."""
+    return Call("GET", "/v1/capabilities", _reader(Capabilities.from_dict))
+
+
+def health() -> Call[Health]:
+    """Return the call ``GET /healthz`` (liveness)."""
+    return Call("GET", "/healthz", _reader(lambda data: Health(data["status"])))
+
+
+def readiness() -> Call[bool]:
+    """Return the call ``GET /readyz``: True once ready, False while warming up (503)."""
+    return Call("GET", "/readyz", lambda response: response.status_code == 200,
+                retry_unavailable=False, accept=(503,))

@@ -1,0 +1,393 @@
+"""`Client` and `AsyncClient`: the API's calls over one pooled httpx connection each."""
+
+from __future__ import annotations
+
+import asyncio
+import time
+from collections.abc import Sequence
+from typing import Any, TypeVar
+
+import httpx
+
+from rnsca_client import calls
+from rnsca_client.errors import (
+    ApiError,
+    ConnectError,
+    RequestTimeoutError,
+    ServiceUnavailableError,
+    TransportError,
+    retry_after_seconds,
+)
+from rnsca_client.results import Capabilities, GeoJSONResult, Health, SegmentsResult, SVGResult
+from rnsca_client.retry import Retry
+
+__all__ = ["Client", "AsyncClient", "DEFAULT_TIMEOUT", "DEFAULT_URL", "DEFAULT_RETRY"]
+
+T = TypeVar("T")
+DEFAULT_URL = "http://127.0.0.1:8000"
+#: Reads wait longer than the server's default request time limit (30 s), so a busy
+#: server answers 503 (retried) before the client gives up on its own.
+DEFAULT_TIMEOUT = httpx.Timeout(60.0, connect=5.0)
+#: Up to 4 tries, waiting about 0.25, 0.5 and 1 s (or what ``Retry-After`` says).
+DEFAULT_RETRY = Retry()
+
+
+def _transport_error(exc: httpx.TransportError, attempts: int) -> TransportError:
+    """Return the SDK's exception for an httpx network failure."""
+    tries = f"{attempts} attempt{'s' if attempts > 1 else ''}"
+    message = f"{type(exc).__name__}: {exc or 'no detail'} (after {tries})"
+    if isinstance(exc, (httpx.ConnectError, httpx.ConnectTimeout)):
+        return ConnectError(f"could not connect to the rnsca server: {message}",
+                            attempts=attempts)
+    if isinstance(exc, httpx.TimeoutException):
+        return RequestTimeoutError(f"the rnsca server did not answer in time: {message}",
+                                   attempts=attempts)
+    return TransportError(f"the request to the rnsca server failed: {message}",
+                          attempts=attempts)
+
+
+def _wait_before_retry(retry: Retry, call: calls.Call, attempt: int, *,
+                       response: httpx.Response | None = None,
+                       failure: httpx.TransportError | None = None) -> float | None:
+    """Return the seconds to wait before trying `call` again, or None not to retry."""
+    if attempt >= retry.attempts:
+        return None
+    if failure is not None:
+        connect_failed = isinstance(failure, (httpx.ConnectError, httpx.ConnectTimeout))
+        return retry.delay(attempt) if connect_failed else None
+    if response is not None and response.status_code == 503 and call.retry_unavailable:
+        return retry.delay(attempt, retry_after_seconds(response))
+    return None
+
+
+def _finish(call: calls.Call[T], response: httpx.Response, attempts: int) -> T:
+    try:
+        return call.finish(response)
+    except ApiError as error:
+        error.attempts = attempts
+        raise
+
+
+class _Options:
+    """What both clients keep: the retry policy and how to make the httpx client."""
+
+    def __init__(self, base_url: str, timeout, retries, headers) -> None:
+        from rnsca_client import __version__
+
+        self.retry = Retry.of(retries)
+        self.http_options = dict(
+            base_url=base_url, timeout=timeout,
+            headers={"User-Agent": f"rnsca-client/{__version__}", **(headers or {})})
+
+
+class Client:
+    """A synchronous client of the rnsca HTTP API.
+
+    One pooled connection is reused across calls; use it as a context manager, or call
+    `close`, to release it.
+
+    Parameters
+    ----------
+    base_url : str
+        The service's root, e.g. ``http://127.0.0.1:8000``.
+    timeout : float or httpx.Timeout
+        Seconds to wait; default 5 s to connect and 60 s for the rest.
+    retries : Retry, int or None
+        A `Retry` policy, or the number of retries after the first try (None: none).
+        Failures to connect and 503 answers are retried with exponential backoff,
+        honouring ``Retry-After`` up to the policy's bound.
+    headers : dict, optional
+        Extra headers of every request (an API gateway's key, say).
+    http_client : httpx.Client, optional
+        Send through this client instead (e.g. a ``fastapi.testclient.TestClient``);
+        its own base URL, timeout and headers apply, and `close` leaves it open.
+    transport : httpx.BaseTransport, optional
+        The transport of the httpx client made here (e.g. ``httpx.MockTransport``).
+
+    Examples
+    --------
+    With a server on the default address (``make serve``)::
+
+        with Client("http://127.0.0.1:8000") as client:
+            result = client.clip_geojson(
+                {"type": "LineString", "coordinates": [[-5, 5], [15, 5]]}, (0, 0, 10, 10))
+        result.geojson   # {'type': 'LineString', 'coordinates': [[0.0, 5.0], [10.0, 5.0]]}
+    """
+
+    def __init__(self, base_url: str = DEFAULT_URL, *, timeout: float | httpx.Timeout =
+                 DEFAULT_TIMEOUT, retries: Retry | int | None = DEFAULT_RETRY,
+                 headers: dict[str, str] | None = None,
+                 http_client: httpx.Client | None = None,
+                 transport: httpx.BaseTransport | None = None) -> None:
+        options = _Options(base_url, timeout, retries, headers)
+        self.retry = options.retry
+        self._owned = http_client is None
+        self._http = http_client or httpx.Client(transport=transport, **options.http_options)
+
+    @property
+    def base_url(self) -> httpx.URL:
+        """The service's root URL."""
+        return self._http.base_url
+
+    def close(self) -> None:
+        """Close the connection pool (not an `http_client` passed in)."""
+        if self._owned:
+            self._http.close()
+
+    def __enter__(self) -> Client:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def send(self, call: calls.Call[T]) -> T:
+        """Return the result of `call`, retrying as the policy says."""
+        attempt = 0
+        while True:
+            attempt += 1
+            try:
+                response = self._http.request(call.method, call.path, content=call.content,
+                                              params=call.params, headers=call.headers)
+            except httpx.TransportError as failure:
+                wait = _wait_before_retry(self.retry, call, attempt, failure=failure)
+                if wait is None:
+                    raise _transport_error(failure, attempt) from failure
+            else:
+                wait = _wait_before_retry(self.retry, call, attempt, response=response)
+                if wait is None:
+                    return _finish(call, response, attempt)
+            time.sleep(wait)
+
+    def clip_geojson(self, obj: Any, window: Any, *, verify: bool | None = None,
+                     approx_bound: float | None = None, **options: Any) -> GeoJSONResult:
+        """Return a GeoJSON Geometry, Feature or FeatureCollection clipped to `window`.
+
+        Parameters
+        ----------
+        obj : dict, str or geometry
+            GeoJSON (a dict or its text), or an object with ``__geo_interface__`` such
+            as a Shapely geometry.
+        window : sequence of 4 float, or an object with ``bounds``
+            ``[xmin, ymin, xmax, ymax]``.
+        verify : bool, optional
+            Compare with Shapely on the server (default: the server decides by size).
+        approx_bound : float, optional
+            In approx mode, the largest deviation that passes verification.
+        **options
+            ``method``, ``n``, ``max_depth``, ``tolerance``, ``mode``, ``backend``,
+            ``boundary``, ``keep_empty``, ``check_validity`` (None: server default).
+
+        Returns
+        -------
+        GeoJSONResult
+            ``geojson`` (dict; ``to_shapely()`` for Shapely), ``stats``, ``verification``.
+
+        Raises
+        ------
+        InvalidRequestError
+            422 with `path` naming the offending value; see `ApiError` for the rest.
+        """
+        return self.send(calls.clip_geojson(obj, window, verify=verify,
+                                            approx_bound=approx_bound, options=options))
+
+    def clip_svg(self, paths: str | Sequence[str], window: Any, *, curves: str | None = None,
+                 fill: str | None = None, verify: bool | None = None,
+                 **options: Any) -> SVGResult:
+        """Return SVG path data clipped to `window`, one string per path.
+
+        Parameters
+        ----------
+        paths : str or sequence of str
+            Path data (the ``d`` attribute), e.g. ``"M 0 0 C 5 10 10 -5 15 5"``.
+        window : sequence of 4 float
+            ``[xmin, ymin, xmax, ymax]`` in the paths' coordinates.
+        curves : {"preserve", "flatten"}, optional
+            Keep Bézier segments as curves (default) or flatten them to lines.
+        fill : {"nonzero", "evenodd"}, optional
+            Clip as filled areas with this rule; default: as strokes.
+        verify : bool, optional
+            Compare with Shapely on the server.
+        **options
+            ``method``, ``n``, ``max_depth``, ``tolerance``, ``mode``, ``backend``.
+
+        Returns
+        -------
+        SVGResult
+            ``paths``, ``stats``, ``verification``.
+        """
+        return self.send(calls.clip_svg(paths, window, verify=verify,
+                                        options={**options, "curves": curves, "fill": fill}))
+
+    def clip_segments(self, segments: Any, window: Any, *, binary: bool | None = None,
+                      verify: bool | None = None, **options: Any) -> SegmentsResult:
+        """Return the visible piece of each line segment ``[x0, y0, x1, y1]``.
+
+        Parameters
+        ----------
+        segments : array_like, shape (n, 4)
+            A NumPy array goes through the binary endpoint (float64 rows, no JSON) and
+            gives NumPy arrays back; a list of rows goes as JSON and gives lists.
+        window : sequence of 4 float
+            ``[xmin, ymin, xmax, ymax]``.
+        binary : bool, optional
+            Force the binary (True, needs NumPy) or the JSON (False) form.
+        verify : bool, optional
+            Compare with Shapely on the server.
+        **options
+            ``method``, ``n``, ``max_depth``, ``tolerance``, ``mode``, ``backend``.
+
+        Returns
+        -------
+        SegmentsResult
+            ``segments`` (m, 4), ``source`` (m,), ``t`` (m, 2), ``stats``,
+            ``verification``, and the ``method``, ``mode`` and ``backend`` that ran.
+        """
+        return self.send(calls.clip_segments(segments, window, binary=binary, verify=verify,
+                                             options=options))
+
+    def capabilities(self) -> Capabilities:
+        """Return the server's methods, modes, backends (and why one is missing), limits."""
+        return self.send(calls.capabilities())
+
+    def health(self) -> Health:
+        """Return the liveness answer (``status == "ok"``) of ``/healthz``."""
+        return self.send(calls.health())
+
+    def ready(self) -> bool:
+        """Return whether ``/readyz`` says the kernels are ready (no retry on 503)."""
+        return self.send(calls.readiness())
+
+    def wait_until_ready(self, timeout: float = 300.0, interval: float = 0.5) -> None:
+        """Return once the server is ready; raise if it is not within `timeout` seconds.
+
+        Raises
+        ------
+        ServiceUnavailableError
+            The server answered but stayed not ready.
+        ConnectError
+            The server could not be reached at all.
+        """
+        deadline = time.monotonic() + timeout
+        while True:
+            try:
+                if self.ready():
+                    return
+                failure: Exception = ServiceUnavailableError(
+                    {"status": 503, "title": "Not ready",
+                     "detail": f"not ready within {timeout} s"})
+            except ConnectError as exc:
+                failure = exc
+            if time.monotonic() + interval > deadline:
+                raise failure
+            time.sleep(interval)
+
+
+class AsyncClient:
+    """An asyncio client of the rnsca HTTP API: `Client`'s methods, to be awaited.
+
+    Parameters are those of `Client` (`http_client` is an ``httpx.AsyncClient``,
+    `transport` an ``httpx.AsyncBaseTransport``). Use ``async with``, or ``await
+    aclose()``.
+
+    Examples
+    --------
+    ::
+
+        async def main():
+            async with AsyncClient("http://127.0.0.1:8000") as client:
+                return await client.clip_svg("M -5 5 L 15 5", (0, 0, 10, 10))
+    """
+
+    def __init__(self, base_url: str = DEFAULT_URL, *, timeout: float | httpx.Timeout =
+                 DEFAULT_TIMEOUT, retries: Retry | int | None = DEFAULT_RETRY,
+                 headers: dict[str, str] | None = None,
+                 http_client: httpx.AsyncClient | None = None,
+                 transport: httpx.AsyncBaseTransport | None = None) -> None:
+        options = _Options(base_url, timeout, retries, headers)
+        self.retry = options.retry
+        self._owned = http_client is None
+        self._http = http_client or httpx.AsyncClient(transport=transport,
+                                                      **options.http_options)
+
+    @property
+    def base_url(self) -> httpx.URL:
+        """The service's root URL."""
+        return self._http.base_url
+
+    async def aclose(self) -> None:
+        """Close the connection pool (not an `http_client` passed in)."""
+        if self._owned:
+            await self._http.aclose()
+
+    async def __aenter__(self) -> AsyncClient:
+        return self
+
+    async def __aexit__(self, *exc) -> None:
+        await self.aclose()
+
+    async def send(self, call: calls.Call[T]) -> T:
+        """Return the result of `call`, retrying as the policy says."""
+        attempt = 0
+        while True:
+            attempt += 1
+            try:
+                response = await self._http.request(
+                    call.method, call.path, content=call.content, params=call.params,
+                    headers=call.headers)
+            except httpx.TransportError as failure:
+                wait = _wait_before_retry(self.retry, call, attempt, failure=failure)
+                if wait is None:
+                    raise _transport_error(failure, attempt) from failure
+            else:
+                wait = _wait_before_retry(self.retry, call, attempt, response=response)
+                if wait is None:
+                    return _finish(call, response, attempt)
+            await asyncio.sleep(wait)
+
+    async def clip_geojson(self, obj: Any, window: Any, *, verify: bool | None = None,
+                           approx_bound: float | None = None,
+                           **options: Any) -> GeoJSONResult:
+        """Return a GeoJSON document clipped to `window` (see `Client.clip_geojson`)."""
+        return await self.send(calls.clip_geojson(obj, window, verify=verify,
+                                                  approx_bound=approx_bound, options=options))
+
+    async def clip_svg(self, paths: str | Sequence[str], window: Any, *,
+                       curves: str | None = None, fill: str | None = None,
+                       verify: bool | None = None, **options: Any) -> SVGResult:
+        """Return SVG path data clipped to `window` (see `Client.clip_svg`)."""
+        return await self.send(calls.clip_svg(
+            paths, window, verify=verify, options={**options, "curves": curves, "fill": fill}))
+
+    async def clip_segments(self, segments: Any, window: Any, *, binary: bool | None = None,
+                            verify: bool | None = None, **options: Any) -> SegmentsResult:
+        """Return the visible piece of each segment (see `Client.clip_segments`)."""
+        return await self.send(calls.clip_segments(segments, window, binary=binary,
+                                                   verify=verify, options=options))
+
+    async def capabilities(self) -> Capabilities:
+        """Return what the server can do (see `Client.capabilities`)."""
+        return await self.send(calls.capabilities())
+
+    async def health(self) -> Health:
+        """Return the liveness answer of ``/healthz``."""
+        return await self.send(calls.health())
+
+    async def ready(self) -> bool:
+        """Return whether ``/readyz`` says the kernels are ready (no retry on 503)."""
+        return await self.send(calls.readiness())
+
+    async def wait_until_ready(self, timeout: float = 300.0, interval: float = 0.5) -> None:
+        """Return once the server is ready (see `Client.wait_until_ready`)."""
+        deadline = time.monotonic() + timeout
+        while True:
+            try:
+                if await self.ready():
+                    return
+                failure: Exception = ServiceUnavailableError(
+                    {"status": 503, "title": "Not ready",
+                     "detail": f"not ready within {timeout} s"})
+            except ConnectError as exc:
+                failure = exc
+            if time.monotonic() + interval > deadline:
+                raise failure
+            await asyncio.sleep(interval)

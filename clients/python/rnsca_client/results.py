@@ -1,0 +1,252 @@
+"""Typed results of the API's answers: clipped data with its stats and verification.
+
+Every dataclass is built by ``from_dict`` from the server's JSON; members this release
+of the SDK does not know (a newer server) are kept in `extra` rather than refused.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass, field
+from typing import Any
+
+__all__ = [
+    "ClipStats",
+    "Verification",
+    "GeoJSONResult",
+    "SVGResult",
+    "SegmentsResult",
+    "Backend",
+    "Limits",
+    "Capabilities",
+    "Health",
+]
+
+
+def _split(cls, data: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any]]:
+    """Return `data` split into the fields of dataclass `cls` and the rest."""
+    names = {f.name for f in dataclasses.fields(cls)} - {"extra"}
+    return ({k: v for k, v in data.items() if k in names},
+            {k: v for k, v in data.items() if k not in names})
+
+
+class _FromDict:
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]):
+        """Return an instance from the server's JSON object."""
+        known, extra = _split(cls, data)
+        return cls(**known, extra=extra)
+
+
+@dataclass(frozen=True)
+class ClipStats(_FromDict):
+    """What the clip did (the library's ``rnsca.ClipStats``; see the service's README).
+
+    ``accepted + rejected + subdivided + clipped + dropped == fragments_evaluated``;
+    the ``*_per_level`` lists count per subdivision level 0..32.
+    """
+
+    segments_in: int
+    pieces_out: int
+    fragments_evaluated: int
+    accepted: int
+    rejected: int
+    subdivided: int
+    clipped: int
+    dropped: int
+    intersections: int
+    deepest_level: int
+    decided_per_level: list[int]
+    geometries_in: int = 0
+    geometries_out: int = 0
+    vertices_in: int = 0
+    vertices_out: int = 0
+    runs_evaluated: int = 0
+    runs_accepted: int = 0
+    runs_rejected: int = 0
+    runs_subdivided: int = 0
+    runs_segmented: int = 0
+    runs_deepest_level: int = 0
+    runs_decided_per_level: list[int] = field(default_factory=list)
+    segments_decided_per_level: list[int] = field(default_factory=list)
+    invalid_polygons: int = 0
+    decided_shallow_fraction: float = 1.0
+    extra: dict[str, Any] = field(default_factory=dict, repr=False, compare=False)
+
+
+@dataclass(frozen=True)
+class Verification(_FromDict):
+    """The server's comparison of the clip with Shapely's exact intersection.
+
+    `passed` says whether the result keeps its mode's promise; `max_deviation` is the
+    Hausdorff distance to Shapely's clip, `ratio` the output's length (or area, or
+    count) over Shapely's, `false_positives` the output vertices outside the window.
+    """
+
+    max_deviation: float
+    false_positives: int
+    ratio: float
+    passed: bool
+    allowed_deviation: float
+    mode: str
+    valid: bool = True
+    invalid_inputs: int = 0
+    extra: dict[str, Any] = field(default_factory=dict, repr=False, compare=False)
+
+
+def _verification(data: dict[str, Any] | None) -> Verification | None:
+    return None if data is None else Verification.from_dict(data)
+
+
+@dataclass(frozen=True)
+class GeoJSONResult:
+    """``POST /v1/clip/geojson``: the clipped document, as sent back (a dict).
+
+    Properties, ids and foreign members are kept; a geometry takes the type of what is
+    left (a LineString cut in two becomes a MultiLineString).
+    """
+
+    geojson: dict[str, Any]
+    stats: ClipStats
+    verification: Verification | None
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> GeoJSONResult:
+        """Return the result of the endpoint's JSON answer."""
+        return cls(data["geojson"], ClipStats.from_dict(data["stats"]),
+                   _verification(data.get("verification")))
+
+    def to_shapely(self):
+        """Return the clipped geometry as Shapely: one geometry, or a list for a collection.
+
+        A Geometry or Feature gives one geometry (None for a Feature without one); a
+        FeatureCollection gives the list of its features' geometries.
+
+        Raises
+        ------
+        ImportError
+            Shapely is not installed (``pip install 'rnsca-client[shapely]'``).
+        """
+        from rnsca_client.inputs import geometry_from_geojson
+
+        document = self.geojson
+        if document.get("type") == "FeatureCollection":
+            return [geometry_from_geojson(f.get("geometry")) for f in document["features"]]
+        if document.get("type") == "Feature":
+            return geometry_from_geojson(document.get("geometry"))
+        return geometry_from_geojson(document)
+
+
+@dataclass(frozen=True)
+class SVGResult:
+    """``POST /v1/clip/svg``: one path data string per input path ("" if nothing is left)."""
+
+    paths: list[str]
+    stats: ClipStats
+    verification: Verification | None
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> SVGResult:
+        """Return the result of the endpoint's JSON answer."""
+        return cls(list(data["paths"]), ClipStats.from_dict(data["stats"]),
+                   _verification(data.get("verification")))
+
+
+@dataclass(frozen=True)
+class SegmentsResult:
+    """``POST /v1/clip/segments``: the visible piece of each segment that has one.
+
+    For a NumPy input (binary endpoint) `segments` is a float64 array (m, 4), `source`
+    int64 (m,) and `t` float64 (m, 2); for a list input they are lists.
+
+    Attributes
+    ----------
+    segments
+        The pieces ``[x0, y0, x1, y1]``, in input order and direction.
+    source
+        Index of the input segment of each piece.
+    t
+        Parameter interval ``[t0, t1]`` of each piece on its input segment.
+    stats, verification
+        As for every clip.
+    method, mode, backend : str
+        What ran (the server's default backend when none was asked for).
+    """
+
+    segments: Any
+    source: Any
+    t: Any
+    stats: ClipStats
+    verification: Verification | None
+    method: str
+    mode: str
+    backend: str
+
+    def __len__(self) -> int:
+        return len(self.source)
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> SegmentsResult:
+        """Return the result of the endpoint's JSON answer."""
+        return cls([list(row) for row in data["segments"]], list(data["source"]),
+                   [list(row) for row in data["t"]], ClipStats.from_dict(data["stats"]),
+                   _verification(data.get("verification")), data["method"], data["mode"],
+                   data["backend"])
+
+
+@dataclass(frozen=True)
+class Backend(_FromDict):
+    """A backend the API names: present here (with its devices) or not (and why)."""
+
+    name: str
+    available: bool
+    devices: list[str] = field(default_factory=list)
+    reason: str | None = None
+    extra: dict[str, Any] = field(default_factory=dict, repr=False, compare=False)
+
+
+@dataclass(frozen=True)
+class Limits(_FromDict):
+    """The limits a request must stay within (the server's settings)."""
+
+    max_body_bytes: int
+    max_vertices: int
+    work_budget: int
+    request_time_limit: float
+    verify_max_vertices: int
+    extra: dict[str, Any] = field(default_factory=dict, repr=False, compare=False)
+
+
+@dataclass(frozen=True)
+class Capabilities:
+    """``GET /v1/capabilities``: what the server can do."""
+
+    version: str
+    methods: list[str]
+    modes: list[str]
+    backends: list[Backend]
+    threading_layer: str | None
+    serialized: bool
+    svg: bool
+    limits: Limits
+    extra: dict[str, Any] = field(default_factory=dict, repr=False, compare=False)
+
+    @property
+    def available_backends(self) -> list[str]:
+        """Return the names of the backends present on the server."""
+        return [b.name for b in self.backends if b.available]
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> Capabilities:
+        """Return the capabilities from the endpoint's JSON answer."""
+        known, extra = _split(cls, data)
+        known["backends"] = [Backend.from_dict(b) for b in known["backends"]]
+        known["limits"] = Limits.from_dict(known["limits"])
+        return cls(**known, extra=extra)
+
+
+@dataclass(frozen=True)
+class Health:
+    """``GET /healthz`` or ``/readyz``: ``status`` is ``"ok"`` or ``"ready"``."""
+
+    status: str

@@ -1,0 +1,650 @@
+"""The OpenCL backend: the kernels of ``clip.cl`` run through pyopencl.
+
+Segments: one work-item clips one segment (RNSCA with its depth-first stack, or a
+baseline) and the output, at most one piece per segment, is compacted in three steps,
+as a GPU wants it: ``clip_segments`` stores each segment's result and a 0/1 count,
+pyopencl's prefix sum (``pyopencl.array.cumsum``) turns the counts into slots, and
+``write_pieces`` copies the kept results there. Only the segments go to the device and
+only the pieces (and one counter row per work-group) come back.
+
+Lines and rings (`OpenCLBackend._prune`): ``chunk_boxes`` (one work-item per chunk of
+16 segments), ``classify_runs`` (RNSCA over runs of chunks, one work-item per line or
+ring) and ``clip_chunk_segments`` (the segments of undecided chunks, one work-item per
+chunk, into slots from a prefix sum) run on the device; the chains, and for polygons
+the walk along the window, are assembled on the host by the Numba kernels that do it
+for the Numba backend (`polylines.assemble_line_blocks`, `polygons.clip_polygon_blocks`
+with decided chunks). The split keeps the sequential, data-dependent assembly (output
+order, joins, the boundary walk) on the host, and the per-segment work on the device.
+
+Devices and programs: the device is picked once per backend (`select_device`); each
+device gets one context and one profiling queue per process, and ``clip.cl`` is built
+once per (context, precision) and kept (`_Device.program`). pyopencl and the OpenCL
+driver also cache built binaries on disk, so a second process builds fast.
+
+Precision: float64 where the device has ``cl_khr_fp64``, else float32 (or float32 when
+asked for, on any device). The float32 path clips the input rounded to float32; see
+the README ("OpenCL backend") for its error bound, which the tests check.
+
+This module imports pyopencl at import time; only `rnsca.backends.registry` imports
+it, and turns a failure into `BackendUnavailableError`.
+"""
+
+from __future__ import annotations
+
+import threading
+import warnings
+from dataclasses import dataclass, field
+from importlib import resources
+
+import numpy as np
+import pyopencl as cl
+import pyopencl.array as cl_array
+
+from rnsca.errors import BackendUnavailableError, InvalidGeometryError, InvalidWindowError
+from rnsca.kernels import counters as C
+from rnsca.kernels import polygons as PG
+from rnsca.kernels import polylines as PL
+from rnsca.kernels import segments as K
+from rnsca.options import Backend, Method, Mode, Precision, SegmentOptions
+from rnsca.stats import ClipStats, DeviceStats
+from rnsca.window import Window
+
+__all__ = ["OpenCLBackend", "list_devices", "select_device", "FLOAT32_RELATIVE_BOUND",
+           "LOCAL_SIZE"]
+
+#: Work-items per group: the stats are summed per group in local memory.
+LOCAL_SIZE = 64
+#: float32 mode: each piece end lies within this many units of the float32 rounding
+#: (2**-24) of ``max(|coordinates of its segment|, |window bounds|)`` of the exact clip
+#: of the input rounded to float32 (README, "OpenCL backend"). Tested.
+FLOAT32_RELATIVE_BOUND = 16 * 2.0 ** -24
+
+_METHOD_ID = {
+    Method.RNSCA: K.RNSCA,
+    Method.COHEN_SUTHERLAND: K.COHEN_SUTHERLAND,
+    Method.LIANG_BARSKY: K.LIANG_BARSKY,
+    Method.NICHOLL_LEE_NICHOLL: K.NICHOLL_LEE_NICHOLL,
+    Method.MIDPOINT: K.MIDPOINT,
+}
+# Counters the segment kernel fills: the head of the row (rnsca.kernels.counters).
+_SEGMENT_COUNTERS = C.LEVELS + C.N_LEVELS
+_F32 = np.finfo(np.float32)
+
+
+def list_devices() -> list[dict]:
+    """Return every OpenCL device found: platform and device index, names, type, fp64.
+
+    Raises
+    ------
+    BackendUnavailableError
+        If the OpenCL runtime finds no platform (no driver installed).
+    """
+    try:
+        platforms = cl.get_platforms()
+    except cl.Error as exc:  # the ICD loader's "no platform" is an error, not []
+        raise BackendUnavailableError(
+            f"no OpenCL platform found ({exc}); install a driver, or PoCL for the CPU: "
+            "pip install 'rnsca[opencl]'") from None
+    found = []
+    for p, platform in enumerate(platforms):
+        try:
+            devices = platform.get_devices()
+        except cl.Error:  # a platform without devices
+            continue
+        for d, device in enumerate(devices):
+            found.append({
+                "id": f"{p}:{d}",
+                "platform": platform.name.strip(),
+                "device": device.name.strip(),
+                "type": _device_type(device.type),
+                "fp64": "cl_khr_fp64" in device.extensions,
+                "max_work_group_size": int(device.max_work_group_size),
+                "version": device.version.strip(),
+            })
+    if not found:
+        raise BackendUnavailableError(
+            "no OpenCL device found; install a driver, or PoCL for the CPU: "
+            "pip install 'rnsca[opencl]'")
+    return found
+
+
+def _device_type(bits: int) -> str:
+    """Return "gpu", "cpu", "accelerator" or "other" (drivers may set several bits)."""
+    for name in ("gpu", "cpu", "accelerator"):
+        if bits & getattr(cl.device_type, name.upper()):
+            return name
+    return "other"
+
+
+def select_device(spec: str | None = None) -> dict:
+    """Return the entry of `list_devices` that `spec` names.
+
+    `spec` is ``"platform:device"`` (indices, as `list_devices` numbers them), or a
+    case-insensitive substring of ``"<platform> <device> <version>"`` (the first match);
+    None picks the first GPU, else the first device.
+
+    Raises
+    ------
+    BackendUnavailableError
+        If no device is found, or none matches `spec` (the message lists them).
+    """
+    devices = list_devices()
+    if spec is None or not spec.strip():
+        gpus = [d for d in devices if d["type"] == "gpu"]
+        return (gpus or devices)[0]
+    spec = spec.strip()
+    for entry in devices:
+        if entry["id"] == spec:
+            return entry
+    for entry in devices:
+        if spec.lower() in f"{entry['platform']} {entry['device']} {entry['version']}".lower():
+            return entry
+    listing = "; ".join(f"{d['id']} {d['platform']} / {d['device']}" for d in devices)
+    raise BackendUnavailableError(
+        f"no OpenCL device matches {spec!r} (give 'platform:device' or part of a name); "
+        f"found: {listing}")
+
+
+@dataclass
+class _Device:
+    """One device's context, profiling queue and built programs (one per process)."""
+
+    name: str
+    context: cl.Context
+    queue: cl.CommandQueue
+    programs: dict = field(default_factory=dict)
+    lock: threading.Lock = field(default_factory=threading.Lock)
+    # Kernel objects hold their arguments and are shared by every backend on this
+    # device: one call at a time sets and enqueues them.
+    call_lock: threading.Lock = field(default_factory=threading.Lock)
+
+    def program(self, double: bool) -> cl.Program:
+        """Return ``clip.cl`` built for float64 (`double`) or float32, built once."""
+        with self.lock:
+            if double not in self.programs:
+                source = resources.files(__package__).joinpath("clip.cl").read_text()
+                options = [f"-DREAL_IS_DOUBLE={int(double)}", f"-DLOCAL_SIZE={LOCAL_SIZE}"]
+                if not double:  # OpenCL's float32 division may be 2.5 ulp otherwise
+                    options.append("-cl-fp32-correctly-rounded-divide-sqrt")
+                program = _build_program(self.context, self.name, source, options)
+                # Kernel objects hold their arguments: one per program, used under `call_lock`.
+                self.programs[double] = _Kernels(
+                    program.clip_segments, program.write_pieces, program.chunk_boxes,
+                    program.classify_runs, program.clip_chunk_segments)
+            return self.programs[double]
+
+
+def _build_program(context: cl.Context, name: str, source: str, options: list) -> cl.Program:
+    """Return `source` built, or BackendUnavailableError with the compiler's errors."""
+    try:
+        with warnings.catch_warnings():
+            # Drivers log progress ("Compilation done"); a failure raises.
+            warnings.simplefilter("ignore", cl.CompilerWarning)
+            return cl.Program(context, source).build(options=options)
+    except cl.Error as exc:
+        errors = [line.strip() for line in str(exc).splitlines()
+                  if "error" in line.lower() and "clBuildProgram" not in line]
+        raise BackendUnavailableError(
+            f"the OpenCL device {name!r} could not build the kernels: "
+            f"{'; '.join(errors) or str(exc).strip()}") from None
+
+
+@dataclass(frozen=True)
+class _Kernels:
+    """The kernels of one built ``clip.cl``."""
+
+    clip_segments: cl.Kernel
+    write_pieces: cl.Kernel
+    chunk_boxes: cl.Kernel
+    classify_runs: cl.Kernel
+    clip_chunk_segments: cl.Kernel
+
+
+_DEVICES: dict[str, _Device] = {}
+_DEVICES_LOCK = threading.Lock()
+
+
+def _device(entry: dict) -> _Device:
+    """Return the process's `_Device` for a `list_devices` entry, created once."""
+    with _DEVICES_LOCK:
+        if entry["id"] not in _DEVICES:
+            p, d = (int(i) for i in entry["id"].split(":"))
+            device = cl.get_platforms()[p].get_devices()[d]
+            context = cl.Context([device])
+            queue = cl.CommandQueue(
+                context, properties=cl.command_queue_properties.PROFILING_ENABLE)
+            _DEVICES[entry["id"]] = _Device(
+                f"{entry['platform']} / {entry['device']}", context, queue)
+        return _DEVICES[entry["id"]]
+
+
+class _Ledger:
+    """Transfers and kernel runs of one call, timed by OpenCL event profiling."""
+
+    def __init__(self):
+        self.transfers = 0
+        self.bytes_to_device = 0
+        self.bytes_from_device = 0
+        self.copy_events = []
+        self.kernel_events = []
+
+    def to_device(self, queue, array: np.ndarray):
+        buffer = cl_array.empty(queue, array.shape, array.dtype)
+        if array.nbytes:
+            self.copy_events.append(cl.enqueue_copy(queue, buffer.data, array))
+            self.transfers += 1
+            self.bytes_to_device += array.nbytes
+        return buffer
+
+    def from_device(self, queue, buffer) -> np.ndarray:
+        out = np.empty(buffer.shape, buffer.dtype)
+        if out.nbytes:
+            self.copy_events.append(cl.enqueue_copy(queue, out, buffer.base_data,
+                                                    src_offset=buffer.offset))
+            self.transfers += 1
+            self.bytes_from_device += out.nbytes
+        return out
+
+    def stats(self, device: str, precision: Precision) -> DeviceStats:
+        cl.wait_for_events(self.copy_events + self.kernel_events)
+        return DeviceStats(device=device, precision=precision.value, transfers=self.transfers,
+                           bytes_to_device=self.bytes_to_device,
+                           bytes_from_device=self.bytes_from_device,
+                           transfer_seconds=_seconds(self.copy_events),
+                           kernel_seconds=_seconds(self.kernel_events))
+
+
+def _seconds(events) -> float:
+    return sum(e.profile.end - e.profile.start for e in events) * 1e-9
+
+
+class OpenCLBackend:
+    """Run the kernels of segments, and of the runs of lines and rings, on an OpenCL device.
+
+    Parameters
+    ----------
+    device : str, optional
+        ``"platform:device"`` or part of a device's name (`select_device`); default:
+        the first GPU, else the first device.
+    precision : Precision or str
+        ``"auto"`` (float64 if the device has it, else float32), ``"float64"`` or
+        ``"float32"``.
+
+    Raises
+    ------
+    BackendUnavailableError
+        No device, none matching `device`, or float64 asked of a device without it.
+    """
+
+    kind = Backend.OPENCL
+
+    def __init__(self, device: str | None = None, precision: Precision | str = Precision.AUTO):
+        self.device = select_device(device)
+        precision = Precision(precision)
+        if precision is Precision.FLOAT64 and not self.device["fp64"]:
+            raise BackendUnavailableError(
+                f"OpenCL device {self.device['device']!r} has no float64 (cl_khr_fp64); "
+                "ask for precision='float32' or 'auto'")
+        if self.device["max_work_group_size"] < LOCAL_SIZE:
+            raise BackendUnavailableError(
+                f"OpenCL device {self.device['device']!r} runs at most "
+                f"{self.device['max_work_group_size']} work-items per group; the kernels "
+                f"need {LOCAL_SIZE}")
+        if precision is Precision.AUTO:
+            precision = Precision.FLOAT64 if self.device["fp64"] else Precision.FLOAT32
+        self.precision = precision
+        self.name = f"{self.device['platform']} / {self.device['device']}"
+        self._device = _device(self.device)
+        self._device.program(self.precision is Precision.FLOAT64)  # a build error shows now
+
+    @property
+    def real(self) -> type:
+        """Return the NumPy dtype of device coordinates."""
+        return np.float64 if self.precision is Precision.FLOAT64 else np.float32
+
+    def clip_segments(self, segments: np.ndarray, window: Window, options: SegmentOptions):
+        """Return ``(pieces, source, t, stats)``; see `ClipBackend.clip_segments`.
+
+        ``stats.device`` holds the device, the precision, and the transfers and times.
+
+        Raises
+        ------
+        InvalidGeometryError, InvalidWindowError
+            In float32, for coordinates (or their differences) beyond float32's range,
+            or a window that collapses when rounded to float32.
+        """
+        real = self.real
+        n = segments.shape[0]
+        with np.errstate(over="ignore"):  # float32: checked below, with the row named
+            data = np.ascontiguousarray(segments, dtype=real)
+        bounds = np.array(window.bounds, dtype=real)
+        if real is np.float32:
+            _check_float32(data, bounds)
+        xmin, ymin, xmax, ymax = (real(b) for b in bounds)
+        queue = self._device.queue
+        ledger = _Ledger()
+        groups = max(1, -(-n // LOCAL_SIZE))
+        with self._device.call_lock:
+            kernels = self._device.program(real is np.float64)
+            clip_kernel, write_kernel = kernels.clip_segments, kernels.write_pieces
+            device_segments = ledger.to_device(queue, data.reshape(-1))
+            result = cl_array.empty(queue, max(1, 6 * n), real)
+            keep = cl_array.empty(queue, max(1, n), np.int64)
+            counters = cl_array.empty(queue, groups * _SEGMENT_COUNTERS, np.int64)
+            ledger.kernel_events.append(clip_kernel(
+                queue, (groups * LOCAL_SIZE,), (LOCAL_SIZE,), device_segments.data,
+                np.int64(n), xmin, ymin, xmax, ymax, np.int32(_METHOD_ID[options.method]),
+                np.int32(options.n), np.int32(options.max_depth), real(options.tolerance),
+                real(options.auto_piece), np.int32(options.mode is Mode.EXACT), result.data,
+                keep.data, counters.data, wait_for=ledger.copy_events))
+            m = 0
+            if n:
+                event, position = cl_array.cumsum(keep[:n], queue=queue, return_event=True,
+                                                  wait_for=ledger.kernel_events)
+                ledger.kernel_events.append(event)
+                m = int(ledger.from_device(queue, position[n - 1:n])[0])
+            pieces = cl_array.empty(queue, max(1, 4 * m), real)
+            source = cl_array.empty(queue, max(1, m), np.int64)
+            t = cl_array.empty(queue, max(1, 2 * m), real)
+            if m:
+                ledger.kernel_events.append(write_kernel(
+                    queue, (n,), None, result.data, keep.data, position.data, np.int64(n),
+                    xmin, ymin, xmax, ymax, pieces.data, source.data, t.data,
+                    wait_for=ledger.kernel_events[-1:]))
+            rows = ledger.from_device(queue, counters).reshape(groups, _SEGMENT_COUNTERS)
+            out_pieces = ledger.from_device(queue, pieces[:4 * m]).reshape(m, 4)
+            out_source = ledger.from_device(queue, source[:m])
+            out_t = ledger.from_device(queue, t[:2 * m]).reshape(m, 2)
+            device_stats = ledger.stats(self.name, self.precision)
+        out_pieces = out_pieces.astype(np.float64)
+        if real is np.float32:
+            # The float32 window may reach an ulp past the float64 one: no output point
+            # lies outside the window the caller gave.
+            np.clip(out_pieces[:, 0::2], window.xmin, window.xmax, out=out_pieces[:, 0::2])
+            np.clip(out_pieces[:, 1::2], window.ymin, window.ymax, out=out_pieces[:, 1::2])
+        full = np.zeros((groups, C.WIDTH), dtype=np.int64)
+        full[:, :_SEGMENT_COUNTERS] = rows
+        stats = ClipStats.from_counters(full, n, m, device=device_stats)
+        return out_pieces, out_source, out_t.astype(np.float64), stats
+
+    def clip_lines(self, xy, z, part_offsets, part_window, windows, options: SegmentOptions,
+                   drop_edge_runs: bool):
+        """Return ``(xy, z, chain_offsets, chains_per_part, counters, device_stats)``.
+
+        See `rnsca.backends.numba_cpu.NumbaBackend.clip_lines` (the same arrays, and the
+        `DeviceStats` too). On the device (`_prune`): the chunk boxes, RNSCA over runs of
+        chunks (one work-item per part) and the clip of the segments of undecided chunks
+        (one work-item per chunk); on the host, with the Numba kernel that does it for
+        the Numba backend, the chains: accepted chunks copied, clipped pieces joined.
+
+        Raises
+        ------
+        InvalidGeometryError, InvalidWindowError
+            In float32, for coordinates beyond its range or a window that collapses.
+        """
+        tables, counters, device_stats = self._prune(xy, part_offsets, part_window, windows,
+                                                     options, drop_edge_runs, None)
+        out = _assemble_lines(xy, z, part_offsets, part_window, windows, drop_edge_runs,
+                              *tables)
+        return (*out, counters, device_stats)
+
+    def clip_polygons(self, xy, z, ring_offsets, polygon_offsets, polygon_window, windows,
+                      options: SegmentOptions):
+        """Return the Numba backend's `clip_polygons` arrays and counters, and `DeviceStats`.
+
+        ``(xy, z, ring_offsets, rings_per_output, outputs_per_polygon, counters,
+        device_stats)``. The shells' boxes classify the polygons on the host
+        (`polygons.classify_polygons`); the rings of the ambiguous ones are pruned and
+        their undecided segments clipped on the device (`_prune`, rings broken along the
+        window's edges); the rings are closed along the window on the host by the Numba
+        polygon kernel, from the device's decisions and pieces.
+        """
+        n_polygons = polygon_offsets.shape[0] - 1
+        polygon_class = np.empty(n_polygons, dtype=np.int8)
+        PG.classify_polygons(xy, ring_offsets, polygon_offsets, polygon_window, windows,
+                             polygon_class)
+        ring_polygon = np.repeat(np.arange(n_polygons, dtype=np.int64),
+                                 np.diff(polygon_offsets))
+        ring_window = np.ascontiguousarray(polygon_window[ring_polygon])
+        active = (polygon_class[ring_polygon] == PG.AMBIGUOUS).astype(np.uint8)
+        tables, device_counters, device_stats = self._prune(
+            xy, ring_offsets, ring_window, windows, options, True, active)
+        has_z = z.shape[0] > 0
+        block = max(1, min(1024, -(-n_polygons // 64)))
+        n_blocks = max(1, -(-n_polygons // block))
+        counters = np.zeros((n_blocks, C.WIDTH), dtype=np.int64)
+        scratch_v = np.zeros(n_polygons, dtype=np.int64)
+        scratch_c = np.zeros(n_polygons, dtype=np.int64)
+        n_vertices = np.empty(n_polygons, dtype=np.int64)
+        n_rings = np.empty(n_polygons, dtype=np.int64)
+        n_polys = np.empty(n_polygons, dtype=np.int64)
+        args = (xy, z, has_z, ring_offsets, polygon_offsets, polygon_window, windows,
+                _METHOD_ID[options.method], options.n, options.max_depth, options.tolerance,
+                options.auto_piece, True, block)
+        nothing_i = np.empty(0, dtype=np.int64)
+        PG.clip_polygon_blocks(*args, False, polygon_class, scratch_v, scratch_c, nothing_i,
+                               nothing_i, nothing_i, np.empty((0, 2)), np.empty(0), nothing_i,
+                               nothing_i, n_vertices, n_rings, n_polys, counters, True, *tables)
+        vertex_start = _exclusive_sum(n_vertices)
+        ring_start = _exclusive_sum(n_rings)
+        poly_start = _exclusive_sum(n_polys)
+        out_xy = np.empty((int(vertex_start[-1]), 2))
+        out_z = np.empty(int(vertex_start[-1]) if has_z else 0)
+        out_rings = np.empty(int(ring_start[-1]) + 1, dtype=np.int64)
+        out_rings[-1] = out_xy.shape[0]
+        out_poly_rings = np.empty(int(poly_start[-1]), dtype=np.int64)
+        PG.clip_polygon_blocks(*args, True, polygon_class, scratch_v, scratch_c, vertex_start,
+                               ring_start, poly_start, out_xy, out_z, out_rings, out_poly_rings,
+                               n_vertices, n_rings, n_polys, counters, True, *tables)
+        return (out_xy, out_z, out_rings, out_poly_rings, n_polys,
+                np.concatenate([counters, device_counters]), device_stats)
+
+    def _prune(self, xy, part_offsets, part_window, windows, options: SegmentOptions,
+               drop_edge_runs: bool, active):
+        """Prune the runs of every part and clip the undecided chunks' segments on the device.
+
+        Returns ``(tables, counters, device_stats)``: `tables` is ``(chunk_start,
+        decision, piece_start, keep, pieces)`` as `polylines.assemble_chains` reads them
+        (pieces in float64, uncut ends the exact input vertices), `counters` the device's
+        counter rows. `active` (uint8 per part, or None for all) leaves parts out.
+        """
+        real = self.real
+        n_parts = part_offsets.shape[0] - 1
+        with np.errstate(over="ignore"):
+            data = np.ascontiguousarray(xy, dtype=real)
+            bounds = np.ascontiguousarray(windows, dtype=real)
+        if real is np.float32:
+            _check_float32_lines(data, bounds)
+        segments = np.maximum(np.diff(part_offsets), 1) - 1
+        chunks_per_part = -(-segments // PL.RUN_LEAF_SEGMENTS)
+        chunk_start = _exclusive_sum(chunks_per_part)
+        n_chunks = int(chunk_start[-1])
+        chunk_part = np.repeat(np.arange(n_parts, dtype=np.int64), chunks_per_part)
+        # Each chunk's first vertex and segment count (the host needs them to assemble).
+        chunk_first = (part_offsets[chunk_part]
+                       + (np.arange(n_chunks) - chunk_start[chunk_part]) * PL.RUN_LEAF_SEGMENTS)
+        chunk_length = np.minimum(chunk_first + PL.RUN_LEAF_SEGMENTS,
+                                  part_offsets[chunk_part + 1] - 1) - chunk_first
+        queue = self._device.queue
+        ledger = _Ledger()
+        part_groups = max(1, -(-n_parts // LOCAL_SIZE))
+        chunk_groups = max(1, -(-n_chunks // LOCAL_SIZE))
+        n_runs = options.n if options.n > 0 else PL.RUN_N_AUTO
+        with self._device.call_lock:
+            kernels = self._device.program(real is np.float64)
+            d_xy = ledger.to_device(queue, data.reshape(-1))
+            d_offsets = ledger.to_device(queue, np.ascontiguousarray(part_offsets, np.int64))
+            d_chunk_start = ledger.to_device(queue, chunk_start)
+            d_chunk_part = ledger.to_device(queue, chunk_part)
+            d_part_window = ledger.to_device(queue, np.ascontiguousarray(part_window, np.int64))
+            d_windows = ledger.to_device(queue, bounds.reshape(-1))
+            d_active = ledger.to_device(queue, np.zeros(0, np.uint8) if active is None
+                                        else np.ascontiguousarray(active, np.uint8))
+            boxes = cl_array.empty(queue, max(1, 4 * n_chunks), real)
+            decision = cl_array.empty(queue, max(1, n_chunks), np.uint8)
+            segmented = cl_array.empty(queue, max(1, n_chunks), np.int64)
+            run_counters = cl_array.empty(queue, part_groups * C.WIDTH, np.int64)
+            chunk_counters = cl_array.empty(queue, chunk_groups * C.WIDTH, np.int64)
+            if n_chunks:
+                ledger.kernel_events.append(kernels.chunk_boxes(
+                    queue, (n_chunks,), None, _data(d_xy), _data(d_offsets),
+                    _data(d_chunk_start), _data(d_chunk_part), np.int64(n_chunks), boxes.data))
+            ledger.kernel_events.append(kernels.classify_runs(
+                queue, (part_groups * LOCAL_SIZE,), (LOCAL_SIZE,), boxes.data, _data(d_offsets),
+                _data(d_chunk_start), _data(d_part_window), _data(d_windows),
+                np.int64(n_parts), np.int32(n_runs), np.int32(drop_edge_runs),
+                np.int32(options.method is Method.RNSCA), _data(d_active),
+                np.int32(active is None), decision.data, segmented.data, run_counters.data))
+            total = 0
+            position = segmented
+            if n_chunks:
+                event, position = cl_array.cumsum(segmented[:n_chunks], queue=queue,
+                                                  return_event=True)
+                ledger.kernel_events.append(event)
+                total = int(ledger.from_device(queue, position[n_chunks - 1:n_chunks])[0])
+            keep = cl_array.empty(queue, max(1, total), np.uint8)
+            result = cl_array.empty(queue, max(1, 6 * total), real)
+            ledger.kernel_events.append(kernels.clip_chunk_segments(
+                queue, (chunk_groups * LOCAL_SIZE,), (LOCAL_SIZE,), _data(d_xy),
+                _data(d_offsets), _data(d_chunk_start), _data(d_chunk_part),
+                _data(d_part_window), _data(d_windows), np.int64(n_chunks), decision.data,
+                segmented.data, position.data, np.int32(_METHOD_ID[options.method]),
+                np.int32(options.n), np.int32(options.max_depth), real(options.tolerance),
+                real(options.auto_piece), np.int32(options.mode is Mode.EXACT), keep.data,
+                result.data, chunk_counters.data))
+            chunk_decision = ledger.from_device(queue, decision[:n_chunks])
+            kept = ledger.from_device(queue, keep[:total]).view(np.bool_)
+            pieces = ledger.from_device(queue, result[:6 * total]).reshape(total, 6)
+            counters = np.concatenate([
+                ledger.from_device(queue, run_counters).reshape(-1, C.WIDTH),
+                ledger.from_device(queue, chunk_counters).reshape(-1, C.WIDTH)])
+            device_stats = ledger.stats(self.name, self.precision)
+        segmented_rows = np.where(chunk_decision == PL.CHUNK_SEGMENTED, chunk_length, 0)
+        piece_start = np.zeros(n_chunks, dtype=np.int64)
+        np.cumsum(segmented_rows[:-1], out=piece_start[1:])
+        pieces = pieces.astype(np.float64)
+        if real is np.float32:
+            _exact_float32_ends(pieces, xy, windows, part_window, chunk_part, chunk_first,
+                                segmented_rows)
+        tables = (chunk_start[:-1].copy(), chunk_decision, piece_start, kept, pieces)
+        return tables, counters, device_stats
+
+    def warm_up(self) -> None:
+        """Build the program (or load it from the caches), run every method, lines, rings.
+
+        Also compiles (or loads from Numba's cache) the host kernels that assemble lines
+        and polygons.
+        """
+        window = Window(0.0, 0.0, 1.0, 1.0)
+        segments = np.array([[-1.0, 0.5, 2.0, 0.5], [0.2, 0.2, 0.8, 0.8]])
+        for method in Method:
+            self.clip_segments(segments, window, SegmentOptions.resolve(window, method=method))
+        ring = np.array([[-1.0, 0.25], [2.0, 0.25], [2.0, 0.75], [-1.0, 0.75], [-1.0, 0.25]])
+        offsets = np.array([0, 5], dtype=np.int64)
+        windows = np.array([[0.0, 0.0, 1.0, 1.0]])
+        index = np.zeros(1, dtype=np.int64)
+        options = SegmentOptions.resolve(window)
+        for z in (np.empty(0), np.zeros(5)):
+            for drop in (False, True):
+                self.clip_lines(ring, z, offsets, index, windows, options, drop)
+            self.clip_polygons(ring, z, offsets, np.array([0, 1], dtype=np.int64), index,
+                               windows, options)
+
+
+def _data(array):
+    """Return the buffer of a device array (the empty ones included: 1 byte then)."""
+    return array.data if array.size else cl.Buffer(array.context, cl.mem_flags.READ_ONLY, 1)
+
+
+def _exclusive_sum(counts: np.ndarray) -> np.ndarray:
+    """Return the exclusive prefix sum of `counts`, with the total appended."""
+    out = np.zeros(counts.shape[0] + 1, dtype=np.int64)
+    np.cumsum(counts, out=out[1:])
+    return out
+
+
+def _assemble_lines(xy, z, part_offsets, part_window, windows, drop_edge_runs, chunk_start,
+                    decision, piece_start, keep, pieces):
+    """Return ``(xy, z, chain_offsets, chains_per_part)``: count, prefix sum, write."""
+    n_parts = part_offsets.shape[0] - 1
+    has_z = z.shape[0] > 0
+    block = max(1, min(1024, -(-n_parts // 64)))
+    n_vertices = np.empty(n_parts, dtype=np.int64)
+    n_chains = np.empty(n_parts, dtype=np.int64)
+    nothing_i = np.empty(0, dtype=np.int64)
+    args = (xy, z, has_z, part_offsets, part_window, windows, drop_edge_runs, block)
+    tables = (chunk_start, decision, piece_start, keep, pieces)
+    PL.assemble_line_blocks(*args, False, *tables, nothing_i, nothing_i, np.empty((0, 2)),
+                            np.empty(0), nothing_i, n_vertices, n_chains)
+    vertex_start = np.zeros(n_parts + 1, dtype=np.int64)
+    np.cumsum(n_vertices, out=vertex_start[1:])
+    chain_start = np.zeros(n_parts + 1, dtype=np.int64)
+    np.cumsum(n_chains, out=chain_start[1:])
+    out_xy = np.empty((int(vertex_start[-1]), 2))
+    out_z = np.empty(int(vertex_start[-1]) if has_z else 0)
+    chain_offsets = np.empty(int(chain_start[-1]) + 1, dtype=np.int64)
+    chain_offsets[-1] = out_xy.shape[0]
+    PL.assemble_line_blocks(*args, True, *tables, vertex_start, chain_start, out_xy, out_z,
+                            chain_offsets, n_vertices, n_chains)
+    return out_xy, out_z, chain_offsets, n_chains
+
+
+def _exact_float32_ends(pieces, xy, windows, part_window, chunk_part, chunk_first, rows):
+    """Give float32 pieces their input vertices back, and keep them in their windows.
+
+    An end not cut (t = 0 or 1) is an input vertex, but rounded to float32: the host
+    puts the float64 vertex back, so chains join at it as on the other backends. A cut
+    end lies exactly on the float32 edge line: it is put on the float64 one (the polygon
+    walk compares boundary positions exactly), and every end is clamped into the window.
+    """
+    segment = np.repeat(chunk_first, rows) + (np.arange(pieces.shape[0])
+                                              - np.repeat(np.cumsum(rows) - rows, rows))
+    window = windows[part_window[np.repeat(chunk_part, rows)]]
+    start = pieces[:, 0] == 0.0
+    end = pieces[:, 1] == 1.0
+    pieces[start, 2:4] = xy[segment[start]]
+    pieces[end, 4:6] = xy[segment[end] + 1]
+    rounded = window.astype(np.float32).astype(np.float64)
+    for column, bound in ((2, 0), (3, 1), (4, 0), (5, 1)):
+        values = pieces[:, column]
+        for side in (bound, bound + 2):
+            on_edge = values == rounded[:, side]
+            values[on_edge] = window[on_edge, side]
+        np.clip(values, window[:, bound], window[:, bound + 2], out=values)
+
+
+def _check_float32_lines(xy: np.ndarray, windows: np.ndarray) -> None:
+    """Refuse float32 lines whose coordinates, steps or windows do not fit float32."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        bad = ~np.isfinite(xy).all(axis=1)
+        bad[1:] |= ~np.isfinite(np.diff(xy, axis=0)).all(axis=1)
+    if bad.any():
+        raise InvalidGeometryError(
+            f"coordinate {int(np.argmax(bad))} does not fit float32, the OpenCL backend's "
+            f"precision here (|coordinates| and their differences must stay below "
+            f"{_F32.max:.3g})")
+    good = (np.isfinite(windows).all(axis=1) & (windows[:, 0] < windows[:, 2])
+            & (windows[:, 1] < windows[:, 3]))
+    if not good.all():
+        row = int(np.argmin(good))
+        raise InvalidWindowError(
+            f"window {row} {windows[row].tolist()} is empty or infinite in float32, the "
+            "OpenCL backend's precision here; use a float64 device or another backend")
+
+
+def _check_float32(data: np.ndarray, bounds: np.ndarray) -> None:
+    """Refuse float32 input whose coordinates, differences or window do not fit float32."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        rows = data.reshape(-1, 4)
+        finite = np.isfinite(rows).all(axis=1) & np.isfinite(rows[:, 2:] - rows[:, :2]).all(axis=1)
+    if not finite.all():
+        row = int(np.argmin(finite))
+        error = InvalidGeometryError(
+            f"segment {row} does not fit float32, the OpenCL backend's precision here "
+            f"(|coordinates| and their differences must stay below {_F32.max:.3g})")
+        error.row = row
+        raise error
+    if not (np.isfinite(bounds).all() and bounds[0] < bounds[2] and bounds[1] < bounds[3]):
+        raise InvalidWindowError(
+            f"the window {bounds.tolist()} is empty or infinite in float32, the OpenCL "
+            "backend's precision here; use a float64 device or another backend")

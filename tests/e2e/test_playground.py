@@ -1,0 +1,293 @@
+"""The playground in a real headless Chromium (Debian's ``chromium``, driven by Playwright)
+against a live server: load an example, drag and resize the window with the mouse, and
+check that what is drawn and the numbers shown are the API's answer for that window.
+
+Screenshots go to ``test-artifacts/`` at the repository's root (ignored by git).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import re
+import shutil
+
+import httpx
+import pytest
+import shapely
+
+from tests.e2e.server import ROOT, LiveServer
+
+pytestmark = pytest.mark.e2e
+
+IN_CI = os.environ.get("CI", "").lower() == "true"
+ARTIFACTS = ROOT / "test-artifacts"
+#: Every wait in the page is bounded by this (ms): a stuck page fails, never hangs.
+WAIT_MS = 30_000
+
+# What the page shows, read back in one go (see the test hooks in playground.js).
+SNAPSHOT = """() => {
+  const value = (el) => Number(el.dataset.value);
+  const byKey = (sel) => Object.fromEntries([...document.querySelectorAll(sel)].map(
+      (el) => [el.dataset.key || el.closest("tr").dataset.key, value(el)]));
+  return {
+    state: document.body.dataset.state,
+    inputs: ["xmin", "ymin", "xmax", "ymax"].map((id) => Number(document.getElementById(id).value)),
+    shownWindow: JSON.parse(document.getElementById("results").dataset.window || "null"),
+    summary: byKey("#summary dd"),
+    stats: byKey("#stats td[data-value]"),
+    passed: document.getElementById("verification").dataset.passed,
+    drawn: [...document.querySelectorAll("#output-layer path")].map((p) => p.getAttribute("d")),
+    error: document.getElementById("error").hidden ? null
+                                                   : document.getElementById("error").innerText,
+  };
+}"""
+
+
+def _launch_options() -> dict:
+    executable = shutil.which("chromium")
+    message = None
+    try:
+        import playwright.sync_api  # noqa: F401
+    except ImportError:
+        message = "playwright is not installed (pip install playwright, in the dev extra)"
+    if message is None and executable is None:
+        message = "chromium is not installed (apt-get install chromium; .ci/run does)"
+    if message is not None:
+        if IN_CI:
+            pytest.fail(message)
+        pytest.skip(message)
+    return dict(executable_path=executable, headless=True,
+                args=["--no-sandbox", "--disable-gpu", "--disable-background-networking"])
+
+
+@pytest.fixture(scope="module")
+def server():
+    with LiveServer() as live:
+        yield live
+
+
+@pytest.fixture(scope="module")
+def browser():
+    options = _launch_options()
+    from playwright.sync_api import sync_playwright
+
+    with sync_playwright() as playwright:
+        chromium = playwright.chromium.launch(**options)
+        yield chromium
+        chromium.close()
+
+
+@pytest.fixture
+def page(browser, server):
+    context = browser.new_context(viewport={"width": 1400, "height": 900})
+    page = context.new_page()
+    page.set_default_timeout(WAIT_MS)
+    errors = []
+    page.on("pageerror", lambda e: errors.append(str(e)))
+    page.goto(server.url + "/")
+    page.wait_for_selector("body[data-state=idle]")
+    yield page
+    context.close()
+    assert not errors, errors
+
+
+@pytest.fixture(scope="module")
+def api(server):
+    with httpx.Client(base_url=server.url, timeout=60) as client:
+        yield client
+
+
+def settled(page) -> dict:
+    """Return the page's snapshot once no request is pending or in flight."""
+    page.wait_for_selector("body[data-state=idle], body[data-state=error]")
+    return page.evaluate(SNAPSHOT)
+
+
+def screenshot(page, name: str) -> None:
+    ARTIFACTS.mkdir(exist_ok=True)
+    path = ARTIFACTS / f"playground-{name}.png"
+    page.screenshot(path=str(path), full_page=True)
+    print(f"screenshot: {path}")
+
+
+def drag(page, selector: str, dx: float, dy: float) -> None:
+    """Drag the element at `selector` by (dx, dy) screen pixels, in steps, with the mouse."""
+    box = page.locator(selector).bounding_box()
+    x, y = box["x"] + box["width"] / 2, box["y"] + box["height"] / 2
+    page.mouse.move(x, y)
+    page.mouse.down()
+    page.mouse.move(x + dx, y + dy, steps=8)
+    page.mouse.up()
+
+
+def numbers(d: str) -> list[float]:
+    return [float(v) for v in re.findall(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?", d)]
+
+
+def coordinates(geojson: dict) -> list[float]:
+    """Every coordinate of a document in the order the page draws them."""
+    out = []
+
+    def walk(value):
+        if isinstance(value, (int, float)):
+            out.append(float(value))
+        else:
+            for item in value:
+                walk(item)
+
+    for feature in geojson.get("features", [geojson]):
+        geometry = feature.get("geometry", feature)
+        if geometry:
+            walk(geometry["coordinates"])
+    return out
+
+
+def example_text(api, name: str) -> str:
+    return api.get(f"/playground/examples/{name}").text
+
+
+def check_geojson_against_api(api, shown: dict, document: dict, options: dict,
+                              **extra) -> dict:
+    """The page's output, stats and summary equal the API's answer for the shown window."""
+    assert shown["state"] == "idle" and shown["error"] is None
+    assert shown["shownWindow"] == shown["inputs"]
+    answer = api.post("/v1/clip/geojson", json={
+        "window": shown["inputs"], "geojson": document, "options": options, **extra})
+    assert answer.status_code == 200, answer.text
+    result = answer.json()
+    assert [v for d in shown["drawn"] for v in numbers(d)] == coordinates(result["geojson"])
+    for key, value in shown["stats"].items():
+        assert value == pytest.approx(result["stats"][key], rel=1e-12), key
+    geometries = [shapely.geometry.shape(f["geometry"]) for f in result["geojson"]["features"]]
+    length = sum(g.length for g in geometries if g.geom_type.endswith("LineString"))
+    area = sum(g.area for g in geometries)
+    if length:
+        assert math.isclose(shown["summary"]["length"], length, rel_tol=1e-9)
+    if area:
+        assert math.isclose(shown["summary"]["area"], area, rel_tol=1e-9)
+    assert shown["summary"]["vertices"] == result["stats"]["vertices_out"]
+    verified = result["verification"]
+    assert shown["passed"] == ("" if verified is None else str(verified["passed"]).lower())
+    return result
+
+
+def test_coastline_window_moved_and_resized_with_the_mouse(page, api):
+    document = json.loads(example_text(api, "coastline.geojson"))
+    options = {"method": "rnsca", "mode": "exact", "boundary": "closed"}
+    page.select_option("#example", "coastline")
+    first = settled(page)
+    assert first["inputs"] == [25, 20, 70, 55] and first["drawn"]
+    check_geojson_against_api(api, first, document, options, verify=True)
+
+    drag(page, "#window-rect", 90, -60)                 # move right and up (north)
+    moved = settled(page)
+    width = lambda w: (w[2] - w[0], w[3] - w[1])  # noqa: E731
+    assert moved["inputs"][0] > first["inputs"][0] and moved["inputs"][1] > first["inputs"][1]
+    assert width(moved["inputs"]) == pytest.approx(width(first["inputs"]), abs=0.2)
+    assert moved["drawn"] != first["drawn"] and moved["stats"] != first["stats"]
+    check_geojson_against_api(api, moved, document, options, verify=True)
+
+    drag(page, '#handles circle[data-handle="xmax,ymax"]', 70, -50)   # resize the NE corner
+    resized = settled(page)
+    assert resized["inputs"][:2] == moved["inputs"][:2]
+    assert resized["inputs"][2] > moved["inputs"][2] and resized["inputs"][3] > moved["inputs"][3]
+    assert resized["summary"]["length"] != moved["summary"]["length"]
+    check_geojson_against_api(api, resized, document, options, verify=True)
+    assert resized["passed"] == "true"
+    screenshot(page, "coastline")
+
+
+def test_polygons_window_widened_with_an_edge_handle(page, api):
+    document = json.loads(example_text(api, "polygons-with-holes.geojson"))
+    page.select_option("#example", "polygons")
+    first = settled(page)
+    check_geojson_against_api(api, first, document, {"boundary": "closed"}, verify=True)
+
+    drag(page, '#handles circle[data-handle="xmin"]', -40, 0)      # widen to the west
+    wider = settled(page)
+    assert wider["inputs"][0] < first["inputs"][0] and wider["inputs"][1:] == first["inputs"][1:]
+    assert wider["summary"]["area"] > first["summary"]["area"]
+    check_geojson_against_api(api, wider, document, {"boundary": "closed"}, verify=True)
+    screenshot(page, "polygons")
+
+    page.select_option("#mode", "approx")          # polygons have no approx mode: a 422
+    refused = settled(page)
+    assert refused["state"] == "error" and "422" in refused["error"]
+    assert "approx" in refused["error"] and refused["drawn"] == []
+
+
+def test_options_reach_the_server_and_change_the_statistics(page, api):
+    document = json.loads(example_text(api, "coastline.geojson"))
+    page.select_option("#example", "coastline")
+    exact = settled(page)
+    page.fill("#n", "4")
+    page.fill("#max_depth", "3")
+    page.fill("#approx_bound", "5")
+    page.select_option("#mode", "approx")
+    approx = settled(page)
+    assert approx["stats"]["dropped"] > 0 and approx["stats"]["deepest_level"] == 3
+    assert approx["stats"]["fragments_evaluated"] != exact["stats"]["fragments_evaluated"]
+    assert approx["summary"]["length"] < exact["summary"]["length"]
+    options = {"method": "rnsca", "mode": "approx", "n": 4, "max_depth": 3,
+               "boundary": "closed"}
+    check_geojson_against_api(api, approx, document, options, verify=True, approx_bound=5)
+    assert approx["passed"] == "true"
+    screenshot(page, "approx")
+
+
+def test_glyph_outlines_are_clipped_as_the_svg_endpoint_clips_them(page, api):
+    paths = example_text(api, "glyphs-dejavu-sans.txt").splitlines()
+    page.select_option("#example", "glyphs")
+    first = settled(page)
+    drag(page, "#window-rect", 120, 40)
+    moved = settled(page)
+    assert moved["inputs"] != first["inputs"] and moved["shownWindow"] == moved["inputs"]
+    answer = api.post("/v1/clip/svg", json={
+        "window": moved["inputs"], "paths": paths,
+        "options": {"method": "rnsca", "mode": "exact", "curves": "preserve",
+                    "fill": "nonzero"}}).json()
+    assert moved["drawn"] == [d for d in answer["paths"] if d]
+    assert moved["stats"]["pieces_out"] == answer["stats"]["pieces_out"]
+    assert moved["passed"] == "true" and answer["verification"]["passed"]
+    assert moved["summary"]["paths"] == len(moved["drawn"])
+    screenshot(page, "glyphs")
+
+
+def test_errors_are_shown_readably(page):
+    page.fill("#input-text", "{not json")
+    shown = settled(page)
+    assert shown["state"] == "error" and "not valid JSON" in shown["error"]
+
+    broken = {"type": "Polygon", "coordinates": [[[0, 0], [4, 0], [4, 4]]]}
+    page.fill("#input-text", json.dumps(broken))
+    shown = settled(page)
+    assert shown["state"] == "error" and shown["drawn"] == []
+    assert "422" in shown["error"] and "Invalid geometry" in shown["error"]
+    assert "geojson.coordinates[0]" in shown["error"]
+
+    page.fill("#input-text", json.dumps({"type": "LineString",
+                                         "coordinates": [[-5, 1], [5, 1]]}))
+    shown = settled(page)   # a flat input still gets a window, and a result
+    assert shown["state"] == "idle" and shown["summary"]["length"] == 5
+    page.fill("#xmin", "100")
+    page.dispatch_event("#xmin", "change")
+    shown = settled(page)
+    assert "Invalid window" in shown["error"] and "xmin" in shown["error"]
+    screenshot(page, "error")
+
+
+def test_an_svg_document_loaded_from_a_file(page, api):
+    document = (b'<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 20 20">'
+                b'<path d="M -5 5 L 15 5"/><g><path d="M 2 -3 Q 5 20 8 -3"/></g></svg>')
+    page.set_input_files("#file", files=[{"name": "shapes.svg", "mimeType": "image/svg+xml",
+                                          "buffer": document}])
+    shown = settled(page)
+    assert "2 path(s)" in page.inner_text("#input-info")
+    assert shown["state"] == "idle" and shown["shownWindow"] == shown["inputs"]
+    answer = api.post("/v1/clip/svg", json={
+        "window": shown["inputs"], "paths": ["M -5 5 L 15 5", "M 2 -3 Q 5 20 8 -3"],
+        "options": {"curves": "preserve", "fill": None}}).json()
+    assert shown["drawn"] == [d for d in answer["paths"] if d] and len(shown["drawn"]) == 2
+    assert shown["stats"]["pieces_out"] == answer["stats"]["pieces_out"]

@@ -1,0 +1,406 @@
+"""The OpenCL backend: device selection, missing OpenCL, float32 and its bound, stats.
+
+The agreement of its pieces and counters with the other backends is in
+tests/property/test_backends_agree.py; the other segment tests run it through the
+`backend` fixture. Tests that need a device take the `opencl` fixture (skipped where
+OpenCL is missing, a failure in CI).
+"""
+
+import dataclasses
+import sys
+import threading
+
+import numpy as np
+import pytest
+
+import rnsca
+from rnsca import Window, clip_segments
+from rnsca.backends import registry
+from rnsca.errors import BackendUnavailableError, InvalidGeometryError, InvalidWindowError
+from rnsca.options import Method, Mode, Precision, SegmentOptions
+
+pytestmark = pytest.mark.opencl
+
+W = Window(0.0, 0.0, 10.0, 20.0)
+
+
+@pytest.fixture
+def opencl_module(opencl):
+    from rnsca.backends import opencl as module
+
+    return module
+
+
+@pytest.fixture
+def default_configuration():
+    """Restore the registry's default OpenCL configuration after the test."""
+    yield
+    registry.configure_opencl()
+
+
+def fake_devices(*entries):
+    return [{"id": f"{p}:{d}", "platform": platform, "device": name, "type": kind,
+             "fp64": fp64, "version": "OpenCL 3.0", "max_work_group_size": 256}
+            for p, d, platform, name, kind, fp64 in entries]
+
+
+# --- device selection --------------------------------------------------------------------
+
+
+def test_the_default_device_is_the_first_gpu(opencl_module, monkeypatch):
+    devices = fake_devices((0, 0, "Portable Computing Language", "cpu-x", "cpu", True),
+                           (1, 0, "NVIDIA CUDA", "RTX", "gpu", True),
+                           (1, 1, "NVIDIA CUDA", "RTX 2", "gpu", True))
+    monkeypatch.setattr(opencl_module, "list_devices", lambda: devices)
+    assert opencl_module.select_device(None)["id"] == "1:0"
+    assert opencl_module.select_device("  ")["id"] == "1:0"
+
+
+def test_without_a_gpu_the_default_device_is_the_first_device(opencl_module, monkeypatch):
+    devices = fake_devices((0, 0, "Intel(R) OpenCL", "cpu-a", "cpu", True),
+                           (1, 0, "Portable Computing Language", "cpu-b", "cpu", True))
+    monkeypatch.setattr(opencl_module, "list_devices", lambda: devices)
+    assert opencl_module.select_device(None)["id"] == "0:0"
+
+
+def test_a_device_is_named_by_index_or_by_part_of_its_name(opencl_module, monkeypatch):
+    devices = fake_devices((0, 0, "Intel(R) OpenCL", "cpu-a", "cpu", True),
+                           (1, 0, "Portable Computing Language", "pthread-cpu", "cpu", True),
+                           (1, 1, "NVIDIA CUDA", "GeForce RTX 4090", "gpu", False))
+    monkeypatch.setattr(opencl_module, "list_devices", lambda: devices)
+    assert opencl_module.select_device("1:1")["device"] == "GeForce RTX 4090"
+    assert opencl_module.select_device("portable")["id"] == "1:0"
+    assert opencl_module.select_device("rtx 4090")["id"] == "1:1"
+
+
+def test_a_device_matching_nothing_is_an_error_listing_the_devices(opencl_module, monkeypatch):
+    devices = fake_devices((0, 0, "Intel(R) OpenCL", "cpu-a", "cpu", True))
+    monkeypatch.setattr(opencl_module, "list_devices", lambda: devices)
+    with pytest.raises(BackendUnavailableError, match=r"no OpenCL device matches '7:0'.*"
+                                                      r"found: 0:0 Intel\(R\) OpenCL / cpu-a"):
+        opencl_module.select_device("7:0")
+
+
+def test_float64_on_a_device_without_fp64_is_an_error_not_float32(opencl_module, monkeypatch):
+    devices = fake_devices((0, 0, "Some GPU platform", "small-gpu", "gpu", False))
+    monkeypatch.setattr(opencl_module, "list_devices", lambda: devices)
+    with pytest.raises(BackendUnavailableError, match="has no float64.*'float32' or 'auto'"):
+        opencl_module.OpenCLBackend(precision="float64")
+
+
+def test_a_device_with_small_work_groups_is_unavailable(opencl_module, monkeypatch):
+    devices = fake_devices((0, 0, "Tiny platform", "tiny", "accelerator", True))
+    devices[0]["max_work_group_size"] = 32
+    monkeypatch.setattr(opencl_module, "list_devices", lambda: devices)
+    with pytest.raises(BackendUnavailableError, match="at most 32 work-items per group"):
+        opencl_module.OpenCLBackend()
+
+
+def test_warm_up_runs_segments_lines_and_polygons(opencl):
+    opencl.warm_up()
+
+
+def test_the_listing_names_every_device_with_its_fp64_support(opencl_module, opencl):
+    devices = opencl_module.list_devices()
+    assert opencl.device in devices
+    for device in devices:
+        assert set(device) == {"id", "platform", "device", "type", "fp64", "version",
+                               "max_work_group_size"}
+        assert device["type"] in ("gpu", "cpu", "accelerator", "other")
+
+
+def test_auto_precision_is_float64_where_the_device_has_it(opencl):
+    expected = Precision.FLOAT64 if opencl.device["fp64"] else Precision.FLOAT32
+    assert opencl.precision is expected
+
+
+def test_the_registry_uses_the_configured_device(opencl, default_configuration):
+    registry.configure_opencl(opencl.device["id"], "float32")
+    engine = registry.get_backend("opencl")
+    assert engine.device == opencl.device and engine.precision is Precision.FLOAT32
+    r = clip_segments([[-5.0, 5.0, 15.0, 5.0]], W, backend="opencl")
+    assert r.stats.device.precision == "float32"
+    registry.configure_opencl("no such device")
+    with pytest.raises(BackendUnavailableError, match="no OpenCL device matches"):
+        clip_segments([[-5.0, 5.0, 15.0, 5.0]], W, backend="opencl")
+    assert "opencl" not in [b.value for b in registry.available_backends()]
+
+
+def test_programs_are_built_once_per_device_and_precision(opencl, opencl_module):
+    again = opencl_module.OpenCLBackend(opencl.device["id"], opencl.precision)
+    assert again._device is opencl._device
+    double = opencl.precision is Precision.FLOAT64
+    assert again._device.program(double) is opencl._device.program(double)
+
+
+# --- OpenCL missing: a clear error, never another backend ----------------------------------
+
+
+def test_without_pyopencl_asking_for_opencl_says_what_to_install(monkeypatch,
+                                                                 default_configuration):
+    monkeypatch.setitem(sys.modules, "pyopencl", None)  # `import pyopencl` fails
+    registry.configure_opencl()
+    with pytest.raises(BackendUnavailableError, match=r"needs pyopencl.*rnsca\[opencl\]"):
+        clip_segments([[0.0, 0.0, 1.0, 1.0]], W, backend="opencl")
+    assert [b.value for b in registry.available_backends()] == ["numba", "numpy"]
+    report = registry.opencl_report()
+    assert report["available"] is False and "needs pyopencl" in report["reason"]
+    assert report["devices"] == []
+
+
+def test_without_an_opencl_platform_asking_for_opencl_says_so(opencl_module, monkeypatch,
+                                                              default_configuration):
+    import pyopencl
+
+    def no_platform():
+        raise pyopencl.LogicError("clGetPlatformIDs failed: PLATFORM_NOT_FOUND_KHR")
+
+    monkeypatch.setattr(pyopencl, "get_platforms", no_platform)
+    registry.configure_opencl()
+    with pytest.raises(BackendUnavailableError, match="no OpenCL platform found.*PoCL"):
+        clip_segments([[0.0, 0.0, 1.0, 1.0]], W, backend="opencl")
+    assert registry.opencl_report()["available"] is False
+
+
+def test_a_platform_without_devices_is_no_device(opencl_module, monkeypatch):
+    import pyopencl
+
+    monkeypatch.setattr(pyopencl, "get_platforms", lambda: [])
+    with pytest.raises(BackendUnavailableError, match="no OpenCL device found"):
+        opencl_module.list_devices()
+
+
+def test_a_driver_that_cannot_build_the_kernels_is_an_unavailable_backend(opencl,
+                                                                          opencl_module):
+    with pytest.raises(BackendUnavailableError,
+                       match="'broken / device' could not build the kernels: .*error"):
+        opencl_module._build_program(opencl._device.context, "broken / device",
+                                     "this is not OpenCL C", [])
+
+
+# --- stats -------------------------------------------------------------------------------
+
+
+def test_stats_count_the_transfers_and_their_bytes(opencl, rng):
+    segs = rng.uniform(-10.0, 30.0, size=(1000, 4))
+    r = clip_segments(segs, W, backend="opencl")
+    d = r.stats.device
+    real = 8 if opencl.precision is Precision.FLOAT64 else 4
+    m = len(r)
+    groups = -(-1000 // 64)
+    assert d.device == opencl.name and d.precision == opencl.precision.value
+    # Up: the segments. Down: the total, the counter rows, the pieces, sources, t.
+    assert d.transfers == 6
+    assert d.bytes_to_device == 1000 * 4 * real
+    assert d.bytes_from_device == 8 + groups * 41 * 8 + m * (4 * real + 8 + 2 * real)
+    assert d.kernel_seconds > 0 and d.transfer_seconds > 0
+
+
+def test_nothing_kept_brings_back_only_the_counters(opencl):
+    r = clip_segments([[20.0, 30.0, 40.0, 50.0]], W, backend="opencl")
+    assert len(r) == 0 and r.stats.rejected == 1
+    assert r.stats.device.transfers == 3  # segments up; total and counters down
+
+
+def test_empty_input_moves_nothing_but_the_counters(opencl):
+    r = clip_segments(np.empty((0, 4)), W, backend="opencl")
+    assert len(r) == 0 and r.stats.segments_in == 0
+    assert r.stats.device.bytes_to_device == 0 and r.stats.device.transfers == 1
+
+
+def test_combined_stats_add_the_device_counters(opencl, rng):
+    from rnsca.stats import ClipStats
+
+    a = clip_segments(rng.uniform(-10, 30, (100, 4)), W, backend="opencl").stats
+    b = clip_segments(rng.uniform(-10, 30, (50, 4)), W, backend="opencl").stats
+    both = ClipStats.combine([a, b])
+    assert both.device.transfers == a.device.transfers + b.device.transfers
+    assert both.device.bytes_to_device == (100 + 50) * 4 * (
+        8 if opencl.precision is Precision.FLOAT64 else 4)
+
+
+def test_concurrent_calls_give_the_same_pieces(opencl, rng):
+    segs = rng.uniform(-10.0, 30.0, size=(5000, 4))
+    expected = clip_segments(segs, W, backend="numpy")
+    results = [None] * 4
+
+    def run(k):
+        results[k] = clip_segments(segs, W, backend="opencl")
+
+    threads = [threading.Thread(target=run, args=(k,)) for k in range(4)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    for r in results:
+        np.testing.assert_array_equal(r.source, expected.source)
+        np.testing.assert_allclose(r.segments, expected.segments, rtol=1e-12, atol=1e-12)
+
+
+def test_two_backends_on_one_device_can_be_called_at_once(opencl, opencl_module, rng):
+    # Both share the device's kernel objects (and so its call lock).
+    other = opencl_module.OpenCLBackend(opencl.device["id"], opencl.precision)
+    segs = rng.uniform(-10.0, 30.0, size=(20000, 4))
+    options = SegmentOptions.resolve(W)
+    expected = clip_segments(segs, W, backend="numpy")
+    results = [None] * 6
+
+    def run(k):
+        results[k] = (opencl if k % 2 else other).clip_segments(segs, W, options)
+
+    threads = [threading.Thread(target=run, args=(k,)) for k in range(6)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    for pieces, source, _, _ in results:
+        np.testing.assert_array_equal(source, expected.source)
+        np.testing.assert_allclose(pieces, expected.segments, rtol=1e-12, atol=1e-12)
+
+
+# --- float32 -------------------------------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def float32(opencl):
+    from rnsca.backends.opencl import OpenCLBackend
+
+    return OpenCLBackend(opencl.device["id"], "float32")
+
+
+def _rounded(array):
+    return np.asarray(array, dtype=np.float32).astype(np.float64)
+
+
+@pytest.mark.parametrize("scale, offset", [(1.0, 0.0), (1e3, 1e6), (1e-3, 0.0), (1e10, -1e12),
+                                           (1e-20, 1e-18)])
+def test_float32_pieces_are_within_the_documented_bound(float32, method, mode, rng, scale,
+                                                        offset):
+    from rnsca.backends.opencl import FLOAT32_RELATIVE_BOUND
+
+    window = Window(offset, offset, offset + scale, offset + 2 * scale)
+    segs = np.concatenate([
+        rng.uniform(-1.0, 3.0, size=(1500, 4)),
+        rng.integers(-2, 5, size=(300, 4)) * 0.5,  # on edges and corners
+    ]) * scale + offset
+    options = SegmentOptions.resolve(window, method=method, mode=mode)
+    pieces, source, t, stats = float32.clip_segments(segs, window, options)
+    assert stats.device.precision == "float32"
+    # The reference: the same input rounded to float32, clipped in float64 (by the NumPy
+    # reference, fast also when the kernels run uncompiled).
+    ref = clip_segments(_rounded(segs), _rounded(window.bounds), method=method, mode=mode,
+                        backend="numpy")
+    size = np.maximum(np.abs(segs).max(axis=1), np.abs(window.bounds).max())
+    bound = FLOAT32_RELATIVE_BOUND * size
+    common, mine, theirs = np.intersect1d(source, ref.source, return_indices=True)
+    error = np.abs(pieces[mine] - ref.segments[theirs]).max(axis=1)
+    assert (error <= bound[common]).all(), (error / bound[common]).max()
+    # A piece only one of them has is a rounding sliver at a corner or an edge.
+    for k in np.setdiff1d(source, common):
+        p = pieces[np.flatnonzero(source == k)[0]]
+        assert np.hypot(p[2] - p[0], p[3] - p[1]) <= bound[k]
+    for k in np.setdiff1d(ref.source, common):
+        p = ref.segments[np.flatnonzero(ref.source == k)[0]]
+        assert np.hypot(p[2] - p[0], p[3] - p[1]) <= bound[k]
+    # Never a point outside the window the caller gave.
+    assert (pieces[:, 0::2] >= window.xmin).all() and (pieces[:, 0::2] <= window.xmax).all()
+    assert (pieces[:, 1::2] >= window.ymin).all() and (pieces[:, 1::2] <= window.ymax).all()
+
+
+def test_float32_refuses_coordinates_beyond_its_range(float32):
+    segs = np.array([[0.0, 0.0, 1.0, 1.0], [-1e300, 5.0, 1e300, 5.0]])
+    options = SegmentOptions.resolve(W)
+    with pytest.raises(InvalidGeometryError, match="segment 1 does not fit float32") as info:
+        float32.clip_segments(segs, W, options)
+    assert info.value.row == 1
+    # Coordinates that fit but whose difference does not.
+    with pytest.raises(InvalidGeometryError, match="segment 0 does not fit float32"):
+        float32.clip_segments(np.array([[-3e38, 0.0, 3e38, 0.0]]), W, options)
+
+
+def test_float32_refuses_a_window_that_collapses(float32):
+    window = Window(1e8, 0.0, 1e8 + 1.0, 1.0)  # 1e8 + 1 rounds to 1e8 in float32
+    with pytest.raises(InvalidWindowError, match="empty or infinite in float32"):
+        float32.clip_segments(np.array([[0.0, 0.5, 2e8, 0.5]]), window,
+                              SegmentOptions.resolve(window))
+
+
+def test_float32_gives_the_same_decisions_on_exact_inputs(float32):
+    # Integers and halves are exact in float32: the same pieces, and in exact mode (which
+    # decides at level 0 by outcodes) the same counters. Approx mode subdivides further
+    # in float32: its rounding margins are wider.
+    segs = np.array([[-5.0, 5.0, 15.0, 5.0], [1.0, 1.0, 2.0, 2.0], [20.0, 0.0, 30.0, 0.0],
+                     [0.0, 0.0, 10.0, 20.0], [-1.0, 10.0, 11.0, 10.0]])
+    for method in Method:
+        for mode in Mode:
+            options = SegmentOptions.resolve(W, method=method, mode=mode)
+            pieces, source, t, stats = float32.clip_segments(segs, W, options)
+            ref = clip_segments(segs, W, method=method, mode=mode, backend="numpy")
+            np.testing.assert_array_equal(source, ref.source)
+            np.testing.assert_allclose(pieces, ref.segments, rtol=0, atol=2.0 ** -22 * 20)
+            if mode is Mode.EXACT:
+                assert stats == dataclasses.replace(ref.stats, device=stats.device)
+
+
+def test_float32_lines_keep_the_input_vertices_and_cut_within_the_bound(
+        opencl, rng, default_configuration):
+    import shapely
+
+    from rnsca.backends.opencl import FLOAT32_RELATIVE_BOUND
+    from rnsca.ragged import clip_ragged
+
+    walks = rng.normal(size=(4000, 2)).cumsum(axis=0) * 0.5 + 5.0
+    lines = np.array([shapely.LineString(walks[i:i + 500]) for i in range(0, 4000, 500)],
+                     dtype=object)
+    triple = shapely.to_ragged_array(lines)
+    window = (0.0, 0.0, 10.0, 10.0)
+    ref = clip_ragged(*triple, window, backend="numba")
+    registry.configure_opencl(opencl.device["id"], "float32")
+    got = clip_ragged(*triple, window, backend="opencl")
+    assert got.stats.device.precision == "float32"
+    for a, b in zip(got.offsets, ref.offsets, strict=True):
+        np.testing.assert_array_equal(a, b)
+    size = max(np.abs(walks).max(), 10.0)
+    np.testing.assert_allclose(got.coords, ref.coords, rtol=0,
+                               atol=FLOAT32_RELATIVE_BOUND * size)
+    # Vertices the clip did not cut are the float64 input vertices, bit for bit.
+    inside = (ref.coords > 0.0).all(axis=1) & (ref.coords < 10.0).all(axis=1)
+    np.testing.assert_array_equal(got.coords[inside], ref.coords[inside])
+    assert (got.coords >= 0.0).all() and (got.coords <= 10.0).all()
+
+
+def test_float32_lines_refuse_coordinates_beyond_its_range(opencl, default_configuration):
+    from rnsca.ragged import clip_ragged
+
+    registry.configure_opencl(opencl.device["id"], "float32")
+    coords = np.array([[0.0, 0.0], [1.0, 1.0], [1e300, 1.0]])
+    with pytest.raises(InvalidGeometryError, match="coordinate 2 does not fit float32"):
+        clip_ragged("linestring", coords, (np.array([0, 3]),), W, backend="opencl")
+
+
+def test_float32_polygons_are_valid_and_within_the_bound(opencl, rng, default_configuration):
+    import shapely
+
+    from rnsca.backends.opencl import FLOAT32_RELATIVE_BOUND
+
+    polygons = []
+    for _ in range(200):
+        centre = rng.uniform(0.0, 10.0, 2)
+        angles = np.sort(rng.uniform(0.0, 2 * np.pi, 40))
+        r = rng.uniform(0.5, 3.0) * rng.uniform(0.5, 1.0, 40)
+        polygons.append(shapely.Polygon(np.c_[centre[0] + r * np.cos(angles),
+                                              centre[1] + r * np.sin(angles)]))
+    polygons = np.array(polygons, dtype=object)
+    window = (2.1, 2.3, 7.7, 7.9)  # bounds not representable in float32
+    ref = rnsca.clip(polygons, window, backend="numba")
+    registry.configure_opencl(opencl.device["id"], "float32")
+    got = rnsca.clip(polygons, window, backend="opencl")
+    assert shapely.is_valid(got).all()
+    bound = FLOAT32_RELATIVE_BOUND * 14.0
+    distance = shapely.hausdorff_distance(got, ref)
+    both = ~shapely.is_empty(ref)
+    assert (shapely.is_empty(got) == ~both).all()
+    assert (distance[both] <= bound).all(), distance[both].max()
+    xmin, ymin, xmax, ymax = shapely.bounds(got[both]).T
+    assert (xmin >= 2.1).all() and (ymin >= 2.3).all() and (xmax <= 7.7).all() \
+        and (ymax <= 7.9).all()

@@ -154,6 +154,9 @@ class _Device:
     queue: cl.CommandQueue
     programs: dict = field(default_factory=dict)
     lock: threading.Lock = field(default_factory=threading.Lock)
+    # Kernel objects hold their arguments and are shared by every backend on this
+    # device: one call at a time sets and enqueues them.
+    call_lock: threading.Lock = field(default_factory=threading.Lock)
 
     def program(self, double: bool) -> cl.Program:
         """Return ``clip.cl`` built for float64 (`double`) or float32, built once."""
@@ -256,7 +259,7 @@ def _seconds(events) -> float:
 
 
 class OpenCLBackend:
-    """Run the segment kernels on one OpenCL device.
+    """Run the kernels of segments, and of the runs of lines and rings, on an OpenCL device.
 
     Parameters
     ----------
@@ -293,8 +296,6 @@ class OpenCLBackend:
         self.name = f"{self.device['platform']} / {self.device['device']}"
         self._device = _device(self.device)
         self._device.program(self.precision is Precision.FLOAT64)  # a build error shows now
-        # Kernel arguments are set on shared kernel objects: one call at a time.
-        self._call_lock = threading.Lock()
 
     @property
     def real(self) -> type:
@@ -323,7 +324,7 @@ class OpenCLBackend:
         queue = self._device.queue
         ledger = _Ledger()
         groups = max(1, -(-n // LOCAL_SIZE))
-        with self._call_lock:
+        with self._device.call_lock:
             kernels = self._device.program(real is np.float64)
             clip_kernel, write_kernel = kernels.clip_segments, kernels.write_pieces
             device_segments = ledger.to_device(queue, data.reshape(-1))
@@ -469,7 +470,7 @@ class OpenCLBackend:
         part_groups = max(1, -(-n_parts // LOCAL_SIZE))
         chunk_groups = max(1, -(-n_chunks // LOCAL_SIZE))
         n_runs = options.n if options.n > 0 else PL.RUN_N_AUTO
-        with self._call_lock:
+        with self._device.call_lock:
             kernels = self._device.program(real is np.float64)
             d_xy = ledger.to_device(queue, data.reshape(-1))
             d_offsets = ledger.to_device(queue, np.ascontiguousarray(part_offsets, np.int64))

@@ -237,6 +237,27 @@ def test_concurrent_calls_give_the_same_pieces(opencl, rng):
         np.testing.assert_allclose(r.segments, expected.segments, rtol=1e-12, atol=1e-12)
 
 
+def test_two_backends_on_one_device_can_be_called_at_once(opencl, opencl_module, rng):
+    # Both share the device's kernel objects (and so its call lock).
+    other = opencl_module.OpenCLBackend(opencl.device["id"], opencl.precision)
+    segs = rng.uniform(-10.0, 30.0, size=(20000, 4))
+    options = SegmentOptions.resolve(W)
+    expected = clip_segments(segs, W, backend="numpy")
+    results = [None] * 6
+
+    def run(k):
+        results[k] = (opencl if k % 2 else other).clip_segments(segs, W, options)
+
+    threads = [threading.Thread(target=run, args=(k,)) for k in range(6)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    for pieces, source, _, _ in results:
+        np.testing.assert_array_equal(source, expected.source)
+        np.testing.assert_allclose(pieces, expected.segments, rtol=1e-12, atol=1e-12)
+
+
 # --- float32 -------------------------------------------------------------------------------
 
 

@@ -7,6 +7,7 @@ from rnsca.arrays import GeometryKind, Ragged
 from rnsca.clip import SegmentClipResult, clip, clip_segments
 from rnsca.clip_geojson import clip_geojson
 from rnsca.clip_svg import Curves, Fill, PathClipResult, clip_paths, clip_svg, flatten_paths
+from rnsca.clip_svgdoc import FillMode, clip_svg_document
 from rnsca.errors import (
     BackendUnavailableError,
     InvalidGeometryError,
@@ -17,7 +18,6 @@ from rnsca.errors import (
     RnscaError,
     UnsupportedGeometryError,
 )
-from rnsca.formats.svgdoc import FillMode, clip_svg_document
 from rnsca.formats.svgpath import PathArrays, parse_path, parse_paths, write_path, write_paths
 from rnsca.options import Backend, Boundary, Method, Mode
 from rnsca.ragged import RaggedClipResult, clip_ragged

@@ -26,6 +26,7 @@ from rnsca.backends.registry import (
     get_backend,
     opencl_report,
 )
+from rnsca.clip_svgdoc import clip_svg_document
 from rnsca.errors import (
     BackendUnavailableError,
     InvalidOptionError,
@@ -33,7 +34,6 @@ from rnsca.errors import (
     RnscaError,
 )
 from rnsca.formats.geojson import dumps, loads
-from rnsca.formats.svgdoc import clip_svg_document
 from rnsca.options import Backend, Boundary, Mode
 
 __all__ = ["app", "PROGRESS_MIN_BYTES"]

@@ -128,22 +128,33 @@ class SegmentOptions:
         """
         method = Method(method)
         mode = Mode(mode)
-        if isinstance(n, str):
-            if n.lower() != "auto":
-                raise InvalidOptionError(
-                    f"n must be an integer {N_MIN}..{N_MAX} or 'auto', got {n!r}")
+        n_value = subdivision_n(n)
+        if n_value is None:
             n_value = 0
-        else:
-            n_value = _integer("n", n, N_MIN, N_MAX)
         if method is Method.MIDPOINT:
             n_value = 2
-        depth = MAX_DEPTH_LIMIT if max_depth is None else _integer(
-            "max_depth", max_depth, 0, MAX_DEPTH_LIMIT)
+        depth = subdivision_depth(max_depth, MAX_DEPTH_LIMIT)
         if tolerance is None:
             tol = window.size * APPROX_RELATIVE_TOLERANCE if mode is Mode.APPROX else math.inf
         else:
             tol = positive_tolerance(tolerance)  # +inf means "never subdivide"
         return cls(method, mode, n_value, depth, tol, window.size)
+
+
+def subdivision_n(n) -> int | None:
+    """Return `n` checked (an integer N_MIN..N_MAX), or None for ``"auto"``."""
+    if isinstance(n, str):
+        if n.lower() != "auto":
+            raise InvalidOptionError(
+                f"n must be an integer {N_MIN}..{N_MAX} or 'auto', got {n!r}")
+        return None
+    return _integer("n", n, N_MIN, N_MAX)
+
+
+def subdivision_depth(max_depth, default: int) -> int:
+    """Return `max_depth` checked (an integer 0..MAX_DEPTH_LIMIT), or `default` for None."""
+    return default if max_depth is None else _integer("max_depth", max_depth, 0,
+                                                      MAX_DEPTH_LIMIT)
 
 
 def positive_tolerance(value, *, finite: bool = False) -> float:

@@ -37,7 +37,6 @@ from service.budget import (
 from service.config import Settings
 from service.errors import (
     InvalidBodyError,
-    NotImplementedYetError,
     TooManyVerticesError,
     WorkOverBudgetError,
 )
@@ -50,7 +49,7 @@ from service.schemas import (
 )
 
 __all__ = ["Outcome", "clip_geojson", "clip_svg", "clip_segments_json",
-           "clip_segments_binary", "svg_available", "warm_up_svg", "backend_report",
+           "clip_segments_binary", "warm_up_svg", "backend_report",
            "SEGMENT_BYTES"]
 
 #: One binary segment: four little-endian float64.
@@ -233,19 +232,12 @@ def clip_segments_binary(body: bytes, window: Window, options: ClipOptions,
 _NUMBER = re.compile(rb"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
 
 
-def svg_available() -> bool:
-    """Return whether the library has SVG path clipping (`rnsca.clip_svg`)."""
-    return callable(getattr(rnsca, "clip_svg", None))
-
-
 def warm_up_svg() -> None:
     """Compile the SVG path kernels (the backends' warm-up covers segments and geometry).
 
     Clips a few small paths, and enough of them to take the parallel drivers too, in each
     curve handling and fill rule; a combination the library refuses is skipped.
     """
-    if not svg_available():
-        return
     paths = ["M -1 0.5 C 0 2 1 -1 2 0.5 Q 0.5 3 -1 0.5 Z", "M -1 0.25 L 2 0.25 L 2 0.75 Z",
              "M 0.2 0.2 A 0.3 0.3 0 0 1 0.8 0.8"]
     # Flattening many paths is slow in itself (arcs at the default tolerance): large
@@ -262,11 +254,7 @@ def warm_up_svg() -> None:
 
 
 def clip_svg(body: bytes, settings: Settings) -> Outcome:
-    """Answer ``POST /v1/clip/svg`` through `rnsca.clip_svg`.
-
-    Until the library has ``clip_svg`` a valid request is answered 501 (a bad one still
-    gets its 422): the one place to change when it lands is `_call_clip_svg`.
-    """
+    """Answer ``POST /v1/clip/svg`` through `rnsca.clip_svg`."""
     request = ClipSVGRequest.model_validate_json(body)
     window = Window(*request.window)
     arguments = _library_options(request.options, settings)
@@ -283,11 +271,7 @@ def clip_svg(body: bytes, settings: Settings) -> Outcome:
 
 def _call_clip_svg(request: ClipSVGRequest, window: Window, arguments: dict, vertices: int,
                    settings: Settings):
-    """Return ``(paths, stats, verification)`` from `rnsca.clip_svg` (501 until it exists)."""
-    if not svg_available():
-        raise NotImplementedYetError(
-            "SVG path clipping is not in this release of rnsca yet (rnsca.clip_svg); "
-            "the request was valid. See /v1/capabilities (svg) for when it is.")
+    """Return ``(paths, stats, verification)`` from `rnsca.clip_svg`."""
     options = request.options
     try:
         paths, stats = rnsca.clip_svg(request.paths, window, curves=options.curves,

@@ -42,7 +42,6 @@ __all__ = [
     "TooManyVerticesError",
     "WorkOverBudgetError",
     "TimeLimitError",
-    "NotImplementedYetError",
     "NotReadyError",
     "problem",
     "problem_bytes",
@@ -112,12 +111,6 @@ class TimeLimitError(ServiceError):
     """The request waited for and ran longer than ``request_time_limit`` (server load)."""
 
     status, slug, title = 503, "time-limit", "Request time limit exceeded"
-
-
-class NotImplementedYetError(ServiceError):
-    """The endpoint exists in the API but the library function behind it does not yet."""
-
-    status, slug, title = 501, "not-implemented", "Not implemented"
 
 
 class NotReadyError(ServiceError):

@@ -1,11 +1,14 @@
-"""Clip whole SVG documents: every drawn shape cut to a window, the rest left as it was.
+"""Read and write SVG documents: the drawn shapes as path data, the rest kept as it was.
 
-`clip_svg_document` reads a document, turns its drawn shapes into path data, maps each
-into the root's user space through the transforms above it, clips them all at once
-(one `rnsca.clip_paths` call per way of clipping: strokes, nonzero fills, evenodd
-fills), maps the results back into each shape's own coordinates and writes the
-document again. Reading and writing keep everything else: elements, attributes in
-their order, namespace prefixes as written, text, comments, processing instructions.
+`read_document` parses a document and `find_shapes` lists its drawn shapes (``<path>``
+and the basic shapes, in the root and in ``<g>``, ``<a>`` and ``<switch>``): each with
+its outline as path data in its own coordinates, the map of the transforms above it
+into the root's user space, and its paint (fill, fill-rule). `parse_shapes`,
+`map_shapes` and `inverse_maps` turn them into `PathArrays` in root units and back;
+`set_path_data` and `remove_children` put new path data in place, and `write_document`
+writes the document again. Reading and writing keep everything else: elements,
+attributes in their order, namespace prefixes as written, text, comments, processing
+instructions. Clipping a document is `rnsca.clip_svgdoc`; this module knows nothing of it.
 
 The document is read with the standard library's expat, without namespace processing
 (names stay as written, so the output has the same prefixes and ``xmlns``
@@ -24,19 +27,12 @@ from xml.parsers import expat
 
 import numpy as np
 
-from rnsca.clip_svg import Fill, _resolve, clip_paths
-from rnsca.errors import (
-    InvalidGeometryError,
-    InvalidOptionError,
-    ParseError,
-    UnsupportedGeometryError,
-)
-from rnsca.formats.svgpath import PathArrays, parse_paths, write_paths
-from rnsca.options import _ChoiceEnum
-from rnsca.stats import ClipStats
-from rnsca.window import Window
+from rnsca.errors import InvalidGeometryError, ParseError, UnsupportedGeometryError
+from rnsca.formats.svgpath import PathArrays, parse_paths
 
-__all__ = ["FillMode", "MAX_NESTING", "SVG_NAMESPACE", "clip_svg_document"]
+__all__ = ["IDENTITY", "MAX_NESTING", "SVG_NAMESPACE", "Shape", "SvgDocument", "find_shapes",
+           "inverse_maps", "largest_stretch", "map_shapes", "parse_shapes", "read_document",
+           "remove_children", "set_path_data", "write_document"]
 
 #: The SVG namespace; elements in it, or in no namespace at all, are SVG elements.
 SVG_NAMESPACE = "http://www.w3.org/2000/svg"
@@ -77,216 +73,27 @@ _TRANSFORM_ARITY = {"matrix": (6,), "translate": (1, 2), "scale": (1, 2),
                     "rotate": (1, 3), "skewX": (1,), "skewY": (1,)}
 _CSS_COMMENT = re.compile(r"/\*.*?\*/", re.S)
 
-# An affine map as SVG writes it, ``matrix(a b c d e f)``: x' = a x + c y + e,
-# y' = b x + d y + f.
-_IDENTITY = (1.0, 0.0, 0.0, 1.0, 0.0, 0.0)
+#: The identity map. An affine map is written as SVG writes it, ``matrix(a b c d e f)``:
+#: x' = a x + c y + e, y' = b x + d y + f.
+IDENTITY = (1.0, 0.0, 0.0, 1.0, 0.0, 0.0)
 
 
-class FillMode(_ChoiceEnum):
-    """How each drawn shape of a document is clipped."""
-
-    AUTO = "auto"
-    """Per element: as a fill (under its fill-rule) when its fill is not none, else as
-    a stroke. A shape both filled and stroked is clipped as a fill."""
-    STROKE = "stroke"
-    """Every shape as a stroke: outlines cut into open pieces, nothing added."""
-    FILL = "fill"
-    """Every shape as a fill under its fill-rule (a <line> has no inside: a stroke)."""
-
-    @classmethod
-    def _missing_(cls, value):
-        choices = ", ".join(repr(m.value) for m in cls)
-        if isinstance(value, str):
-            for member in cls:
-                if member.value == value.lower():
-                    return member
-        raise InvalidOptionError(f"fill_mode must be one of {choices}, got {value!r}")
-
-
-def clip_svg_document(document, window, *, curves="preserve", fill_mode="auto",
-                      tolerance=None, precision=None, keep_empty=False,
-                      **options) -> tuple[str, ClipStats]:
-    """Return an SVG document with every drawn shape clipped to a window, and the stats.
-
-    Every ``<path>`` drawn where it stands (in the root or in ``<g>``, ``<a>`` and
-    ``<switch>`` containers) is clipped; so are the basic shapes (``<rect>``, rounded
-    or not, ``<circle>``, ``<ellipse>``, ``<line>``, ``<polyline>``, ``<polygon>``),
-    which become a ``<path>`` with their other attributes (id, class, style, fill,
-    stroke, transform...) kept. Everything else is left as it is.
-
-    Parameters
-    ----------
-    document : str or bytes
-        The SVG document. Bytes are decoded as their XML declaration says (UTF-8 by
-        default); a str is taken as already decoded.
-    window : Window or sequence of 4 floats
-        ``(xmin, ymin, xmax, ymax)`` in the root's user space: the coordinates the
-        root ``<svg>`` element's children are written in (its ``viewBox`` is not
-        applied to them).
-    curves : {"preserve", "flatten"}
-        As for `rnsca.clip_paths`.
-    fill_mode : {"auto", "stroke", "fill"}
-        How shapes are clipped (`FillMode`): "auto" per element, from its computed
-        ``fill`` (not none: a fill under its ``fill-rule``; none: a stroke).
-    tolerance : float, optional
-        As for `rnsca.clip_paths`, in root user units (default: 1e-6 of the window's
-        longer side); arcs (in path data, circles, ellipses, rounded corners) are read
-        as cubics within it too (default: 1e-9 of each arc's radius).
-    precision : int or None
-        Significant digits of the written path data; None (default) writes each
-        number exactly (shortest round-trip form).
-    keep_empty : bool
-        Keep shapes whose clip is empty as ``<path d="">`` instead of removing them.
-    **options
-        ``method``, ``n``, ``max_depth``, ``mode``, ``backend``: as for
-        `rnsca.clip_paths`.
-
-    Returns
-    -------
-    (str, ClipStats)
-        The document, and the stats of all its clips taken together
-        (`ClipStats.combine`): ``geometries_in`` counts the shapes clipped. The text
-        starts with an XML declaration (``encoding="UTF-8"``: encode it as UTF-8) when
-        the input had one.
-
-    Raises
-    ------
-    ParseError
-        The XML is malformed (``line L, column C``, 1-based, also as the ``line`` and
-        ``column`` attributes), declares entities, nests elements deeper than
-        `MAX_NESTING`, has no ``<svg>`` root, or a shape's path data, points, lengths
-        or transform are malformed (the message names the element, its id and line).
-    UnsupportedGeometryError
-        A shape's length is in font-relative units (em, ex...), or a percentage with no
-        viewBox (nor width and height) on the root to resolve it against.
-    InvalidGeometryError
-        A coordinate becomes infinite (the element is named).
-    InvalidWindowError, InvalidOptionError
-        (ValueError) naming the bad value; they are checked before the document is
-        read.
-
-    Notes
-    -----
-    Transforms: each shape is mapped to the root's user space by the ``transform``
-    attributes of its ancestors and its own (``matrix``, ``translate``, ``scale``,
-    ``rotate(a [cx cy])``, ``skewX``, ``skewY`` and lists of them), clipped there, and
-    mapped back by the inverse map: its path data stays in its own coordinates and
-    every ``transform`` attribute stays where it was (an affine map takes a Bézier to
-    the Bézier of the mapped control points, so curves stay exact). The root's own
-    ``transform`` is not applied. A shape under a singular transform (``scale(0)``)
-    covers no area; it is left as it is.
-
-    Fill or stroke: ``fill`` and ``fill-rule`` are read from the ``style`` attribute,
-    then the presentation attribute, then inherited from the ancestors (the root
-    included); the default fill is black, the default rule nonzero. CSS rules in
-    ``<style>`` elements, and the ``transform`` and geometry properties in ``style``,
-    are not read. A fill clip closes every subpath and adds runs along the window's
-    edges, so a shape that is also stroked shows stroke along the cut: use
-    ``fill_mode="stroke"`` to keep outlines only. A stroke clip cuts the outline into
-    open pieces: markers appear at the new ends, and ``pathLength`` dash scaling
-    refers to the old length. The stroke's width is not taken into account: the
-    outline, not its painted band, is clipped.
-
-    Output: a shape whose control points all lie in the window is left as it is
-    (a ``<rect>`` inside stays a ``<rect>``). A shape whose clip is empty is removed,
-    with the whitespace before it (``keep_empty`` keeps it as an empty ``<path>``).
-    Shapes that do not render (a ``<rect>`` of zero width, a ``<path>`` without
-    ``d``) are left as they are.
-
-    Not clipped, left as they are: ``<use>`` (and what it references inside
-    ``<defs>``; a ``<use>`` of a drawn shape shows that shape clipped, in the use's
-    coordinates), ``<text>``, ``<image>``, ``<foreignObject>``, nested ``<svg>``
-    elements and everything inside ``<defs>``, ``<clipPath>``, ``<mask>``,
-    ``<pattern>``, ``<marker>`` and ``<symbol>`` (not drawn where they stand).
-
-    Reading: whitespace between the top-level items before and after the root is not
-    kept (each is written on its own line); a DOCTYPE is written back without its
-    internal subset; entity declarations are refused, so are references to entities
-    other than XML's five.
-
-    Examples
-    --------
-    >>> text = '''<svg xmlns="http://www.w3.org/2000/svg">
-    ...   <rect id="r" x="-5" y="2" width="10" height="4"/>
-    ...   <text x="1" y="1">kept</text>
-    ... </svg>'''
-    >>> out, stats = clip_svg_document(text, (0, 0, 10, 10))
-    >>> print(out)
-    <svg xmlns="http://www.w3.org/2000/svg">
-      <path id="r" d="M0 2H5V6H0V2Z" />
-      <text x="1" y="1">kept</text>
-    </svg>
-    <BLANKLINE>
-    >>> stats.geometries_in, stats.geometries_out
-    (1, 1)
-    """
-    window = Window.of(window)
-    mode = FillMode(fill_mode)
-    curve_options = dict(method="rnsca", n="auto", max_depth=None, mode="exact",
-                         backend="numba") | options
-    _resolve(window, curves=curves, fill=None, tolerance=tolerance, **curve_options)
-    write_paths(PathArrays.empty(), precision=precision)  # checks `precision`
-    doc = _read_document(document)
-    shapes = _find_shapes(doc, mode)
-    groups: dict[Fill | None, list[_Shape]] = {}
-    for shape in shapes:
-        groups.setdefault(shape.fill, []).append(shape)
-    removals: dict[int, tuple[ET.Element, set[int]]] = {}
-    stats = [
-        _clip_group(doc, group, fill, window, removals, curves=curves, tolerance=tolerance,
-                    precision=precision, keep_empty=keep_empty, options=curve_options)
-        for fill, group in groups.items()
-    ]
-    for parent, removed in removals.values():
-        _remove_children(parent, removed)
-    return _write_document(doc), ClipStats.combine(stats)
-
-
-# --------------------------------------------------------------------------- clipping
+# --------------------------------------------------------------------------- shapes
 
 @dataclass(slots=True)
-class _Shape:
-    """A drawn shape: its element, path data in its own coordinates, how to clip it."""
+class Shape:
+    """A drawn shape: its element, path data in its own coordinates, its paint."""
 
     element: ET.Element
     parent: ET.Element
     local: str                  # "path", "rect", ...
     d: str
     matrix: tuple[float, ...]   # own coordinates to the root's, (a, b, c, d, e, f)
-    fill: Fill | None           # None: a stroke
+    filled: bool                # its computed fill is not none
+    fill_rule: str              # its computed fill-rule: "nonzero" or "evenodd"
 
 
-def _clip_group(doc, shapes: list[_Shape], fill: Fill | None, window: Window,
-                removals: dict, *, curves, tolerance, precision, keep_empty,
-                options) -> ClipStats:
-    """Clip `shapes` (all clipped the same way) in one call; rewrite their elements."""
-    matrices = np.array([shape.matrix for shape in shapes], dtype=np.float64)
-    identity = bool((matrices == _IDENTITY).all())
-    arc_tolerance = tolerance
-    if tolerance is not None and not identity:
-        # Arcs are read in each shape's own units: the largest stretch of any map
-        # turns their error into root units.
-        arc_tolerance = float(tolerance) / float(_largest_stretch(matrices).max())
-    paths = _parse_shapes(doc, shapes, arc_tolerance)
-    root = paths if identity else _named(doc, shapes, _map_paths, paths, matrices)
-    result = clip_paths(root, window, curves=curves, fill=fill, tolerance=tolerance,
-                        **options)
-    clipped = result.paths if identity else \
-        _named(doc, shapes, _map_paths, result.paths, _invert(matrices))
-    texts = write_paths(clipped, precision=precision)
-    inside = _inside(root, window)
-    for shape, text, unchanged in zip(shapes, texts, inside.tolist(), strict=True):
-        if unchanged:
-            continue
-        if text or keep_empty:
-            _set_path_data(shape, text)
-        else:
-            removals.setdefault(id(shape.parent), (shape.parent, set()))[1].add(
-                id(shape.element))
-    return result.stats
-
-
-def _parse_shapes(doc, shapes: list[_Shape], tolerance) -> PathArrays:
+def parse_shapes(doc, shapes: list[Shape], tolerance) -> PathArrays:
     """Return the path data of `shapes` parsed at once; errors name the element."""
     try:
         return parse_paths([shape.d for shape in shapes], tolerance=tolerance)
@@ -301,6 +108,11 @@ def _parse_shapes(doc, shapes: list[_Shape], tolerance) -> PathArrays:
         raised.__dict__.update(error.__dict__)
         raised.line = doc.lines.get(shape.element)
         raise raised from None
+
+
+def map_shapes(doc, shapes: list[Shape], paths: PathArrays, matrices: np.ndarray) -> PathArrays:
+    """Return `paths` with path ``i`` mapped by ``matrices[i]``; errors name the element."""
+    return _named(doc, shapes, _map_paths, paths, matrices)
 
 
 def _named(doc, shapes, function, paths, matrices):
@@ -343,7 +155,7 @@ def _apply(m: np.ndarray, points: np.ndarray) -> np.ndarray:
     return out
 
 
-def _invert(m: np.ndarray) -> np.ndarray:
+def inverse_maps(m: np.ndarray) -> np.ndarray:
     """Return the inverse of each map (n, 6); the caller has excluded singular ones."""
     a, b, c, d, e, f = m.T
     det = a * d - b * c
@@ -351,7 +163,7 @@ def _invert(m: np.ndarray) -> np.ndarray:
                      (b * e - a * f) / det], axis=1)
 
 
-def _largest_stretch(m: np.ndarray) -> np.ndarray:
+def largest_stretch(m: np.ndarray) -> np.ndarray:
     """Return each map's largest singular value: the most it lengthens a vector."""
     a, b, c, d = m[:, 0], m[:, 1], m[:, 2], m[:, 3]
     s = a * a + b * b + c * c + d * d
@@ -359,41 +171,7 @@ def _largest_stretch(m: np.ndarray) -> np.ndarray:
     return np.sqrt((s + np.sqrt(np.maximum(s * s - 4 * det * det, 0.0))) / 2)
 
 
-def _inside(paths: PathArrays, window: Window) -> np.ndarray:
-    """Return, per path, whether all its control points lie in the window.
-
-    Such a path is its own clip (a Bézier lies in the hull of its control points), so
-    its element is left as it was. A path with no points counts as inside.
-    """
-    c = paths.controls
-    segment_low = np.minimum(np.minimum(c[:, 0], c[:, 1]), np.minimum(c[:, 2], c[:, 3]))
-    segment_high = np.maximum(np.maximum(c[:, 0], c[:, 1]), np.maximum(c[:, 2], c[:, 3]))
-    low = np.minimum(_reduce(np.minimum, segment_low, paths.subpath_offsets, np.inf),
-                     paths.start)
-    high = np.maximum(_reduce(np.maximum, segment_high, paths.subpath_offsets, -np.inf),
-                      paths.start)
-    low = _reduce(np.minimum, low, paths.path_offsets, np.inf)
-    high = _reduce(np.maximum, high, paths.path_offsets, -np.inf)
-    xmin, ymin, xmax, ymax = window.bounds
-    return ((low[:, 0] >= xmin) & (low[:, 1] >= ymin)
-            & (high[:, 0] <= xmax) & (high[:, 1] <= ymax))
-
-
-def _reduce(ufunc, values: np.ndarray, offsets: np.ndarray, empty: float) -> np.ndarray:
-    """Return `ufunc` reduced over each run ``offsets[i]:offsets[i + 1]`` of `values`.
-
-    Runs are contiguous; an empty run gives `empty`. Only non-empty runs are passed to
-    ``reduceat``, so each reduces exactly its own rows.
-    """
-    counts = np.diff(offsets)
-    out = np.full((counts.shape[0],) + values.shape[1:], empty)
-    full = counts > 0
-    if full.any():
-        out[full] = ufunc.reduceat(values, offsets[:-1][full], axis=0)
-    return out
-
-
-def _set_path_data(shape: _Shape, d: str) -> None:
+def set_path_data(shape: Shape, d: str) -> None:
     """Write the clipped path data; a basic shape becomes a <path> in its place."""
     element = shape.element
     if shape.local == "path":
@@ -413,7 +191,7 @@ def _set_path_data(shape: _Shape, d: str) -> None:
     element.attrib.update(attributes)
 
 
-def _remove_children(parent: ET.Element, removed: set[int]) -> None:
+def remove_children(parent: ET.Element, removed: set[int]) -> None:
     """Remove the children of `parent` whose ids are in `removed`, and their indents.
 
     The whitespace before a removed element goes with it: its tail takes the place of
@@ -442,12 +220,12 @@ class _Context:
 
     matrix: tuple[float, ...]
     filled: bool
-    fill_rule: Fill
+    fill_rule: str
     namespaces: dict
 
 
-def _find_shapes(doc, mode: FillMode) -> list[_Shape]:
-    """Return the drawn shapes of the document, in document order.
+def find_shapes(doc) -> list[Shape]:
+    """Return the drawn shapes of the document, in document order, with their paint.
 
     Descends only into containers; shapes that do not render, and shapes under a
     singular transform, are left out (and so left as they are).
@@ -458,7 +236,7 @@ def _find_shapes(doc, mode: FillMode) -> list[_Shape]:
     if local != "svg":
         raise ParseError(f"not an SVG document: the root element is <{root.tag}>, not "
                          f"<svg> (in the SVG namespace {SVG_NAMESPACE} or none)")
-    context = _paint(root, _Context(_IDENTITY, True, Fill.NONZERO, namespaces))
+    context = _paint(root, _Context(IDENTITY, True, "nonzero", namespaces))
     shapes = []
     stack = [(child, root, context) for child in reversed(root)]
     while stack:
@@ -478,9 +256,8 @@ def _find_shapes(doc, mode: FillMode) -> list[_Shape]:
         d = _outline(doc, element, local)
         if d is None or not _invertible(matrix):
             continue
-        filled = mode is FillMode.FILL or (mode is FillMode.AUTO and inner.filled)
-        fill = inner.fill_rule if filled and local != "line" else None
-        shapes.append(_Shape(element, parent, local, d, matrix, fill))
+        shapes.append(Shape(element, parent, local, d, matrix, inner.filled,
+                            inner.fill_rule))
     return shapes
 
 
@@ -520,9 +297,9 @@ def _paint(element: ET.Element, context: _Context) -> _Context:
     if rule is not None:
         value = rule.strip().lower()
         if value == "initial":
-            fill_rule = Fill.NONZERO
+            fill_rule = "nonzero"
         elif value in ("nonzero", "evenodd"):
-            fill_rule = Fill(value)
+            fill_rule = value
     if (filled, fill_rule) == (context.filled, context.fill_rule):
         return context
     return _Context(context.matrix, filled, fill_rule, context.namespaces)
@@ -551,8 +328,8 @@ def _transform(doc, element: ET.Element) -> tuple[float, ...]:
     """
     text = element.get("transform")
     if text is None or not text.strip() or text.strip() == "none":
-        return _IDENTITY
-    matrix = _IDENTITY
+        return IDENTITY
+    matrix = IDENTITY
     position = 0
     while position < len(text):
         match = _TRANSFORM.match(text, position)
@@ -608,9 +385,9 @@ def _cos_sin(degrees: float) -> tuple[float, float]:
 
 def _compose(m: tuple[float, ...], n: tuple[float, ...]) -> tuple[float, ...]:
     """Return the map that applies `n`, then `m`."""
-    if n == _IDENTITY:
+    if n == IDENTITY:
         return m
-    if m == _IDENTITY:
+    if m == IDENTITY:
         return n
     a, b, c, d, e, f = m
     return (a * n[0] + c * n[1], b * n[0] + d * n[1],
@@ -749,7 +526,7 @@ def _element_error(doc, element: ET.Element, message: str) -> ParseError:
 # --------------------------------------------------------------------------- reading
 
 @dataclass(eq=False)
-class _Document:
+class SvgDocument:
     """A parsed document: the root element and what surrounds it."""
 
     root: ET.Element | None = None
@@ -784,7 +561,7 @@ class _Reader:
         parser.ordered_attributes = True
         parser.specified_attributes = True              # no defaults from a DTD
         self.builder = ET.TreeBuilder(insert_comments=True, insert_pis=True)
-        self.doc = _Document()
+        self.doc = SvgDocument()
         self.depth = 0
         parser.StartElementHandler = self.start
         parser.EndElementHandler = self.end
@@ -798,7 +575,7 @@ class _Reader:
         parser.SkippedEntityHandler = self.skipped_entity
         parser.ExternalEntityRefHandler = self.skipped_entity
 
-    def read(self, data) -> _Document:
+    def read(self, data) -> SvgDocument:
         try:
             self.parser.Parse(data, True)
         except expat.ExpatError as error:
@@ -863,7 +640,7 @@ class _Reader:
         (self.doc.epilog if self.doc.lines else self.doc.prolog).append(text)
 
 
-def _read_document(document) -> _Document:
+def read_document(document) -> SvgDocument:
     """Return the parsed document; ParseError with the line and column if malformed."""
     if isinstance(document, (bytearray, memoryview)):
         document = bytes(document)
@@ -879,7 +656,7 @@ def _xml_error(line: int, column: int, message: str) -> ParseError:
     return error
 
 
-def _write_document(doc: _Document) -> str:
+def write_document(doc: SvgDocument) -> str:
     """Return the document as text: declaration, prolog, root, epilog, a line each."""
     parts = [] if doc.declaration is None else [doc.declaration]
     parts += doc.prolog

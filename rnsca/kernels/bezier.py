@@ -27,7 +27,6 @@ ends, and consecutive such lines along one edge are merged.
 Two passes (count, write) over one body per subpath, `prange` over blocks of subpaths.
 """
 
-import numba
 import numpy as np
 from numba import prange
 
@@ -35,11 +34,9 @@ from rnsca.kernels import counters as C
 from rnsca.kernels.jit import borrowing, parallel, scalar
 from rnsca.kernels.outcode import BOTTOM, LEFT, RIGHT, TOP, clamp, outcode
 
-# Helpers that take many arrays are inlined by Numba itself (LLVM does not inline them):
-# each call's passing of the arrays cost more than the helper's work (measured: 4.5 ->
-# 2.8 us per ambiguous segment). Numba's inliner fails on the larger callers, which stay
-# calls.
-_inline = numba.njit(cache=True, nogil=True, error_model="numpy", inline="always")
+# Helpers that take arrays are `borrowing` (no reference counting of their arrays): a
+# call then costs no more than passing the arrays' fields, and LLVM inlines the small
+# ones (measured: Numba's own inlining of them, which this module used, gains nothing).
 
 __all__ = [
     "BREAK_CAPACITY",
@@ -107,6 +104,10 @@ _FIRST_AT_START = 9  # the subpath's first chain starts at its start point (stro
 _V_END = 10       # end of the subpath's counted output: a closing line dropped later
                   # (a whole closed stroke: Z draws it) is not written past it
 _INT_STATE_WIDTH = 11
+# Decisions of a run of segments, kept by the count pass for the write pass.
+_RUN_ACCEPTED = 0
+_RUN_REJECTED = 1
+_RUN_SEGMENTED = 2
 
 
 @scalar
@@ -278,9 +279,13 @@ def _add_break(brk_t, brk_e, n, t, edge_bit):
 
 
 @borrowing
-def _line_roots(degree, a0, a1, a2, a3, level, edge_bit, lo, hi, brk_t, brk_e, n, st):
-    """Add to the break table the parameters in [lo, hi] where B(t) crosses `level`."""
-    s0, s1, s2, s3 = piece_values(degree, a0, a1, a2, a3, lo, hi)
+def _line_roots(degree, a0, a1, a2, a3, s0, s1, s2, s3, level, edge_bit, lo, hi, brk_t,
+                brk_e, n, st):
+    """Add to the break table the parameters in [lo, hi] where B(t) crosses `level`.
+
+    s0..s3 are the control values of the piece [lo, hi] (shared by the two edge lines
+    of an axis).
+    """
     below = (s0 < level) | (s1 < level) | (s2 < level) | (s3 < level)
     above = (s0 > level) | (s1 > level) | (s2 > level) | (s3 > level)
     if not (below and above) and not (s0 == level or s3 == level):
@@ -322,10 +327,22 @@ def edge_breaks(degree, x0, x1, x2, x3, y0, y1, y2, y3, lo, hi, xmin, ymin, xmax
     two breaks the piece lies in one of the nine regions the edge lines make.
     """
     n = _add_break(brk_t, brk_e, 0, lo, 0)
-    n = _line_roots(degree, x0, x1, x2, x3, xmin, LEFT, lo, hi, brk_t, brk_e, n, st)
-    n = _line_roots(degree, x0, x1, x2, x3, xmax, RIGHT, lo, hi, brk_t, brk_e, n, st)
-    n = _line_roots(degree, y0, y1, y2, y3, ymin, BOTTOM, lo, hi, brk_t, brk_e, n, st)
-    n = _line_roots(degree, y0, y1, y2, y3, ymax, TOP, lo, hi, brk_t, brk_e, n, st)
+    if lo == 0.0 and hi == 1.0:
+        # The whole segment: its control values are the piece's (unused rows repeat
+        # the end, as piece_values does), no blossoms needed.
+        sx0, sx1, sx2, sx3 = x0, x1, x2, x3
+        sy0, sy1, sy2, sy3 = y0, y1, y2, y3
+    else:
+        sx0, sx1, sx2, sx3 = piece_values(degree, x0, x1, x2, x3, lo, hi)
+        sy0, sy1, sy2, sy3 = piece_values(degree, y0, y1, y2, y3, lo, hi)
+    n = _line_roots(degree, x0, x1, x2, x3, sx0, sx1, sx2, sx3, xmin, LEFT, lo, hi, brk_t,
+                    brk_e, n, st)
+    n = _line_roots(degree, x0, x1, x2, x3, sx0, sx1, sx2, sx3, xmax, RIGHT, lo, hi, brk_t,
+                    brk_e, n, st)
+    n = _line_roots(degree, y0, y1, y2, y3, sy0, sy1, sy2, sy3, ymin, BOTTOM, lo, hi, brk_t,
+                    brk_e, n, st)
+    n = _line_roots(degree, y0, y1, y2, y3, sy0, sy1, sy2, sy3, ymax, TOP, lo, hi, brk_t,
+                    brk_e, n, st)
     n = _add_break(brk_t, brk_e, n, hi, 0)
     # Insertion sort (at most BREAK_CAPACITY entries), then merge equal parameters.
     for i in range(1, n):
@@ -364,23 +381,19 @@ def _snap(x, y, edges, xmin, ymin, xmax, ymax):
     return x, y
 
 
-@_inline
-def _put_segment(write, degree, px, py, out_ctrl, out_deg, si, sf):
-    """Append one output segment with control points px[0..3], py[0..3]."""
-    v = si[_V]
-    if write and v < si[_V_END]:
-        for k in range(4):
-            out_ctrl[v, k, 0] = px[k]
-            out_ctrl[v, k, 1] = py[k]
-        out_deg[v] = degree
-    si[_V] = v + 1
-    sf[_CUR_X] = px[3]
-    sf[_CUR_Y] = py[3]
+@borrowing
+def _advance(n, x, y, si, sf):
+    """Count `n` visible segments appended to the output, ending at (x, y)."""
+    si[_V] += n
+    si[_LAST_RUN] = 0
+    si[_VISIBLE] = 1
+    sf[_CUR_X] = x
+    sf[_CUR_Y] = y
 
 
 @borrowing
-def _put_whole(write, degree, x0, x1, x2, x3, y0, y1, y2, y3, out_ctrl, out_deg, si, sf):
-    """Append an input segment accepted whole (unused slots already repeat its end)."""
+def _put_segment(write, degree, x0, x1, x2, x3, y0, y1, y2, y3, out_ctrl, out_deg, si, sf):
+    """Append a visible segment (unused control slots repeat its end)."""
     v = si[_V]
     if write and v < si[_V_END]:
         out_ctrl[v, 0, 0] = x0
@@ -392,11 +405,7 @@ def _put_whole(write, degree, x0, x1, x2, x3, y0, y1, y2, y3, out_ctrl, out_deg,
         out_ctrl[v, 2, 1] = y2
         out_ctrl[v, 3, 1] = y3
         out_deg[v] = degree
-    si[_V] = v + 1
-    si[_LAST_RUN] = 0
-    si[_VISIBLE] = 1
-    sf[_CUR_X] = x3
-    sf[_CUR_Y] = y3
+    _advance(1, x3, y3, si, sf)
 
 
 @borrowing
@@ -423,20 +432,18 @@ def _put_run(write, controls, degree, a, b, out_ctrl, out_deg, si, sf):
     v = si[_V]
     n = b - a
     if write:
-        for i in range(n):
-            if v + i < si[_V_END]:
-                for k in range(4):
-                    out_ctrl[v + i, k, 0] = controls[a + i, k, 0]
-                    out_ctrl[v + i, k, 1] = controls[a + i, k, 1]
-                out_deg[v + i] = degree[a + i]
-    si[_V] = v + n
-    si[_LAST_RUN] = 0
-    si[_VISIBLE] = 1
-    sf[_CUR_X] = controls[b - 1, 3, 0]
-    sf[_CUR_Y] = controls[b - 1, 3, 1]
+        # One loop over the rows without a test per row: LLVM vectorizes the copy.
+        n_copy = min(n, si[_V_END] - v)
+        for i in range(n_copy):
+            for k in range(4):
+                out_ctrl[v + i, k, 0] = controls[a + i, k, 0]
+                out_ctrl[v + i, k, 1] = controls[a + i, k, 1]
+        for i in range(n_copy):
+            out_deg[v + i] = degree[a + i]
+    _advance(n, controls[b - 1, 3, 0], controls[b - 1, 3, 1], si, sf)
 
 
-@_inline
+@borrowing
 def _put_line(write, x, y, out_ctrl, out_deg, si, sf):
     """Append a line from the current point to (x, y)."""
     v = si[_V]
@@ -452,7 +459,7 @@ def _put_line(write, x, y, out_ctrl, out_deg, si, sf):
     sf[_CUR_Y] = y
 
 
-@_inline
+@borrowing
 def _begin_subpath(write, x, y, source, out_first, out_start, out_from, si, sf):
     s = si[_S]
     if write:
@@ -467,24 +474,22 @@ def _begin_subpath(write, x, y, source, out_first, out_start, out_from, si, sf):
     sf[_CUR_Y] = y
 
 
-@_inline
-def _emit_piece(write, fill, degree, px, py, source, out_ctrl, out_deg, out_first, out_start,
-                out_from, si, sf):
-    """Add a visible piece (control points px, py) to the output."""
+@borrowing
+def _emit_piece(write, fill, degree, x0, x1, x2, x3, y0, y1, y2, y3, source, out_ctrl,
+                out_deg, out_first, out_start, out_from, si, sf):
+    """Add a visible piece (control points x0..x3, y0..y3) to the output."""
     if fill:
-        if px[0] != sf[_CUR_X] or py[0] != sf[_CUR_Y]:
+        if x0 != sf[_CUR_X] or y0 != sf[_CUR_Y]:
             # Rounding left a gap between the clamped path and the piece: bridge it.
-            _put_line(write, px[0], py[0], out_ctrl, out_deg, si, sf)
-    elif si[_OPEN] == 0 or px[0] != sf[_CUR_X] or py[0] != sf[_CUR_Y]:
+            _put_line(write, x0, y0, out_ctrl, out_deg, si, sf)
+    elif si[_OPEN] == 0 or x0 != sf[_CUR_X] or y0 != sf[_CUR_Y]:
         if si[_VISIBLE] == 0 and si[_BROKEN] == 0:
             si[_FIRST_AT_START] = 1  # nothing before it: it starts at t = 0
-        _begin_subpath(write, px[0], py[0], source, out_first, out_start, out_from, si, sf)
-    _put_segment(write, degree, px, py, out_ctrl, out_deg, si, sf)
-    si[_LAST_RUN] = 0
-    si[_VISIBLE] = 1
+        _begin_subpath(write, x0, y0, source, out_first, out_start, out_from, si, sf)
+    _put_segment(write, degree, x0, x1, x2, x3, y0, y1, y2, y3, out_ctrl, out_deg, si, sf)
 
 
-@_inline
+@borrowing
 def _clamp_to(write, x, y, xmin, ymin, xmax, ymax, out_ctrl, out_deg, si, sf):
     """Fill: continue the output along the boundary to the clamp of (x, y)."""
     cx = clamp(x, xmin, xmax)
@@ -518,7 +523,7 @@ def _clamp_to(write, x, y, xmin, ymin, xmax, ymax, out_ctrl, out_deg, si, sf):
     si[_LAST_RUN] = 1
 
 
-@_inline
+@borrowing
 def _outside(write, fill, x, y, xmin, ymin, xmax, ymax, out_ctrl, out_deg, si, sf):
     """Mark the part ending at (x, y) not visible: clamp to it (fill), or end the chain."""
     si[_BROKEN] = 1
@@ -530,30 +535,22 @@ def _outside(write, fill, x, y, xmin, ymin, xmax, ymax, out_ctrl, out_deg, si, s
 
 @borrowing
 def _flush(write, fill, flatten, degree, x0, x1, x2, x3, y0, y1, y2, y3, xmin, ymin, xmax,
-           ymax, tol, source, px, py, out_ctrl, out_deg, out_first, out_start, out_from, si, sf):
+           ymax, tol, source, out_ctrl, out_deg, out_first, out_start, out_from, si, sf):
     """Output the pending visible interval of the segment, if any."""
     if si[_PEND] == 0:
         return
     si[_PEND] = 0
     a = sf[_PEND_A]
     b = sf[_PEND_B]
+    if not flatten or degree == 1:
+        _emit_stretch(write, fill, degree, x0, x1, x2, x3, y0, y1, y2, y3, a, b, si[_PEND_EA],
+                      si[_PEND_EB], xmin, ymin, xmax, ymax, source, out_ctrl, out_deg,
+                      out_first, out_start, out_from, si, sf)
+        return
     qx0, qx1, qx2, qx3 = piece_values(degree, x0, x1, x2, x3, a, b)
     qy0, qy1, qy2, qy3 = piece_values(degree, y0, y1, y2, y3, a, b)
     sx, sy = _snap(qx0, qy0, si[_PEND_EA], xmin, ymin, xmax, ymax)
-    # piece_values repeats the end in the unused slots: qx3, qy3 is the end.
     ex, ey = _snap(qx3, qy3, si[_PEND_EB], xmin, ymin, xmax, ymax)
-    if not flatten or degree == 1:
-        px[0] = sx
-        py[0] = sy
-        px[1] = ex if degree == 1 else qx1
-        py[1] = ey if degree == 1 else qy1
-        px[2] = qx2 if degree == 3 else ex
-        py[2] = qy2 if degree == 3 else ey
-        px[3] = ex
-        py[3] = ey
-        _emit_piece(write, fill, degree, px, py, source, out_ctrl, out_deg, out_first,
-                    out_start, out_from, si, sf)
-        return
     steps = flatten_count(degree, qx0, qx1, qx2, qx3, qy0, qy1, qy2, qy3, tol)
     prev_x = sx
     prev_y = sy
@@ -565,41 +562,31 @@ def _flush(write, fill, flatten, degree, x0, x1, x2, x3, y0, y1, y2, y3, xmin, y
             t = a + (b - a) * k / steps
             nx = point_value(degree, x0, x1, x2, x3, t)
             ny = point_value(degree, y0, y1, y2, y3, t)
-        px[0] = prev_x
-        py[0] = prev_y
-        for j in range(1, 4):
-            px[j] = nx
-            py[j] = ny
-        _emit_piece(write, fill, 1, px, py, source, out_ctrl, out_deg, out_first, out_start,
-                    out_from, si, sf)
+        _emit_piece(write, fill, 1, prev_x, nx, nx, nx, prev_y, ny, ny, ny, source, out_ctrl,
+                    out_deg, out_first, out_start, out_from, si, sf)
         prev_x = nx
         prev_y = ny
 
 
-@_inline
+@borrowing
 def _emit_stretch(write, fill, degree, x0, x1, x2, x3, y0, y1, y2, y3, a, b, edges_a, edges_b,
-                  xmin, ymin, xmax, ymax, source, px, py, out_ctrl, out_deg, out_first,
+                  xmin, ymin, xmax, ymax, source, out_ctrl, out_deg, out_first,
                   out_start, out_from, si, sf):
     """Output the visible stretch [a, b] of a segment as a piece of its degree."""
     qx0, qx1, qx2, qx3 = piece_values(degree, x0, x1, x2, x3, a, b)
     qy0, qy1, qy2, qy3 = piece_values(degree, y0, y1, y2, y3, a, b)
     sx, sy = _snap(qx0, qy0, edges_a, xmin, ymin, xmax, ymax)
+    # piece_values repeats the end in the unused slots: qx3, qy3 is the end.
     ex, ey = _snap(qx3, qy3, edges_b, xmin, ymin, xmax, ymax)
-    px[0] = sx
-    py[0] = sy
-    px[1] = ex if degree == 1 else qx1
-    py[1] = ey if degree == 1 else qy1
-    px[2] = qx2 if degree == 3 else ex
-    py[2] = qy2 if degree == 3 else ey
-    px[3] = ex
-    py[3] = ey
-    _emit_piece(write, fill, degree, px, py, source, out_ctrl, out_deg, out_first, out_start,
+    _emit_piece(write, fill, degree, sx, ex if degree == 1 else qx1,
+                qx2 if degree == 3 else ex, ex, sy, ey if degree == 1 else qy1,
+                qy2 if degree == 3 else ey, ey, source, out_ctrl, out_deg, out_first, out_start,
                 out_from, si, sf)
 
 
 @borrowing
 def _emit_exact(write, fill, degree, x0, x1, x2, x3, y0, y1, y2, y3, xmin, ymin, xmax, ymax,
-                source, px, py, brk_t, brk_e, out_ctrl, out_deg, out_first, out_start,
+                source, brk_t, brk_e, out_ctrl, out_deg, out_first, out_start,
                 out_from, si, sf, st):
     """Clip a whole ambiguous segment at its edge crossings (exact mode, level 0).
 
@@ -621,7 +608,7 @@ def _emit_exact(write, fill, degree, x0, x1, x2, x3, y0, y1, y2, y3, xmin, ymin,
         if open_k >= 0:
             _emit_stretch(write, fill, degree, x0, x1, x2, x3, y0, y1, y2, y3, brk_t[open_k],
                           brk_t[k], brk_e[open_k], brk_e[k], xmin, ymin, xmax, ymax, source,
-                          px, py, out_ctrl, out_deg, out_first, out_start, out_from, si, sf)
+                          out_ctrl, out_deg, out_first, out_start, out_from, si, sf)
             open_k = -1
         ex, ey = _snap(point_value(degree, x0, x1, x2, x3, brk_t[k + 1]),
                        point_value(degree, y0, y1, y2, y3, brk_t[k + 1]), brk_e[k + 1], xmin,
@@ -630,11 +617,11 @@ def _emit_exact(write, fill, degree, x0, x1, x2, x3, y0, y1, y2, y3, xmin, ymin,
     if open_k >= 0:
         _emit_stretch(write, fill, degree, x0, x1, x2, x3, y0, y1, y2, y3, brk_t[open_k],
                       brk_t[n - 1], brk_e[open_k], brk_e[n - 1], xmin, ymin, xmax, ymax,
-                      source, px, py, out_ctrl, out_deg, out_first, out_start, out_from, si,
+                      source, out_ctrl, out_deg, out_first, out_start, out_from, si,
                       sf)
 
 
-@_inline
+@borrowing
 def _pend(a, b, edges_a, edges_b, si, sf):
     """Mark [a, b] visible; return whether it continues the pending interval."""
     if si[_PEND] == 1 and sf[_PEND_B] == a:
@@ -646,12 +633,12 @@ def _pend(a, b, edges_a, edges_b, si, sf):
 
 @borrowing
 def _visible(write, fill, flatten, degree, x0, x1, x2, x3, y0, y1, y2, y3, a, b, edges_a,
-             edges_b, xmin, ymin, xmax, ymax, tol, source, px, py, out_ctrl, out_deg,
+             edges_b, xmin, ymin, xmax, ymax, tol, source, out_ctrl, out_deg,
              out_first, out_start, out_from, si, sf):
     if _pend(a, b, edges_a, edges_b, si, sf):
         return
     _flush(write, fill, flatten, degree, x0, x1, x2, x3, y0, y1, y2, y3, xmin, ymin, xmax,
-           ymax, tol, source, px, py, out_ctrl, out_deg, out_first, out_start, out_from, si, sf)
+           ymax, tol, source, out_ctrl, out_deg, out_first, out_start, out_from, si, sf)
     si[_PEND] = 1
     sf[_PEND_A] = a
     sf[_PEND_B] = b
@@ -661,7 +648,7 @@ def _visible(write, fill, flatten, degree, x0, x1, x2, x3, y0, y1, y2, y3, a, b,
 
 @borrowing
 def _leaf(write, fill, flatten, degree, x0, x1, x2, x3, y0, y1, y2, y3, a, b, xmin, ymin,
-          xmax, ymax, tol, source, px, py, brk_t, brk_e, out_ctrl, out_deg, out_first,
+          xmax, ymax, tol, source, brk_t, brk_e, out_ctrl, out_deg, out_first,
           out_start, out_from, si, sf, st):
     """Clip the piece [a, b] exactly at its crossings with the edge lines."""
     st[C.CLIPPED] += 1
@@ -675,11 +662,11 @@ def _leaf(write, fill, flatten, degree, x0, x1, x2, x3, y0, y1, y2, y3, a, b, xm
                        point_value(degree, y0, y1, y2, y3, tm), xmin, ymin, xmax, ymax)
         if code == 0:
             _visible(write, fill, flatten, degree, x0, x1, x2, x3, y0, y1, y2, y3, t0, t1,
-                     brk_e[k], brk_e[k + 1], xmin, ymin, xmax, ymax, tol, source, px, py,
+                     brk_e[k], brk_e[k + 1], xmin, ymin, xmax, ymax, tol, source,
                      out_ctrl, out_deg, out_first, out_start, out_from, si, sf)
         else:
             _flush(write, fill, flatten, degree, x0, x1, x2, x3, y0, y1, y2, y3, xmin, ymin,
-                   xmax, ymax, tol, source, px, py, out_ctrl, out_deg, out_first, out_start,
+                   xmax, ymax, tol, source, out_ctrl, out_deg, out_first, out_start,
                    out_from, si, sf)
             ex, ey = _snap(point_value(degree, x0, x1, x2, x3, t1),
                            point_value(degree, y0, y1, y2, y3, t1), brk_e[k + 1], xmin, ymin,
@@ -690,7 +677,7 @@ def _leaf(write, fill, flatten, degree, x0, x1, x2, x3, y0, y1, y2, y3, a, b, xm
 
 @borrowing
 def clip_segment(write, fill, flatten, exact, degree, x0, x1, x2, x3, y0, y1, y2, y3, xmin,
-                 ymin, xmax, ymax, n_split, leaf_depth, tol, source, px, py, brk_t, brk_e,
+                 ymin, xmax, ymax, n_split, leaf_depth, tol, source, brk_t, brk_e,
                  stack, out_ctrl, out_deg, out_first, out_start, out_from, si, sf, st):
     """Clip one segment (degree 1..3, control points x0..x3, y0..y3) into the output."""
     st[C.EVALUATED] += 1
@@ -699,10 +686,10 @@ def clip_segment(write, fill, flatten, exact, degree, x0, x1, x2, x3, y0, y1, y2
         st[C.ACCEPTED] += 1
         st[C.LEVELS] += 1
         _visible(write, fill, flatten, degree, x0, x1, x2, x3, y0, y1, y2, y3, 0.0, 1.0, 0, 0,
-                 xmin, ymin, xmax, ymax, tol, source, px, py, out_ctrl, out_deg, out_first,
+                 xmin, ymin, xmax, ymax, tol, source, out_ctrl, out_deg, out_first,
                  out_start, out_from, si, sf)
         _flush(write, fill, flatten, degree, x0, x1, x2, x3, y0, y1, y2, y3, xmin, ymin, xmax,
-               ymax, tol, source, px, py, out_ctrl, out_deg, out_first, out_start, out_from,
+               ymax, tol, source, out_ctrl, out_deg, out_first, out_start, out_from,
                si, sf)
         return
     if c_and != 0:
@@ -735,14 +722,14 @@ def clip_segment(write, fill, flatten, exact, degree, x0, x1, x2, x3, y0, y1, y2
             st[C.ACCEPTED] += 1
             st[C.LEVELS + slot] += 1
             _visible(write, fill, flatten, degree, x0, x1, x2, x3, y0, y1, y2, y3, a, b, 0, 0,
-                     xmin, ymin, xmax, ymax, tol, source, px, py, out_ctrl, out_deg,
+                     xmin, ymin, xmax, ymax, tol, source, out_ctrl, out_deg,
                      out_first, out_start, out_from, si, sf)
             continue
         if c_and != 0:
             st[C.REJECTED] += 1
             st[C.LEVELS + slot] += 1
             _flush(write, fill, flatten, degree, x0, x1, x2, x3, y0, y1, y2, y3, xmin, ymin,
-                   xmax, ymax, tol, source, px, py, out_ctrl, out_deg, out_first, out_start,
+                   xmax, ymax, tol, source, out_ctrl, out_deg, out_first, out_start,
                    out_from, si, sf)
             _outside(write, fill, qx3, qy3, xmin, ymin, xmax, ymax, out_ctrl,
                      out_deg, si, sf)
@@ -771,27 +758,27 @@ def clip_segment(write, fill, flatten, exact, degree, x0, x1, x2, x3, y0, y1, y2
         if flatten:
             # The piece is flat: clip its chord as a line.
             _flush(write, fill, flatten, degree, x0, x1, x2, x3, y0, y1, y2, y3, xmin, ymin,
-                   xmax, ymax, tol, source, px, py, out_ctrl, out_deg, out_first, out_start,
+                   xmax, ymax, tol, source, out_ctrl, out_deg, out_first, out_start,
                    out_from, si, sf)
             _leaf(write, fill, False, 1, qx0, qx3, qx3, qx3, qy0, qy3, qy3, qy3, 0.0, 1.0,
-                  xmin, ymin, xmax, ymax, tol, source, px, py, brk_t, brk_e, out_ctrl, out_deg,
+                  xmin, ymin, xmax, ymax, tol, source, brk_t, brk_e, out_ctrl, out_deg,
                   out_first, out_start, out_from, si, sf, st)
             _flush(write, fill, False, 1, qx0, qx3, qx3, qx3, qy0, qy3, qy3, qy3, xmin, ymin,
-                   xmax, ymax, tol, source, px, py, out_ctrl, out_deg, out_first, out_start,
+                   xmax, ymax, tol, source, out_ctrl, out_deg, out_first, out_start,
                    out_from, si, sf)
         elif exact:
             _leaf(write, fill, flatten, degree, x0, x1, x2, x3, y0, y1, y2, y3, a, b, xmin,
-                  ymin, xmax, ymax, tol, source, px, py, brk_t, brk_e, out_ctrl, out_deg,
+                  ymin, xmax, ymax, tol, source, brk_t, brk_e, out_ctrl, out_deg,
                   out_first, out_start, out_from, si, sf, st)
         else:
             st[C.DROPPED] += 1
             _flush(write, fill, flatten, degree, x0, x1, x2, x3, y0, y1, y2, y3, xmin, ymin,
-                   xmax, ymax, tol, source, px, py, out_ctrl, out_deg, out_first, out_start,
+                   xmax, ymax, tol, source, out_ctrl, out_deg, out_first, out_start,
                    out_from, si, sf)
             _outside(write, fill, qx3, qy3, xmin, ymin, xmax, ymax, out_ctrl,
                      out_deg, si, sf)
     _flush(write, fill, flatten, degree, x0, x1, x2, x3, y0, y1, y2, y3, xmin, ymin, xmax,
-           ymax, tol, source, px, py, out_ctrl, out_deg, out_first, out_start, out_from, si, sf)
+           ymax, tol, source, out_ctrl, out_deg, out_first, out_start, out_from, si, sf)
 
 
 @borrowing
@@ -832,187 +819,14 @@ def _rotate_last_chain(s0, s_end, v0, v_end, out_ctrl, out_deg, out_first, out_s
 
 
 @borrowing
-def _emit_flattened(write, fill, x0, y0, a, b, points, source, px, py, out_ctrl, out_deg,
-                    out_first, out_start, out_from, si, sf, st):
-    """Output an accepted curve (flatten mode) as lines from (x0, y0) through points a..b-1.
+def _end_subpath(write, fill, closed, controls, last, sx, sy, xmin, ymin, xmax, ymax, v0, s0,
+                 out_ctrl, out_deg, out_first, out_start, out_closed, out_from, si, sf):
+    """Finish the output of a subpath whose segments first..last-1 have been clipped.
 
-    What `clip_segment` does with an accepted curve, from points computed elsewhere: the
-    same counters, the same lines.
+    Fill: return to the clamped start and keep the closed subpath, unless it is only
+    boundary lines winding around no point. Strokes: a closed subpath visible whole
+    stays closed; otherwise its last chain is joined to its first at the start point.
     """
-    st[C.EVALUATED] += 1
-    st[C.ACCEPTED] += 1
-    st[C.LEVELS] += 1
-    prev_x = x0
-    prev_y = y0
-    for p in range(a, b):
-        px[0] = prev_x
-        py[0] = prev_y
-        for j in range(1, 4):
-            px[j] = points[p, 0]
-            py[j] = points[p, 1]
-        _emit_piece(write, fill, 1, px, py, source, out_ctrl, out_deg, out_first, out_start,
-                    out_from, si, sf)
-        prev_x = points[p, 0]
-        prev_y = points[p, 1]
-
-
-@borrowing
-def _clip_subpath(write, fill, flatten, exact, controls, degree, first, last, closed, sx, sy,
-                  source, xmin, ymin, xmax, ymax, n_split, leaf_depth, tol, v0, v_end, s0, px,
-                  py, brk_t, brk_e, stack, out_ctrl, out_deg, out_first, out_start, out_closed,
-                  out_from, si, sf, st, decided, segment_class, point_start, points):
-    """Clip the subpath of segments first..last-1 starting at (sx, sy) into the output.
-
-    With `decided`, each input segment's class is ``segment_class`` (`SEGMENT_*`) and,
-    in flatten mode, an accepted curve's lines end at ``points[point_start[k]:
-    point_start[k + 1]]`` (`flatten_into`'s points), computed elsewhere (the OpenCL
-    backend); the closing line and the ambiguous segments are done here.
-
-    Strokes: the visible parts as open subpaths (the subpath itself, closed, if it is
-    visible whole; a closed subpath's last and first parts are joined at its start).
-    Fill (`fill`): one closed subpath, the visible parts joined by the boundary, or
-    nothing if no part is visible and the boundary path winds around no point.
-    """
-    si[:] = 0
-    sf[:] = 0.0
-    si[_V] = v0
-    si[_V_END] = v_end
-    si[_S] = s0
-    sf[_START_X] = sx
-    sf[_START_Y] = sy
-    if first == last:
-        # A lone moveto: nothing to fill; as a stroke, a dot (caps) if in the window.
-        if not fill and outcode(sx, sy, xmin, ymin, xmax, ymax) == 0:
-            _begin_subpath(write, sx, sy, source, out_first, out_start, out_from, si, sf)
-            if write:
-                out_closed[s0] = closed
-        return
-    if fill:
-        _begin_subpath(write, clamp(sx, xmin, xmax), clamp(sy, ymin, ymax), source,
-                       out_first, out_start, out_from, si, sf)
-    end = last + 1 if (fill or closed) else last  # index `last`: the closing line
-    i = first
-    while i < end:
-        j = min(i + RUN_SEGMENTS, last)
-        if j - i >= 2:
-            # Run level: the box of the run's control points decides it whole, as a
-            # piece's hull decides a piece (copy it, or skip it: no per-segment work).
-            lo_x, lo_y, hi_x, hi_y = _run_box(controls, i, j)
-            c_lo = outcode(lo_x, lo_y, xmin, ymin, xmax, ymax)
-            c_hi = outcode(hi_x, hi_y, xmin, ymin, xmax, ymax)
-            st[C.RUNS_EVALUATED] += 1
-            if (c_lo | c_hi) == 0 and not flatten:
-                st[C.RUNS_ACCEPTED] += 1
-                st[C.RUN_LEVELS] += 1
-                st[C.SEGMENT_LEVELS] += j - i
-                x0 = controls[i, 0, 0]
-                y0 = controls[i, 0, 1]
-                if fill or (si[_OPEN] == 1 and x0 == sf[_CUR_X] and y0 == sf[_CUR_Y]):
-                    if fill and (x0 != sf[_CUR_X] or y0 != sf[_CUR_Y]):
-                        _put_line(write, x0, y0, out_ctrl, out_deg, si, sf)
-                else:
-                    if si[_VISIBLE] == 0 and si[_BROKEN] == 0:
-                        si[_FIRST_AT_START] = 1
-                    _begin_subpath(write, x0, y0, source, out_first, out_start, out_from,
-                                   si, sf)
-                _put_run(write, controls, degree, i, j, out_ctrl, out_deg, si, sf)
-                i = j
-                continue
-            if (c_lo & c_hi) != 0:
-                st[C.RUNS_REJECTED] += 1
-                st[C.RUN_LEVELS] += 1
-                st[C.SEGMENT_LEVELS] += j - i
-                si[_BROKEN] = 1
-                if fill:
-                    _clamp_to(write, controls[j - 1, 3, 0], controls[j - 1, 3, 1], xmin, ymin,
-                              xmax, ymax, out_ctrl, out_deg, si, sf)
-                else:
-                    si[_OPEN] = 0
-                i = j
-                continue
-            st[C.RUNS_SEGMENTED] += 1
-        else:
-            j = i + 1
-        for k in range(i, j):
-            if k < last:
-                d = degree[k]
-                x0 = controls[k, 0, 0]
-                x1 = controls[k, 1, 0]
-                x2 = controls[k, 2, 0]
-                x3 = controls[k, 3, 0]
-                y0 = controls[k, 0, 1]
-                y1 = controls[k, 1, 1]
-                y2 = controls[k, 2, 1]
-                y3 = controls[k, 3, 1]
-            else:
-                # The closing line back to the start: filled subpaths are always closed.
-                d = 1
-                x0 = controls[last - 1, 3, 0]
-                y0 = controls[last - 1, 3, 1]
-                x1 = sx
-                y1 = sy
-                x2 = sx
-                y2 = sy
-                x3 = sx
-                y3 = sy
-            if x0 == x1 == x2 == x3 and y0 == y1 == y2 == y3:
-                continue  # a point: nothing to draw, nothing to clamp
-            # Level 0 inline: most segments are decided here, and every call that passes
-            # arrays costs their reference counting (more than the test itself).
-            if decided and k < last:
-                accepted = segment_class[k] == SEGMENT_ACCEPTED
-                rejected = segment_class[k] == SEGMENT_REJECTED
-            else:
-                c_or, c_and = _hull_codes(d, x0, x1, x2, x3, y0, y1, y2, y3, xmin, ymin,
-                                          xmax, ymax)
-                accepted = c_or == 0
-                rejected = c_and != 0
-            if accepted and not (flatten and d > 1):
-                st[C.EVALUATED] += 1
-                st[C.ACCEPTED] += 1
-                st[C.LEVELS] += 1
-                if fill or (si[_OPEN] == 1 and x0 == sf[_CUR_X] and y0 == sf[_CUR_Y]):
-                    if fill and (x0 != sf[_CUR_X] or y0 != sf[_CUR_Y]):
-                        _put_line(write, x0, y0, out_ctrl, out_deg, si, sf)
-                else:
-                    if si[_VISIBLE] == 0 and si[_BROKEN] == 0:
-                        si[_FIRST_AT_START] = 1
-                    _begin_subpath(write, x0, y0, source, out_first, out_start, out_from, si,
-                                   sf)
-                _put_whole(write, d, x0, x1, x2, x3, y0, y1, y2, y3, out_ctrl, out_deg, si,
-                           sf)
-                continue
-            if accepted and decided and k < last:
-                _emit_flattened(write, fill, x0, y0, point_start[k], point_start[k + 1],
-                                points, source, px, py, out_ctrl, out_deg, out_first,
-                                out_start, out_from, si, sf, st)
-                continue
-            if rejected:
-                st[C.EVALUATED] += 1
-                st[C.REJECTED] += 1
-                st[C.LEVELS] += 1
-                si[_BROKEN] = 1
-                if fill:
-                    _clamp_to(write, x3, y3, xmin, ymin, xmax, ymax, out_ctrl, out_deg, si,
-                              sf)
-                else:
-                    si[_OPEN] = 0
-                continue
-            if exact and leaf_depth == 0 and not flatten:
-                st[C.EVALUATED] += 1
-                st[C.LEVELS] += 1
-                _emit_exact(write, fill, d, x0, x1, x2, x3, y0, y1, y2, y3, xmin, ymin, xmax,
-                            ymax, source, px, py, brk_t, brk_e, out_ctrl, out_deg, out_first,
-                            out_start, out_from, si, sf, st)
-                continue
-            clip_segment(write, fill, flatten, exact, d, x0, x1, x2, x3, y0, y1, y2, y3, xmin,
-                         ymin, xmax, ymax, n_split, leaf_depth, tol, source, px, py, brk_t,
-                         brk_e, stack, out_ctrl, out_deg, out_first, out_start, out_from, si,
-                         sf, st)
-        i = j
-    if write:
-        for s in range(s0, si[_S]):
-            out_closed[s] = False
     if fill:
         cx = clamp(sx, xmin, xmax)
         cy = clamp(sy, ymin, ymax)
@@ -1045,13 +859,49 @@ def _clip_subpath(write, fill, flatten, exact, controls, degree, first, last, cl
             out_from[si[_S] - 1] = -1
 
 
+
 @borrowing
-def _clip_block(write, fill, flatten, exact, controls, degree, subpath_offsets, closed, start,
-                subpath_source, xmin, ymin, xmax, ymax, n_split, leaf_depth, tol, k0, k1,
-                segment_start, subpath_start, px, py, brk_t, brk_e, stack, out_ctrl, out_deg,
-                out_first, out_start, out_closed, out_from, n_segments, n_subpaths, si, sf, st,
-                decided, segment_class, point_start, points):
-    """Count or write the subpaths k0..k1-1 (one block of `clip_path_blocks`)."""
+def _emit_flattened(write, fill, x0, y0, a, b, points, source, out_ctrl, out_deg, out_first,
+                    out_start, out_from, si, sf, st):
+    """Output an accepted curve (flatten mode) as lines from (x0, y0) through points a..b-1.
+
+    What `clip_segment` does with an accepted curve, from points computed elsewhere: the
+    same counters, the same lines.
+    """
+    st[C.EVALUATED] += 1
+    st[C.ACCEPTED] += 1
+    st[C.LEVELS] += 1
+    prev_x = x0
+    prev_y = y0
+    for p in range(a, b):
+        nx = points[p, 0]
+        ny = points[p, 1]
+        _emit_piece(write, fill, 1, prev_x, nx, nx, nx, prev_y, ny, ny, ny, source, out_ctrl,
+                    out_deg, out_first, out_start, out_from, si, sf)
+        prev_x = nx
+        prev_y = ny
+
+
+@borrowing
+def _clip_subpaths(write, fill, flatten, exact, controls, degree, subpath_offsets, closed,
+                   start, subpath_source, xmin, ymin, xmax, ymax, n_split, leaf_depth, tol, k0,
+                   k1, segment_start, subpath_start, n_segments, n_subpaths, run_decisions,
+                   brk_t, brk_e, stack, out_ctrl, out_deg, out_first, out_start, out_closed,
+                   out_from, si, sf, st, decided, segment_class, point_start, points):
+    """Count or write the clipped output of subpaths k0..k1-1 (one block).
+
+    Subpath k, segments ``first..last-1`` starting at (sx, sy), gives as strokes its
+    visible parts as open subpaths (the subpath itself, closed, if it is visible whole;
+    a closed subpath's last and first parts are joined at its start); with `fill`, one
+    closed subpath, the visible parts joined by the boundary, or nothing if no part is
+    visible and the boundary path winds around no point. One function for the whole
+    block: a call per subpath passing these arrays cost more than a short subpath's clip.
+
+    With `decided`, each input segment's class is ``segment_class[g]`` (`SEGMENT_*`)
+    and, in flatten mode, an accepted curve's lines end at ``points[point_start[g]:
+    point_start[g + 1]]`` (`flatten_into`'s points), both computed elsewhere (the OpenCL
+    backend); the closing lines and the ambiguous segments are done here.
+    """
     for k in range(k0, k1):
         v0 = 0
         v_end = np.iinfo(np.int64).max
@@ -1062,12 +912,166 @@ def _clip_block(write, fill, flatten, exact, controls, degree, subpath_offsets, 
             v0 = segment_start[k]
             v_end = v0 + n_segments[k]
             s0 = subpath_start[k]
-        _clip_subpath(write, fill, flatten, exact, controls, degree, subpath_offsets[k],
-                      subpath_offsets[k + 1], closed[k], start[k, 0], start[k, 1],
-                      subpath_source[k], xmin, ymin, xmax, ymax, n_split, leaf_depth, tol,
-                      v0, v_end, s0, px, py, brk_t, brk_e, stack, out_ctrl, out_deg, out_first,
-                      out_start, out_closed, out_from, si, sf, st, decided, segment_class,
-                      point_start, points)
+        first = subpath_offsets[k]
+        last = subpath_offsets[k + 1]
+        sx = start[k, 0]
+        sy = start[k, 1]
+        source = subpath_source[k]
+        for q in range(_INT_STATE_WIDTH):
+            si[q] = 0
+        for q in range(_FLOAT_STATE_WIDTH):
+            sf[q] = 0.0
+        si[_V] = v0
+        si[_V_END] = v_end
+        si[_S] = s0
+        sf[_START_X] = sx
+        sf[_START_Y] = sy
+        if first == last:
+            # A lone moveto: nothing to fill; as a stroke, a dot (caps) if in the window.
+            if not fill and outcode(sx, sy, xmin, ymin, xmax, ymax) == 0:
+                _begin_subpath(write, sx, sy, source, out_first, out_start, out_from, si, sf)
+                if write:
+                    out_closed[s0] = closed[k]
+            if not write:
+                n_segments[k] = si[_V]
+                n_subpaths[k] = si[_S]
+            continue
+        if fill:
+            _begin_subpath(write, clamp(sx, xmin, xmax), clamp(sy, ymin, ymax), source,
+                           out_first, out_start, out_from, si, sf)
+        end = last + 1 if (fill or closed[k]) else last  # index `last`: the closing line
+        i = first
+        while i < end:
+            j = min(i + RUN_SEGMENTS, last)
+            if j - i >= 2:
+                # Run level: the box of the run's control points decides it whole, as a
+                # piece's hull decides a piece (copy it, or skip it: no per-segment work).
+                if write:
+                    decision = run_decisions[i]  # the count pass's: the same box, the same test
+                else:
+                    lo_x, lo_y, hi_x, hi_y = _run_box(controls, i, j)
+                    c_lo = outcode(lo_x, lo_y, xmin, ymin, xmax, ymax)
+                    c_hi = outcode(hi_x, hi_y, xmin, ymin, xmax, ymax)
+                    decision = _RUN_ACCEPTED if (c_lo | c_hi) == 0 and not flatten else (
+                        _RUN_REJECTED if (c_lo & c_hi) != 0 else _RUN_SEGMENTED)
+                    run_decisions[i] = decision
+                st[C.RUNS_EVALUATED] += 1
+                if decision == _RUN_ACCEPTED:
+                    st[C.RUNS_ACCEPTED] += 1
+                    st[C.RUN_LEVELS] += 1
+                    st[C.SEGMENT_LEVELS] += j - i
+                    x0 = controls[i, 0, 0]
+                    y0 = controls[i, 0, 1]
+                    if fill or (si[_OPEN] == 1 and x0 == sf[_CUR_X] and y0 == sf[_CUR_Y]):
+                        if fill and (x0 != sf[_CUR_X] or y0 != sf[_CUR_Y]):
+                            _put_line(write, x0, y0, out_ctrl, out_deg, si, sf)
+                    else:
+                        if si[_VISIBLE] == 0 and si[_BROKEN] == 0:
+                            si[_FIRST_AT_START] = 1
+                        _begin_subpath(write, x0, y0, source, out_first, out_start, out_from,
+                                       si, sf)
+                    _put_run(write, controls, degree, i, j, out_ctrl, out_deg, si, sf)
+                    i = j
+                    continue
+                if decision == _RUN_REJECTED:
+                    st[C.RUNS_REJECTED] += 1
+                    st[C.RUN_LEVELS] += 1
+                    st[C.SEGMENT_LEVELS] += j - i
+                    si[_BROKEN] = 1
+                    if fill:
+                        _clamp_to(write, controls[j - 1, 3, 0], controls[j - 1, 3, 1], xmin, ymin,
+                                  xmax, ymax, out_ctrl, out_deg, si, sf)
+                    else:
+                        si[_OPEN] = 0
+                    i = j
+                    continue
+                st[C.RUNS_SEGMENTED] += 1
+            else:
+                j = i + 1
+            for g in range(i, j):
+                if g < last:
+                    d = degree[g]
+                    x0 = controls[g, 0, 0]
+                    x1 = controls[g, 1, 0]
+                    x2 = controls[g, 2, 0]
+                    x3 = controls[g, 3, 0]
+                    y0 = controls[g, 0, 1]
+                    y1 = controls[g, 1, 1]
+                    y2 = controls[g, 2, 1]
+                    y3 = controls[g, 3, 1]
+                else:
+                    # The closing line back to the start: filled subpaths are always closed.
+                    d = 1
+                    x0 = controls[last - 1, 3, 0]
+                    y0 = controls[last - 1, 3, 1]
+                    x1 = sx
+                    y1 = sy
+                    x2 = sx
+                    y2 = sy
+                    x3 = sx
+                    y3 = sy
+                if x0 == x1 == x2 == x3 and y0 == y1 == y2 == y3:
+                    continue  # a point: nothing to draw, nothing to clamp
+                # Level 0 inline: most segments are decided here, and a call would pass every
+                # array's fields (more than the test itself costs).
+                if decided and g < last:
+                    accepted = segment_class[g] == SEGMENT_ACCEPTED
+                    rejected = segment_class[g] == SEGMENT_REJECTED
+                else:
+                    c_or, c_and = _hull_codes(d, x0, x1, x2, x3, y0, y1, y2, y3, xmin, ymin,
+                                              xmax, ymax)
+                    accepted = c_or == 0
+                    rejected = c_and != 0
+                if accepted and not (flatten and d > 1):
+                    st[C.EVALUATED] += 1
+                    st[C.ACCEPTED] += 1
+                    st[C.LEVELS] += 1
+                    if fill or (si[_OPEN] == 1 and x0 == sf[_CUR_X] and y0 == sf[_CUR_Y]):
+                        if fill and (x0 != sf[_CUR_X] or y0 != sf[_CUR_Y]):
+                            _put_line(write, x0, y0, out_ctrl, out_deg, si, sf)
+                    else:
+                        if si[_VISIBLE] == 0 and si[_BROKEN] == 0:
+                            si[_FIRST_AT_START] = 1
+                        _begin_subpath(write, x0, y0, source, out_first, out_start, out_from, si,
+                                       sf)
+                    _put_segment(write, d, x0, x1, x2, x3, y0, y1, y2, y3, out_ctrl, out_deg, si,
+                                 sf)
+                    continue
+                if accepted and decided and g < last:
+                    _emit_flattened(write, fill, x0, y0, point_start[g], point_start[g + 1],
+                                    points, source, out_ctrl, out_deg, out_first, out_start,
+                                    out_from, si, sf, st)
+                    continue
+                if rejected:
+                    st[C.EVALUATED] += 1
+                    st[C.REJECTED] += 1
+                    st[C.LEVELS] += 1
+                    si[_BROKEN] = 1
+                    if fill:
+                        _clamp_to(write, x3, y3, xmin, ymin, xmax, ymax, out_ctrl, out_deg, si,
+                                  sf)
+                    else:
+                        si[_OPEN] = 0
+                    continue
+                if exact and leaf_depth == 0 and not flatten:
+                    st[C.EVALUATED] += 1
+                    st[C.LEVELS] += 1
+                    _emit_exact(write, fill, d, x0, x1, x2, x3, y0, y1, y2, y3, xmin, ymin, xmax,
+                                ymax, source, brk_t, brk_e, out_ctrl, out_deg, out_first,
+                                out_start, out_from, si, sf, st)
+                    continue
+                clip_segment(write, fill, flatten, exact, d, x0, x1, x2, x3, y0, y1, y2, y3, xmin,
+                             ymin, xmax, ymax, n_split, leaf_depth, tol, source, brk_t,
+                             brk_e, stack, out_ctrl, out_deg, out_first, out_start, out_from, si,
+                             sf, st)
+            i = j
+        if write:
+            for s in range(s0, si[_S]):
+                out_closed[s] = False
+        if fill or (closed[k] and si[_S] != s0):
+            _end_subpath(write, fill, closed[k], controls, last, sx, sy, xmin, ymin, xmax,
+                         ymax, v0, s0, out_ctrl, out_deg, out_first, out_start,
+                         out_closed, out_from, si, sf)
         if not write:
             n_segments[k] = si[_V]
             n_subpaths[k] = si[_S]
@@ -1078,7 +1082,7 @@ def clip_path_blocks(controls, degree, subpath_offsets, closed, start, subpath_s
                      ymin, xmax, ymax, fill, flatten, exact, n_split, leaf_depth, tol,
                      block_size, write, segment_start, subpath_start, out_ctrl, out_deg,
                      out_first, out_start, out_closed, out_from, n_segments, n_subpaths,
-                     counters, decided, segment_class, point_start, points):
+                     run_decisions, counters, decided, segment_class, point_start, points):
     """Count (``write=False``) or write the clipped subpaths of a path array.
 
     Subpath k is the segments ``subpath_offsets[k]:subpath_offsets[k+1]`` of `controls`
@@ -1088,9 +1092,11 @@ def clip_path_blocks(controls, degree, subpath_offsets, closed, start, subpath_s
     ``subpath_start[k]`` on: control points and degrees, and for each output subpath
     its first segment, start point, closed flag and source (``subpath_source[k]``, or
     -1 for an entry freed by joining the ends of a closed stroke: drop those).
-    With `decided`, the segments' classes and accepted curves' flattened points come
-    from `segment_class`, `point_start`, `points` (see `_clip_subpath`); otherwise those
-    are empty and unused.
+    `run_decisions` (int8, one per input segment) keeps the count pass's decision of
+    each run (at its first segment) for the write pass, which does not test runs again.
+    With `decided`, the segments' classes and the accepted curves' flattened points come
+    from `segment_class`, `point_start`, `points` (see `_clip_subpaths`); otherwise
+    those are empty and unused.
     """
     n = subpath_offsets.shape[0] - 1
     n_blocks = counters.shape[0]
@@ -1098,17 +1104,15 @@ def clip_path_blocks(controls, degree, subpath_offsets, closed, start, subpath_s
         st = np.zeros(C.WIDTH, dtype=np.int64) if write else counters[blk]
         si = np.zeros(_INT_STATE_WIDTH, dtype=np.int64)
         sf = np.zeros(_FLOAT_STATE_WIDTH, dtype=np.float64)
-        px = np.empty(4, dtype=np.float64)
-        py = np.empty(4, dtype=np.float64)
         brk_t = np.empty(BREAK_CAPACITY, dtype=np.float64)
         brk_e = np.empty(BREAK_CAPACITY, dtype=np.int64)
         stack = np.empty((CURVE_STACK_CAPACITY, 3), dtype=np.float64)
-        _clip_block(write, fill, flatten, exact, controls, degree, subpath_offsets, closed,
-                    start, subpath_source, xmin, ymin, xmax, ymax, n_split, leaf_depth, tol,
-                    blk * block_size, min(n, (blk + 1) * block_size), segment_start,
-                    subpath_start, px, py, brk_t, brk_e, stack, out_ctrl, out_deg, out_first,
-                    out_start, out_closed, out_from, n_segments, n_subpaths, si, sf, st,
-                    decided, segment_class, point_start, points)
+        _clip_subpaths(write, fill, flatten, exact, controls, degree, subpath_offsets, closed,
+                       start, subpath_source, xmin, ymin, xmax, ymax, n_split, leaf_depth, tol,
+                       blk * block_size, min(n, (blk + 1) * block_size), segment_start,
+                       subpath_start, n_segments, n_subpaths, run_decisions, brk_t,
+                       brk_e, stack, out_ctrl, out_deg, out_first, out_start, out_closed,
+                       out_from, si, sf, st, decided, segment_class, point_start, points)
 
 
 @scalar

@@ -83,15 +83,11 @@ async def clip_geojson(request: Request, settings: SettingsDep, runner: RunnerDe
 
 
 @router.post("/svg", response_model=ClipSVGResponse,
-             responses={**_ERRORS, 501: {**_PROBLEM, "description": "SVG clipping is not "
-                                         "in this release of the library yet"}},
+             responses=_ERRORS,
              openapi_extra=_json_body(ClipSVGRequest), summary="Clip SVG path data")
 async def clip_svg(request: Request, settings: SettingsDep, runner: RunnerDep,
                    metrics: MetricsDep) -> Response:
-    """Return each path's data clipped to the window (curves kept or flattened).
-
-    Answers 501 until the library has SVG clipping (see `/v1/capabilities`).
-    """
+    """Return each path's data clipped to the window (curves kept or flattened)."""
     body = await _read_json(request)
     return _respond(await runner.run(convert.clip_svg, body, settings), metrics)
 

@@ -29,7 +29,7 @@ async def capabilities(settings: SettingsDep, runner: RunnerDep) -> Response:
         "backends": convert.backend_report(),
         "threading_layer": runner.threading_layer,
         "serialized": runner.serialized,
-        "svg": convert.svg_available(),
+        "svg": True,
         "limits": {
             "max_body_bytes": settings.max_body_bytes,
             "max_vertices": settings.max_vertices,

@@ -8,7 +8,7 @@ import pytest
 from typer.testing import CliRunner
 
 from rnsca.cli import app
-from rnsca.formats.svgdoc import clip_svg_document
+from rnsca.clip_svgdoc import clip_svg_document
 
 WINDOW = ["--window", "0,0,10,10"]
 

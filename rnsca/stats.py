@@ -163,8 +163,8 @@ class ClipStats:
         # One conversion to Python ints, then slices: this runs on every clip call, and
         # per-value conversions cost more than small clips themselves.
         total = rows.sum(axis=0).tolist()
-        deepest = rows.max(axis=0)[[C.DEEPEST, C.RUN_DEEPEST]].tolist() if rows.shape[0] \
-            else [0, 0]
+        deepest = [int(rows[:, C.DEEPEST].max()), int(rows[:, C.RUN_DEEPEST].max())] \
+            if rows.shape[0] else [0, 0]
         return cls(
             segments_in=int(segments_in),
             pieces_out=int(pieces_out),

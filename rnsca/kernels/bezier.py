@@ -24,7 +24,8 @@ see the same shape. A part outside that stays beyond one edge projects onto that
 a contractible segment, so it is replaced by the straight line between its clamped
 ends, and consecutive such lines along one edge are merged.
 
-Two passes (count, write) over one body per subpath, `prange` over blocks of subpaths.
+Two passes (count, write) over one body per block of subpaths, `prange` over the blocks;
+the write pass takes each run's decision from the count pass instead of testing it again.
 """
 
 import numpy as np

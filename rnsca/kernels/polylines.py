@@ -598,10 +598,11 @@ def _line_block(blk, block_size, xy, z, has_z, part_offsets, geometry_parts, geo
     """
     n_geometries = geometry_parts.shape[0] - 1
     st = np.zeros(C.WIDTH, dtype=np.int64) if write else counters[blk]
-    run_stack = np.empty((RUN_STACK_CAPACITY, 3), dtype=np.int64)
+    # The write pass replays plans: it needs neither the run stack nor the code scratch.
+    run_stack = np.empty((0 if write else RUN_STACK_CAPACITY, 3), dtype=np.int64)
     stack_f = np.empty((STACK_CAPACITY, 6), dtype=np.float64)
     stack_i = np.empty((STACK_CAPACITY, 3), dtype=np.int64)
-    codes = np.empty(CODE_SCRATCH_BYTES, dtype=np.uint8)
+    codes = np.empty(0 if write else CODE_SCRATCH_BYTES, dtype=np.uint8)
     flat = xy.reshape(-1)
     for g in range(blk * block_size, min(n_geometries, (blk + 1) * block_size)):
         w = geometry_window[g] if geometry_window.shape[0] > 0 else 0

@@ -14,6 +14,7 @@ from enum import Enum
 
 import numpy as np
 
+from rnsca.backends.registry import get_backend
 from rnsca.errors import InvalidOptionError
 from rnsca.formats.svgpath import PathArrays, parse_paths, write_paths
 from rnsca.kernels import bezier as BZ
@@ -118,6 +119,7 @@ class _CurveOptions:
     n_split: int
     leaf_depth: int
     tolerance: float
+    backend: Backend
 
 
 def _resolve(window: Window, *, curves, fill, tolerance, method, n, max_depth, mode,
@@ -129,8 +131,10 @@ def _resolve(window: Window, *, curves, fill, tolerance, method, n, max_depth, m
         raise InvalidOptionError(
             f"curves are clipped by method='rnsca' only, got {method!r} (the line "
             "baselines clip curves after flatten_paths)")
-    if Backend(backend) is not Backend.NUMBA:
-        raise InvalidOptionError(f"curves are clipped on backend='numba' only, got {backend!r}")
+    backend = Backend(backend)
+    if backend not in (Backend.NUMBA, Backend.OPENCL):
+        raise InvalidOptionError(
+            f"curves are clipped on backend='numba' or 'opencl', got {backend.value!r}")
     n_split = subdivision_n(n)
     if n_split is None:
         n_split = BZ.CURVE_N_AUTO
@@ -138,7 +142,7 @@ def _resolve(window: Window, *, curves, fill, tolerance, method, n, max_depth, m
         mode is Mode.EXACT and curves is Curves.PRESERVE) else MAX_DEPTH_LIMIT)
     tol = window.size * CURVE_RELATIVE_TOLERANCE if tolerance is None else \
         positive_tolerance(tolerance, finite=True)
-    return _CurveOptions(curves, fill, mode, n_split, depth, tol)
+    return _CurveOptions(curves, fill, mode, n_split, depth, tol, backend)
 
 
 def clip_paths(paths: PathArrays, window, *, curves="preserve", fill=None, tolerance=None,
@@ -170,7 +174,10 @@ def clip_paths(paths: PathArrays, window, *, curves="preserve", fill=None, toler
         0 in exact preserve mode, where an ambiguous segment is solved exactly whole
         (measured fastest); 32 otherwise),
         ``mode="approx"`` drops undecided leaves (no root finding; the output stays
-        inside the window).
+        inside the window). ``backend="opencl"`` (float64 devices) classifies every
+        segment by its control points, and flattens the curves accepted whole, on the
+        device; the runs, the ambiguous segments and the output are done on the host
+        by the Numba kernel, from the device's decisions: the output is the same.
 
     Returns
     -------
@@ -198,9 +205,18 @@ def clip_paths(paths: PathArrays, window, *, curves="preserve", fill=None, toler
             options.leaf_depth, options.tolerance, block)
     nothing = np.empty(0, dtype=np.int64)
     run_decisions = np.empty(paths.degree.shape[0], dtype=np.int8)
+    device_stats = None
+    if options.backend is Backend.OPENCL:
+        segment_class, point_start, points, device_stats = get_backend(
+            options.backend).classify_curves(
+                paths.controls, paths.degree, window, options.tolerance,
+                "accepted" if options.curves is Curves.FLATTEN else "none")
+        decisions = (True, segment_class, point_start, points)
+    else:
+        decisions = (False, np.empty(0, np.uint8), nothing, np.empty((0, 2)))
     BZ.clip_path_blocks(*args, False, nothing, nothing, np.empty((0, 4, 2)),
                         np.empty(0, np.int8), nothing, np.empty((0, 2)), np.empty(0, bool),
-                        nothing, n_segments, n_out, run_decisions, counters)
+                        nothing, n_segments, n_out, run_decisions, counters, *decisions)
     segment_start = _exclusive_sum(n_segments)
     subpath_start = _exclusive_sum(n_out)
     m = int(segment_start[-1])
@@ -214,7 +230,8 @@ def clip_paths(paths: PathArrays, window, *, curves="preserve", fill=None, toler
     out_from = np.empty(k, dtype=np.int64)
     BZ.clip_path_blocks(*args, True, segment_start, subpath_start, out_ctrl, out_deg,
                         out_first, out_start, out_closed, out_from, n_segments, n_out,
-                        run_decisions, np.zeros((n_blocks, C.WIDTH), dtype=np.int64))
+                        run_decisions, np.zeros((n_blocks, C.WIDTH), dtype=np.int64),
+                        *decisions)
     kept = out_from >= 0
     if not kept.all():  # entries freed by joining the two ends of a closed stroke
         out_first = np.append(out_first[:-1][kept], m)
@@ -229,7 +246,7 @@ def clip_paths(paths: PathArrays, window, *, curves="preserve", fill=None, toler
     stats = ClipStats.from_counters(counters, segments_in, m, geometries_in=len(paths),
                                     geometries_out=non_empty,
                                     vertices_in=int(paths.controls.shape[0]),
-                                    vertices_out=m)
+                                    vertices_out=m, device=device_stats)
     return PathClipResult(clipped, stats, options.curves.value,
                           None if options.fill is None else options.fill.value,
                           options.mode.value, options.tolerance)
@@ -290,7 +307,8 @@ def clip_svg(d, window, *, curves="preserve", fill=None, tolerance=None, precisi
     return (written[0] if single else written), result.stats
 
 
-def flatten_paths(paths: PathArrays, tolerance: float, *, close: bool = False):
+def flatten_paths(paths: PathArrays, tolerance: float, *, close: bool = False,
+                  backend="numba"):
     """Return the paths as polylines within `tolerance` of every curve.
 
     Parameters
@@ -301,6 +319,9 @@ def flatten_paths(paths: PathArrays, tolerance: float, *, close: bool = False):
     close : bool
         Close every subpath (fill): the polyline returns to the subpath's start;
         otherwise only subpaths marked closed do.
+    backend : {"numba", "opencl"}
+        Where the segments' points are computed; "opencl" (float64 devices only)
+        gives the same points: the same counts, the coordinates to rounding.
 
     Returns
     -------
@@ -309,23 +330,51 @@ def flatten_paths(paths: PathArrays, tolerance: float, *, close: bool = False):
         One polyline per subpath with at least one segment.
     line_path : ndarray of int64, shape (L,)
         The path of each polyline.
+
+    Raises
+    ------
+    InvalidOptionError
+        For a bad tolerance or backend.
+    BackendUnavailableError
+        For ``backend="opencl"`` where OpenCL (or float64 on its device) is missing.
     """
     if not (tolerance > 0 and math.isfinite(tolerance)):
         raise InvalidOptionError(f"tolerance must be a positive finite number, got "
                                  f"{tolerance!r}")
+    backend = Backend(backend)
+    if backend not in (Backend.NUMBA, Backend.OPENCL):
+        raise InvalidOptionError(f"paths are flattened on backend='numba' or 'opencl', got "
+                                 f"{backend.value!r}")
     sub = paths.subpath_offsets
-    steps = BZ.flatten_steps(paths.controls, paths.degree, float(tolerance))
-    segment_points = _exclusive_sum(steps)
+    if backend is Backend.OPENCL:
+        _, segment_points, points, _ = get_backend(backend).classify_curves(
+            paths.controls, paths.degree, None, float(tolerance), "all")
+        steps = np.diff(segment_points)
+    else:
+        steps = BZ.flatten_steps(paths.controls, paths.degree, float(tolerance))
+        segment_points = _exclusive_sum(steps)
     has_line = np.diff(sub) > 0
     closes = has_line & (paths.closed | close)
     ends = paths.start.copy()
     ends[has_line] = paths.controls[sub[1:][has_line] - 1, 3]
     closes &= (ends != paths.start).any(axis=1)
-    points = segment_points[sub[1:]] - segment_points[sub[:-1]] + has_line + closes
-    line_offsets = _exclusive_sum(points[has_line])
+    points_per_line = segment_points[sub[1:]] - segment_points[sub[:-1]] + has_line + closes
+    line_offsets = _exclusive_sum(points_per_line[has_line])
+    lines = np.flatnonzero(has_line)
     coords = np.empty((int(line_offsets[-1]), 2))
-    BZ.flatten_into(paths.controls, paths.degree, float(tolerance), sub, paths.start,
-                    np.flatnonzero(has_line), closes, steps, segment_points, line_offsets,
-                    coords)
+    if backend is Backend.OPENCL:
+        # The device's points are the segments' in order; each line adds its start
+        # point before them (and its start again after them where it closes).
+        segment_subpath = np.repeat(np.arange(sub.shape[0] - 1), np.diff(sub))
+        line_of_subpath = np.cumsum(has_line) - 1
+        shift = (line_offsets[:-1][line_of_subpath[segment_subpath]] + 1
+                 - segment_points[sub[:-1]][segment_subpath])
+        coords[np.repeat(shift, steps) + np.arange(points.shape[0])] = points
+        coords[line_offsets[:-1]] = paths.start[lines]
+        closing = closes[lines]
+        coords[line_offsets[1:][closing] - 1] = paths.start[lines[closing]]
+    else:
+        BZ.flatten_into(paths.controls, paths.degree, float(tolerance), sub, paths.start,
+                        lines, closes, steps, segment_points, line_offsets, coords)
     subpath_path = np.repeat(np.arange(len(paths), dtype=np.int64), np.diff(paths.path_offsets))
     return coords, line_offsets, subpath_path[has_line]

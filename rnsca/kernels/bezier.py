@@ -44,6 +44,9 @@ __all__ = [
     "CURVE_N_AUTO",
     "RUN_SEGMENTS",
     "EXACT_LEAF_DEPTH",
+    "SEGMENT_ACCEPTED",
+    "SEGMENT_AMBIGUOUS",
+    "SEGMENT_REJECTED",
     "clip_path_blocks",
     "closing_edges",
     "edge_breaks",
@@ -69,6 +72,11 @@ BREAK_CAPACITY = 16
 # before any segment is (run-level RNSCA, as for polylines): a path that lies mostly
 # inside or outside is copied or skipped a run at a time.
 RUN_SEGMENTS = 16
+# Classes of a segment decided elsewhere (the OpenCL backend's ``classify_bezier``) by
+# the outcodes of its control points: all beyond one edge, all inside, or neither.
+SEGMENT_REJECTED = 0
+SEGMENT_ACCEPTED = 1
+SEGMENT_AMBIGUOUS = 2
 # Depth-first stack: at most N - 1 pending siblings per level, 33 levels, N <= 64.
 CURVE_STACK_CAPACITY = 64 * 34
 
@@ -854,11 +862,33 @@ def _end_subpath(write, fill, closed, controls, last, sx, sy, xmin, ymin, xmax, 
 
 
 @borrowing
+def _emit_flattened(write, fill, x0, y0, a, b, points, source, out_ctrl, out_deg, out_first,
+                    out_start, out_from, si, sf, st):
+    """Output an accepted curve (flatten mode) as lines from (x0, y0) through points a..b-1.
+
+    What `clip_segment` does with an accepted curve, from points computed elsewhere: the
+    same counters, the same lines.
+    """
+    st[C.EVALUATED] += 1
+    st[C.ACCEPTED] += 1
+    st[C.LEVELS] += 1
+    prev_x = x0
+    prev_y = y0
+    for p in range(a, b):
+        nx = points[p, 0]
+        ny = points[p, 1]
+        _emit_piece(write, fill, 1, prev_x, nx, nx, nx, prev_y, ny, ny, ny, source, out_ctrl,
+                    out_deg, out_first, out_start, out_from, si, sf)
+        prev_x = nx
+        prev_y = ny
+
+
+@borrowing
 def _clip_subpaths(write, fill, flatten, exact, controls, degree, subpath_offsets, closed,
                    start, subpath_source, xmin, ymin, xmax, ymax, n_split, leaf_depth, tol, k0,
                    k1, segment_start, subpath_start, n_segments, n_subpaths, run_decisions,
                    brk_t, brk_e, stack, out_ctrl, out_deg, out_first, out_start, out_closed,
-                   out_from, si, sf, st):
+                   out_from, si, sf, st, decided, segment_class, point_start, points):
     """Count or write the clipped output of subpaths k0..k1-1 (one block).
 
     Subpath k, segments ``first..last-1`` starting at (sx, sy), gives as strokes its
@@ -867,6 +897,11 @@ def _clip_subpaths(write, fill, flatten, exact, controls, degree, subpath_offset
     closed subpath, the visible parts joined by the boundary, or nothing if no part is
     visible and the boundary path winds around no point. One function for the whole
     block: a call per subpath passing these arrays cost more than a short subpath's clip.
+
+    With `decided`, each input segment's class is ``segment_class[g]`` (`SEGMENT_*`)
+    and, in flatten mode, an accepted curve's lines end at ``points[point_start[g]:
+    point_start[g + 1]]`` (`flatten_into`'s points), both computed elsewhere (the OpenCL
+    backend); the closing lines and the ambiguous segments are done here.
     """
     for k in range(k0, k1):
         v0 = 0
@@ -980,9 +1015,15 @@ def _clip_subpaths(write, fill, flatten, exact, controls, degree, subpath_offset
                     continue  # a point: nothing to draw, nothing to clamp
                 # Level 0 inline: most segments are decided here, and a call would pass every
                 # array's fields (more than the test itself costs).
-                c_or, c_and = _hull_codes(d, x0, x1, x2, x3, y0, y1, y2, y3, xmin, ymin, xmax,
-                                          ymax)
-                if c_or == 0 and not (flatten and d > 1):
+                if decided and g < last:
+                    accepted = segment_class[g] == SEGMENT_ACCEPTED
+                    rejected = segment_class[g] == SEGMENT_REJECTED
+                else:
+                    c_or, c_and = _hull_codes(d, x0, x1, x2, x3, y0, y1, y2, y3, xmin, ymin,
+                                              xmax, ymax)
+                    accepted = c_or == 0
+                    rejected = c_and != 0
+                if accepted and not (flatten and d > 1):
                     st[C.EVALUATED] += 1
                     st[C.ACCEPTED] += 1
                     st[C.LEVELS] += 1
@@ -997,7 +1038,12 @@ def _clip_subpaths(write, fill, flatten, exact, controls, degree, subpath_offset
                     _put_segment(write, d, x0, x1, x2, x3, y0, y1, y2, y3, out_ctrl, out_deg, si,
                                  sf)
                     continue
-                if c_and != 0:
+                if accepted and decided and g < last:
+                    _emit_flattened(write, fill, x0, y0, point_start[g], point_start[g + 1],
+                                    points, source, out_ctrl, out_deg, out_first, out_start,
+                                    out_from, si, sf, st)
+                    continue
+                if rejected:
                     st[C.EVALUATED] += 1
                     st[C.REJECTED] += 1
                     st[C.LEVELS] += 1
@@ -1037,7 +1083,7 @@ def clip_path_blocks(controls, degree, subpath_offsets, closed, start, subpath_s
                      ymin, xmax, ymax, fill, flatten, exact, n_split, leaf_depth, tol,
                      block_size, write, segment_start, subpath_start, out_ctrl, out_deg,
                      out_first, out_start, out_closed, out_from, n_segments, n_subpaths,
-                     run_decisions, counters):
+                     run_decisions, counters, decided, segment_class, point_start, points):
     """Count (``write=False``) or write the clipped subpaths of a path array.
 
     Subpath k is the segments ``subpath_offsets[k]:subpath_offsets[k+1]`` of `controls`
@@ -1049,6 +1095,9 @@ def clip_path_blocks(controls, degree, subpath_offsets, closed, start, subpath_s
     -1 for an entry freed by joining the ends of a closed stroke: drop those).
     `run_decisions` (int8, one per input segment) keeps the count pass's decision of
     each run (at its first segment) for the write pass, which does not test runs again.
+    With `decided`, the segments' classes and the accepted curves' flattened points come
+    from `segment_class`, `point_start`, `points` (see `_clip_subpaths`); otherwise
+    those are empty and unused.
     """
     n = subpath_offsets.shape[0] - 1
     n_blocks = counters.shape[0]
@@ -1064,7 +1113,7 @@ def clip_path_blocks(controls, degree, subpath_offsets, closed, start, subpath_s
                        blk * block_size, min(n, (blk + 1) * block_size), segment_start,
                        subpath_start, n_segments, n_subpaths, run_decisions, brk_t,
                        brk_e, stack, out_ctrl, out_deg, out_first, out_start, out_closed,
-                       out_from, si, sf, st)
+                       out_from, si, sf, st, decided, segment_class, point_start, points)
 
 
 @scalar

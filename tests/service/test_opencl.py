@@ -90,3 +90,15 @@ def test_geojson_runs_on_opencl(opencl, default_configuration):
     assert r.json()["geojson"] == numba.json()["geojson"]
     assert r.json()["geojson"]["coordinates"][0][0] == [1.0, 0.0]
     assert r.json()["verification"]["passed"] is True
+
+
+def test_svg_paths_run_on_opencl(opencl, default_configuration):
+    paths = ["M-5 5 C0 10 10 10 15 5 Q 20 -20 3 3 Z", "M 2 2 C 3 9 7 9 8 2"]
+    with make_client(warm_up=False) as client:
+        answers = {backend: client.post("/v1/clip/svg", json={
+            "window": WINDOW, "paths": paths,
+            "options": {"backend": backend, "curves": "flatten", "fill": "nonzero"}})
+            for backend in ("opencl", "numba")}
+    assert answers["opencl"].status_code == 200, answers["opencl"].text
+    assert answers["opencl"].json()["paths"] == answers["numba"].json()["paths"]
+    assert answers["opencl"].json()["stats"]["device"]["device"] == opencl.name

@@ -204,3 +204,11 @@ def test_the_output_keeps_the_path_layout(options):
     assert out.controls.dtype == np.float64 and out.degree.dtype == np.int8
     assert out.subpath_offsets.dtype == np.int64 and out.path_offsets.dtype == np.int64
     assert out.closed.dtype == np.bool_ and out.start.dtype == np.float64
+
+
+def test_flatten_paths_names_the_backends_it_runs_on():
+    paths = parse_paths(["M0 0 Q 5 9 9 1"])
+    with pytest.raises(InvalidOptionError, match="'numba' or 'opencl', got 'numpy'"):
+        rnsca.flatten_paths(paths, 0.1, backend="numpy")
+    with pytest.raises(InvalidOptionError, match="'numba' or 'opencl', got 'numpy'"):
+        clip_paths(paths, (0, 0, 1, 1), backend="numpy")

@@ -69,6 +69,8 @@ _METHOD_ID = {
 # Counters the segment kernel fills: the head of the row (rnsca.kernels.counters).
 _SEGMENT_COUNTERS = C.LEVELS + C.N_LEVELS
 _F32 = np.finfo(np.float32)
+# `classify_curves`'s `flatten` as clip.cl numbers it (FLATTEN_*).
+_FLATTEN = {"none": 0, "accepted": 1, "all": 2}
 
 
 def list_devices() -> list[dict]:
@@ -170,7 +172,8 @@ class _Device:
                 # Kernel objects hold their arguments: one per program, used under `call_lock`.
                 self.programs[double] = _Kernels(
                     program.clip_segments, program.write_pieces, program.chunk_boxes,
-                    program.classify_runs, program.clip_chunk_segments)
+                    program.classify_runs, program.clip_chunk_segments,
+                    program.classify_bezier, program.flatten_bezier)
             return self.programs[double]
 
 
@@ -198,6 +201,8 @@ class _Kernels:
     chunk_boxes: cl.Kernel
     classify_runs: cl.Kernel
     clip_chunk_segments: cl.Kernel
+    classify_bezier: cl.Kernel
+    flatten_bezier: cl.Kernel
 
 
 _DEVICES: dict[str, _Device] = {}
@@ -246,7 +251,8 @@ class _Ledger:
         return out
 
     def stats(self, device: str, precision: Precision) -> DeviceStats:
-        cl.wait_for_events(self.copy_events + self.kernel_events)
+        if self.copy_events or self.kernel_events:  # OpenCL refuses an empty wait list
+            cl.wait_for_events(self.copy_events + self.kernel_events)
         return DeviceStats(device=device, precision=precision.value, transfers=self.transfers,
                            bytes_to_device=self.bytes_to_device,
                            bytes_from_device=self.bytes_from_device,
@@ -528,6 +534,79 @@ class OpenCLBackend:
                                 segmented_rows)
         tables = (chunk_start[:-1].copy(), chunk_decision, piece_start, kept, pieces)
         return tables, counters, device_stats
+
+    def classify_curves(self, controls: np.ndarray, degree: np.ndarray, window: Window | None,
+                        tolerance: float, flatten: str):
+        """Classify Bézier segments by their control points, and flatten some, on the device.
+
+        Parameters
+        ----------
+        controls : ndarray, shape (m, 4, 2)
+            Control points, unused slots repeating the end (`PathArrays`).
+        degree : ndarray of int8, shape (m,)
+        window : Window or None
+            The window the classes refer to; None when only flattening (the classes
+            are then meaningless).
+        tolerance : float
+            Flattening tolerance (`bezier.flatten_count`).
+        flatten : {"none", "accepted", "all"}
+            Which segments are flattened: none, the curves (degree > 1) accepted whole,
+            or every segment.
+
+        Returns
+        -------
+        segment_class : ndarray of uint8, shape (m,)
+            `bezier.SEGMENT_REJECTED`, `SEGMENT_ACCEPTED` or `SEGMENT_AMBIGUOUS`.
+        point_start : ndarray of int64, shape (m + 1,)
+            Segment i's points are ``points[point_start[i]:point_start[i + 1]]``: the
+            `bezier.flatten_count` points after its start, its end point last.
+        points : ndarray, shape (point_start[-1], 2)
+        device_stats : DeviceStats
+
+        Raises
+        ------
+        BackendUnavailableError
+            In float32: curves are flattened and classified in float64 only.
+        """
+        if self.precision is not Precision.FLOAT64:
+            raise BackendUnavailableError(
+                f"curves run on the OpenCL backend in float64 only, and the device "
+                f"{self.name!r} runs float32 here; use backend='numba'")
+        m = degree.shape[0]
+        bounds = (0.0, 0.0, 0.0, 0.0) if window is None else window.bounds
+        queue = self._device.queue
+        ledger = _Ledger()
+        with self._device.call_lock:
+            kernels = self._device.program(True)
+            d_controls = ledger.to_device(queue, np.ascontiguousarray(controls, np.float64)
+                                          .reshape(-1))
+            d_degree = ledger.to_device(queue, np.ascontiguousarray(degree, np.int8))
+            segment_class = cl_array.empty(queue, max(1, m), np.uint8)
+            n_points = cl_array.empty(queue, max(1, m), np.int64)
+            if m:
+                ledger.kernel_events.append(kernels.classify_bezier(
+                    queue, (m,), None, _data(d_controls), _data(d_degree), np.int64(m),
+                    *(np.float64(b) for b in bounds), np.float64(tolerance),
+                    np.int32(_FLATTEN[flatten]), segment_class.data, n_points.data))
+            point_end = np.zeros(0, dtype=np.int64)
+            total = 0
+            if m and flatten != "none":
+                event, d_point_end = cl_array.cumsum(n_points[:m], queue=queue,
+                                                     return_event=True)
+                ledger.kernel_events.append(event)
+                point_end = ledger.from_device(queue, d_point_end)
+                total = int(point_end[-1])
+            points = cl_array.empty(queue, max(1, 2 * total), np.float64)
+            if total:
+                ledger.kernel_events.append(kernels.flatten_bezier(
+                    queue, (m,), None, _data(d_controls), _data(d_degree), n_points.data,
+                    d_point_end.data, np.int64(m), points.data))
+            classes = ledger.from_device(queue, segment_class[:m])
+            flat = ledger.from_device(queue, points[:2 * total]).reshape(total, 2)
+            device_stats = ledger.stats(self.name, self.precision)
+        point_start = np.zeros(m + 1, dtype=np.int64)
+        point_start[1:] = point_end if point_end.shape[0] else 0
+        return classes, point_start, flat, device_stats
 
     def warm_up(self) -> None:
         """Build the program (or load it from the caches), run every method, lines, rings.

@@ -1271,3 +1271,106 @@ void clip_chunk_segments(__global const REAL *xy, __global const long *part_offs
     for (int j = get_local_id(0); j < COUNTERS_WIDTH; j += LOCAL_SIZE)
         row[j] = st[j];
 }
+
+/* --- bezier.py: classification and flattening of Bézier segments ------------------ */
+
+/* Segment classes (rnsca/kernels/bezier.py SEGMENT_*): by the outcodes of the control
+ * points, all inside, all beyond one edge, or neither. */
+#define SEGMENT_REJECTED 0
+#define SEGMENT_ACCEPTED 1
+#define SEGMENT_AMBIGUOUS 2
+/* Which segments get flattened (`classify_bezier`'s `flatten`). */
+#define FLATTEN_NONE 0
+#define FLATTEN_ACCEPTED_CURVES 1
+#define FLATTEN_ALL 2
+
+REAL bezier_lerp(REAL a, REAL b, REAL t) {
+    return t < (REAL)0.5 ? a + t * (b - a) : b - ((REAL)1 - t) * (b - a);
+}
+
+/* point_value: the 1-D Bézier (a0..a_degree) at t, by de Casteljau. */
+REAL point_value(int degree, REAL a0, REAL a1, REAL a2, REAL a3, REAL t) {
+    if (degree == 1)
+        return bezier_lerp(a0, a1, t);
+    if (degree == 2)
+        return bezier_lerp(bezier_lerp(a0, a1, t), bezier_lerp(a1, a2, t), t);
+    REAL b0 = bezier_lerp(a0, a1, t);
+    REAL b1 = bezier_lerp(a1, a2, t);
+    REAL b2 = bezier_lerp(a2, a3, t);
+    return bezier_lerp(bezier_lerp(b0, b1, t), bezier_lerp(b1, b2, t), t);
+}
+
+long flatten_count(int degree, REAL x0, REAL x1, REAL x2, REAL x3, REAL y0, REAL y1,
+                   REAL y2, REAL y3, REAL tol) {
+    if (degree == 1)
+        return 1;
+    REAL m;
+    if (degree == 2)
+        m = hypot(x0 - (REAL)2 * x1 + x2, y0 - (REAL)2 * y1 + y2) * (REAL)0.25;
+    else
+        m = (REAL)0.75 * py_max(hypot(x0 - (REAL)2 * x1 + x2, y0 - (REAL)2 * y1 + y2),
+                                hypot(x1 - (REAL)2 * x2 + x3, y1 - (REAL)2 * y2 + y3));
+    if (!(m > tol))
+        return 1;
+    REAL n = ceil(sqrt(m / tol));
+    return (long)py_min(n, (REAL)1.0e6);
+}
+
+/* Segment i (control points controls[8 i:], x y interleaved, degree[i]): its class, and
+ * how many points flatten it within `tol` (`flatten_count`), or 0 where `flatten` does
+ * not ask for its points. */
+__kernel void classify_bezier(__global const REAL *controls, __global const char *degree,
+                              const long m, const REAL xmin, const REAL ymin,
+                              const REAL xmax, const REAL ymax, const REAL tol,
+                              const int flatten, __global uchar *segment_class,
+                              __global long *n_points) {
+    long i = get_global_id(0);
+    if (i >= m)
+        return;
+    __global const REAL *c = controls + 8 * i;
+    int d = degree[i];
+    int c0 = outcode(c[0], c[1], xmin, ymin, xmax, ymax);
+    int c1 = outcode(c[2], c[3], xmin, ymin, xmax, ymax);
+    int c_or = c0 | c1, c_and = c0 & c1;
+    if (d >= 2) {
+        int c2 = outcode(c[4], c[5], xmin, ymin, xmax, ymax);
+        c_or |= c2;
+        c_and &= c2;
+    }
+    if (d == 3) {
+        int c3 = outcode(c[6], c[7], xmin, ymin, xmax, ymax);
+        c_or |= c3;
+        c_and &= c3;
+    }
+    uchar cls = c_or == 0 ? SEGMENT_ACCEPTED
+                          : (c_and != 0 ? SEGMENT_REJECTED : SEGMENT_AMBIGUOUS);
+    segment_class[i] = cls;
+    int wanted = flatten == FLATTEN_ALL
+                 || (flatten == FLATTEN_ACCEPTED_CURVES && cls == SEGMENT_ACCEPTED && d > 1);
+    n_points[i] = wanted ? flatten_count(d, c[0], c[2], c[4], c[6], c[1], c[3], c[5], c[7], tol)
+                         : 0;
+}
+
+/* Segment i's n_points[i] points at equal parameter steps k / n (its end point exactly
+ * last), from points[point_end[i] - n_points[i]] on (`bezier.flatten_into`). */
+__kernel void flatten_bezier(__global const REAL *controls, __global const char *degree,
+                             __global const long *n_points, __global const long *point_end,
+                             const long m, __global REAL *points) {
+    long i = get_global_id(0);
+    if (i >= m)
+        return;
+    __global const REAL *c = controls + 8 * i;
+    int d = degree[i];
+    long n = n_points[i];
+    long pos = point_end[i] - n;
+    for (long k = 1; k <= n; k++, pos++) {
+        if (k == n) {
+            points[2 * pos] = c[6];
+            points[2 * pos + 1] = c[7];
+        } else {
+            REAL t = (REAL)k / (REAL)n;
+            points[2 * pos] = point_value(d, c[0], c[2], c[4], c[6], t);
+            points[2 * pos + 1] = point_value(d, c[1], c[3], c[5], c[7], t);
+        }
+    }
+}

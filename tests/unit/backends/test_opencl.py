@@ -404,3 +404,66 @@ def test_float32_polygons_are_valid_and_within_the_bound(opencl, rng, default_co
     xmin, ymin, xmax, ymax = shapely.bounds(got[both]).T
     assert (xmin >= 2.1).all() and (ymin >= 2.3).all() and (xmax <= 7.7).all() \
         and (ymax <= 7.9).all()
+
+
+# --- curves --------------------------------------------------------------------------------
+
+CURVES = ["M-5 5 C0 10 10 10 15 5 Q 20 -20 3 3 L 4 4 C 5 5 6 6 7 8 Z",
+          "M1 1 Q 5 9 9 1 Z M 3 3 L 4 4", "M 2 2 C 3 9 7 9 8 2"]
+
+
+def test_curves_run_on_the_device_and_count_their_transfers(opencl):
+    paths = rnsca.parse_paths(CURVES)
+    moved_up = paths.controls.nbytes + paths.degree.nbytes
+    d, stats = rnsca.clip_svg(CURVES, (0, 0, 10, 10), curves="preserve", backend="opencl")
+    assert d == rnsca.clip_svg(CURVES, (0, 0, 10, 10), curves="preserve")[0]
+    # Up: the controls and degrees; down: one class per segment (nothing is flattened).
+    assert (stats.device.transfers, stats.device.bytes_to_device,
+            stats.device.bytes_from_device) == (3, moved_up, paths.degree.shape[0])
+    assert stats.device.device == opencl.name and stats.device.precision == "float64"
+    d, stats = rnsca.clip_svg(CURVES, (0, 0, 10, 10), curves="flatten", backend="opencl")
+    assert d == rnsca.clip_svg(CURVES, (0, 0, 10, 10), curves="flatten")[0]
+    # Flatten: also the points' prefix sum and the points of the accepted curves (the
+    # last cubic and the quadratic lie inside; their points make lines of the output).
+    assert stats.device.transfers == 5
+    assert stats.device.bytes_from_device > paths.degree.shape[0] + 8 * paths.degree.shape[0]
+
+
+def test_the_device_classes_and_points_are_the_numba_kernels(opencl):
+    from rnsca.kernels import bezier as BZ
+
+    paths = rnsca.parse_paths(CURVES)
+    window = Window(0.0, 0.0, 10.0, 10.0)
+    classes, point_start, points, _ = opencl.classify_curves(
+        paths.controls, paths.degree, window, 0.01, "accepted")
+    # Segments: the cubic crossing the left and right edges, the quadratic below, the
+    # lines and curves inside; the closing lines are not segments.
+    assert classes.tolist() == [BZ.SEGMENT_AMBIGUOUS, BZ.SEGMENT_AMBIGUOUS,
+                                BZ.SEGMENT_ACCEPTED, BZ.SEGMENT_ACCEPTED,
+                                BZ.SEGMENT_ACCEPTED, BZ.SEGMENT_ACCEPTED,
+                                BZ.SEGMENT_ACCEPTED]
+    steps = BZ.flatten_steps(paths.controls, paths.degree, 0.01)
+    curve = (paths.degree > 1) & (classes == BZ.SEGMENT_ACCEPTED)
+    np.testing.assert_array_equal(np.diff(point_start), np.where(curve, steps, 0))
+    assert points.shape == (point_start[-1], 2)
+    none = opencl.classify_curves(paths.controls, paths.degree, window, 0.01, "none")
+    np.testing.assert_array_equal(none[0], classes)
+    assert none[1].tolist() == [0] * 8 and none[2].shape == (0, 2)
+
+
+def test_no_segments_move_nothing(opencl):
+    empty = rnsca.parse_paths(["", "M 1 1"])
+    classes, point_start, points, device = opencl.classify_curves(
+        empty.controls, empty.degree, Window(0, 0, 1, 1), 0.1, "all")
+    assert classes.shape == (0,) and point_start.tolist() == [0] and points.shape == (0, 2)
+    assert device.transfers == 0
+    assert rnsca.clip_svg(["", "M 1 1"], (0, 0, 2, 2), backend="opencl")[0] == ["", "M1 1"]
+
+
+def test_curves_in_float32_are_refused_not_run_elsewhere(opencl, default_configuration):
+    registry.configure_opencl(opencl.device["id"], "float32")
+    with pytest.raises(BackendUnavailableError, match="curves run on the OpenCL backend in "
+                                                      "float64 only.*backend='numba'"):
+        rnsca.clip_svg("M0 0 Q 5 9 9 1", (0, 0, 10, 10), backend="opencl")
+    with pytest.raises(BackendUnavailableError, match="float64 only"):
+        rnsca.flatten_paths(rnsca.parse_paths(["M0 0 Q 5 9 9 1"]), 0.1, backend="opencl")

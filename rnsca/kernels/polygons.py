@@ -24,7 +24,7 @@ import numpy as np
 from numba import prange
 
 from rnsca.kernels import counters as C
-from rnsca.kernels.jit import parallel, scalar
+from rnsca.kernels.jit import borrowing, parallel, scalar
 from rnsca.kernels.outcode import line_coordinate
 from rnsca.kernels.polylines import (
     RUN_STACK_CAPACITY,
@@ -52,7 +52,7 @@ _BOTTOM, _RIGHT, _TOP, _LEFT = 0, 1, 2, 3
 _UNTOUCHED, _FULL, _CUT = 0, 1, 2
 
 
-@scalar
+@borrowing
 def signed_area(xy, first, last):
     """Return twice the signed area of the closed ring ``xy[first..last]`` (CCW > 0).
 
@@ -77,7 +77,7 @@ def signed_area(xy, first, last):
     return total
 
 
-@scalar
+@borrowing
 def point_in_ring(px, py, xy, first, last):
     """Return 1 if (px, py) is inside the closed ring ``xy[first..last]``, 0 on it, -1 outside.
 
@@ -174,12 +174,12 @@ def _key_less(e1, s1, t1, e2, s2, t2):
     return e1 < e2 or (e1 == e2 and (s1 < s2 or (s1 == s2 and t1 < t2)))
 
 
-@scalar
+@borrowing
 def _chain_length(lc, k):
     return (lc[k, 1] - lc[k, 0]) + (lc[k, 3] - lc[k, 2])
 
 
-@scalar
+@borrowing
 def _chain_vertex(lc, k, j):
     """Return the scratch index of vertex j of logical chain k, in its oriented order.
 
@@ -193,7 +193,7 @@ def _chain_vertex(lc, k, j):
     return lc[k, 0] + j if j < n1 else lc[k, 2] + (j - n1)
 
 
-@scalar
+@borrowing
 def _event_angle(ch_xy, lc, k, at_start, edge, xmin, ymin, xmax, ymax):
     """Return the angle of chain k's direction into the window at its start or end.
 
@@ -221,7 +221,7 @@ def _event_angle(ch_xy, lc, k, at_start, edge, xmin, ymin, xmax, ymax):
     return math.atan2(dy * ux - dx * uy, dx * ux + dy * uy)
 
 
-@scalar
+@borrowing
 def _put(out_xy, out_z, has_z, v, ring_start, x, y, z):
     """Append a ring vertex unless it repeats the previous one; return the next position."""
     if v > ring_start and out_xy[v - 1, 0] == x and out_xy[v - 1, 1] == y:
@@ -233,7 +233,7 @@ def _put(out_xy, out_z, has_z, v, ring_start, x, y, z):
     return v + 1
 
 
-@scalar
+@borrowing
 def _put_chain(ch_xy, ch_z, has_z, lc, k, out_xy, out_z, v, ring_start):
     """Append the vertices of logical chain k; return the next position."""
     for j in range(_chain_length(lc, k)):
@@ -243,7 +243,7 @@ def _put_chain(ch_xy, ch_z, has_z, lc, k, out_xy, out_z, v, ring_start):
     return v
 
 
-@scalar
+@borrowing
 def _put_ring(xy, z, has_z, first, last, reverse, out_xy, out_z, v):
     """Copy the input ring ``xy[first..last]`` (backwards if `reverse`); return the end."""
     for k in range(last - first + 1):
@@ -256,7 +256,7 @@ def _put_ring(xy, z, has_z, first, last, reverse, out_xy, out_z, v):
     return v
 
 
-@scalar
+@borrowing
 def _add_ring(rg_xy, rg_z, has_z, rg_start, rg_sign, n_rg, src_xy, src_z, idx, count, close):
     """Store the ring of ``src[idx[0..count-1]]`` (closed with its first vertex if `close`).
 
@@ -427,7 +427,7 @@ def _split_loops(tmp_xy, tmp_z, has_z, m, node, stk, rg_xy, rg_z, rg_start, rg_s
     return _add_ring(rg_xy, rg_z, has_z, rg_start, rg_sign, n_rg, tmp_xy, tmp_z, stk, top, True)
 
 
-@scalar
+@borrowing
 def _inside_edge(x, y, edge, xmin, ymin, xmax, ymax):
     if edge == _LEFT:
         return x >= xmin
@@ -438,7 +438,7 @@ def _inside_edge(x, y, edge, xmin, ymin, xmax, ymax):
     return y <= ymax
 
 
-@scalar
+@borrowing
 def _cross_edge(x0, y0, z0, x1, y1, z1, edge, xmin, ymin, xmax, ymax):
     """Return the point (x, y, z) where segment 0-1 crosses the line of `edge`."""
     if edge == _LEFT or edge == _RIGHT:

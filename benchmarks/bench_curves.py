@@ -17,7 +17,11 @@ round-robin (best of repeats):
 - ``flatten+rnsca:clip_ragged``: `flatten_paths` at T, then `clip_ragged` on the lines
   (our own line core, run-level RNSCA);
 - ``flatten+shapely:intersection``: `flatten_paths` at T, ``shapely.from_ragged_array``
-  and ``shapely.intersection`` with the box.
+  and ``shapely.intersection`` with the box;
+- ``opencl:preserve`` and ``opencl:flatten``: ``rnsca:preserve`` and ``rnsca:flatten``
+  with ``backend="opencl"`` (segment and run classes, and flatten mode's accepted
+  curves, on the device; the rest on the host), where OpenCL is available; the
+  device's kernel and transfer times are recorded beside them (``device``).
 
 T is 1e-4 of the window's longer side: the flattened baselines are within T of the
 curves, preserve mode within about 1e-15 of the parameter (equal or better accuracy).
@@ -27,6 +31,7 @@ Strokes (``fill=None``): the baselines clip lines, not regions. A fill row
 
 from __future__ import annotations
 
+import dataclasses
 import gc
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -34,6 +39,7 @@ from dataclasses import dataclass
 import numpy as np
 import shapely
 
+from benchmarks.bench_segments import backend_unavailable_reason
 from benchmarks.machine import load_average
 from benchmarks.timing import Contender, Policy, time_round_robin
 from rnsca import PathArrays, clip_paths, clip_ragged, flatten_paths
@@ -153,19 +159,28 @@ def _contenders(paths: PathArrays, window) -> list[tuple[str, Callable[[], objec
         ("rnsca:flatten", lambda: clip_paths(paths, window, curves="flatten", tolerance=tol)),
         (FLATTEN_CLIP, flatten_clip),
         (FLATTEN_SHAPELY, flatten_shapely),
-    ]
+    ] + ([] if backend_unavailable_reason("opencl") else [
+        ("opencl:preserve", lambda: clip_paths(paths, window, backend="opencl")),
+        ("opencl:flatten", lambda: clip_paths(paths, window, curves="flatten", tolerance=tol,
+                                              backend="opencl")),
+    ])
 
 
 def _time_all(entries, policy: Policy, log) -> list[dict]:
     contenders = []
+    devices = {}
     for label, call in entries:
         log(f"curves: {label}")
-        call()  # compile or load the kernels outside the timing
+        result = call()  # compile or load the kernels outside the timing
+        device = getattr(getattr(result, "stats", None), "device", None)
+        if device is not None:  # one call's device times (OpenCL event profiling)
+            devices[label] = dataclasses.asdict(device)
         contenders.append(Contender(label, call))
     time_round_robin(contenders, policy)
     return [{"label": c.label, "seconds": c.best,
              "seconds_median": float(np.median(c.samples)), "repeats": len(c.samples),
-             "number": c.number} for c in contenders]
+             "number": c.number, **({"device": devices[c.label]} if c.label in devices else {})}
+            for c in contenders]
 
 
 def _ratios(runs: list[dict]) -> None:

@@ -20,8 +20,8 @@ round-robin (best of repeats):
   and ``shapely.intersection`` with the box;
 - ``opencl:preserve`` and ``opencl:flatten``: ``rnsca:preserve`` and ``rnsca:flatten``
   with ``backend="opencl"`` (segment and run classes, and flatten mode's accepted
-  curves, on the device; the rest on the host), where OpenCL is available; the
-  device's kernel and transfer times are recorded beside them (``device``).
+  curves, on the device; the rest on the host), where OpenCL is available, with the
+  split of one more profiled call (``device``, as in the other suites).
 
 T is 1e-4 of the window's longer side: the flattened baselines are within T of the
 curves, preserve mode within about 1e-15 of the parameter (equal or better accuracy).
@@ -31,7 +31,6 @@ Strokes (``fill=None``): the baselines clip lines, not regions. A fill row
 
 from __future__ import annotations
 
-import dataclasses
 import gc
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -39,7 +38,7 @@ from dataclasses import dataclass
 import numpy as np
 import shapely
 
-from benchmarks.bench_segments import backend_unavailable_reason
+from benchmarks.bench_segments import backend_unavailable_reason, device_split
 from benchmarks.machine import load_average
 from benchmarks.timing import Contender, Policy, time_round_robin
 from rnsca import PathArrays, clip_paths, clip_ragged, flatten_paths
@@ -168,18 +167,17 @@ def _contenders(paths: PathArrays, window) -> list[tuple[str, Callable[[], objec
 
 def _time_all(entries, policy: Policy, log) -> list[dict]:
     contenders = []
-    devices = {}
     for label, call in entries:
         log(f"curves: {label}")
-        result = call()  # compile or load the kernels outside the timing
-        device = getattr(getattr(result, "stats", None), "device", None)
-        if device is not None:  # one call's device times (OpenCL event profiling)
-            devices[label] = dataclasses.asdict(device)
+        call()  # compile or load the kernels outside the timing
         contenders.append(Contender(label, call))
     time_round_robin(contenders, policy)
     return [{"label": c.label, "seconds": c.best,
              "seconds_median": float(np.median(c.samples)), "repeats": len(c.samples),
-             "number": c.number, **({"device": devices[c.label]} if c.label in devices else {})}
+             "number": c.number,
+             # One more (profiled) call's kernel, transfer and host times, as in the
+             # other suites (benchmarks/README.md, "OpenCL contenders").
+             **({"device": device_split(c.call)} if c.label.startswith("opencl:") else {})}
             for c in contenders]
 
 

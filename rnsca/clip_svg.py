@@ -176,8 +176,9 @@ def clip_paths(paths: PathArrays, window, *, curves="preserve", fill=None, toler
         ``mode="approx"`` drops undecided leaves (no root finding; the output stays
         inside the window). ``backend="opencl"`` (float64 devices) classifies every
         segment by its control points, and flattens the curves accepted whole, on the
-        device; the runs, the ambiguous segments and the output are done on the host
-        by the Numba kernel, from the device's decisions: the output is the same.
+        device, and runs of segments by their box; the ambiguous segments and the
+        output are done on the host by the Numba kernel, from the device's decisions:
+        the output is the same.
 
     Returns
     -------
@@ -207,10 +208,11 @@ def clip_paths(paths: PathArrays, window, *, curves="preserve", fill=None, toler
     run_decisions = np.empty(paths.degree.shape[0], dtype=np.int8)
     device_stats = None
     if options.backend is Backend.OPENCL:
-        segment_class, point_start, points, device_stats = get_backend(
+        segment_class, run_decisions, point_start, points, device_stats = get_backend(
             options.backend).classify_curves(
                 paths.controls, paths.degree, window, options.tolerance,
-                "accepted" if options.curves is Curves.FLATTEN else "none")
+                "accepted" if options.curves is Curves.FLATTEN else "none",
+                paths.subpath_offsets)
         decisions = (True, segment_class, point_start, points)
     else:
         decisions = (False, np.empty(0, np.uint8), nothing, np.empty((0, 2)))
@@ -347,7 +349,7 @@ def flatten_paths(paths: PathArrays, tolerance: float, *, close: bool = False,
                                  f"{backend.value!r}")
     sub = paths.subpath_offsets
     if backend is Backend.OPENCL:
-        _, segment_points, points, _ = get_backend(backend).classify_curves(
+        _, _, segment_points, points, _ = get_backend(backend).classify_curves(
             paths.controls, paths.degree, None, float(tolerance), "all")
         steps = np.diff(segment_points)
     else:

@@ -898,9 +898,10 @@ def _clip_subpaths(write, fill, flatten, exact, controls, degree, subpath_offset
     visible and the boundary path winds around no point. One function for the whole
     block: a call per subpath passing these arrays cost more than a short subpath's clip.
 
-    With `decided`, each input segment's class is ``segment_class[g]`` (`SEGMENT_*`)
-    and, in flatten mode, an accepted curve's lines end at ``points[point_start[g]:
-    point_start[g + 1]]`` (`flatten_into`'s points), both computed elsewhere (the OpenCL
+    With `decided`, each run's decision is already in `run_decisions`, each input
+    segment's class is ``segment_class[g]`` (`SEGMENT_*`) and, in flatten mode, an
+    accepted curve's lines end at ``points[point_start[g]:point_start[g + 1]]``
+    (`flatten_into`'s points), all computed elsewhere (the OpenCL
     backend); the closing lines and the ambiguous segments are done here.
     """
     for k in range(k0, k1):
@@ -947,8 +948,9 @@ def _clip_subpaths(write, fill, flatten, exact, controls, degree, subpath_offset
             if j - i >= 2:
                 # Run level: the box of the run's control points decides it whole, as a
                 # piece's hull decides a piece (copy it, or skip it: no per-segment work).
-                if write:
-                    decision = run_decisions[i]  # the count pass's: the same box, the same test
+                if write or decided:
+                    # The count pass's (or the device's): the same box, the same test.
+                    decision = run_decisions[i]
                 else:
                     lo_x, lo_y, hi_x, hi_y = _run_box(controls, i, j)
                     c_lo = outcode(lo_x, lo_y, xmin, ymin, xmax, ymax)
@@ -1095,9 +1097,9 @@ def clip_path_blocks(controls, degree, subpath_offsets, closed, start, subpath_s
     -1 for an entry freed by joining the ends of a closed stroke: drop those).
     `run_decisions` (int8, one per input segment) keeps the count pass's decision of
     each run (at its first segment) for the write pass, which does not test runs again.
-    With `decided`, the segments' classes and the accepted curves' flattened points come
-    from `segment_class`, `point_start`, `points` (see `_clip_subpaths`); otherwise
-    those are empty and unused.
+    With `decided`, the runs' decisions, the segments' classes and the accepted curves'
+    flattened points are given (`run_decisions`, `segment_class`, `point_start`,
+    `points`; see `_clip_subpaths`); otherwise those are empty and unused.
     """
     n = subpath_offsets.shape[0] - 1
     n_blocks = counters.shape[0]

@@ -49,8 +49,14 @@ def assert_curves_agree(source: PathArrays, window, **options) -> None:
     assert dataclasses.replace(got.stats, device=None) == ref.stats, where
     assert ref.stats.device is None
     assert got.stats.device is not None and got.stats.device.precision == "float64"
-    # The controls and degrees go to the device, the classes (and points) come back.
-    assert got.stats.device.bytes_to_device == source.controls.nbytes + source.degree.nbytes
+    # The controls, degrees and runs (first and end segments) go to the device; the
+    # classes, run decisions (and points) come back.
+    offsets = source.subpath_offsets
+    n_runs = sum(min(a + 16, last) - a >= 2
+                 for first, last in zip(offsets[:-1], offsets[1:], strict=True)
+                 for a in range(first, last, 16))
+    assert got.stats.device.bytes_to_device == (source.controls.nbytes + source.degree.nbytes
+                                                + 16 * n_runs)
     assert got.stats.device.bytes_from_device >= source.degree.shape[0]
 
 

@@ -41,6 +41,7 @@ import pyopencl as cl
 import pyopencl.array as cl_array
 
 from rnsca.errors import BackendUnavailableError, InvalidGeometryError, InvalidWindowError
+from rnsca.kernels import bezier as BZ
 from rnsca.kernels import counters as C
 from rnsca.kernels import polygons as PG
 from rnsca.kernels import polylines as PL
@@ -173,7 +174,8 @@ class _Device:
                 self.programs[double] = _Kernels(
                     program.clip_segments, program.write_pieces, program.chunk_boxes,
                     program.classify_runs, program.clip_chunk_segments,
-                    program.classify_bezier, program.flatten_bezier)
+                    program.classify_bezier, program.flatten_bezier,
+                    program.classify_bezier_runs)
             return self.programs[double]
 
 
@@ -203,6 +205,7 @@ class _Kernels:
     clip_chunk_segments: cl.Kernel
     classify_bezier: cl.Kernel
     flatten_bezier: cl.Kernel
+    classify_bezier_runs: cl.Kernel
 
 
 _DEVICES: dict[str, _Device] = {}
@@ -536,8 +539,8 @@ class OpenCLBackend:
         return tables, counters, device_stats
 
     def classify_curves(self, controls: np.ndarray, degree: np.ndarray, window: Window | None,
-                        tolerance: float, flatten: str):
-        """Classify Bézier segments by their control points, and flatten some, on the device.
+                        tolerance: float, flatten: str, subpath_offsets: np.ndarray | None = None):
+        """Classify Bézier segments and runs of them, and flatten some segments, on the device.
 
         Parameters
         ----------
@@ -550,13 +553,21 @@ class OpenCLBackend:
         tolerance : float
             Flattening tolerance (`bezier.flatten_count`).
         flatten : {"none", "accepted", "all"}
-            Which segments are flattened: none, the curves (degree > 1) accepted whole,
-            or every segment.
+            Which segments are flattened: none, the curves (degree > 1) accepted whole
+            (flatten mode: runs are then never accepted whole), or every segment.
+        subpath_offsets : ndarray of int64, optional
+            The subpaths, whose runs of `bezier.RUN_SEGMENTS` segments are classified
+            by their control points' box as `bezier.clip_path_blocks` does; None: no
+            runs.
 
         Returns
         -------
         segment_class : ndarray of uint8, shape (m,)
             `bezier.SEGMENT_REJECTED`, `SEGMENT_ACCEPTED` or `SEGMENT_AMBIGUOUS`.
+        run_decision : ndarray of int8, shape (m,)
+            Each run's decision (bezier's ``_RUN_*``) at its first segment, as
+            `bezier.clip_path_blocks` reads them; 0 elsewhere (empty without
+            `subpath_offsets`).
         point_start : ndarray of int64, shape (m + 1,)
             Segment i's points are ``points[point_start[i]:point_start[i + 1]]``: the
             `bezier.flatten_count` points after its start, its end point last.
@@ -574,6 +585,9 @@ class OpenCLBackend:
                 f"{self.name!r} runs float32 here; use backend='numba'")
         m = degree.shape[0]
         bounds = (0.0, 0.0, 0.0, 0.0) if window is None else window.bounds
+        run_first, run_end = _runs(subpath_offsets if subpath_offsets is not None
+                                   else np.zeros(1, np.int64))
+        n_runs = run_first.shape[0]
         queue = self._device.queue
         ledger = _Ledger()
         with self._device.call_lock:
@@ -601,12 +615,24 @@ class OpenCLBackend:
                 ledger.kernel_events.append(kernels.flatten_bezier(
                     queue, (m,), None, _data(d_controls), _data(d_degree), n_points.data,
                     d_point_end.data, np.int64(m), points.data))
+            run_class = np.zeros(0, dtype=np.int8)
+            if n_runs:
+                d_run_first = ledger.to_device(queue, run_first)
+                d_run_end = ledger.to_device(queue, run_end)
+                d_run_class = cl_array.empty(queue, n_runs, np.int8)
+                ledger.kernel_events.append(kernels.classify_bezier_runs(
+                    queue, (n_runs,), None, _data(d_controls), d_run_first.data,
+                    d_run_end.data, np.int64(n_runs), *(np.float64(b) for b in bounds),
+                    np.int32(flatten != "none"), d_run_class.data))
+                run_class = ledger.from_device(queue, d_run_class)
             classes = ledger.from_device(queue, segment_class[:m])
             flat = ledger.from_device(queue, points[:2 * total]).reshape(total, 2)
             device_stats = ledger.stats(self.name, self.precision)
         point_start = np.zeros(m + 1, dtype=np.int64)
         point_start[1:] = point_end if point_end.shape[0] else 0
-        return classes, point_start, flat, device_stats
+        run_decision = np.zeros(m if subpath_offsets is not None else 0, dtype=np.int8)
+        run_decision[run_first] = run_class
+        return classes, run_decision, point_start, flat, device_stats
 
     def warm_up(self) -> None:
         """Build the program (or load it from the caches), run every method, lines, rings.
@@ -633,6 +659,25 @@ class OpenCLBackend:
 def _data(array):
     """Return the buffer of a device array (the empty ones included: 1 byte then)."""
     return array.data if array.size else cl.Buffer(array.context, cl.mem_flags.READ_ONLY, 1)
+
+
+def _runs(subpath_offsets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Return the first and end segments of the runs `bezier.clip_path_blocks` tests.
+
+    Runs of `bezier.RUN_SEGMENTS` segments from each subpath's first one; a last run
+    of a single segment is not a run (its segment is tested alone).
+    """
+    first = subpath_offsets[:-1]
+    last = subpath_offsets[1:]
+    per_subpath = -(-(last - first) // BZ.RUN_SEGMENTS)
+    subpath = np.repeat(np.arange(first.shape[0]), per_subpath)
+    index = np.arange(subpath.shape[0]) - np.repeat(_exclusive_sum(per_subpath)[:-1],
+                                                    per_subpath)
+    run_first = first[subpath] + index * BZ.RUN_SEGMENTS
+    run_end = np.minimum(run_first + BZ.RUN_SEGMENTS, last[subpath])
+    kept = run_end - run_first >= 2
+    return (np.ascontiguousarray(run_first[kept], np.int64),
+            np.ascontiguousarray(run_end[kept], np.int64))
 
 
 def _exclusive_sum(counts: np.ndarray) -> np.ndarray:

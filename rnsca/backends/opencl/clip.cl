@@ -1374,3 +1374,38 @@ __kernel void flatten_bezier(__global const REAL *controls, __global const char 
         }
     }
 }
+
+/* Run decisions of bezier.py's run level (_RUN_*), and its run length. */
+#define RUN_ACCEPTED 0
+#define RUN_REJECTED 1
+#define RUN_SEGMENTED 2
+
+/* Run r, the segments run_first[r]..run_end[r]-1 of one subpath: the outcodes of the
+ * corners of its control points' box (`bezier._run_box`) accept it whole (not when
+ * flattening: its curves must be flattened), reject it whole, or leave it to its
+ * segments. */
+__kernel void classify_bezier_runs(__global const REAL *controls,
+                                   __global const long *run_first,
+                                   __global const long *run_end, const long n_runs,
+                                   const REAL xmin, const REAL ymin, const REAL xmax,
+                                   const REAL ymax, const int flatten,
+                                   __global char *run_decision) {
+    long r = get_global_id(0);
+    if (r >= n_runs)
+        return;
+    long a = run_first[r], b = run_end[r];
+    REAL lo_x = controls[8 * a], hi_x = lo_x, lo_y = controls[8 * a + 1], hi_y = lo_y;
+    for (long i = a; i < b; i++) {
+        for (int k = 1; k < 4; k++) {  /* slot 0 is the previous segment's end (slot 3) */
+            REAL x = controls[8 * i + 2 * k], y = controls[8 * i + 2 * k + 1];
+            lo_x = py_min(lo_x, x);
+            hi_x = py_max(hi_x, x);
+            lo_y = py_min(lo_y, y);
+            hi_y = py_max(hi_y, y);
+        }
+    }
+    int c_lo = outcode(lo_x, lo_y, xmin, ymin, xmax, ymax);
+    int c_hi = outcode(hi_x, hi_y, xmin, ymin, xmax, ymax);
+    run_decision[r] = ((c_lo | c_hi) == 0 && !flatten) ? RUN_ACCEPTED
+                      : ((c_lo & c_hi) != 0 ? RUN_REJECTED : RUN_SEGMENTED);
+}

@@ -417,15 +417,17 @@ def test_curves_run_on_the_device_and_count_their_transfers(opencl):
     moved_up = paths.controls.nbytes + paths.degree.nbytes
     d, stats = rnsca.clip_svg(CURVES, (0, 0, 10, 10), curves="preserve", backend="opencl")
     assert d == rnsca.clip_svg(CURVES, (0, 0, 10, 10), curves="preserve")[0]
-    # Up: the controls and degrees; down: one class per segment (nothing is flattened).
+    # Up: the controls, degrees, and the one run's first and end segments (the first
+    # path's 5 segments; the others have one per subpath); down: one class per segment
+    # and the run's decision (nothing is flattened).
     assert (stats.device.transfers, stats.device.bytes_to_device,
-            stats.device.bytes_from_device) == (3, moved_up, paths.degree.shape[0])
+            stats.device.bytes_from_device) == (6, moved_up + 16, paths.degree.shape[0] + 1)
     assert stats.device.device == opencl.name and stats.device.precision == "float64"
     d, stats = rnsca.clip_svg(CURVES, (0, 0, 10, 10), curves="flatten", backend="opencl")
     assert d == rnsca.clip_svg(CURVES, (0, 0, 10, 10), curves="flatten")[0]
     # Flatten: also the points' prefix sum and the points of the accepted curves (the
     # last cubic and the quadratic lie inside; their points make lines of the output).
-    assert stats.device.transfers == 5
+    assert stats.device.transfers == 8
     assert stats.device.bytes_from_device > paths.degree.shape[0] + 8 * paths.degree.shape[0]
 
 
@@ -434,8 +436,9 @@ def test_the_device_classes_and_points_are_the_numba_kernels(opencl):
 
     paths = rnsca.parse_paths(CURVES)
     window = Window(0.0, 0.0, 10.0, 10.0)
-    classes, point_start, points, _ = opencl.classify_curves(
+    classes, runs, point_start, points, _ = opencl.classify_curves(
         paths.controls, paths.degree, window, 0.01, "accepted")
+    assert runs.shape == (0,)  # no subpaths given: no runs
     # Segments: the cubic crossing the left and right edges, the quadratic below, the
     # lines and curves inside; the closing lines are not segments.
     assert classes.tolist() == [BZ.SEGMENT_AMBIGUOUS, BZ.SEGMENT_AMBIGUOUS,
@@ -448,14 +451,15 @@ def test_the_device_classes_and_points_are_the_numba_kernels(opencl):
     assert points.shape == (point_start[-1], 2)
     none = opencl.classify_curves(paths.controls, paths.degree, window, 0.01, "none")
     np.testing.assert_array_equal(none[0], classes)
-    assert none[1].tolist() == [0] * 8 and none[2].shape == (0, 2)
+    assert none[2].tolist() == [0] * 8 and none[3].shape == (0, 2)
 
 
 def test_no_segments_move_nothing(opencl):
     empty = rnsca.parse_paths(["", "M 1 1"])
-    classes, point_start, points, device = opencl.classify_curves(
-        empty.controls, empty.degree, Window(0, 0, 1, 1), 0.1, "all")
-    assert classes.shape == (0,) and point_start.tolist() == [0] and points.shape == (0, 2)
+    classes, runs, point_start, points, device = opencl.classify_curves(
+        empty.controls, empty.degree, Window(0, 0, 1, 1), 0.1, "all", empty.subpath_offsets)
+    assert classes.shape == runs.shape == (0,)
+    assert point_start.tolist() == [0] and points.shape == (0, 2)
     assert device.transfers == 0
     assert rnsca.clip_svg(["", "M 1 1"], (0, 0, 2, 2), backend="opencl")[0] == ["", "M1 1"]
 
@@ -467,3 +471,20 @@ def test_curves_in_float32_are_refused_not_run_elsewhere(opencl, default_configu
         rnsca.clip_svg("M0 0 Q 5 9 9 1", (0, 0, 10, 10), backend="opencl")
     with pytest.raises(BackendUnavailableError, match="float64 only"):
         rnsca.flatten_paths(rnsca.parse_paths(["M0 0 Q 5 9 9 1"]), 0.1, backend="opencl")
+
+
+def test_runs_of_sixteen_segments_are_decided_on_the_device(opencl):
+    from rnsca.kernels import bezier as BZ
+
+    inside = " ".join(f"L {1 + i % 2} {1 + i / 10}" for i in range(20))  # 0..19 inside
+    outside = " ".join(f"Q {-5 - i % 2} {i} {-6} {i + 0.5}" for i in range(28))  # 21..48 left
+    paths = rnsca.parse_paths([f"M 1 1 {inside} L -5 0 {outside} L 3 3"])
+    window = Window(0.0, 0.0, 10.0, 10.0)
+    for flatten, accepted in (("none", BZ._RUN_ACCEPTED), ("accepted", BZ._RUN_SEGMENTED)):
+        _, runs, _, _, _ = opencl.classify_curves(paths.controls, paths.degree, window, 0.01,
+                                                  flatten, paths.subpath_offsets)
+        # Runs start at segments 0, 16, 32 and 48 (of 50); flattening accepts no run.
+        expected = np.zeros(50, dtype=np.int8)
+        expected[[0, 16, 32, 48]] = [accepted, BZ._RUN_SEGMENTED, BZ._RUN_REJECTED,
+                                     BZ._RUN_SEGMENTED]
+        assert runs.tolist() == expected.tolist()

@@ -16,6 +16,15 @@ for the Numba backend (`polylines.assemble_line_blocks`, `polygons.clip_polygon_
 with decided chunks). The split keeps the sequential, data-dependent assembly (output
 order, joins, the boundary walk) on the host, and the per-segment work on the device.
 
+Bézier paths (`classify_curves`, for `rnsca.clip_paths` and `rnsca.flatten_paths`):
+``classify_bezier`` (one work-item per segment: its class by its control points'
+outcodes, and the step count of the segments to flatten), ``classify_bezier_runs`` (one
+work-item per run of 16 segments: the box of its control points) and, after a prefix
+sum of the step counts, ``flatten_bezier`` (each segment's points into its slots) run
+on the device; the Numba path kernel (`bezier.clip_path_blocks` with decisions) reads
+the classes, run decisions and points and does the ambiguous segments and the output
+on the host, as it does for the Numba backend. float64 only.
+
 Devices and programs: the device is picked once per backend (`select_device`); each
 device gets one context and one profiling queue per process, and ``clip.cl`` is built
 once per (context, precision) and kept (`_Device.program`). pyopencl and the OpenCL
@@ -638,7 +647,8 @@ class OpenCLBackend:
         """Build the program (or load it from the caches), run every method, lines, rings.
 
         Also compiles (or loads from Numba's cache) the host kernels that assemble lines
-        and polygons.
+        and polygons, and (float64) those that clip and flatten curves from the device's
+        decisions.
         """
         window = Window(0.0, 0.0, 1.0, 1.0)
         segments = np.array([[-1.0, 0.5, 2.0, 0.5], [0.2, 0.2, 0.8, 0.8]])
@@ -654,6 +664,19 @@ class OpenCLBackend:
                 self.clip_lines(ring, z, offsets, index, windows, options, drop)
             self.clip_polygons(ring, z, offsets, np.array([0, 1], dtype=np.int64), index,
                                windows, options)
+        if self.precision is Precision.FLOAT64:
+            from rnsca.clip_svg import clip_svg
+            from rnsca.formats.svgpath import parse_paths
+
+            d = "M-1 0.5 C0 2 1 2 2 0.5 L 0.5 0.5 Z"
+            paths = parse_paths([d])
+            for flatten in ("none", "accepted", "all"):
+                self.classify_curves(paths.controls, paths.degree, window, 0.01, flatten,
+                                     paths.subpath_offsets)
+            # The host kernel reading the device's decisions is the Numba backend's
+            # (the same types): compiled or loaded here.
+            for curves in ("preserve", "flatten"):
+                clip_svg(d, window.bounds, curves=curves, backend="numba")
 
 
 def _data(array):

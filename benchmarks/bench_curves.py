@@ -17,7 +17,11 @@ round-robin (best of repeats):
 - ``flatten+rnsca:clip_ragged``: `flatten_paths` at T, then `clip_ragged` on the lines
   (our own line core, run-level RNSCA);
 - ``flatten+shapely:intersection``: `flatten_paths` at T, ``shapely.from_ragged_array``
-  and ``shapely.intersection`` with the box.
+  and ``shapely.intersection`` with the box;
+- ``opencl:preserve`` and ``opencl:flatten``: ``rnsca:preserve`` and ``rnsca:flatten``
+  with ``backend="opencl"`` (segment and run classes, and flatten mode's accepted
+  curves, on the device; the rest on the host), where OpenCL is available, with the
+  split of one more profiled call (``device``, as in the other suites).
 
 T is 1e-4 of the window's longer side: the flattened baselines are within T of the
 curves, preserve mode within about 1e-15 of the parameter (equal or better accuracy).
@@ -34,6 +38,7 @@ from dataclasses import dataclass
 import numpy as np
 import shapely
 
+from benchmarks.bench_segments import backend_unavailable_reason, device_split
 from benchmarks.machine import load_average
 from benchmarks.timing import Contender, Policy, time_round_robin
 from rnsca import PathArrays, clip_paths, clip_ragged, flatten_paths
@@ -153,7 +158,11 @@ def _contenders(paths: PathArrays, window) -> list[tuple[str, Callable[[], objec
         ("rnsca:flatten", lambda: clip_paths(paths, window, curves="flatten", tolerance=tol)),
         (FLATTEN_CLIP, flatten_clip),
         (FLATTEN_SHAPELY, flatten_shapely),
-    ]
+    ] + ([] if backend_unavailable_reason("opencl") else [
+        ("opencl:preserve", lambda: clip_paths(paths, window, backend="opencl")),
+        ("opencl:flatten", lambda: clip_paths(paths, window, curves="flatten", tolerance=tol,
+                                              backend="opencl")),
+    ])
 
 
 def _time_all(entries, policy: Policy, log) -> list[dict]:
@@ -165,7 +174,11 @@ def _time_all(entries, policy: Policy, log) -> list[dict]:
     time_round_robin(contenders, policy)
     return [{"label": c.label, "seconds": c.best,
              "seconds_median": float(np.median(c.samples)), "repeats": len(c.samples),
-             "number": c.number} for c in contenders]
+             "number": c.number,
+             # One more (profiled) call's kernel, transfer and host times, as in the
+             # other suites (benchmarks/README.md, "OpenCL contenders").
+             **({"device": device_split(c.call)} if c.label.startswith("opencl:") else {})}
+            for c in contenders]
 
 
 def _ratios(runs: list[dict]) -> None:

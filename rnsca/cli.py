@@ -190,7 +190,7 @@ def clip(
     tolerance: Annotated[float | None, typer.Option(
         help="leaf length; SVG: also how far flattened curves may stray")] = None,
     mode: Annotated[str, typer.Option(help="exact or approx (lines and points only)")] = "exact",
-    backend: Annotated[str, typer.Option(help="numba")] = "numba",
+    backend: Annotated[str, typer.Option(help="numba or opencl")] = "numba",
     boundary: Annotated[str, typer.Option(
         help="closed keeps parts on the window's edge (as shapely.intersection); interior "
              "drops them (as shapely.clip_by_rect)")] = "closed",

@@ -7,6 +7,7 @@ OpenCL is missing, a failure in CI).
 """
 
 import dataclasses
+import json
 import sys
 import threading
 
@@ -488,3 +489,23 @@ def test_runs_of_sixteen_segments_are_decided_on_the_device(opencl):
         expected[[0, 16, 32, 48]] = [accepted, BZ._RUN_SEGMENTED, BZ._RUN_REJECTED,
                                      BZ._RUN_SEGMENTED]
         assert runs.tolist() == expected.tolist()
+
+
+def test_svg_documents_clip_on_the_device_from_the_command_line(opencl, tmp_path):
+    from typer.testing import CliRunner
+
+    from rnsca.cli import app
+
+    drawing = tmp_path / "drawing.svg"
+    drawing.write_text('<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 10 10">'
+                       '<path d="M-5 5 C0 10 10 10 15 5 Q 20 -20 3 3 Z" fill="red"/>'
+                       '<circle cx="5" cy="5" r="7" fill="none" stroke="black"/></svg>')
+    runner = CliRunner()
+    results = {backend: runner.invoke(app, ["clip", str(drawing), "--window", "0,0,10,10",
+                                            "--curves", "flatten", "--backend", backend])
+               for backend in ("numba", "opencl")}
+    for result in results.values():
+        assert result.exit_code == 0, result.output
+    assert results["opencl"].stdout == results["numba"].stdout
+    device = json.loads(results["opencl"].stderr.strip().splitlines()[-1])["stats"]["device"]
+    assert device["device"] == opencl.name and device["transfers"] > 0

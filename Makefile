@@ -16,7 +16,7 @@ $(STAMP): pyproject.toml clients/python/pyproject.toml
 	$(PY) -m pip install --quiet --upgrade pip
 	$(PY) -m pip install --quiet -e '.[dev,bench,service,opencl]' -e clients/python
 	# The ICD file for Intel's CPU OpenCL driver (the dev extra): its wheel's own names a
-	# conda path. tests/conftest.py and benchmarks/run.py point OCL_ICD_VENDORS here.
+	# conda path. rnsca.backends.opencl points OCL_ICD_VENDORS here (unless it is set).
 	if [ -e $(VENV)/lib/libintelocl.so ]; then mkdir -p $(VENV)/opencl-vendors && \
 	  echo "$(abspath $(VENV))/lib/libintelocl.so" > $(VENV)/opencl-vendors/intel-cpu.icd; fi
 	touch $(STAMP)

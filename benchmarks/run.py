@@ -31,11 +31,6 @@ from pathlib import Path
 
 import numba
 
-# OpenCL drivers the install step registered beside PoCL (see the Makefile); the ICD
-# loader reads this once, before the first OpenCL call.
-if (Path(sys.prefix) / "opencl-vendors").is_dir():
-    os.environ.setdefault("OCL_ICD_VENDORS", str(Path(sys.prefix) / "opencl-vendors"))
-
 from benchmarks import bench_curves, bench_geometry, bench_svg, datasets
 from benchmarks.bench_segments import (
     Plan,

@@ -13,14 +13,6 @@ from Numba's cache), which would blow any per-example deadline.
 """
 
 import os
-import sys
-from pathlib import Path
-
-# OpenCL drivers the install step registered beside PoCL (see the Makefile); the ICD
-# loader reads this once, before the first OpenCL call.
-_VENDORS = Path(sys.prefix) / "opencl-vendors"
-if _VENDORS.is_dir():
-    os.environ.setdefault("OCL_ICD_VENDORS", str(_VENDORS))
 
 import numpy as np  # noqa: E402
 import pytest  # noqa: E402

@@ -81,38 +81,12 @@ class NumbaBackend:
         See `ClipBackend.clip_polygons`; count, prefix sum, write.
         """
         n_polygons = polygon_offsets.shape[0] - 1
-        has_z = z.shape[0] > 0
-        block = _block_size(n_polygons)
-        n_blocks = max(1, -(-n_polygons // block))
-        counters = np.zeros((n_blocks, C.WIDTH), dtype=np.int64)
-        polygon_class = np.empty(n_polygons, dtype=np.int8)
-        scratch_v = np.zeros(n_polygons, dtype=np.int64)
-        scratch_c = np.zeros(n_polygons, dtype=np.int64)
-        n_vertices = np.empty(n_polygons, dtype=np.int64)
-        n_rings = np.empty(n_polygons, dtype=np.int64)
-        n_polys = np.empty(n_polygons, dtype=np.int64)
-        args = (xy, z, has_z, ring_offsets, polygon_offsets, polygon_window, windows,
-                _METHOD_ID[options.method], options.n, options.max_depth, options.tolerance,
-                options.auto_piece, True, block)
         nothing_i = np.empty(0, dtype=np.int64)
         # Runs and segments are clipped here, not decided elsewhere: no decision tables.
         undecided = (False, nothing_i, np.empty(0, dtype=np.uint8), nothing_i,
                      np.empty(0, dtype=np.bool_), np.empty((0, 6)))
-        PG.clip_polygon_blocks(*args, False, polygon_class, scratch_v, scratch_c, nothing_i,
-                               nothing_i, nothing_i, np.empty((0, 2)), np.empty(0), nothing_i,
-                               nothing_i, n_vertices, n_rings, n_polys, counters, *undecided)
-        vertex_start = _exclusive_sum(n_vertices)
-        ring_start = _exclusive_sum(n_rings)
-        poly_start = _exclusive_sum(n_polys)
-        out_xy = np.empty((int(vertex_start[-1]), 2))
-        out_z = np.empty(int(vertex_start[-1]) if has_z else 0)
-        out_rings = np.empty(int(ring_start[-1]) + 1, dtype=np.int64)
-        out_rings[-1] = out_xy.shape[0]
-        out_poly_rings = np.empty(int(poly_start[-1]), dtype=np.int64)
-        PG.clip_polygon_blocks(*args, True, polygon_class, scratch_v, scratch_c, vertex_start,
-                               ring_start, poly_start, out_xy, out_z, out_rings, out_poly_rings,
-                               n_vertices, n_rings, n_polys, counters, *undecided)
-        return out_xy, out_z, out_rings, out_poly_rings, n_polys, counters
+        return polygon_passes(xy, z, ring_offsets, polygon_offsets, polygon_window, windows,
+                              options, np.empty(n_polygons, dtype=np.int8), undecided)
 
     def warm_up(self) -> None:
         """Compile (or load from the cache) the kernels, so the first real call is fast."""
@@ -145,6 +119,50 @@ def _warm_up_curves() -> None:
         write_paths(result.paths, precision=None)
         write_paths(result.paths, precision=6)
     flatten_paths(paths, 1e-3, close=True)
+
+
+def polygon_passes(xy, z, ring_offsets, polygon_offsets, polygon_window, windows,
+                   options: SegmentOptions, polygon_class, decisions):
+    """Run the polygon kernel's count pass, prefix sums and write pass.
+
+    Shared by the Numba backend (`decisions` says nothing is decided) and the OpenCL
+    backend (`decisions` carries the device's run decisions and pieces: ``(True,
+    chunk_start, decision, piece_start, keep, pieces)``).
+
+    Returns
+    -------
+    tuple
+        ``(xy, z, ring_offsets, rings_per_output, outputs_per_polygon, counters)``.
+    """
+    n_polygons = polygon_offsets.shape[0] - 1
+    has_z = z.shape[0] > 0
+    block = _block_size(n_polygons)
+    n_blocks = max(1, -(-n_polygons // block))
+    counters = np.zeros((n_blocks, C.WIDTH), dtype=np.int64)
+    scratch_v = np.zeros(n_polygons, dtype=np.int64)
+    scratch_c = np.zeros(n_polygons, dtype=np.int64)
+    n_vertices = np.empty(n_polygons, dtype=np.int64)
+    n_rings = np.empty(n_polygons, dtype=np.int64)
+    n_polys = np.empty(n_polygons, dtype=np.int64)
+    args = (xy, z, has_z, ring_offsets, polygon_offsets, polygon_window, windows,
+            _METHOD_ID[options.method], options.n, options.max_depth, options.tolerance,
+            options.auto_piece, True, block)
+    nothing_i = np.empty(0, dtype=np.int64)
+    PG.clip_polygon_blocks(*args, False, polygon_class, scratch_v, scratch_c, nothing_i,
+                           nothing_i, nothing_i, np.empty((0, 2)), np.empty(0), nothing_i,
+                           nothing_i, n_vertices, n_rings, n_polys, counters, *decisions)
+    vertex_start = _exclusive_sum(n_vertices)
+    ring_start = _exclusive_sum(n_rings)
+    poly_start = _exclusive_sum(n_polys)
+    out_xy = np.empty((int(vertex_start[-1]), 2))
+    out_z = np.empty(int(vertex_start[-1]) if has_z else 0)
+    out_rings = np.empty(int(ring_start[-1]) + 1, dtype=np.int64)
+    out_rings[-1] = out_xy.shape[0]
+    out_poly_rings = np.empty(int(poly_start[-1]), dtype=np.int64)
+    PG.clip_polygon_blocks(*args, True, polygon_class, scratch_v, scratch_c, vertex_start,
+                           ring_start, poly_start, out_xy, out_z, out_rings, out_poly_rings,
+                           n_vertices, n_rings, n_polys, counters, *decisions)
+    return out_xy, out_z, out_rings, out_poly_rings, n_polys, counters
 
 
 def _block_size(n_items: int) -> int:

@@ -51,6 +51,7 @@ import numpy as np
 import pyopencl as cl
 import pyopencl.array as cl_array
 
+from rnsca.backends.numba_cpu import polygon_passes
 from rnsca.errors import BackendUnavailableError, InvalidGeometryError, InvalidWindowError
 from rnsca.kernels import bezier as BZ
 from rnsca.kernels import counters as C
@@ -437,35 +438,10 @@ class OpenCLBackend:
         active = (polygon_class[ring_polygon] == PG.AMBIGUOUS).astype(np.uint8)
         tables, device_counters, device_stats = self._prune(
             xy, ring_offsets, ring_window, windows, options, True, active)
-        has_z = z.shape[0] > 0
-        block = max(1, min(1024, -(-n_polygons // 64)))
-        n_blocks = max(1, -(-n_polygons // block))
-        counters = np.zeros((n_blocks, C.WIDTH), dtype=np.int64)
-        scratch_v = np.zeros(n_polygons, dtype=np.int64)
-        scratch_c = np.zeros(n_polygons, dtype=np.int64)
-        n_vertices = np.empty(n_polygons, dtype=np.int64)
-        n_rings = np.empty(n_polygons, dtype=np.int64)
-        n_polys = np.empty(n_polygons, dtype=np.int64)
-        args = (xy, z, has_z, ring_offsets, polygon_offsets, polygon_window, windows,
-                _METHOD_ID[options.method], options.n, options.max_depth, options.tolerance,
-                options.auto_piece, True, block)
-        nothing_i = np.empty(0, dtype=np.int64)
-        PG.clip_polygon_blocks(*args, False, polygon_class, scratch_v, scratch_c, nothing_i,
-                               nothing_i, nothing_i, np.empty((0, 2)), np.empty(0), nothing_i,
-                               nothing_i, n_vertices, n_rings, n_polys, counters, True, *tables)
-        vertex_start = _exclusive_sum(n_vertices)
-        ring_start = _exclusive_sum(n_rings)
-        poly_start = _exclusive_sum(n_polys)
-        out_xy = np.empty((int(vertex_start[-1]), 2))
-        out_z = np.empty(int(vertex_start[-1]) if has_z else 0)
-        out_rings = np.empty(int(ring_start[-1]) + 1, dtype=np.int64)
-        out_rings[-1] = out_xy.shape[0]
-        out_poly_rings = np.empty(int(poly_start[-1]), dtype=np.int64)
-        PG.clip_polygon_blocks(*args, True, polygon_class, scratch_v, scratch_c, vertex_start,
-                               ring_start, poly_start, out_xy, out_z, out_rings, out_poly_rings,
-                               n_vertices, n_rings, n_polys, counters, True, *tables)
-        return (out_xy, out_z, out_rings, out_poly_rings, n_polys,
-                np.concatenate([counters, device_counters]), device_stats)
+        *clipped, counters = polygon_passes(xy, z, ring_offsets, polygon_offsets,
+                                            polygon_window, windows, options, polygon_class,
+                                            (True, *tables))
+        return (*clipped, np.concatenate([counters, device_counters]), device_stats)
 
     def _prune(self, xy, part_offsets, part_window, windows, options: SegmentOptions,
                drop_edge_runs: bool, active):

@@ -322,8 +322,9 @@ def flatten_paths(paths: PathArrays, tolerance: float, *, close: bool = False,
         Close every subpath (fill): the polyline returns to the subpath's start;
         otherwise only subpaths marked closed do.
     backend : {"numba", "opencl"}
-        Where the segments' points are computed; "opencl" (float64 devices only)
-        gives the same points: the same counts, the coordinates to rounding.
+        Where the segments' points are computed; "opencl" gives the same points: the
+        same counts, the coordinates to rounding (a float32 device: exactly, the host
+        computes them in float64).
 
     Returns
     -------
@@ -338,7 +339,7 @@ def flatten_paths(paths: PathArrays, tolerance: float, *, close: bool = False,
     InvalidOptionError
         For a bad tolerance or backend.
     BackendUnavailableError
-        For ``backend="opencl"`` where OpenCL (or float64 on its device) is missing.
+        For ``backend="opencl"`` where OpenCL is missing.
     """
     if not (tolerance > 0 and math.isfinite(tolerance)):
         raise InvalidOptionError(f"tolerance must be a positive finite number, got "

@@ -52,6 +52,7 @@ __all__ = [
     "edge_breaks",
     "flatten_count",
     "flatten_into",
+    "flatten_segments",
     "flatten_steps",
     "piece_values",
     "point_value",
@@ -1135,6 +1136,33 @@ def closing_edges(controls, subpath_offsets, closed, start, fill):
     return count
 
 
+@borrowing
+def _segment_points(controls, degree, i, n, coords, pos):
+    """Write segment i's `n` points at equal parameter steps (its end point exactly last)
+    to ``coords[pos:pos + n]``."""
+    d = degree[i]
+    for k in range(1, n + 1):
+        if k == n:
+            coords[pos, 0] = controls[i, 3, 0]
+            coords[pos, 1] = controls[i, 3, 1]
+        else:
+            t = k / n
+            coords[pos, 0] = point_value(d, controls[i, 0, 0], controls[i, 1, 0],
+                                         controls[i, 2, 0], controls[i, 3, 0], t)
+            coords[pos, 1] = point_value(d, controls[i, 0, 1], controls[i, 1, 1],
+                                         controls[i, 2, 1], controls[i, 3, 1], t)
+        pos += 1
+
+
+@parallel
+def flatten_segments(controls, degree, point_start, points):
+    """Write segment i's ``point_start[i + 1] - point_start[i]`` points (`_segment_points`)
+    to ``points[point_start[i]:]``: the layout of `OpenCLBackend.classify_curves`."""
+    for i in prange(degree.shape[0]):
+        _segment_points(controls, degree, i, point_start[i + 1] - point_start[i], points,
+                        point_start[i])
+
+
 @parallel
 def flatten_steps(controls, degree, tol):
     """Return how many lines flatten each segment within `tol` (`flatten_count`)."""
@@ -1162,19 +1190,8 @@ def flatten_into(controls, degree, tol, subpath_offsets, start, lines, closes, s
         coords[pos, 1] = start[s, 1]
         pos += 1
         for i in range(subpath_offsets[s], subpath_offsets[s + 1]):
-            d = degree[i]
-            n = steps[i]
-            for k in range(1, n + 1):
-                if k == n:
-                    coords[pos, 0] = controls[i, 3, 0]
-                    coords[pos, 1] = controls[i, 3, 1]
-                else:
-                    t = k / n
-                    coords[pos, 0] = point_value(d, controls[i, 0, 0], controls[i, 1, 0],
-                                                 controls[i, 2, 0], controls[i, 3, 0], t)
-                    coords[pos, 1] = point_value(d, controls[i, 0, 1], controls[i, 1, 1],
-                                                 controls[i, 2, 1], controls[i, 3, 1], t)
-                pos += 1
+            _segment_points(controls, degree, i, steps[i], coords, pos)
+            pos += steps[i]
         if closes[s]:
             coords[pos, 0] = start[s, 0]
             coords[pos, 1] = start[s, 1]

@@ -23,7 +23,10 @@ work-item per run of 16 segments: the box of its control points) and, after a pr
 sum of the step counts, ``flatten_bezier`` (each segment's points into its slots) run
 on the device; the Numba path kernel (`bezier.clip_path_blocks` with decisions) reads
 the classes, run decisions and points and does the ambiguous segments and the output
-on the host, as it does for the Numba backend. float64 only.
+on the host, as it does for the Numba backend. On a float32 device the device's classes
+are conservative (inside, or beyond an edge, only where that is sure for the float64
+input: `_windows32`); the host decides the rest from the float64 input and flattens in
+float64, so the output is the float64 output exactly (only the device's share differs).
 
 Devices and programs: the device is picked once per backend (`select_device`); each
 device gets one context and one profiling queue per process, and ``clip.cl`` is built
@@ -58,6 +61,7 @@ from rnsca.kernels import counters as C
 from rnsca.kernels import polygons as PG
 from rnsca.kernels import polylines as PL
 from rnsca.kernels import segments as K
+from rnsca.kernels.outcode import BOTTOM, LEFT, RIGHT, TOP
 from rnsca.options import Backend, Method, Mode, Precision, SegmentOptions
 from rnsca.stats import ClipStats, DeviceStats
 from rnsca.window import Window
@@ -569,43 +573,53 @@ class OpenCLBackend:
         points : ndarray, shape (point_start[-1], 2)
         device_stats : DeviceStats
 
-        Raises
-        ------
-        BackendUnavailableError
-            In float32: curves are flattened and classified in float64 only.
+        In float32 the device's classes are conservative (`_windows32`): "inside" and
+        "beyond an edge" only where that holds for the float64 input too; the host
+        decides the rest (ambiguous segments, segmented runs) from the float64 input and
+        flattens in float64, so the classes, decisions and points returned are exactly
+        the float64 ones.
         """
-        if self.precision is not Precision.FLOAT64:
-            raise BackendUnavailableError(
-                f"curves run on the OpenCL backend in float64 only, and the device "
-                f"{self.name!r} runs float32 here; use backend='numba'")
         m = degree.shape[0]
         bounds = (0.0, 0.0, 0.0, 0.0) if window is None else window.bounds
         run_first, run_end = _runs(subpath_offsets if subpath_offsets is not None
                                    else np.zeros(1, np.int64))
         n_runs = run_first.shape[0]
+        double = self.precision is Precision.FLOAT64
+        controls = np.ascontiguousarray(controls, np.float64)
+        degree = np.ascontiguousarray(degree, np.int8)
+        if double:
+            accept = reject = tuple(np.float64(b) for b in bounds)
+            device_flatten = flatten
+        else:
+            accept, reject = _windows32(bounds)
+            device_flatten = "none"  # the host flattens, in float64 (below)
+            if window is None:  # flattening only: nothing for the device to decide
+                m = n_runs = 0
         queue = self._device.queue
         ledger = _Ledger()
         with self._device.call_lock:
-            kernels = self._device.program(True)
-            d_controls = ledger.to_device(queue, np.ascontiguousarray(controls, np.float64)
-                                          .reshape(-1))
-            d_degree = ledger.to_device(queue, np.ascontiguousarray(degree, np.int8))
+            kernels = self._device.program(double)
+            with np.errstate(over="ignore"):  # float32: beyond its range is ±inf, which
+                # still orders the points against the window (`_windows32`)
+                device_controls = controls[:m].astype(self.real).reshape(-1)
+            d_controls = ledger.to_device(queue, device_controls)
+            d_degree = ledger.to_device(queue, degree[:m])
             segment_class = cl_array.empty(queue, max(1, m), np.uint8)
             n_points = cl_array.empty(queue, max(1, m), np.int64)
             if m:
                 ledger.kernel_events.append(kernels.classify_bezier(
                     queue, (m,), None, _data(d_controls), _data(d_degree), np.int64(m),
-                    *(np.float64(b) for b in bounds), np.float64(tolerance),
-                    np.int32(_FLATTEN[flatten]), segment_class.data, n_points.data))
+                    *accept, *reject, self.real(tolerance),
+                    np.int32(_FLATTEN[device_flatten]), segment_class.data, n_points.data))
             point_end = np.zeros(0, dtype=np.int64)
             total = 0
-            if m and flatten != "none":
+            if m and device_flatten != "none":
                 event, d_point_end = cl_array.cumsum(n_points[:m], queue=queue,
                                                      return_event=True)
                 ledger.kernel_events.append(event)
                 point_end = ledger.from_device(queue, d_point_end)
                 total = int(point_end[-1])
-            points = cl_array.empty(queue, max(1, 2 * total), np.float64)
+            points = cl_array.empty(queue, max(1, 2 * total), self.real)
             if total:
                 ledger.kernel_events.append(kernels.flatten_bezier(
                     queue, (m,), None, _data(d_controls), _data(d_degree), n_points.data,
@@ -617,24 +631,40 @@ class OpenCLBackend:
                 d_run_class = cl_array.empty(queue, n_runs, np.int8)
                 ledger.kernel_events.append(kernels.classify_bezier_runs(
                     queue, (n_runs,), None, _data(d_controls), d_run_first.data,
-                    d_run_end.data, np.int64(n_runs), *(np.float64(b) for b in bounds),
+                    d_run_end.data, np.int64(n_runs), *accept, *reject,
                     np.int32(flatten != "none"), d_run_class.data))
                 run_class = ledger.from_device(queue, d_run_class)
             classes = ledger.from_device(queue, segment_class[:m])
             flat = ledger.from_device(queue, points[:2 * total]).reshape(total, 2)
             device_stats = ledger.stats(self.name, self.precision)
+        m = degree.shape[0]
         point_start = np.zeros(m + 1, dtype=np.int64)
-        point_start[1:] = point_end if point_end.shape[0] else 0
+        if not double:
+            if window is None:  # classes and runs mean nothing here (see `window`)
+                classes = np.full(m, BZ.SEGMENT_AMBIGUOUS, dtype=np.uint8)
+                run_class = np.full(run_first.shape[0], BZ._RUN_SEGMENTED, dtype=np.int8)
+            else:
+                _decide_ambiguous(classes, run_class, controls, degree, run_first, run_end,
+                                  bounds, flatten != "none")
+            if flatten != "none":
+                wanted = (flatten == "all") | ((classes == BZ.SEGMENT_ACCEPTED) & (degree > 1))
+                steps = np.where(wanted, BZ.flatten_steps(controls, degree, float(tolerance)),
+                                 0)
+                np.cumsum(steps, out=point_start[1:])
+                flat = np.empty((int(point_start[-1]), 2))
+                BZ.flatten_segments(controls, degree, point_start, flat)
+        elif point_end.shape[0]:
+            point_start[1:] = point_end
         run_decision = np.zeros(m if subpath_offsets is not None else 0, dtype=np.int8)
         run_decision[run_first] = run_class
-        return classes, run_decision, point_start, flat, device_stats
+        return (classes, run_decision, point_start, flat.astype(np.float64, copy=False),
+                device_stats)
 
     def warm_up(self) -> None:
         """Build the program (or load it from the caches), run every method, lines, rings.
 
         Also compiles (or loads from Numba's cache) the host kernels that assemble lines
-        and polygons, and (float64) those that clip and flatten curves from the device's
-        decisions.
+        and polygons, and those that clip and flatten curves from the device's decisions.
         """
         window = Window(0.0, 0.0, 1.0, 1.0)
         segments = np.array([[-1.0, 0.5, 2.0, 0.5], [0.2, 0.2, 0.8, 0.8]])
@@ -650,19 +680,18 @@ class OpenCLBackend:
                 self.clip_lines(ring, z, offsets, index, windows, options, drop)
             self.clip_polygons(ring, z, offsets, np.array([0, 1], dtype=np.int64), index,
                                windows, options)
-        if self.precision is Precision.FLOAT64:
-            from rnsca.clip_svg import clip_svg
-            from rnsca.formats.svgpath import parse_paths
+        from rnsca.clip_svg import clip_svg
+        from rnsca.formats.svgpath import parse_paths
 
-            d = "M-1 0.5 C0 2 1 2 2 0.5 L 0.5 0.5 Z"
-            paths = parse_paths([d])
-            for flatten in ("none", "accepted", "all"):
-                self.classify_curves(paths.controls, paths.degree, window, 0.01, flatten,
-                                     paths.subpath_offsets)
-            # The host kernel reading the device's decisions is the Numba backend's
-            # (the same types): compiled or loaded here.
-            for curves in ("preserve", "flatten"):
-                clip_svg(d, window.bounds, curves=curves, backend="numba")
+        d = "M-1 0.5 C0 2 1 2 2 0.5 L 0.5 0.5 Z"
+        paths = parse_paths([d])
+        for flatten in ("none", "accepted", "all"):
+            self.classify_curves(paths.controls, paths.degree, window, 0.01, flatten,
+                                 paths.subpath_offsets)
+        # The host kernel reading the device's decisions is the Numba backend's
+        # (the same types): compiled or loaded here.
+        for curves in ("preserve", "flatten"):
+            clip_svg(d, window.bounds, curves=curves, backend="numba")
 
 
 def _data(array):
@@ -744,6 +773,78 @@ def _exact_float32_ends(pieces, xy, windows, part_window, chunk_part, chunk_firs
             on_edge = values == rounded[:, side]
             values[on_edge] = window[on_edge, side]
         np.clip(values, window[:, bound], window[:, bound + 2], out=values)
+
+
+def _windows32(bounds) -> tuple[tuple, tuple]:
+    """Return the float32 windows that make the device's curve classes sure (float32).
+
+    Rounding to float32 keeps order (``x <= y`` gives ``f(x) <= f(y)``, also where it
+    overflows to ±inf or a device flushes subnormals to zero), so ``f(x) < f(xmin)``
+    proves ``x < xmin`` and ``f(x) > f(xmin)`` proves ``x > xmin``. The reject window
+    is the window rounded outward to a normal float32 (or ±inf), so a point beyond one
+    of its edges is beyond the float64 edge; the accept window is the smallest normal
+    float32 strictly inside each rounded bound, so a point inside it is inside the
+    float64 window. Points between the two are ambiguous and go to the host.
+    """
+    tiny = np.float32(_F32.tiny)  # the smallest normal: subnormals may be flushed to 0
+    inf = np.float32(np.inf)
+    with np.errstate(over="ignore"):
+        rounded = np.asarray(bounds, np.float64).astype(np.float32)
+
+    def above(h):  # the smallest normal float32 > h
+        return tiny if -tiny <= h < tiny else np.nextafter(h, inf)
+
+    def not_above(h):  # the largest normal float32 (or -inf) <= h
+        return -tiny if -tiny < h < tiny else h
+
+    xmin, ymin, xmax, ymax = rounded
+    reject = (not_above(xmin), not_above(ymin), -not_above(-xmax), -not_above(-ymax))
+    if np.isposinf(xmin) or np.isposinf(ymin) or np.isneginf(xmax) or np.isneginf(ymax):
+        accept = (_F32.max, _F32.max, -_F32.max, -_F32.max)  # no point is inside it
+    else:
+        accept = (above(xmin), above(ymin), -above(-xmax), -above(-ymax))
+    return tuple(map(np.float32, accept)), tuple(map(np.float32, reject))
+
+
+def _outcodes(x, y, bounds):
+    xmin, ymin, xmax, ymax = bounds
+    return ((x < xmin) * LEFT) | ((x > xmax) * RIGHT) | ((y < ymin) * BOTTOM) | (
+        (y > ymax) * TOP)
+
+
+def _decide_ambiguous(classes, run_class, controls, degree, run_first, run_end, bounds,
+                      flatten: bool) -> None:
+    """Decide, in float64 and in place, the segments and runs a float32 device left open.
+
+    The same tests as `bezier.clip_path_blocks` (control points' outcodes, a run's box),
+    on the float64 input: the result is the float64 device's.
+    """
+    rows = np.flatnonzero(classes == BZ.SEGMENT_AMBIGUOUS)
+    if rows.size:
+        codes = _outcodes(controls[rows, :, 0], controls[rows, :, 1], bounds)
+        d = degree[rows]
+        used = np.ones(codes.shape, dtype=bool)
+        used[:, 2] = d >= 2
+        used[:, 3] = d == 3
+        c_or = np.bitwise_or.reduce(np.where(used, codes, 0), axis=1)
+        c_and = np.bitwise_and.reduce(np.where(used, codes, LEFT | RIGHT | BOTTOM | TOP),
+                                      axis=1)
+        classes[rows] = np.where(c_or == 0, BZ.SEGMENT_ACCEPTED, np.where(
+            c_and != 0, BZ.SEGMENT_REJECTED, BZ.SEGMENT_AMBIGUOUS))
+    runs = np.flatnonzero(run_class == BZ._RUN_SEGMENTED)
+    if runs.size:
+        first, end = run_first[runs], run_end[runs]
+        # Each run's segments (its last repeated up to RUN_SEGMENTS), slots 1..3, and
+        # slot 0 of its first (`bezier._run_box`).
+        members = np.minimum(first[:, None] + np.arange(BZ.RUN_SEGMENTS), end[:, None] - 1)
+        points = controls[members][:, :, 1:, :].reshape(runs.size, -1, 2)
+        lo = np.minimum(points.min(axis=1), controls[first, 0])
+        hi = np.maximum(points.max(axis=1), controls[first, 0])
+        c_lo = _outcodes(lo[:, 0], lo[:, 1], bounds)
+        c_hi = _outcodes(hi[:, 0], hi[:, 1], bounds)
+        run_class[runs] = np.where(((c_lo | c_hi) == 0) & (not flatten), BZ._RUN_ACCEPTED,
+                                   np.where((c_lo & c_hi) != 0, BZ._RUN_REJECTED,
+                                            BZ._RUN_SEGMENTED))
 
 
 def _check_float32_lines(xy: np.ndarray, windows: np.ndarray) -> None:

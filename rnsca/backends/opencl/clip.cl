@@ -1318,29 +1318,32 @@ long flatten_count(int degree, REAL x0, REAL x1, REAL x2, REAL x3, REAL y0, REAL
 
 /* Segment i (control points controls[8 i:], x y interleaved, degree[i]): its class, and
  * how many points flatten it within `tol` (`flatten_count`), or 0 where `flatten` does
- * not ask for its points. */
+ * not ask for its points. Inside is tested against the window a_* and beyond an edge
+ * against the window r_*: the same window in float64; in float32 the window shrunk and
+ * grown by the host so that both answers are sure for the float64 input (`_windows32`),
+ * everything else ambiguous. */
 __kernel void classify_bezier(__global const REAL *controls, __global const char *degree,
-                              const long m, const REAL xmin, const REAL ymin,
-                              const REAL xmax, const REAL ymax, const REAL tol,
-                              const int flatten, __global uchar *segment_class,
-                              __global long *n_points) {
+                              const long m, const REAL a_xmin, const REAL a_ymin,
+                              const REAL a_xmax, const REAL a_ymax, const REAL r_xmin,
+                              const REAL r_ymin, const REAL r_xmax, const REAL r_ymax,
+                              const REAL tol, const int flatten,
+                              __global uchar *segment_class, __global long *n_points) {
     long i = get_global_id(0);
     if (i >= m)
         return;
     __global const REAL *c = controls + 8 * i;
     int d = degree[i];
-    int c0 = outcode(c[0], c[1], xmin, ymin, xmax, ymax);
-    int c1 = outcode(c[2], c[3], xmin, ymin, xmax, ymax);
-    int c_or = c0 | c1, c_and = c0 & c1;
+    int c_or = outcode(c[0], c[1], a_xmin, a_ymin, a_xmax, a_ymax)
+               | outcode(c[2], c[3], a_xmin, a_ymin, a_xmax, a_ymax);
+    int c_and = outcode(c[0], c[1], r_xmin, r_ymin, r_xmax, r_ymax)
+                & outcode(c[2], c[3], r_xmin, r_ymin, r_xmax, r_ymax);
     if (d >= 2) {
-        int c2 = outcode(c[4], c[5], xmin, ymin, xmax, ymax);
-        c_or |= c2;
-        c_and &= c2;
+        c_or |= outcode(c[4], c[5], a_xmin, a_ymin, a_xmax, a_ymax);
+        c_and &= outcode(c[4], c[5], r_xmin, r_ymin, r_xmax, r_ymax);
     }
     if (d == 3) {
-        int c3 = outcode(c[6], c[7], xmin, ymin, xmax, ymax);
-        c_or |= c3;
-        c_and &= c3;
+        c_or |= outcode(c[6], c[7], a_xmin, a_ymin, a_xmax, a_ymax);
+        c_and &= outcode(c[6], c[7], r_xmin, r_ymin, r_xmax, r_ymax);
     }
     uchar cls = c_or == 0 ? SEGMENT_ACCEPTED
                           : (c_and != 0 ? SEGMENT_REJECTED : SEGMENT_AMBIGUOUS);
@@ -1383,12 +1386,13 @@ __kernel void flatten_bezier(__global const REAL *controls, __global const char 
 /* Run r, the segments run_first[r]..run_end[r]-1 of one subpath: the outcodes of the
  * corners of its control points' box (`bezier._run_box`) accept it whole (not when
  * flattening: its curves must be flattened), reject it whole, or leave it to its
- * segments. */
+ * segments; a_* and r_* as in `classify_bezier`. */
 __kernel void classify_bezier_runs(__global const REAL *controls,
                                    __global const long *run_first,
                                    __global const long *run_end, const long n_runs,
-                                   const REAL xmin, const REAL ymin, const REAL xmax,
-                                   const REAL ymax, const int flatten,
+                                   const REAL a_xmin, const REAL a_ymin, const REAL a_xmax,
+                                   const REAL a_ymax, const REAL r_xmin, const REAL r_ymin,
+                                   const REAL r_xmax, const REAL r_ymax, const int flatten,
                                    __global char *run_decision) {
     long r = get_global_id(0);
     if (r >= n_runs)
@@ -1404,8 +1408,10 @@ __kernel void classify_bezier_runs(__global const REAL *controls,
             hi_y = py_max(hi_y, y);
         }
     }
-    int c_lo = outcode(lo_x, lo_y, xmin, ymin, xmax, ymax);
-    int c_hi = outcode(hi_x, hi_y, xmin, ymin, xmax, ymax);
-    run_decision[r] = ((c_lo | c_hi) == 0 && !flatten) ? RUN_ACCEPTED
-                      : ((c_lo & c_hi) != 0 ? RUN_REJECTED : RUN_SEGMENTED);
+    int inside = (outcode(lo_x, lo_y, a_xmin, a_ymin, a_xmax, a_ymax)
+                  | outcode(hi_x, hi_y, a_xmin, a_ymin, a_xmax, a_ymax)) == 0;
+    int beyond = (outcode(lo_x, lo_y, r_xmin, r_ymin, r_xmax, r_ymax)
+                  & outcode(hi_x, hi_y, r_xmin, r_ymin, r_xmax, r_ymax)) != 0;
+    run_decision[r] = (inside && !flatten) ? RUN_ACCEPTED
+                      : (beyond ? RUN_REJECTED : RUN_SEGMENTED);
 }

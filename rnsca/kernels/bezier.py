@@ -1138,8 +1138,10 @@ def closing_edges(controls, subpath_offsets, closed, start, fill):
 
 @borrowing
 def _segment_points(controls, degree, i, n, coords, pos):
-    """Write segment i's `n` points at equal parameter steps (its end point exactly last)
-    to ``coords[pos:pos + n]``."""
+    """Write segment i's `n` points, at equal parameter steps, to ``coords[pos:pos + n]``.
+
+    Its end point exactly last.
+    """
     d = degree[i]
     for k in range(1, n + 1):
         if k == n:
@@ -1156,8 +1158,11 @@ def _segment_points(controls, degree, i, n, coords, pos):
 
 @parallel
 def flatten_segments(controls, degree, point_start, points):
-    """Write segment i's ``point_start[i + 1] - point_start[i]`` points (`_segment_points`)
-    to ``points[point_start[i]:]``: the layout of `OpenCLBackend.classify_curves`."""
+    """Write each segment's points (`_segment_points`) to ``points[point_start[i]:]``.
+
+    Segment i has ``point_start[i + 1] - point_start[i]`` of them: the layout of
+    `OpenCLBackend.classify_curves`.
+    """
     for i in prange(degree.shape[0]):
         _segment_points(controls, degree, i, point_start[i + 1] - point_start[i], points,
                         point_start[i])

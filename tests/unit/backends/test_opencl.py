@@ -465,13 +465,117 @@ def test_no_segments_move_nothing(opencl):
     assert rnsca.clip_svg(["", "M 1 1"], (0, 0, 2, 2), backend="opencl")[0] == ["", "M1 1"]
 
 
-def test_curves_in_float32_are_refused_not_run_elsewhere(opencl, default_configuration):
+@pytest.mark.parametrize("curves", ["preserve", "flatten"])
+@pytest.mark.parametrize("mode", ["exact", "approx"])
+@pytest.mark.parametrize("fill", [None, "nonzero"])
+def test_curves_in_float32_give_the_float64_output_exactly(opencl, default_configuration,
+                                                           curves, mode, fill):
+    window = (0.1, 0.2, 9.7, 9.9)  # bounds between float32 values
+    ref = rnsca.clip_paths(rnsca.parse_paths(CURVES), window, curves=curves, mode=mode,
+                           fill=fill, backend="numba")
     registry.configure_opencl(opencl.device["id"], "float32")
-    with pytest.raises(BackendUnavailableError, match="curves run on the OpenCL backend in "
-                                                      "float64 only.*backend='numba'"):
-        rnsca.clip_svg("M0 0 Q 5 9 9 1", (0, 0, 10, 10), backend="opencl")
-    with pytest.raises(BackendUnavailableError, match="float64 only"):
-        rnsca.flatten_paths(rnsca.parse_paths(["M0 0 Q 5 9 9 1"]), 0.1, backend="opencl")
+    got = rnsca.clip_paths(rnsca.parse_paths(CURVES), window, curves=curves, mode=mode,
+                           fill=fill, backend="opencl")
+    for name in ("controls", "degree", "start", "subpath_offsets", "closed", "path_offsets"):
+        np.testing.assert_array_equal(getattr(got.paths, name), getattr(ref.paths, name))
+    assert dataclasses.replace(got.stats, device=None) == ref.stats
+    assert got.stats.device.precision == "float32"
+    paths = rnsca.parse_paths(CURVES)
+    for got_part, ref_part in zip(rnsca.flatten_paths(paths, 0.01, backend="opencl"),
+                                  rnsca.flatten_paths(paths, 0.01), strict=True):
+        np.testing.assert_array_equal(got_part, ref_part)
+
+
+def _edge_values(bound: float) -> list[float]:
+    """Values around `bound` where float32 rounding could flip a comparison with it."""
+    with np.errstate(over="ignore"):  # beyond float32's range: ±inf, left out below
+        b32 = np.float32(bound)
+    values = [bound, np.nextafter(bound, np.inf), np.nextafter(bound, -np.inf), float(b32),
+              float(np.nextafter(b32, np.float32(np.inf))),
+              float(np.nextafter(b32, np.float32(-np.inf))), (bound + float(b32)) / 2]
+    return [float(v) for v in values if np.isfinite(v)]
+
+
+def _float64_classes(controls, degree, bounds):
+    """Each segment's class by its control points' outcodes, in float64, one by one."""
+    from rnsca.kernels import bezier as BZ
+    from rnsca.kernels.outcode import outcode
+
+    classes = []
+    for points, d in zip(controls, degree, strict=True):
+        codes = [outcode(float(x), float(y), *bounds) for x, y in points[[0, 1, 2, 3][:d + 1]]
+                 ] + [outcode(float(points[3, 0]), float(points[3, 1]), *bounds)]
+        c_or = c_and = codes[0]
+        for code in codes[1:]:
+            c_or |= code
+            c_and &= code
+        classes.append(BZ.SEGMENT_ACCEPTED if c_or == 0 else
+                       BZ.SEGMENT_REJECTED if c_and else BZ.SEGMENT_AMBIGUOUS)
+    return np.array(classes)
+
+
+# Windows whose edges lie between float32 values, at 0 (subnormals around it, which a
+# device may flush to zero), subnormal themselves, and beyond float32's range.
+EDGE_WINDOWS = [(0.1, 0.2, 0.7, 0.9), (1e8 + 0.3, -1e-7, 1e8 + 7.1, 3e-7),
+                (0.0, -1e-40, 1e-39, 0.0), (-1e-300, 1e-310, 1e-300, 1e-30),
+                (-1e39, 1e38, 3.5e38, 1e39)]
+
+
+@pytest.mark.parametrize("bounds", EDGE_WINDOWS)
+def test_float32_device_classes_are_only_the_sure_ones(opencl, opencl_module, monkeypatch,
+                                                       bounds, rng):
+    from rnsca.kernels import bezier as BZ
+
+    # Values at the edges, around 0, in the middle and well beyond each edge.
+    xs, ys = ([*_edge_values(lo), *_edge_values(hi), 0.0, -0.0, 1e-45, -1e-45, (lo + hi) / 2,
+               lo - 1.0 - abs(lo), hi + 1.0 + abs(hi)]
+              for lo, hi in (bounds[0::2], bounds[1::2]))
+    parts = []
+    for _ in range(400):
+        degree = int(rng.integers(1, 4))
+        # One edge's values (or two edges', or every edge's) for each coordinate.
+        pts = [(float(rng.choice(xs)), float(rng.choice(ys))) for _ in range(degree + 1)]
+        parts.append(f"M{pts[0][0]!r} {pts[0][1]!r} " + "LQC"[degree - 1]
+                     + " ".join(f"{x!r} {y!r}" for x, y in pts[1:]))
+    paths = rnsca.parse_paths(parts)
+    seen = {}
+    decide = opencl_module._decide_ambiguous
+
+    def record(classes, run_class, *args):
+        seen["device"] = classes.copy()
+        decide(classes, run_class, *args)
+
+    monkeypatch.setattr(opencl_module, "_decide_ambiguous", record)
+    float32 = opencl_module.OpenCLBackend(opencl.device["id"], "float32")
+    window = Window(*bounds)
+    classes, *_ = float32.classify_curves(paths.controls, paths.degree, window, 0.01, "none")
+    exact = _float64_classes(paths.controls, paths.degree, bounds)
+    device = seen["device"]
+    sure = device != BZ.SEGMENT_AMBIGUOUS
+    # What the device decided is right; it decided some; the host decided the rest.
+    np.testing.assert_array_equal(device[sure], exact[sure])
+    assert sure.any()
+    np.testing.assert_array_equal(classes, exact)
+    ref = rnsca.clip_paths(paths, window, backend="numba")
+    registry.configure_opencl(opencl.device["id"], "float32")
+    try:
+        got = rnsca.clip_paths(paths, window, backend="opencl")
+    finally:
+        registry.configure_opencl()
+    np.testing.assert_array_equal(got.paths.controls, ref.paths.controls)
+    assert dataclasses.replace(got.stats, device=None) == ref.stats
+
+
+def test_float32_curves_beyond_its_range_clip_as_in_float64(opencl, default_configuration):
+    # Beyond float32's range a coordinate rounds to ±inf on the device: still ordered,
+    # so its segment is only ambiguous (decided on the host) instead of an error.
+    d = ["M -1e300 5 C 0 1e300 5 3 5 5 L 1e39 5 Q 5 -3e38 2 2 Z", "M 1 1 L 2 2"]
+    registry.configure_opencl(opencl.device["id"], "float32")
+    for window in [(0.0, 0.0, 10.0, 10.0), (-1e39, -1e39, 1e39, 1e39)]:
+        for curves in ("preserve", "flatten"):
+            got, stats = rnsca.clip_svg(d, window, curves=curves, backend="opencl")
+            assert got == rnsca.clip_svg(d, window, curves=curves, backend="numba")[0]
+            assert stats.device.precision == "float32"
 
 
 def test_runs_of_sixteen_segments_are_decided_on_the_device(opencl):

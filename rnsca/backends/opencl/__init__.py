@@ -609,7 +609,8 @@ class OpenCLBackend:
             if m:
                 ledger.kernel_events.append(kernels.classify_bezier(
                     queue, (m,), None, _data(d_controls), _data(d_degree), np.int64(m),
-                    *accept, *reject, self.real(tolerance),
+                    *accept, *reject,
+                    np.float64(tolerance) if double else np.float32(0),  # float32: unused
                     np.int32(_FLATTEN[device_flatten]), segment_class.data, n_points.data))
             point_end = np.zeros(0, dtype=np.int64)
             total = 0
@@ -776,15 +777,16 @@ def _exact_float32_ends(pieces, xy, windows, part_window, chunk_part, chunk_firs
 
 
 def _windows32(bounds) -> tuple[tuple, tuple]:
-    """Return the float32 windows that make the device's curve classes sure (float32).
+    """Return the (accept, reject) float32 windows that make the device's curve classes sure.
 
     Rounding to float32 keeps order (``x <= y`` gives ``f(x) <= f(y)``, also where it
     overflows to ±inf or a device flushes subnormals to zero), so ``f(x) < f(xmin)``
-    proves ``x < xmin`` and ``f(x) > f(xmin)`` proves ``x > xmin``. The reject window
-    is the window rounded outward to a normal float32 (or ±inf), so a point beyond one
-    of its edges is beyond the float64 edge; the accept window is the smallest normal
-    float32 strictly inside each rounded bound, so a point inside it is inside the
-    float64 window. Points between the two are ambiguous and go to the host.
+    proves ``x < xmin`` and ``f(x) > f(xmin)`` proves ``x > xmin``. The reject window:
+    each bound rounded to nearest (moved outward to a normal float32 where that is
+    subnormal), so a point beyond one of its edges is beyond the float64 edge. The
+    accept window: the nearest normal float32 strictly inside each rounded bound, so a
+    point inside it is inside the float64 window (none is where a bound overflows
+    inward). Points between the two are ambiguous and go to the host.
     """
     tiny = np.float32(_F32.tiny)  # the smallest normal: subnormals may be flushed to 0
     inf = np.float32(np.inf)

@@ -477,9 +477,9 @@ def _begin_subpath(write, x, y, source, out_first, out_start, out_from, si, sf):
 
 
 @borrowing
-def _emit_piece(write, fill, degree, x0, x1, x2, x3, y0, y1, y2, y3, source, out_ctrl,
-                out_deg, out_first, out_start, out_from, si, sf):
-    """Add a visible piece (control points x0..x3, y0..y3) to the output."""
+def _arrive_at(write, fill, x0, y0, source, out_ctrl, out_deg, out_first, out_start, out_from,
+               si, sf):
+    """Make (x0, y0) the current point before visible output that starts there."""
     if fill:
         if x0 != sf[_CUR_X] or y0 != sf[_CUR_Y]:
             # Rounding left a gap between the clamped path and the piece: bridge it.
@@ -488,6 +488,14 @@ def _emit_piece(write, fill, degree, x0, x1, x2, x3, y0, y1, y2, y3, source, out
         if si[_VISIBLE] == 0 and si[_BROKEN] == 0:
             si[_FIRST_AT_START] = 1  # nothing before it: it starts at t = 0
         _begin_subpath(write, x0, y0, source, out_first, out_start, out_from, si, sf)
+
+
+@borrowing
+def _emit_piece(write, fill, degree, x0, x1, x2, x3, y0, y1, y2, y3, source, out_ctrl,
+                out_deg, out_first, out_start, out_from, si, sf):
+    """Add a visible piece (control points x0..x3, y0..y3) to the output."""
+    _arrive_at(write, fill, x0, y0, source, out_ctrl, out_deg, out_first, out_start, out_from,
+               si, sf)
     _put_segment(write, degree, x0, x1, x2, x3, y0, y1, y2, y3, out_ctrl, out_deg, si, sf)
 
 
@@ -964,16 +972,8 @@ def _clip_subpaths(write, fill, flatten, exact, controls, degree, subpath_offset
                     st[C.RUNS_ACCEPTED] += 1
                     st[C.RUN_LEVELS] += 1
                     st[C.SEGMENT_LEVELS] += j - i
-                    x0 = controls[i, 0, 0]
-                    y0 = controls[i, 0, 1]
-                    if fill or (si[_OPEN] == 1 and x0 == sf[_CUR_X] and y0 == sf[_CUR_Y]):
-                        if fill and (x0 != sf[_CUR_X] or y0 != sf[_CUR_Y]):
-                            _put_line(write, x0, y0, out_ctrl, out_deg, si, sf)
-                    else:
-                        if si[_VISIBLE] == 0 and si[_BROKEN] == 0:
-                            si[_FIRST_AT_START] = 1
-                        _begin_subpath(write, x0, y0, source, out_first, out_start, out_from,
-                                       si, sf)
+                    _arrive_at(write, fill, controls[i, 0, 0], controls[i, 0, 1], source,
+                               out_ctrl, out_deg, out_first, out_start, out_from, si, sf)
                     _put_run(write, controls, degree, i, j, out_ctrl, out_deg, si, sf)
                     i = j
                     continue
@@ -1030,16 +1030,8 @@ def _clip_subpaths(write, fill, flatten, exact, controls, degree, subpath_offset
                     st[C.EVALUATED] += 1
                     st[C.ACCEPTED] += 1
                     st[C.LEVELS] += 1
-                    if fill or (si[_OPEN] == 1 and x0 == sf[_CUR_X] and y0 == sf[_CUR_Y]):
-                        if fill and (x0 != sf[_CUR_X] or y0 != sf[_CUR_Y]):
-                            _put_line(write, x0, y0, out_ctrl, out_deg, si, sf)
-                    else:
-                        if si[_VISIBLE] == 0 and si[_BROKEN] == 0:
-                            si[_FIRST_AT_START] = 1
-                        _begin_subpath(write, x0, y0, source, out_first, out_start, out_from, si,
-                                       sf)
-                    _put_segment(write, d, x0, x1, x2, x3, y0, y1, y2, y3, out_ctrl, out_deg, si,
-                                 sf)
+                    _emit_piece(write, fill, d, x0, x1, x2, x3, y0, y1, y2, y3, source,
+                                out_ctrl, out_deg, out_first, out_start, out_from, si, sf)
                     continue
                 if accepted and decided and g < last:
                     _emit_flattened(write, fill, x0, y0, point_start[g], point_start[g + 1],

@@ -706,6 +706,20 @@ Bracket midpoint_search(REAL x0, REAL y0, REAL dx, REAL dy, REAL x1, REAL y1, in
     return r;
 }
 
+/* A bracket whose only visible part is an end inside the window: out = that end, as a
+   zero-length piece; 0 if neither end is inside. */
+int inside_end_only(Bracket k, REAL *out) {
+    if (k.ca == 0) {
+        out[0] = k.a; out[1] = k.a; out[2] = k.xa; out[3] = k.ya; out[4] = k.xa; out[5] = k.ya;
+        return 1;
+    }
+    if (k.cb == 0) {
+        out[0] = k.b; out[1] = k.b; out[2] = k.xb; out[3] = k.yb; out[4] = k.xb; out[5] = k.yb;
+        return 1;
+    }
+    return 0;
+}
+
 /* Decide a final bracket; out = (u0, u1, ax, ay, bx, by) of its visible part. */
 int midpoint_leaf(REAL x0, REAL y0, REAL x1, REAL y1, Bracket k, int exact, REAL xmin,
                          REAL ymin, REAL xmax, REAL ymax, Counters st, REAL *out) {
@@ -722,17 +736,7 @@ int midpoint_leaf(REAL x0, REAL y0, REAL x1, REAL y1, Bracket k, int exact, REAL
     }
     if (!exact) {
         COUNT(st, DROPPED, 1);
-        if (k.ca == 0) {
-            out[0] = k.a; out[1] = k.a; out[2] = k.xa; out[3] = k.ya; out[4] = k.xa;
-            out[5] = k.ya;
-            return 1;
-        }
-        if (k.cb == 0) {
-            out[0] = k.b; out[1] = k.b; out[2] = k.xb; out[3] = k.yb; out[4] = k.xb;
-            out[5] = k.yb;
-            return 1;
-        }
-        return 0;
+        return inside_end_only(k, out);
     }
     COUNT(st, CLIPPED, 1);
     int flags = (k.ca | k.cb) & UNSURE_BITS;
@@ -740,17 +744,7 @@ int midpoint_leaf(REAL x0, REAL y0, REAL x1, REAL y1, Bracket k, int exact, REAL
                                xmin, ymin, xmax, ymax, out);
     COUNT(st, INTERSECTIONS, count_divisions(flags));
     if (!ok) {
-        if (k.ca == 0) {
-            out[0] = k.a; out[1] = k.a; out[2] = k.xa; out[3] = k.ya; out[4] = k.xa;
-            out[5] = k.ya;
-            return 1;
-        }
-        if (k.cb == 0) {
-            out[0] = k.b; out[1] = k.b; out[2] = k.xb; out[3] = k.yb; out[4] = k.xb;
-            out[5] = k.yb;
-            return 1;
-        }
-        return 0;
+        return inside_end_only(k, out);
     }
     return 1;
 }

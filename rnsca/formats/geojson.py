@@ -11,11 +11,11 @@ Reading is strict. The first problem, in document order, raises `InvalidGeometry
 (a ValueError) whose message and ``path`` attribute name its JSON path, for example
 ``features[12].geometry.coordinates[0][3][1]``. To stay fast on large documents the
 reader does no per-coordinate Python work on valid input: it collects the coordinate
-arrays of every geometry and converts their positions a chunk at a time, in C: pickle
-writes each list of numbers as opcodes that name the type of each number, which NumPy
-checks and decodes for the whole chunk (see `_read_pickled`). Sizes, finiteness and ring
-closure are checked in bulk too. Only when a bulk check fails does a second, slow walk
-run to find the exact path of the first problem.
+arrays of every geometry and converts their positions a chunk at a time: ormsgpack
+writes the lists in C as MessagePack, which tags every number with its type, and a
+compiled decoder checks and reads them (`rnsca.kernels.geojson_io.read_positions`).
+Sizes, finiteness and ring closure are checked in bulk too. Only when a bulk check fails
+does a second, slow walk run to find the exact path of the first problem.
 
 Rules (where RFC 7946 leaves a choice, the choice is stated):
 
@@ -37,13 +37,13 @@ from __future__ import annotations
 
 import gc
 import math
-import pickle
 from contextlib import contextmanager
 from dataclasses import dataclass
 from itertools import chain
 
 import numpy as np
 import orjson
+import ormsgpack
 import shapely
 
 from rnsca.errors import (
@@ -52,6 +52,7 @@ from rnsca.errors import (
     LimitExceededError,
     ParseError,
 )
+from rnsca.kernels.geojson_io import REFUSED, read_positions, same_geometries
 
 __all__ = [
     "GEOMETRY_TYPES",
@@ -82,7 +83,6 @@ _KIND_NAME = ("points", "lines", "polygons")
 
 _ARRAY = (list, tuple)
 _ARRAY_TYPES = frozenset(_ARRAY)
-_PLAIN_NUMBER_TYPES = frozenset((int, float))
 _NUMBER = (int, float, np.integer, np.floating)
 _BOOL = (bool, np.bool_)
 _TEXT = (str, bytes, bytearray, memoryview)
@@ -113,6 +113,12 @@ class GeoJSONLayout:
         geometry_offsets))``: Polygon and MultiPolygon.
     has_z : bool
         Whether positions are 3D; then every ``coords`` has shape (n, 3), else (n, 2).
+    sources : tuple of three lists, or None
+        For each geometry of `points`, `lines` and `polygons`, the input's own
+        ``coordinates`` member where it holds exactly the positions read (lists of
+        floats, as many per position as the document's dimension, no empty member),
+        else None; None for all when the document was read by the slow validator.
+        `to_geojson` writes a geometry its arrays leave unchanged with this member.
 
     Notes
     -----
@@ -124,6 +130,7 @@ class GeoJSONLayout:
     lines: tuple
     polygons: tuple
     has_z: bool
+    sources: tuple | None = None
 
     @property
     def vertex_count(self) -> int:
@@ -295,13 +302,35 @@ def to_geojson(layout: GeoJSONLayout, points=None, lines=None, polygons=None, *,
     """
     given = (points, lines, polygons)
     with _collector_paused():
-        ragged = []
+        ragged, reuse = [], []
         for kind in (_POINTS, _LINES, _POLYGONS):
             own = getattr(layout, _KIND_NAME[kind])
-            ragged.append(_checked_ragged(kind, own if given[kind] is None else given[kind],
-                                          own[2][-1].shape[0] - 1))
-        writer = _Writer(ragged, 3 if layout.has_z else 2, bool(keep_empty), bool(arrays))
+            coords, offsets = _checked_ragged(
+                kind, own if given[kind] is None else given[kind], own[2][-1].shape[0] - 1)
+            ragged.append((coords, offsets))
+            sources = None if arrays or layout.sources is None else layout.sources[kind]
+            reuse.append(None if sources is None else _unchanged(
+                own, None if given[kind] is None else (coords, offsets), sources))
+        writer = _Writer(ragged, reuse, layout.sources, 3 if layout.has_z else 2,
+                         bool(keep_empty), bool(arrays))
         return writer.document(layout.document)
+
+
+def _unchanged(own: tuple, given: tuple | None, sources: list) -> np.ndarray:
+    """Return which geometries to write back from their `sources`.
+
+    Those that have one and that `given` (coords, offsets) holds as `own` does; all that
+    have one if `given` is None.
+    """
+    reuse = np.fromiter((source is not None for source in sources), dtype=bool,
+                        count=len(sources))
+    if given is None:
+        return reuse
+    _, coords, offsets = own
+    given_coords, given_offsets = given
+    if given_coords.shape[1] != coords.shape[1]:
+        return np.zeros_like(reuse)
+    return reuse & same_geometries(coords, offsets, given_coords, given_offsets)
 
 
 @contextmanager
@@ -336,6 +365,8 @@ class _Reader:
         self.rings = []           # each ring
         self.ring_counts = []     # rings per non-empty polygon
         self.polygon_counts = []  # non-empty polygons per polygon-like geometry
+        # Each geometry's coordinates member, or None if it has members read as nothing.
+        self.sources = ([], [], [])
 
     def document(self, doc) -> None:
         if not isinstance(doc, dict):
@@ -381,13 +412,16 @@ class _Reader:
         if not isinstance(coordinates, _ARRAY):
             raise _Fallback
         if kind == "Point":
-            self.point_arrays.append((coordinates,) if coordinates else ())
+            self.point_arrays.append([coordinates] if coordinates else [])
+            self.sources[_POINTS].append(coordinates)
         elif kind == "MultiPoint":
             self.point_arrays.append(coordinates)
+            self.sources[_POINTS].append(coordinates)
         elif kind == "LineString":
             if coordinates:
                 self.line_parts.append(coordinates)
             self.line_counts.append(1 if coordinates else 0)
+            self.sources[_LINES].append(coordinates)
         elif kind == "MultiLineString":
             count = 0
             for part in coordinates:
@@ -397,6 +431,7 @@ class _Reader:
                     self.line_parts.append(part)
                     count += 1
             self.line_counts.append(count)
+            self.sources[_LINES].append(coordinates if count == len(coordinates) else None)
         elif kind == "Polygon":
             if coordinates:
                 self.rings.extend(coordinates)  # rings are checked in bulk in `layout`
@@ -404,6 +439,7 @@ class _Reader:
                 self.polygon_counts.append(1)
             else:
                 self.polygon_counts.append(0)
+            self.sources[_POLYGONS].append(coordinates)
         elif kind == "MultiPolygon":
             count = 0
             for polygon in coordinates:
@@ -414,6 +450,7 @@ class _Reader:
                     self.ring_counts.append(len(polygon))
                     count += 1
             self.polygon_counts.append(count)
+            self.sources[_POLYGONS].append(coordinates if count == len(coordinates) else None)
         else:
             raise _Fallback
 
@@ -428,14 +465,18 @@ class _Reader:
         if max_vertices is not None and total > max_vertices:
             raise LimitExceededError(
                 f"GeoJSON has {total} positions, more than max_vertices={max_vertices}")
-        coords = _coordinates(arrays, sizes)
-        if coords is None:
+        read = _coordinates(arrays, sizes)
+        if read is None:
             # A check failed, or a number is of a type the fast path does not take
             # (a NumPy scalar): the validator names the problem or vouches for the data.
             validator = _Validator(max_vertices)
             validator.document(document)
             coords = _checked_coordinates(list(chain.from_iterable(arrays)),
                                           validator.dim or 2)
+            sources = None
+        else:
+            coords, plain = read
+            sources = self.plain_sources(plain)
         n_points = len(self.point_arrays)
         n_parts = len(self.line_parts)
         point_sizes = sizes[:n_points]
@@ -454,7 +495,24 @@ class _Reader:
                  (_offsets(part_sizes), _offsets(self.line_counts)))
         polygons = (_RAGGED_TYPE[_POLYGONS], ring_coords,
                     (ring_offsets, _offsets(self.ring_counts), _offsets(self.polygon_counts)))
-        return GeoJSONLayout(document, points, lines, polygons, coords.shape[1] == 3)
+        return GeoJSONLayout(document, points, lines, polygons, coords.shape[1] == 3, sources)
+
+    def plain_sources(self, plain: np.ndarray) -> tuple:
+        """Return `sources`, with None for each geometry that has an array not `plain`.
+
+        `plain` holds a flag per coordinate array, in the order of `layout`'s `arrays`.
+        """
+        not_plain = np.concatenate(([0], np.cumsum(~plain)))
+        n_points, n_parts = len(self.point_arrays), len(self.line_parts)
+        ring_offsets = _offsets(self.ring_counts)
+        # The first array of each geometry of each kind, and the end of the last.
+        firsts = (np.arange(n_points + 1),
+                  n_points + _offsets(self.line_counts),
+                  n_points + n_parts + ring_offsets[_offsets(self.polygon_counts)])
+        for sources, first in zip(self.sources, firsts, strict=True):
+            for geometry in np.flatnonzero(not_plain[first[1:]] != not_plain[first[:-1]]):
+                sources[geometry] = None
+        return self.sources
 
 
 def _offsets(sizes) -> np.ndarray:
@@ -467,236 +525,58 @@ def _offsets(sizes) -> np.ndarray:
 
 
 #: About how many positions are converted per step: the objects of a chunk stay in cache
-#: from listing them to pickling them to releasing the list (listing all positions at
-#: once is ~25% slower).
+#: from packing them to reading them.
 _CHUNK = 1 << 15
 
+#: ormsgpack packs only what it has a MessagePack type for; these options make it refuse
+#: (TypeError) every other object instead of converting it: subclasses of list, int or
+#: float, ints beyond 64 bits, dataclasses, enums (packed as their value otherwise),
+#: dates, UUIDs. NumPy scalars and arrays are refused without an option.
+_PACK_STRICT = (ormsgpack.OPT_PASSTHROUGH_SUBCLASS | ormsgpack.OPT_PASSTHROUGH_BIG_INT
+                | ormsgpack.OPT_PASSTHROUGH_DATACLASS | ormsgpack.OPT_PASSTHROUGH_ENUM
+                | ormsgpack.OPT_PASSTHROUGH_DATETIME | ormsgpack.OPT_PASSTHROUGH_UUID)
+#: Also refuse tuples, which MessagePack cannot tell from lists: a chunk without any
+#: is packed with this, so that its arrays can be plain.
+_PACK_LISTS_ONLY = _PACK_STRICT | ormsgpack.OPT_PASSTHROUGH_TUPLE
 
-def _coordinates(arrays: list, sizes: np.ndarray) -> np.ndarray | None:
-    """Return the positions of `arrays` (lists of positions) as float64 (n, 2) or (n, 3).
 
-    `sizes` holds the length of each array. Returns None if any check fails: then
-    `_Validator` names the problem, or, for numbers of a type only it takes (NumPy
-    scalars), vouches for the data.
+def _coordinates(arrays: list, sizes: np.ndarray) -> tuple | None:
+    """Return the positions of `arrays` (lists of positions), and which arrays are plain.
+
+    `sizes` holds the length of each array. The positions are float64 (n, 2) or (n, 3);
+    an array is plain if it is a list of lists of floats of the document's dimension
+    (see `read_positions`). Returns None if any check fails: then `_Validator` names the
+    problem, or, for numbers of a type only it takes (NumPy scalars), vouches for the
+    data.
     """
     starts = _offsets(sizes)
     total = int(starts[-1])
+    plain = np.zeros(len(arrays), dtype=bool)
     if total == 0:
-        return np.empty((0, 2), dtype=np.float64)
+        return np.empty((0, 2), dtype=np.float64), plain
     first = next(chain.from_iterable(arrays), None)
     if type(first) not in _ARRAY_TYPES or len(first) < 2:
         return None
     out = np.empty((total, 3 if len(first) >= 3 else 2), dtype=np.float64)
-    # Chunks of whole arrays: extending a list by each array is faster than slicing a
-    # chain of all positions.
     cuts = np.searchsorted(starts, np.arange(_CHUNK, total, _CHUNK), side="right")
     bounds = np.unique(np.concatenate(([0], cuts, [len(arrays)]))).tolist()
     for lo, hi in zip(bounds[:-1], bounds[1:], strict=True):
-        chunk = []
-        for array in arrays[lo:hi]:
-            chunk += array
-        rows = out[starts[lo]:starts[hi]]
-        if len(chunk) != rows.shape[0]:  # an array subclass whose len() lies
-            return None
-        if chunk and not _read_pickled(chunk, rows):
-            values = _fast_coordinates(chunk)
-            if values is None or values.shape != rows.shape:
+        chunk = arrays[lo:hi]
+        has_tuples = False
+        try:
+            packed = ormsgpack.packb(chunk, option=_PACK_LISTS_ONLY)
+        except TypeError:  # ormsgpack.MsgpackEncodeError, a cycle included
+            try:
+                packed = ormsgpack.packb(chunk, option=_PACK_STRICT)
+            except TypeError:
                 return None
-            rows[:] = values
-    return out
-
-
-class _BuiltinPickler(pickle.Pickler):
-    """A pickler that refuses every object of a type it has no built-in opcode for.
-
-    ``reducer_override`` is only consulted for such objects, so no ``__reduce__`` of user
-    code runs: pickling a position list either writes plain opcodes or raises.
-    """
-
-    def reducer_override(self, obj):
-        raise _Fallback
-
-
-class _Sink:
-    """A file that keeps the bytes objects written to it, without copying them.
-
-    Below protocol 4 the pickler writes its whole output in one call at the end, so the
-    stream is the one bytes object the pickler built (``io.BytesIO`` would copy it).
-    """
-
-    __slots__ = ("parts",)
-
-    def __init__(self) -> None:
-        self.parts = []
-
-    def write(self, data) -> None:
-        self.parts.append(data)
-
-
-# The pickle opcodes (protocol 2) of a list of positions: PROTO 2, then EMPTY_LIST and its
-# items in batches of 1000, each batch MARK ... APPENDS, then STOP. A position is a list
-# too: EMPTY_LIST MARK <numbers> APPENDS. A float is BINFLOAT and 8 bytes (big-endian
-# double); an int is BININT1 (1 byte, unsigned), BININT2 (2, unsigned) or BININT (4,
-# signed) if it fits in 32 bits. Anything else (a bool, None, a string, a larger int, a
-# tuple, a nested list, a float subclass) is written with other opcodes.
-_EMPTY_LIST, _MARK, _APPENDS, _BINFLOAT = b"](eG"
-_PICKLE_BATCH = 1000
-_NUMBER_OPCODES = {_BINFLOAT: np.dtype(">f8"), b"K"[0]: np.dtype("u1"),
-                   b"M"[0]: np.dtype("<u2"), b"J"[0]: np.dtype("<i4")}
-_ARGUMENT_SIZE = np.zeros(256, dtype=np.int64)  # bytes after each number opcode, else 0
-_ARGUMENT_SIZE[list(_NUMBER_OPCODES)] = [dtype.itemsize for dtype in _NUMBER_OPCODES.values()]
-#: The (offset, opcode) pairs of the record of a list of 2 or of 3 floats.
-_FLOAT_RECORD = {
-    2: ((0, _EMPTY_LIST), (1, _MARK), (2, _BINFLOAT), (11, _BINFLOAT), (20, _APPENDS)),
-    3: ((0, _EMPTY_LIST), (1, _MARK), (2, _BINFLOAT), (11, _BINFLOAT), (20, _BINFLOAT),
-        (29, _APPENDS)),
-}
-
-
-def _read_pickled(positions: list, out: np.ndarray) -> bool:
-    """Fill `out` (n, dim) from `positions` if they are lists of `dim` finite numbers.
-
-    Returns False, with `out` partly written, for anything else (`_fast_coordinates` or
-    the validator take it): numbers of another type than int or float (bools, NumPy
-    scalars), ints beyond 32 bits, tuples, other sizes, non-finite values. What passes
-    is a subset of what `_Validator` accepts, and is what orjson gives for a document
-    of moderate numbers.
-
-    The type checks and the conversion are one C pass: `positions` is pickled (fast
-    mode: no memo), which writes each list of numbers as opcodes that say their type,
-    and anything else as other opcodes. The opcodes are checked and the numbers read
-    with NumPy (`_read_floats`, `_read_numbers`), never one at a time.
-    """
-    if out.shape[0] < 2:  # a one-item list is pickled without MARK ... APPENDS
-        return False
-    sink = _Sink()
-    pickler = _BuiltinPickler(sink, protocol=2)
-    pickler.fast = True
-    try:
-        pickler.dump(positions)
-    except (_Fallback, RecursionError, ValueError, pickle.PicklingError):
-        return False  # an object pickle has no opcode for, or a cycle
-    stream = b"".join(sink.parts) if len(sink.parts) != 1 else sink.parts[0]
-    if stream[:4] != b"\x80\x02](" or stream[-2:] != b"e.":
-        return False
-    return (_read_floats(stream, out) or _read_numbers(stream, out)) and bool(
-        np.isfinite(out).all())
-
-
-def _read_floats(stream: bytes, out: np.ndarray) -> bool:
-    """Fill `out` from the pickled `stream` of a list of lists of `dim` floats, or return False.
-
-    All such lists are pickled as records of one size, so the stream has a known length
-    and each opcode a known place. Pickle opcodes are self-delimiting: a stream with
-    every expected opcode in its place is the expected stream. Each opcode, and each
-    coordinate, is read for all records at once through a strided view.
-    """
-    n, dim = out.shape
-    width = 3 + 9 * dim
-    full, rest = divmod(n, _PICKLE_BATCH)
-    batches = [(count, per) for count, per in ((full, _PICKLE_BATCH), (1, rest)) if count and per]
-    if len(stream) != 3 + sum(count * (per * width + 2) for count, per in batches) + 1:
-        return False
-    start, first = 3, 0
-    for count, per in batches:
-        stride = per * width + 2
-        framing = np.ndarray((count, 2), np.uint8, stream, start, (stride, stride - 1))
-        if not ((framing[:, 0] == _MARK) & (framing[:, 1] == _APPENDS)).all():
-            return False
-        # One (count, per) view per byte position, with long inner loops: several
-        # times faster than one 3D view whose inner axis is the few bytes of a record.
-        records = start + 1
-        for offset, opcode in _FLOAT_RECORD[dim]:
-            if not (np.ndarray((count, per), np.uint8, stream, records + offset,
-                               (stride, width)) == opcode).all():
-                return False
-        rows = out[first:first + count * per].reshape(count, per, dim)
-        for axis in range(dim):
-            rows[:, :, axis] = np.ndarray((count, per), ">f8", stream,
-                                          records + 3 + 9 * axis, (stride, width))
-        start += count * stride
-        first += count * per
-    return True
-
-
-def _read_numbers(stream: bytes, out: np.ndarray) -> bool:
-    """Fill `out` from the pickled `stream` of a list of lists of `dim` ints or floats.
-
-    Returns False if the stream holds anything else. Records now differ in size, so
-    their starts are found rather than computed: every record starts with EMPTY_LIST
-    MARK, and so, by chance, may a few places inside the 8 bytes of a float. Each such
-    candidate is read as a record (a number opcode, its argument, ... APPENDS); the
-    stream is accepted only if exactly `n` candidates read as records and each of them
-    ends where the next begins (past the MARK ... APPENDS framing between batches), the
-    first just after the list's own MARK and the last just before its APPENDS and STOP.
-    That chain is the sequential parse of the stream, so a candidate inside a float,
-    which lies within a record, cannot be part of it.
-    """
-    n, dim = out.shape
-    data = np.frombuffer(stream + bytes(32), np.uint8)  # reads from a false start stay inside
-    starts = np.flatnonzero((data[:-1] == _EMPTY_LIST) & (data[1:] == _MARK))
-    at = starts + 2
-    valid = np.ones(starts.shape[0], dtype=bool)
-    numbers = []  # (argument offset, opcode) of each coordinate
-    for _ in range(dim):
-        opcode = data[at]
-        size = _ARGUMENT_SIZE[opcode]
-        valid &= size > 0
-        numbers.append((at + 1, opcode))
-        at = at + 1 + size
-    valid &= data[at] == _APPENDS
-    if np.count_nonzero(valid) != n:
-        return False
-    starts, ends = starts[valid], at[valid] + 1
-    between = np.arange(_PICKLE_BATCH - 1, n - 1, _PICKLE_BATCH)  # last record of a batch
-    framing = ends[between]
-    if not ((data[framing] == _APPENDS) & (data[framing + 1] == _MARK)).all():
-        return False
-    ends[between] += 2
-    if starts[0] != 4 or ends[-1] != len(stream) - 2 or not (ends[:-1] == starts[1:]).all():
-        return False
-    for axis, (offset, opcode) in enumerate(numbers):
-        offset, opcode = offset[valid], opcode[valid]
-        column = out[:, axis]
-        for code, dtype in _NUMBER_OPCODES.items():
-            pick = opcode == code
-            if pick.any():
-                view = np.ndarray((data.shape[0] - 7,), dtype, data, 0, (1,))
-                column[pick] = view[offset[pick]]
-    return True
-
-
-def _fast_coordinates(positions: list) -> np.ndarray | None:
-    """Return positions as float64 (n, 2) or (n, 3), or None if any check fails.
-
-    Passes only lists or tuples of two or more finite int or float values, all 2D or all
-    3D: a subset of what `_Validator` accepts.
-    """
-    n = len(positions)
-    if not set(map(type, positions)) <= _ARRAY_TYPES:
-        return None
-    sizes = np.fromiter(map(len, positions), np.int64, n)
-    flat = list(chain.from_iterable(positions))
-    if not set(map(type, flat)) <= _PLAIN_NUMBER_TYPES:
-        return None
-    if n == 0:
-        return np.empty((0, 2), dtype=np.float64)
-    if sizes.min() < 2:
-        return None
-    try:
-        values = np.array(flat, dtype=np.float64)
-    except OverflowError:  # an int beyond float64
-        return None
-    if not np.isfinite(values).all():
-        return None
-    three = sizes >= 3
-    dim = 3 if three[0] else 2
-    if (three != three[0]).any():
-        return None
-    if (sizes == dim).all():
-        return values.reshape(n, dim)
-    starts = np.cumsum(sizes) - sizes
-    return values[starts[:, None] + np.arange(dim)]
+            has_tuples = True
+        if read_positions(np.frombuffer(packed, dtype=np.uint8), sizes[lo:hi],
+                          out[starts[lo]:starts[hi]], plain[lo:hi]) == REFUSED:
+            return None
+        if has_tuples:
+            plain[lo:hi] = False
+    return out, plain
 
 
 def _checked_coordinates(positions: list, dim: int) -> np.ndarray:
@@ -895,29 +775,56 @@ def _checked_ragged(kind: int, ragged, count: int) -> tuple:
         raise InvalidGeometryError(
             f"{_KIND_NAME[kind]} must be {expected.name} with {kind + 1} offset arrays, got "
             f"{name} with {depth}")
-    offsets = [np.asarray(level, dtype=np.int64).tolist() for level in offsets]
-    if len(offsets[-1]) - 1 != count:
+    coords = np.ascontiguousarray(coords, dtype=np.float64)
+    offsets = tuple(np.ascontiguousarray(level, dtype=np.int64) for level in offsets)
+    if offsets[-1].ndim != 1 or offsets[-1].shape[0] - 1 != count:
         raise InvalidGeometryError(
-            f"{_KIND_NAME[kind]} holds {len(offsets[-1]) - 1} geometries, the layout {count}")
-    return np.ascontiguousarray(coords, dtype=np.float64), offsets
+            f"{_KIND_NAME[kind]} holds {offsets[-1].shape[0] - 1} geometries, the layout {count}")
+    below = coords.shape[0] if coords.ndim == 2 else -1
+    for level, level_offsets in enumerate(offsets):
+        if level_offsets.ndim != 1 or level_offsets.shape[0] == 0 or level_offsets[0] != 0 \
+                or level_offsets[-1] != below or (np.diff(level_offsets) < 0).any():
+            raise InvalidGeometryError(
+                f"{_KIND_NAME[kind]}: offsets[{level}] must rise from 0 to the length of "
+                + ("coords" if level == 0 else f"offsets[{level - 1}] minus one"))
+        below = level_offsets.shape[0] - 1
+    return coords, offsets
 
 
 class _Writer:
     """Walks a document in `_Reader` order, writing each geometry from the arrays."""
 
-    def __init__(self, ragged: list, dim: int, keep_empty: bool, arrays: bool) -> None:
+    def __init__(self, ragged: list, reuse: list, sources: tuple | None, dim: int,
+                 keep_empty: bool, arrays: bool) -> None:
         self.coords = [coords for coords, _ in ragged]
-        self.values = [coords if arrays else coords.tolist() for coords in self.coords]
-        self.offsets = [offsets for _, offsets in ragged]
+        (points,), (parts, lines), (rings, polygons, shapes) = (
+            offsets for _, offsets in ragged)
+        # The positions of geometry i are bounds[i]:bounds[i + 1] in its array.
+        bounds = [points, parts[lines], rings[polygons[shapes]]]
+        self.sources = sources
+        self.reuse = [None if flags is None or not flags.any() else flags.tolist()
+                      for flags in reuse]
+        # The positions of geometries written back from their source are not converted:
+        # `values` holds the others, and `starts` the innermost offsets into it.
+        self.values, starts = [], []
+        for (coords, (innermost, *_)), flags, rows in zip(ragged, reuse, bounds, strict=True):
+            if flags is None or not flags.any():
+                self.values.append(coords if arrays else coords.tolist())
+                starts.append(innermost)
+                continue
+            edges = np.bincount(rows[:-1][flags], minlength=coords.shape[0] + 1) \
+                - np.bincount(rows[1:][flags], minlength=coords.shape[0] + 1)
+            convert = np.cumsum(edges[:-1]) == 0
+            self.values.append(coords[convert].tolist())
+            starts.append(np.concatenate(([0], np.cumsum(convert)))[innermost])
+        self.offsets = [[level.tolist() for level in offsets] for _, offsets in ragged]
+        self.starts = [level.tolist() for level in starts]
         # Every line part and polygon written once, up front: a slice per part, ring and
         # polygon in three comprehensions costs less than nested ones per geometry.
-        parts, _ = self.offsets[_LINES]
-        self.parts = _split(self.values[_LINES], parts)
-        rings, polygons, _ = self.offsets[_POLYGONS]
-        self.polygons = _split(_split(self.values[_POLYGONS], rings), polygons)
-        # The positions of geometry i are bounds[i]:bounds[i + 1] in its array.
-        (points,), (_, lines), (_, _, shapes) = self.offsets
-        self.bounds = [points, [parts[k] for k in lines], [rings[polygons[k]] for k in shapes]]
+        self.parts = _split(self.values[_LINES], self.starts[_LINES])
+        self.polygons = _split(_split(self.values[_POLYGONS], self.starts[_POLYGONS]),
+                               self.offsets[_POLYGONS][1])
+        self.bounds = [level.tolist() for level in bounds]
         self.next = [0, 0, 0]
         self.keep_empty = keep_empty
         self.dim = dim
@@ -976,7 +883,11 @@ class _Writer:
                 return None, None, True
             coordinates, box = [], None
         else:
-            kind, coordinates = _WRITE[index](self, kind, i)
+            reuse = self.reuse[index]
+            if reuse is not None and reuse[i]:
+                coordinates = self.sources[index][i]  # the same positions, and type
+            else:
+                kind, coordinates = _WRITE[index](self, kind, i)
             box = None
             if want:
                 rows = self.coords[index][lo:hi]
@@ -991,8 +902,8 @@ class _Writer:
     # The type and coordinates of non-empty geometry i of each array, given its input type.
 
     def points(self, kind: str, i: int):
-        (offsets,) = self.offsets[_POINTS]
-        lo, hi = offsets[i], offsets[i + 1]
+        starts = self.starts[_POINTS]
+        lo, hi = starts[i], starts[i + 1]
         values = self.values[_POINTS]
         return kind, (values[lo] if kind == "Point" else values[lo:hi])
 

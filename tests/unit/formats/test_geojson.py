@@ -1,6 +1,7 @@
 """GeoJSON to ragged arrays and back: layout, strict validation with JSON paths, writing."""
 
 import copy
+import enum
 import gc
 import struct
 
@@ -406,7 +407,7 @@ def test_max_vertices_must_be_a_non_negative_int(value):
 
 # --------------------------------------------------------------------------- large documents
 # Large documents are read in bulk, a chunk of whole coordinate arrays at a time (see
-# `_coordinates`, `_read_pickled`). The `small_chunks` fixture makes chunks end after the
+# `_coordinates`, `read_positions`). The `small_chunks` fixture makes chunks end after the
 # array holding position 4096, 8192, ..., so that the 100 lines of 100 positions of
 # `make_lines` make three chunks (positions 0-4099, 4100-8199, 8200-9999), and these tests
 # put every kind of value at places the bulk reader treats differently: first and last
@@ -473,9 +474,12 @@ def test_a_large_document_of_every_kind_matches_shapely(small_chunks, rng, dim):
     assert layout.geometry_count("points") == 2001 and layout.geometry_count("polygons") == 201
 
 
-#: Ints of every size pickle writes differently: 1, 2 and 4 bytes, then beyond 32 bits.
-INTS = [0, 7, 255, 256, 65_535, 65_536, -1, -300, 2 ** 31 - 1, -(2 ** 31)]
-BIG_INTS = [2 ** 31, -(2 ** 40), 2 ** 47, 2 ** 53]  # 2 ** 47 is pickled in 9 bytes, as a float
+#: Ints of every size MessagePack writes differently: fixints, then 1, 2, 4 and 8 bytes,
+#: signed and unsigned.
+INTS = [0, 7, 127, 128, 255, 256, 65_535, 65_536, -1, -32, -33, -128, -129, -300, -32_769,
+        2 ** 31 - 1, -(2 ** 31)]
+BIG_INTS = [2 ** 31, 2 ** 32, -(2 ** 31) - 1, -(2 ** 40), 2 ** 47, 2 ** 53, 2 ** 63 - 1, 2 ** 63,
+            2 ** 64 - 1, -(2 ** 63)]
 
 
 @pytest.mark.parametrize("count", [1, 40, 2000])
@@ -497,10 +501,12 @@ def test_a_document_of_ints_only_is_read(small_chunks, rng):
     np.testing.assert_array_equal(layout.lines[1], coords.astype(np.float64))
 
 
-def test_floats_whose_bytes_look_like_opcodes_are_read(make_lines, rng):
-    """Bytes of a pickled float that read as EMPTY_LIST MARK and a number do not confuse it."""
+def test_floats_whose_bytes_look_like_type_tags_are_read(make_lines, rng):
+    """Floats whose bytes read as array headers or numbers in MessagePack (or pickle)."""
     tricky = [struct.unpack(">d", bytes(b))[0] for b in (
-        b"@](K\x01e](", b"@](G@](e", b"@](J\x00\x00\x00\x00", b"@e](M\x01\x02e")]
+        b"@](K\x01e](", b"@](G@](e", b"@](J\x00\x00\x00\x00", b"@e](M\x01\x02e",
+        b"\x92\x01\x02\x92\x01\x02\x91\x01", b"\x91\xcb\x40\x00\x00\x00\x00\x00",
+        b"\xdc\x00\x02\x92\xcb\xdd\x00\x00")]
     assert all(np.isfinite(tricky))
     doc, coords = make_lines()
     for n, index in enumerate(rng.choice(coords.shape[0], 1500, replace=False)):
@@ -513,17 +519,18 @@ def test_floats_whose_bytes_look_like_opcodes_are_read(make_lines, rng):
 
 @pytest.mark.parametrize("place", PLACES)
 def test_a_string_whose_bytes_end_like_a_position_is_refused(make_lines, place):
-    """A string may hold the pickled bytes of a position, ending where its own record does.
+    """A string may hold the bytes of a position, ending where its own record does.
 
-    Pickled, ``[1.5, "](K\\x01K\\x02"]`` ends with the bytes of the position [1, 2]: only
-    reading the records in sequence tells them apart.
+    ``"](K\\x01K\\x02"`` holds the pickled bytes of the position [1, 2]; ``"\\x92\\x01\\x02"``
+    (below) its MessagePack bytes: only reading the objects in sequence tells them apart.
     """
-    doc, _ = make_lines()
-    position, path = position_at(doc, place)
-    position[1] = "](K\x01K\x02"
-    found, message = error_path(doc)
-    assert found == f"{path}[1]"
-    assert "expected a number, got string" in message
+    for text in ("](K\x01K\x02", "\x92\x01\x02"):
+        doc, _ = make_lines()
+        position, path = position_at(doc, place)
+        position[1] = text
+        found, message = error_path(doc)
+        assert found == f"{path}[1]"
+        assert "expected a number, got string" in message
 
 
 class Number:
@@ -545,7 +552,8 @@ class Number:
     (np.bool_(True), "expected a number, got boolean True"),
     (None, "expected a number, got null"),
     ("1.5", "expected a number, got string '1.5'"),
-    ("1.25", "expected a number, got string '1.25'"),  # pickled in 9 bytes, as a float
+    ("1.25", "expected a number, got string '1.25'"),
+    ("\x92\x01\x02", "expected a number, got string"),  # the MessagePack bytes of [1, 2]
     ([1.5], "expected a number, got an array of 1"),
     ({}, "expected a number, got an object"),
     (float("nan"), "expected a finite number, got nan"),
@@ -601,7 +609,7 @@ def test_numpy_scalars_in_a_large_document_are_numbers(make_lines, value):
 
 
 class Position(list):
-    """A list subclass: read like a list, pickled otherwise."""
+    """A list subclass: read like a list, but only by the slow validator."""
 
 
 @pytest.mark.parametrize("dim", [2, 3])
@@ -615,21 +623,38 @@ def test_tuples_list_subclasses_and_long_positions_in_a_large_document(make_line
     np.testing.assert_array_equal(from_geojson(doc).lines[1], coords)
 
 
+class Tag(enum.Enum):
+    """An enum member is not a number, whatever its value (ormsgpack would pack the value)."""
+
+    HALF = 1.5
+
+
 def test_bulk_reading_takes_lists_of_ints_and_floats_and_nothing_else():
-    """What `_read_pickled` takes, so that documents of such numbers stay fast."""
-    def read(positions):
-        out = np.empty((len(positions), len(positions[0])))
-        return geojson_module._read_pickled(positions, out) and out.tolist() == positions
+    """What `_coordinates` takes, so that documents of such numbers stay fast, and which of
+    its arrays it finds plain (lists of floats of the document's dimension)."""
+    def read(*arrays):
+        sizes = np.array([len(array) for array in arrays], dtype=np.int64)
+        result = geojson_module._coordinates(list(arrays), sizes)
+        if result is None:
+            return None
+        coords, plain = result
+        dim = coords.shape[1]
+        assert coords.tolist() == [list(map(float, p[:dim])) for a in arrays for p in a]
+        return plain.tolist()
 
     floats = [[0.5 + k, -1.5 * k] for k in range(2500)]
-    assert read(floats) and read([[*p, 3.25] for p in floats])
-    assert read([[k, 1.5] for k in range(-70_000, 70_000, 7)])
-    assert read([[k, 2 ** 31 - 1] for k in range(1001)]) and read([[0.5, 1.5], [2, 3]])
-    for value in (True, None, "1", np.float64(1.5), np.int64(1), 2 ** 31, float("nan"), [1]):
-        assert not read([*floats[:1500], [1.5, value], *floats[1500:]])
-    assert not read([*floats[:10], (1.5, 2.5)]) and not read([*floats[:10], Position([1.5, 2.5])])
-    assert not read([*floats[:10], [1.5]]) and not read([*floats[:10], [1.5, 2.5, 3.5]])
-    assert not read([[0.5, 1.5]])  # one position: the slower paths take it
+    assert read(floats) == [True] and read(floats[:1]) == [True]
+    assert read([[*p, 3.25] for p in floats]) == [True]
+    assert read([[*p, 3.25, 4.5] for p in floats]) == [False]  # numbers after z dropped
+    assert read(floats, [[k, 1.5] for k in range(-70_000, 70_000, 7)]) == [True, False]
+    assert read(floats, [[k, 0.5] for k in INTS + BIG_INTS], floats) == [True, False, True]
+    assert read([[1.5, 2.5]], [(1.5, 2.5)]) == [False, False]  # tuples: the chunk is not plain
+    assert read(floats, [[1.5, 2.5, 3.5]]) is None  # 2D then 3D
+    for value in (True, None, "1", np.float64(1.5), np.int64(1), 2 ** 64, -(2 ** 63) - 1,
+                  float("nan"), float("inf"), [1], {}, Tag.HALF, b"12345678"):
+        assert read([*floats[:1500], [1.5, value], *floats[1500:]]) is None, value
+    assert read(floats[:10], [Position([1.5, 2.5])]) is None
+    assert read(floats[:10], [[1.5]]) is None and read(floats[:10], [[]]) is None
 
 
 NUMBER_REPLACEMENTS = [0, 255, 65_536, -7, 2 ** 40, 1.5, "1.25", None, True, np.float64(2.5),

@@ -23,7 +23,10 @@ def clip_geojson(obj, window, *, keep_empty: bool = False, max_vertices: int | N
     its dimension (see `rnsca.clip_ragged`). The document keeps its shape: Features keep
     ``properties``, ``id`` and foreign members, ``bbox`` is recomputed where there was one,
     and each geometry takes the type of what is left (a LineString cut in two becomes a
-    MultiLineString; a single part stays single; Multi* types stay Multi*).
+    MultiLineString; a single part stays single; Multi* types stay Multi*). Members the
+    clip does not change are shared with the input, not copied: those above, and the
+    ``coordinates`` of a geometry the clip leaves as it was, if they are lists of
+    floats (see `rnsca.formats.geojson.to_geojson`).
 
     Parameters
     ----------

@@ -275,7 +275,12 @@ def to_geojson(layout: GeoJSONLayout, points=None, lines=None, polygons=None, *,
         holding two polygons a MultiPolygon; Multi* types stay Multi*. A ``bbox`` is
         recomputed where the input had one (6 numbers if it had 6 and the document is
         3D, else 4) and left out where the geometry is empty. Rings are written as
-        given.
+        given. With lists (``arrays=False``), a geometry the arrays hold exactly as the
+        layout does (same parts, same coordinates) keeps the input's own
+        ``coordinates`` member, shared and not copied, where that member is what would
+        be written anyway (`GeoJSONLayout.sources`): a clip leaves most geometries
+        wholly inside its window so, and building their lists again would be most of
+        the cost of writing.
 
     Raises
     ------

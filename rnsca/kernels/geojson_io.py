@@ -67,11 +67,11 @@ def _other_number(data, at, bits32, float32):
     end = data.shape[0]
     if at >= end:
         return 0.0, -1
-    tag = data[at]
+    tag = np.int64(data[at])  # not uint8: `tag - _UINT8` below must not wrap
     if tag <= 0x7F:  # positive fixint
         return float(tag), at + 1
     if tag >= 0xE0:  # negative fixint
-        return float(np.int64(tag) - 256), at + 1
+        return float(tag - 256), at + 1
     if tag == _FLOAT32 and at + 5 <= end:
         bits32[0] = np.uint32(_unsigned(data, at + 1, 4))
         return float(float32[0]), at + 5

@@ -277,6 +277,39 @@ def test_arrays_output_serializes_like_list_output(rng):
     assert dumps(fast) == orjson.dumps(listed)
 
 
+@pytest.mark.parametrize("window", [WINDOW, (-1e3, -1e3, 1e3, 1e3), (40.1, 40.2, 60.3, 60.4)])
+def test_list_output_of_a_parsed_document_serializes_like_array_output(rng, window):
+    """Geometries the clip leaves unchanged keep the input's lists: the same output."""
+    shapes = [star_with_hole(rng) for _ in range(30)]
+    shapes += [shapely.LineString(random_walk(rng, 40)) for _ in range(30)]
+    shapes += [shapely.MultiPoint(rng.uniform(0, 100, (5, 2))) for _ in range(10)]
+    shapes += [shapely.Polygon(star(rng, rng.uniform(30, 60, 2), 5, 12)[::-1])]  # clockwise
+    doc = orjson.loads(orjson.dumps(collection(*(feature(mapping(g)) for g in shapes))))
+    listed, _ = clip_geojson(doc, window)
+    fast, _ = clip_geojson(doc, window, arrays=True)
+    assert dumps(fast) == orjson.dumps(listed)
+    kept = {id(f["geometry"]["coordinates"]) for f in doc["features"]}
+    shared = [id(f["geometry"]["coordinates"]) in kept for f in listed["features"]]
+    inside = [shapely.contains_properly(shapely.box(*window), g) for g in shapes]
+    # Only what lies inside can be unchanged; the clockwise star is turned around.
+    assert sum(shared) <= sum(inside) - inside[-1]
+    if window[0] < -100:
+        assert sum(shared) == len(shapes) - 1
+    for out in listed["features"]:
+        if out["geometry"]["type"].endswith("Polygon"):
+            assert_rfc7946_orientation(out["geometry"])
+
+
+def test_an_unchanged_feature_keeps_the_input_coordinates():
+    inside = {"type": "LineString", "coordinates": [[30.5, 40.5], [50.5, 60.5]]}
+    cut = {"type": "LineString", "coordinates": [[0.5, 40.5], [50.5, 60.5]]}
+    doc = collection(feature(inside), feature(cut))
+    out, _ = clip_geojson(doc, WINDOW)
+    first, second = (f["geometry"]["coordinates"] for f in out["features"])
+    assert first is inside["coordinates"]
+    assert second is not cut["coordinates"] and second[1] == [50.5, 60.5]
+
+
 def test_empty_document_gives_zero_stats():
     out, stats = clip_geojson(collection(), (0, 0, 1, 1))
     assert out == collection()

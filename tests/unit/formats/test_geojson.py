@@ -25,6 +25,7 @@ from rnsca.formats.geojson import (
     loads,
     to_geojson,
 )
+from rnsca.kernels.geojson_io import same_geometries
 
 SQUARE = [[0, 0], [10, 0], [10, 10], [0, 10], [0, 0]]
 HOLE = [[2, 2], [2, 4], [4, 4], [4, 2], [2, 2]]
@@ -969,6 +970,122 @@ def test_arrays_of_the_wrong_type_or_count_are_refused():
         to_geojson(layout, lines=multi("MultiLineString", [[0, 0], [1, 1]], [0, 2], [0, 1, 1]))
     with pytest.raises(InvalidGeometryError, match="triple"):
         to_geojson(layout, lines=(1, 2))
+
+
+def test_offsets_that_do_not_fit_their_arrays_are_refused():
+    layout = from_geojson(collection(feature(line([0, 0], [1, 1]))))
+    for parts, geometries in (([0, 3], [0, 1]), ([1, 2], [0, 1]), ([0, 2], [0, 2]),
+                              ([0, 2, 1, 2], [0, 3])):
+        with pytest.raises(InvalidGeometryError, match=r"offsets\[\d\] must rise from 0"):
+            to_geojson(layout, lines=multi("MultiLineString", [[0, 0], [1, 1]], parts,
+                                           geometries))
+
+
+# --------------------------------------------------------------------------- written back
+# A geometry that the arrays given to `to_geojson` hold exactly as the layout does is
+# written with the input's own coordinates member, if that member holds exactly what
+# the writer would write: lists of floats of the document's dimension, no empty member.
+
+FLOATS = collection(
+    feature(line([0.5, 0.5], [1.5, 2.5])),
+    feature({"type": "Polygon", "coordinates": [[[0.0, 0.0], [4.0, 0.0], [4.0, 4.0], [0.0, 0.0]]]}),
+    feature({"type": "MultiPoint", "coordinates": [[1.5, 2.5], [3.5, 4.5]]}),
+    feature({"type": "Point", "coordinates": [7.5, 8.5]}),
+    feature({"type": "MultiLineString", "coordinates": [[[0.5, 0.5], [1.5, 2.5]],
+                                                        [[5.5, 5.5], [6.5, 7.5]]]}),
+)
+
+
+def coordinates_of(doc):
+    return [f["geometry"]["coordinates"] for f in doc["features"]]
+
+
+def test_an_unchanged_document_is_written_with_its_own_coordinates():
+    out = to_geojson(from_geojson(FLOATS))
+    assert out == FLOATS
+    assert all(a is b for a, b in zip(coordinates_of(out), coordinates_of(FLOATS), strict=True))
+    arrays = to_geojson(from_geojson(FLOATS), arrays=True)
+    assert not any(a is b for a, b in zip(coordinates_of(arrays), coordinates_of(FLOATS),
+                                          strict=True))
+
+
+def test_only_the_geometries_the_arrays_change_are_rewritten():
+    layout = from_geojson(FLOATS)
+    _, coords, (parts, geometries) = layout.lines
+    moved = coords.copy()
+    moved[1] = [1.5, 3.0]  # the second position of the first line
+    out = to_geojson(layout, lines=multi("MultiLineString", moved, parts, geometries))
+    first, *rest = coordinates_of(out)
+    assert first == [[0.5, 0.5], [1.5, 3.0]] and first is not coordinates_of(FLOATS)[0]
+    assert all(a is b for a, b in zip(rest, coordinates_of(FLOATS)[1:], strict=True))
+    assert dumps(out) == dumps(to_geojson(layout, lines=multi(
+        "MultiLineString", moved, parts, geometries), arrays=True))
+
+
+def test_the_same_positions_in_other_parts_are_a_change():
+    layout = from_geojson(FLOATS)
+    _, coords, _ = layout.lines
+    regrouped = multi("MultiLineString", coords, [0, 2, 3, 6], [0, 1, 3])  # parts 2, 1, 3
+    out = to_geojson(layout, lines=regrouped)
+    assert coordinates_of(out)[0] is coordinates_of(FLOATS)[0]
+    assert coordinates_of(out)[4] == [[[0.5, 0.5]], [[1.5, 2.5], [5.5, 5.5], [6.5, 7.5]]]
+    assert dumps(out) == dumps(to_geojson(layout, lines=regrouped, arrays=True))
+
+
+@pytest.mark.parametrize("geometry, written, others_kept", [
+    (line([0, 0], [1.5, 2.5]), [[0.0, 0.0], [1.5, 2.5]], True),  # ints become floats
+    # Tuples become lists; MessagePack cannot tell them from lists, so the whole chunk
+    # of arrays read with them is rewritten.
+    (line((0.5, 0.5), (1.5, 2.5)), [[0.5, 0.5], [1.5, 2.5]], False),
+    ({"type": "MultiLineString", "coordinates": [[], [[0.5, 0.5], [1.5, 2.5]]]},
+     [[[0.5, 0.5], [1.5, 2.5]]], True),  # an empty member is left out
+    ({"type": "MultiPolygon", "coordinates": [[[[0.0, 0.0], [4.0, 0.0], [4.0, 4.0],
+                                                [0.0, 0.0]]], []]},
+     [[[[0.0, 0.0], [4.0, 0.0], [4.0, 4.0], [0.0, 0.0]]]], True),
+])
+def test_a_member_unlike_its_written_form_is_rewritten(geometry, written, others_kept):
+    doc = collection(feature(geometry), *FLOATS["features"])
+    out = to_geojson(from_geojson(doc))
+    assert coordinates_of(out)[0] == written and coordinates_of(out)[0] is not \
+        geometry["coordinates"]
+    assert orjson.dumps(coordinates_of(out)[0]) == orjson.dumps(written)
+    assert out["features"][1:] == FLOATS["features"]
+    kept = [a is b for a, b in zip(coordinates_of(out)[1:], coordinates_of(FLOATS), strict=True)]
+    assert kept == [others_kept] * len(kept)
+
+
+def test_numbers_after_z_are_not_written_back():
+    doc = collection(feature(line([0.5, 0.5, 1.5, 9.5], [1.5, 2.5, 3.5, 9.5])),
+                     feature(line([0.5, 0.5, 1.5], [1.5, 2.5, 3.5])))
+    out = to_geojson(from_geojson(doc))
+    assert coordinates_of(out)[0] == [[0.5, 0.5, 1.5], [1.5, 2.5, 3.5]]
+    assert coordinates_of(out)[1] is coordinates_of(doc)[1]
+
+
+def test_a_document_read_by_the_validator_is_rewritten_whole():
+    doc = collection(feature(line([np.float64(0.5), 0.5], [1.5, 2.5])), *FLOATS["features"])
+    out = to_geojson(from_geojson(doc))
+    assert from_geojson(doc).sources is None
+    assert not any(a is b for a, b in zip(coordinates_of(out)[1:], coordinates_of(FLOATS),
+                                          strict=True))
+    assert out["features"][1:] == FLOATS["features"]
+
+
+def test_same_geometries_compares_parts_and_coordinates():
+    coords = np.array([[0.0, 0.0], [1.0, 1.0], [2.0, 2.0], [3.0, 3.0]])
+    offsets = (np.array([0, 2, 4]), np.array([0, 1, 2]))
+    regrouped = (np.array([0, 1, 4]), np.array([0, 1, 2]))
+    assert same_geometries(coords, offsets, coords, offsets).tolist() == [True, True]
+    assert same_geometries(coords, offsets, coords, regrouped).tolist() == [False, False]
+    signed = coords.copy()
+    signed[0] = -0.0
+    moved = coords.copy()
+    moved[3, 1] = 3.5
+    assert same_geometries(coords, offsets, signed, offsets).tolist() == [True, True]
+    assert same_geometries(coords, offsets, moved, offsets).tolist() == [True, False]
+    # The second geometry is empty in the other arrays; the first keeps its part.
+    emptied = (np.array([0, 2]), np.array([0, 1, 1]))
+    assert same_geometries(coords, offsets, coords[:2], emptied).tolist() == [True, False]
 
 
 def test_loads_and_dumps():

@@ -21,7 +21,7 @@ import shapely
 from rnsca.errors import InvalidGeometryError, UnsupportedGeometryError
 from rnsca.kernels.validate import all_finite, first_open_ring
 
-__all__ = ["GeometryKind", "Ragged", "OUTPUT_KIND", "geometry_error"]
+__all__ = ["GeometryKind", "Ragged", "OUTPUT_KIND", "exclusive_sum", "geometry_error"]
 
 
 class GeometryKind(str, Enum):
@@ -272,3 +272,19 @@ class Ragged:
         for level in self.offsets[depth + 1:]:
             g = int(np.searchsorted(level, g, side="right")) - 1
         return g
+
+
+def exclusive_sum(counts) -> np.ndarray:
+    """Return int64 offsets ``[0, cumsum(counts)...]``.
+
+    Where each counted run starts, and the total at the end.
+
+    Examples
+    --------
+    >>> exclusive_sum([2, 0, 3]).tolist()
+    [0, 2, 2, 5]
+    """
+    counts = np.asarray(counts, dtype=np.int64)
+    out = np.zeros(counts.shape[0] + 1, dtype=np.int64)
+    np.cumsum(counts, out=out[1:])
+    return out

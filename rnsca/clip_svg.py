@@ -14,6 +14,7 @@ from enum import Enum
 
 import numpy as np
 
+from rnsca.arrays import exclusive_sum
 from rnsca.backends.registry import get_backend
 from rnsca.errors import InvalidOptionError
 from rnsca.formats.svgpath import PathArrays, parse_paths, write_paths
@@ -219,8 +220,8 @@ def clip_paths(paths: PathArrays, window, *, curves="preserve", fill=None, toler
     BZ.clip_path_blocks(*args, False, nothing, nothing, np.empty((0, 4, 2)),
                         np.empty(0, np.int8), nothing, np.empty((0, 2)), np.empty(0, bool),
                         nothing, n_segments, n_out, run_decisions, counters, *decisions)
-    segment_start = _exclusive_sum(n_segments)
-    subpath_start = _exclusive_sum(n_out)
+    segment_start = exclusive_sum(n_segments)
+    subpath_start = exclusive_sum(n_out)
     m = int(segment_start[-1])
     k = int(subpath_start[-1])
     out_ctrl = np.empty((m, 4, 2))
@@ -238,7 +239,7 @@ def clip_paths(paths: PathArrays, window, *, curves="preserve", fill=None, toler
     if not kept.all():  # entries freed by joining the two ends of a closed stroke
         out_first = np.append(out_first[:-1][kept], m)
         out_start, out_closed, out_from = out_start[kept], out_closed[kept], out_from[kept]
-    path_offsets = _exclusive_sum(np.bincount(out_from, minlength=len(paths)))
+    path_offsets = exclusive_sum(np.bincount(out_from, minlength=len(paths)))
     clipped = PathArrays.from_kernel(controls=out_ctrl, degree=out_deg,
                                      subpath_offsets=out_first, closed=out_closed,
                                      start=out_start, path_offsets=path_offsets)
@@ -252,12 +253,6 @@ def clip_paths(paths: PathArrays, window, *, curves="preserve", fill=None, toler
     return PathClipResult(clipped, stats, options.curves.value,
                           None if options.fill is None else options.fill.value,
                           options.mode.value, options.tolerance)
-
-
-def _exclusive_sum(counts: np.ndarray) -> np.ndarray:
-    out = np.zeros(counts.shape[0] + 1, dtype=np.int64)
-    np.cumsum(counts, out=out[1:])
-    return out
 
 
 def clip_svg(d, window, *, curves="preserve", fill=None, tolerance=None, precision=None,
@@ -355,14 +350,14 @@ def flatten_paths(paths: PathArrays, tolerance: float, *, close: bool = False,
         steps = np.diff(segment_points)
     else:
         steps = BZ.flatten_steps(paths.controls, paths.degree, float(tolerance))
-        segment_points = _exclusive_sum(steps)
+        segment_points = exclusive_sum(steps)
     has_line = np.diff(sub) > 0
     closes = has_line & (paths.closed | close)
     ends = paths.start.copy()
     ends[has_line] = paths.controls[sub[1:][has_line] - 1, 3]
     closes &= (ends != paths.start).any(axis=1)
     points_per_line = segment_points[sub[1:]] - segment_points[sub[:-1]] + has_line + closes
-    line_offsets = _exclusive_sum(points_per_line[has_line])
+    line_offsets = exclusive_sum(points_per_line[has_line])
     lines = np.flatnonzero(has_line)
     coords = np.empty((int(line_offsets[-1]), 2))
     if backend is Backend.OPENCL:

@@ -6,11 +6,21 @@ from typing import Protocol
 
 import numpy as np
 
-from rnsca.options import Backend, SegmentOptions
+from rnsca.kernels import segments as K
+from rnsca.options import Backend, Method, SegmentOptions
 from rnsca.stats import ClipStats
 from rnsca.window import Window
 
-__all__ = ["ClipBackend"]
+__all__ = ["METHOD_ID", "ClipBackend"]
+
+#: The number each segment kernel (Numba and OpenCL) knows a method by.
+METHOD_ID = {
+    Method.RNSCA: K.RNSCA,
+    Method.COHEN_SUTHERLAND: K.COHEN_SUTHERLAND,
+    Method.LIANG_BARSKY: K.LIANG_BARSKY,
+    Method.NICHOLL_LEE_NICHOLL: K.NICHOLL_LEE_NICHOLL,
+    Method.MIDPOINT: K.MIDPOINT,
+}
 
 
 class ClipBackend(Protocol):

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from rnsca.arrays import exclusive_sum
+from rnsca.backends.base import METHOD_ID
 from rnsca.clip_svg import clip_paths, flatten_paths
 from rnsca.formats.svgpath import parse_paths, write_paths
 from rnsca.kernels import counters as C
@@ -16,13 +18,6 @@ from rnsca.window import Window
 
 __all__ = ["NumbaBackend"]
 
-_METHOD_ID = {
-    Method.RNSCA: K.RNSCA,
-    Method.COHEN_SUTHERLAND: K.COHEN_SUTHERLAND,
-    Method.LIANG_BARSKY: K.LIANG_BARSKY,
-    Method.NICHOLL_LEE_NICHOLL: K.NICHOLL_LEE_NICHOLL,
-    Method.MIDPOINT: K.MIDPOINT,
-}
 # Segments per prange iteration: large enough that per-block scratch and counters cost
 # nothing, small enough that the scratch columns (14 x 16 KiB) stay in L2 cache.
 BLOCK_SIZE = 2048
@@ -40,7 +35,7 @@ class NumbaBackend:
         n = segments.shape[0]
         n_blocks = max(1, -(-n // BLOCK_SIZE))
         args = (segments, window.xmin, window.ymin, window.xmax, window.ymax,
-                _METHOD_ID[options.method], options.n, options.max_depth, options.tolerance,
+                METHOD_ID[options.method], options.n, options.max_depth, options.tolerance,
                 options.auto_piece, options.mode is Mode.EXACT, BLOCK_SIZE)
         driver = K.clip_segment_blocks_serial if n_blocks <= SERIAL_BLOCKS \
             else K.clip_segment_blocks
@@ -70,7 +65,7 @@ class NumbaBackend:
         (`polylines.clip_lines`).
         """
         return PL.clip_lines(xy, z, part_offsets, geometry_parts, geometry_window, windows,
-                             _METHOD_ID[options.method], options.n, options.max_depth,
+                             METHOD_ID[options.method], options.n, options.max_depth,
                              options.tolerance, options.auto_piece, options.mode is Mode.EXACT,
                              drop_edge_runs)
 
@@ -145,15 +140,15 @@ def polygon_passes(xy, z, ring_offsets, polygon_offsets, polygon_window, windows
     n_rings = np.empty(n_polygons, dtype=np.int64)
     n_polys = np.empty(n_polygons, dtype=np.int64)
     args = (xy, z, has_z, ring_offsets, polygon_offsets, polygon_window, windows,
-            _METHOD_ID[options.method], options.n, options.max_depth, options.tolerance,
+            METHOD_ID[options.method], options.n, options.max_depth, options.tolerance,
             options.auto_piece, True, block)
     nothing_i = np.empty(0, dtype=np.int64)
     PG.clip_polygon_blocks(*args, False, polygon_class, scratch_v, scratch_c, nothing_i,
                            nothing_i, nothing_i, np.empty((0, 2)), np.empty(0), nothing_i,
                            nothing_i, n_vertices, n_rings, n_polys, counters, *decisions)
-    vertex_start = _exclusive_sum(n_vertices)
-    ring_start = _exclusive_sum(n_rings)
-    poly_start = _exclusive_sum(n_polys)
+    vertex_start = exclusive_sum(n_vertices)
+    ring_start = exclusive_sum(n_rings)
+    poly_start = exclusive_sum(n_polys)
     out_xy = np.empty((int(vertex_start[-1]), 2))
     out_z = np.empty(int(vertex_start[-1]) if has_z else 0)
     out_rings = np.empty(int(ring_start[-1]) + 1, dtype=np.int64)
@@ -169,9 +164,3 @@ def _block_size(n_items: int) -> int:
     """Return items per prange block: about 64 blocks for load balance, 1..1024 items each."""
     return max(1, min(1024, -(-n_items // 64)))
 
-
-def _exclusive_sum(counts: np.ndarray) -> np.ndarray:
-    """Return the exclusive prefix sum of `counts`, with the total appended."""
-    out = np.zeros(counts.shape[0] + 1, dtype=np.int64)
-    np.cumsum(counts, out=out[1:])
-    return out

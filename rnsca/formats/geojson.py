@@ -46,6 +46,7 @@ import orjson
 import ormsgpack
 import shapely
 
+from rnsca.arrays import exclusive_sum
 from rnsca.errors import (
     InvalidGeometryError,
     InvalidOptionError,
@@ -487,7 +488,7 @@ class _Reader:
         point_sizes = sizes[:n_points]
         part_sizes = sizes[n_points:n_points + n_parts]
         ring_sizes = sizes[n_points + n_parts:]
-        ring_offsets = _offsets(ring_sizes)
+        ring_offsets = exclusive_sum(ring_sizes)
         ring_coords = coords[point_sizes.sum() + part_sizes.sum():]
         if (part_sizes < 2).any() or (ring_sizes < 4).any() or not (
                 ring_coords[ring_offsets[:-1]] == ring_coords[ring_offsets[1:] - 1]).all():
@@ -495,11 +496,12 @@ class _Reader:
             raise AssertionError("GeoJSON reader and validator disagree on line or ring sizes")
         n_point_coords = int(point_sizes.sum())
         n_line_coords = int(part_sizes.sum())
-        points = (_RAGGED_TYPE[_POINTS], coords[:n_point_coords], (_offsets(point_sizes),))
+        points = (_RAGGED_TYPE[_POINTS], coords[:n_point_coords], (exclusive_sum(point_sizes),))
         lines = (_RAGGED_TYPE[_LINES], coords[n_point_coords:n_point_coords + n_line_coords],
-                 (_offsets(part_sizes), _offsets(self.line_counts)))
+                 (exclusive_sum(part_sizes), exclusive_sum(self.line_counts)))
         polygons = (_RAGGED_TYPE[_POLYGONS], ring_coords,
-                    (ring_offsets, _offsets(self.ring_counts), _offsets(self.polygon_counts)))
+                    (ring_offsets, exclusive_sum(self.ring_counts),
+                     exclusive_sum(self.polygon_counts)))
         return GeoJSONLayout(document, points, lines, polygons, coords.shape[1] == 3, sources)
 
     def plain_sources(self, plain: np.ndarray) -> tuple:
@@ -509,24 +511,15 @@ class _Reader:
         """
         not_plain = np.concatenate(([0], np.cumsum(~plain)))
         n_points, n_parts = len(self.point_arrays), len(self.line_parts)
-        ring_offsets = _offsets(self.ring_counts)
+        ring_offsets = exclusive_sum(self.ring_counts)
         # The first array of each geometry of each kind, and the end of the last.
         firsts = (np.arange(n_points + 1),
-                  n_points + _offsets(self.line_counts),
-                  n_points + n_parts + ring_offsets[_offsets(self.polygon_counts)])
+                  n_points + exclusive_sum(self.line_counts),
+                  n_points + n_parts + ring_offsets[exclusive_sum(self.polygon_counts)])
         for sources, first in zip(self.sources, firsts, strict=True):
             for geometry in np.flatnonzero(not_plain[first[1:]] != not_plain[first[:-1]]):
                 sources[geometry] = None
         return self.sources
-
-
-def _offsets(sizes) -> np.ndarray:
-    """Return int64 offsets ``[0, cumsum(sizes)...]``."""
-    sizes = np.asarray(sizes, dtype=np.int64)
-    out = np.empty(sizes.shape[0] + 1, dtype=np.int64)
-    out[0] = 0
-    np.cumsum(sizes, out=out[1:])
-    return out
 
 
 #: About how many positions are converted per step: the objects of a chunk stay in cache
@@ -554,7 +547,7 @@ def _coordinates(arrays: list, sizes: np.ndarray) -> tuple | None:
     problem, or, for numbers of a type only it takes (NumPy scalars), vouches for the
     data.
     """
-    starts = _offsets(sizes)
+    starts = exclusive_sum(sizes)
     total = int(starts[-1])
     plain = np.zeros(len(arrays), dtype=bool)
     if total == 0:

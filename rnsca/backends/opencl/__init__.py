@@ -54,13 +54,14 @@ import numpy as np
 import pyopencl as cl
 import pyopencl.array as cl_array
 
+from rnsca.arrays import exclusive_sum
+from rnsca.backends.base import METHOD_ID
 from rnsca.backends.numba_cpu import polygon_passes
 from rnsca.errors import BackendUnavailableError, InvalidGeometryError, InvalidWindowError
 from rnsca.kernels import bezier as BZ
 from rnsca.kernels import counters as C
 from rnsca.kernels import polygons as PG
 from rnsca.kernels import polylines as PL
-from rnsca.kernels import segments as K
 from rnsca.kernels.outcode import BOTTOM, LEFT, RIGHT, TOP
 from rnsca.options import Backend, Method, Mode, Precision, SegmentOptions
 from rnsca.stats import ClipStats, DeviceStats
@@ -84,13 +85,6 @@ LOCAL_SIZE = 64
 #: of the input rounded to float32 (README, "OpenCL backend"). Tested.
 FLOAT32_RELATIVE_BOUND = 16 * 2.0 ** -24
 
-_METHOD_ID = {
-    Method.RNSCA: K.RNSCA,
-    Method.COHEN_SUTHERLAND: K.COHEN_SUTHERLAND,
-    Method.LIANG_BARSKY: K.LIANG_BARSKY,
-    Method.NICHOLL_LEE_NICHOLL: K.NICHOLL_LEE_NICHOLL,
-    Method.MIDPOINT: K.MIDPOINT,
-}
 # Counters the segment kernel fills: the head of the row (rnsca.kernels.counters).
 _SEGMENT_COUNTERS = C.LEVELS + C.N_LEVELS
 _F32 = np.finfo(np.float32)
@@ -366,7 +360,7 @@ class OpenCLBackend:
             counters = cl_array.empty(queue, groups * _SEGMENT_COUNTERS, np.int64)
             ledger.kernel_events.append(clip_kernel(
                 queue, (groups * LOCAL_SIZE,), (LOCAL_SIZE,), device_segments.data,
-                np.int64(n), xmin, ymin, xmax, ymax, np.int32(_METHOD_ID[options.method]),
+                np.int64(n), xmin, ymin, xmax, ymax, np.int32(METHOD_ID[options.method]),
                 np.int32(options.n), np.int32(options.max_depth), real(options.tolerance),
                 real(options.auto_piece), np.int32(options.mode is Mode.EXACT), result.data,
                 keep.data, counters.data, wait_for=ledger.copy_events))
@@ -465,7 +459,7 @@ class OpenCLBackend:
             _check_float32_lines(data, bounds)
         segments = np.maximum(np.diff(part_offsets), 1) - 1
         chunks_per_part = -(-segments // PL.RUN_LEAF_SEGMENTS)
-        chunk_start = _exclusive_sum(chunks_per_part)
+        chunk_start = exclusive_sum(chunks_per_part)
         n_chunks = int(chunk_start[-1])
         chunk_part = np.repeat(np.arange(n_parts, dtype=np.int64), chunks_per_part)
         # Each chunk's first vertex and segment count (the host needs them to assemble).
@@ -516,7 +510,7 @@ class OpenCLBackend:
                 queue, (chunk_groups * LOCAL_SIZE,), (LOCAL_SIZE,), _data(d_xy),
                 _data(d_offsets), _data(d_chunk_start), _data(d_chunk_part),
                 _data(d_part_window), _data(d_windows), np.int64(n_chunks), decision.data,
-                segmented.data, position.data, np.int32(_METHOD_ID[options.method]),
+                segmented.data, position.data, np.int32(METHOD_ID[options.method]),
                 np.int32(options.n), np.int32(options.max_depth), real(options.tolerance),
                 real(options.auto_piece), np.int32(options.mode is Mode.EXACT), keep.data,
                 result.data, chunk_counters.data))
@@ -710,20 +704,13 @@ def _runs(subpath_offsets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     last = subpath_offsets[1:]
     per_subpath = -(-(last - first) // BZ.RUN_SEGMENTS)
     subpath = np.repeat(np.arange(first.shape[0]), per_subpath)
-    index = np.arange(subpath.shape[0]) - np.repeat(_exclusive_sum(per_subpath)[:-1],
+    index = np.arange(subpath.shape[0]) - np.repeat(exclusive_sum(per_subpath)[:-1],
                                                     per_subpath)
     run_first = first[subpath] + index * BZ.RUN_SEGMENTS
     run_end = np.minimum(run_first + BZ.RUN_SEGMENTS, last[subpath])
     kept = run_end - run_first >= 2
     return (np.ascontiguousarray(run_first[kept], np.int64),
             np.ascontiguousarray(run_end[kept], np.int64))
-
-
-def _exclusive_sum(counts: np.ndarray) -> np.ndarray:
-    """Return the exclusive prefix sum of `counts`, with the total appended."""
-    out = np.zeros(counts.shape[0] + 1, dtype=np.int64)
-    np.cumsum(counts, out=out[1:])
-    return out
 
 
 def _assemble_lines(xy, z, part_offsets, part_window, windows, drop_edge_runs, chunk_start,

@@ -247,6 +247,18 @@ def test_hole_pinched_between_shell_and_window_edge_splits_the_polygon():
     assert shapely.symmetric_difference(got, expected).area == 0.0, got.wkt
 
 
+@pytest.mark.parametrize("window", [(-1, -1, 6, 5), (4, -1, 11, 2), (4.5, -1, 5.5, 4)])
+def test_cut_hole_touching_its_shell_mid_edge_gives_a_valid_polygon(window):
+    # The hole's vertex (5 0) lies inside the shell's bottom edge; the window cuts the
+    # hole, so the walk joins shell and hole chains and must become a vertex there too.
+    polygon = "POLYGON ((0 0, 10 0, 10 10, 0 10, 0 0), (5 0, 7 3, 3 3, 5 0))"
+    got = clip_wkt(polygon, window)
+    assert shapely.is_valid(got), shapely.is_valid_reason(got)
+    expected = shapely.intersection(shapely.from_wkt(polygon), shapely.box(*window))
+    assert shapely.symmetric_difference(got, expected).area < 1e-12, got.wkt
+    assert got.area == pytest.approx(expected.area, abs=1e-12)
+
+
 def test_hole_containing_the_window_gives_nothing():
     # GEOS's RectangleIntersectionTest 135.
     assert clip_wkt("POLYGON ((-2 -2, -2 12, 12 12, 12 -2, -2 -2), "

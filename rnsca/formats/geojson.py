@@ -322,21 +322,21 @@ def to_geojson(layout: GeoJSONLayout, points=None, lines=None, polygons=None, *,
         return writer.document(layout.document)
 
 
-def _unchanged(own: tuple, given: tuple | None, sources: list) -> np.ndarray:
-    """Return which geometries to write back from their `sources`.
+def _unchanged(own: tuple, given: tuple | None, sources: list) -> np.ndarray | None:
+    """Return which geometries to write back from their `sources`, or None for none.
 
     Those that have one and that `given` (coords, offsets) holds as `own` does; all that
     have one if `given` is None.
     """
     reuse = np.fromiter((source is not None for source in sources), dtype=bool,
                         count=len(sources))
-    if given is None:
-        return reuse
-    _, coords, offsets = own
-    given_coords, given_offsets = given
-    if given_coords.shape[1] != coords.shape[1]:
-        return np.zeros_like(reuse)
-    return reuse & same_geometries(coords, offsets, given_coords, given_offsets)
+    if given is not None:
+        _, coords, offsets = own
+        given_coords, given_offsets = given
+        if given_coords.shape[1] != coords.shape[1]:
+            return None
+        reuse &= same_geometries(coords, offsets, given_coords, given_offsets)
+    return reuse if reuse.any() else None
 
 
 @contextmanager
@@ -800,13 +800,12 @@ class _Writer:
         # The positions of geometry i are bounds[i]:bounds[i + 1] in its array.
         bounds = [points, parts[lines], rings[polygons[shapes]]]
         self.sources = sources
-        self.reuse = [None if flags is None or not flags.any() else flags.tolist()
-                      for flags in reuse]
+        self.reuse = [None if flags is None else flags.tolist() for flags in reuse]
         # The positions of geometries written back from their source are not converted:
         # `values` holds the others, and `starts` the innermost offsets into it.
         self.values, starts = [], []
         for (coords, (innermost, *_)), flags, rows in zip(ragged, reuse, bounds, strict=True):
-            if flags is None or not flags.any():
+            if flags is None:
                 self.values.append(coords if arrays else coords.tolist())
                 starts.append(innermost)
                 continue

@@ -34,8 +34,8 @@ makes Shapely's first call), then all are timed round-robin (see `benchmarks.tim
 Outside the timing, each output is converted to Shapely geometries and measured (length
 or area per source geometry) and, for polygons, checked with ``shapely.is_valid``.
 
-The GeoJSON workload times `rnsca.formats.geojson.loads` (parse, orjson),
-`rnsca.clip_geojson` (clip) and `rnsca.formats.geojson.dumps` (serialize, orjson) of one
+The GeoJSON workload times `rnsca.io.geojson.loads` (parse, orjson),
+`rnsca.clip_geojson` (clip) and `rnsca.io.geojson.dumps` (serialize, orjson) of one
 FeatureCollection as three stages of one pipeline, for both output forms of the clip
 (nested lists, NumPy arrays), and the clip's own steps (read, clip_ragged, write).
 """
@@ -56,7 +56,7 @@ from benchmarks import datasets
 from benchmarks.bench_segments import backend_unavailable_reason, device_split
 from benchmarks.machine import load_average
 from benchmarks.timing import Contender, Policy, time_round_robin
-from rnsca.formats import geojson as geojson_format
+from rnsca.io import geojson as geojson_format
 
 __all__ = [
     "SUBJECT",
@@ -519,7 +519,7 @@ def _clip_parts(parsed: dict, window, arrays: bool) -> tuple[dict[str, float], o
 def run_geojson(plan: GeometryPlan, log: Callable[[str], None] = print) -> dict:
     """Time parse, clip (`rnsca.clip_geojson`) and serialize of one FeatureCollection.
 
-    Parse and serialize are `rnsca.formats.geojson.loads` and ``dumps`` (orjson; ``dumps``
+    Parse and serialize are `rnsca.io.geojson.loads` and ``dumps`` (orjson; ``dumps``
     writes NumPy arrays too). For each output form of `GEOJSON_PIPELINES`, each repeat
     runs the three stages in order on fresh objects (the clip gets the parsed collection,
     the serializer the clipped one), then, on another fresh parse, the clip's own steps

@@ -4,8 +4,6 @@ For one workload the contenders are
 
 - ``numba:<method>[:<mode>]``: `rnsca.clip_segments` on the Numba backend, every method
   in exact mode, plus rnsca and midpoint in approx mode;
-- ``numpy:<method>[:<mode>]``: the same on the NumPy reference backend, for inputs of at
-  most `NUMPY_MAX_N` segments;
 - ``opencl:<method>[:<mode>]``: the same on the OpenCL backend (default device, or
   ``RNSCA_OPENCL_DEVICE``), where OpenCL is available. Its record also holds
   ``device``: the kernel time and the host-device transfer time of one more call, from
@@ -45,7 +43,6 @@ from benchmarks.timing import Contender, Policy, peak_traced_bytes, time_round_r
 from rnsca.clip import as_segments
 
 __all__ = [
-    "NUMPY_MAX_N",
     "SWEEP_N",
     "Plan",
     "Variant",
@@ -57,8 +54,6 @@ __all__ = [
     "device_split",
 ]
 
-#: The NumPy reference backend is only timed up to this many segments.
-NUMPY_MAX_N = 100_000
 #: Fixed N values of the sweep (compared with ``n="auto"``).
 SWEEP_N = (2, 3, 4, 8, 16, 32, 64)
 #: Reference contenders for the ratios.
@@ -253,14 +248,13 @@ def device_split(call: Callable[[], object]) -> dict:
             "host_seconds": max(0.0, wall - device.kernel_seconds - device.transfer_seconds)}
 
 
-def run_workload(workload: Workload, plan: Plan, numpy_skip: str | None,
+def run_workload(workload: Workload, plan: Plan,
                  shapely_estimate: dict[str, float] | None = None,
                  log: Callable[[str], None] = print, opencl_skip: str | None = "not asked"
                  ) -> dict:
     """Time every contender on `workload`; return ``{"workload": ..., "runs": [...]}``.
 
-    `numpy_skip` is the reason the NumPy backend is unavailable (None: it runs, up to
-    `NUMPY_MAX_N`); `opencl_skip` the same for OpenCL (None: it runs at every size).
+    `opencl_skip` is the reason the OpenCL backend is not timed (None: it runs).
     `shapely_estimate` maps a Shapely label to seconds per segment measured on a smaller
     uniform set, used when the plan extrapolates at this size.
     """
@@ -276,11 +270,6 @@ def run_workload(workload: Workload, plan: Plan, numpy_skip: str | None,
     skipped: list[dict] = []
 
     backends = ["numba"]
-    if n <= NUMPY_MAX_N:
-        if numpy_skip is None:
-            backends.append("numpy")
-        else:
-            skipped.append({"label": "numpy:*", "reason": numpy_skip})
     if opencl_skip is None:
         backends.append("opencl")
     else:

@@ -9,7 +9,7 @@ minified (``M10-5.5.5``), others spelled out (``M 10,-5.5 L .5,...``).
 Contenders, each called once before timing (compiles or loads the kernels), then timed
 round-robin (best of repeats, see `benchmarks.timing`):
 
-- ``parse:parse_paths``: `rnsca.formats.svgpath.parse_paths` on the whole corpus, every
+- ``parse:parse_paths``: `rnsca.io.svgpath.parse_paths` on the whole corpus, every
   Numba thread; ``parse:parse_paths:1thread`` the same on one thread;
 - ``write:precision=6`` and ``write:precision=None``: `write_paths` of the parsed paths.
 
@@ -30,7 +30,7 @@ import numpy as np
 
 from benchmarks.machine import load_average
 from benchmarks.timing import Contender, Policy, time_round_robin
-from rnsca.formats.svgpath import parse_paths, write_paths
+from rnsca.io.svgpath import parse_paths, write_paths
 
 __all__ = ["SvgPlan", "FULL_PLAN", "QUICK_PLAN", "PARSE_TARGET_MB_S", "TIMING", "glyph_corpus",
            "run_svg", "evaluate_svg_targets", "print_svg_summary"]

@@ -45,10 +45,7 @@ def draw_figure5(workload_results: list[dict], path: Path, title_note: str = "")
         xs = [p[0] for p in points]
         ts = [p[1] for p in points]
         style = dict(_STYLE.get(label, {}))
-        if label.startswith("numpy:"):
-            twin = _STYLE.get("numba:" + label.split(":", 1)[1], {})
-            style = dict(color=twin.get("color"), lw=1.0, ls=":", marker=".", alpha=0.6)
-        elif label.startswith("opencl:"):  # dashed, in the colour of the Numba twin
+        if label.startswith("opencl:"):  # dashed, in the colour of the Numba twin
             twin = _STYLE.get("numba:" + label.split(":", 1)[1], {})
             style = dict(color=twin.get("color"), lw=1.2, ls="--", marker="x", alpha=0.8)
         style.setdefault("lw", 1.3)

@@ -113,9 +113,6 @@ def run(quick: bool, out_dir: Path, sizes: list[int] | None = None,
     startup = measure_startup(PROJECT_ROOT, warm_runs=config["startup_warm_runs"],
                               empty_cache=config["startup_empty_cache"])
 
-    numpy_skip = backend_unavailable_reason("numpy")
-    if numpy_skip:
-        _log(f"numpy backend unavailable, recorded as skipped: {numpy_skip}")
     opencl_skip = backend_unavailable_reason("opencl")
     if opencl_skip:
         _log(f"opencl backend unavailable, recorded as skipped: {opencl_skip}")
@@ -126,7 +123,7 @@ def run(quick: bool, out_dir: Path, sizes: list[int] | None = None,
     shapely_per_segment: dict[str, float] = {}
     for w in workloads:
         _log(f"workload {w.name}")
-        res = run_workload(w, plan, numpy_skip, shapely_per_segment, log=_log,
+        res = run_workload(w, plan, shapely_per_segment, log=_log,
                            opencl_skip=opencl_skip)
         if w.family == "uniform":
             for r in res["runs"]:

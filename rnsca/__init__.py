@@ -18,7 +18,7 @@ from rnsca.errors import (
     RnscaError,
     UnsupportedGeometryError,
 )
-from rnsca.formats.svgpath import PathArrays, parse_path, parse_paths, write_path, write_paths
+from rnsca.io.svgpath import PathArrays, parse_path, parse_paths, write_path, write_paths
 from rnsca.options import Backend, Boundary, Method, Mode
 from rnsca.ragged import RaggedClipResult, clip_ragged
 from rnsca.stats import ClipStats

@@ -33,7 +33,7 @@ from rnsca.errors import (
     InvalidWindowError,
     RnscaError,
 )
-from rnsca.formats.geojson import dumps, loads
+from rnsca.io.geojson import dumps, loads
 from rnsca.options import Backend, Boundary, Mode
 
 __all__ = ["app", "PROGRESS_MIN_BYTES"]

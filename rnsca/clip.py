@@ -123,7 +123,7 @@ def clip_segments(segments, window, *, method="rnsca", n="auto", max_depth=None,
         approx mode the length lost at each boundary crossing is at most one leaf,
         ``max(tolerance, length / 2**max_depth)``-ish; see README, "Approx mode".
         The analytic methods (Cohen–Sutherland, Liang–Barsky, NLN) are always exact.
-    backend : {"numba", "numpy"}
+    backend : {"numba", "opencl"}
 
     Returns
     -------

@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import fields
 from itertools import zip_longest
 
-from rnsca.formats.geojson import from_geojson, to_geojson
+from rnsca.io.geojson import from_geojson, to_geojson
 from rnsca.ragged import clip_ragged
 from rnsca.stats import ClipStats, DeviceStats
 from rnsca.window import Window
@@ -26,7 +26,7 @@ def clip_geojson(obj, window, *, keep_empty: bool = False, max_vertices: int | N
     MultiLineString; a single part stays single; Multi* types stay Multi*). Members the
     clip does not change are shared with the input, not copied: those above, and the
     ``coordinates`` of a geometry the clip leaves as it was, if they are lists of
-    floats (see `rnsca.formats.geojson.to_geojson`).
+    floats (see `rnsca.io.geojson.to_geojson`).
 
     Parameters
     ----------
@@ -43,7 +43,7 @@ def clip_geojson(obj, window, *, keep_empty: bool = False, max_vertices: int | N
         Refuse documents with more positions than this.
     arrays : bool
         Write coordinates as NumPy arrays instead of nested lists (faster for large
-        documents; serialize with `rnsca.formats.geojson.dumps`).
+        documents; serialize with `rnsca.io.geojson.dumps`).
     **options
         ``boundary``, ``method``, ``n``, ``max_depth``, ``tolerance``, ``mode``,
         ``backend``, as for `rnsca.clip_ragged`.
@@ -51,7 +51,7 @@ def clip_geojson(obj, window, *, keep_empty: bool = False, max_vertices: int | N
     Returns
     -------
     dict
-        The clipped document (see `rnsca.formats.geojson.to_geojson`).
+        The clipped document (see `rnsca.io.geojson.to_geojson`).
     ClipStats
         The stats of the up to three clips (points, lines, polygons) added up.
 

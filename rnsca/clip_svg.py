@@ -17,7 +17,7 @@ import numpy as np
 from rnsca.arrays import exclusive_sum
 from rnsca.backends.registry import get_backend
 from rnsca.errors import InvalidOptionError
-from rnsca.formats.svgpath import PathArrays, parse_paths, write_paths
+from rnsca.io.svgpath import PathArrays, parse_paths, write_paths
 from rnsca.kernels import bezier as BZ
 from rnsca.kernels import counters as C
 from rnsca.options import (
@@ -154,7 +154,7 @@ def clip_paths(paths: PathArrays, window, *, curves="preserve", fill=None, toler
     Parameters
     ----------
     paths : PathArrays
-        Paths of lines, quadratic and cubic Béziers (`rnsca.formats.svgpath`).
+        Paths of lines, quadratic and cubic Béziers (`rnsca.io.svgpath`).
     window : Window or sequence of 4 floats
         The closed window ``(xmin, ymin, xmax, ymax)``.
     curves : {"preserve", "flatten"}

@@ -1,6 +1,6 @@
 """Clip whole SVG documents: every drawn shape cut to a window, the rest left as it was.
 
-`clip_svg_document` reads a document (`rnsca.formats.svgdoc`), maps each drawn shape
+`clip_svg_document` reads a document (`rnsca.io.svgdoc`), maps each drawn shape
 into the root's user space through the transforms above it, clips them all at once
 (one `rnsca.clip_paths` call per way of clipping: strokes, nonzero fills, evenodd
 fills), maps the results back into each shape's own coordinates and writes the
@@ -15,7 +15,7 @@ import numpy as np
 
 from rnsca.clip_svg import Fill, _resolve, clip_paths
 from rnsca.errors import InvalidOptionError
-from rnsca.formats.svgdoc import (
+from rnsca.io.svgdoc import (
     IDENTITY,
     Shape,
     find_shapes,
@@ -28,7 +28,7 @@ from rnsca.formats.svgdoc import (
     set_path_data,
     write_document,
 )
-from rnsca.formats.svgpath import PathArrays, write_paths
+from rnsca.io.svgpath import PathArrays, write_paths
 from rnsca.options import _ChoiceEnum
 from rnsca.stats import ClipStats
 from rnsca.window import Window

@@ -64,10 +64,8 @@ class Backend(_ChoiceEnum):
 
     NUMBA = "numba"
     """Numba-compiled, parallel over blocks of primitives (default)."""
-    NUMPY = "numpy"
-    """Vectorized NumPy reference; slow, written to be read, used as a second opinion."""
     OPENCL = "opencl"
-    """OpenCL kernels (pyopencl) on a GPU or any other OpenCL device; segments and lines."""
+    """OpenCL kernels (pyopencl) on a GPU or any other OpenCL device."""
 
 
 class Precision(_ChoiceEnum):

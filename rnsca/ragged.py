@@ -16,7 +16,7 @@ import shapely
 
 from rnsca.arrays import GeometryKind, Ragged
 from rnsca.backends.registry import get_backend
-from rnsca.errors import BackendUnavailableError, InvalidOptionError, InvalidWindowError
+from rnsca.errors import InvalidOptionError, InvalidWindowError
 from rnsca.kernels import counters as C
 from rnsca.kernels.validate import all_finite
 from rnsca.options import Backend, Boundary, Mode, SegmentOptions
@@ -155,9 +155,6 @@ def resolve_geometry_options(windows: np.ndarray, dimension: int, *, boundary="c
                                      max_depth=max_depth, tolerance=tolerance, mode=mode)
     side = Boundary(boundary)
     engine = get_backend(backend)
-    if engine.kind is Backend.NUMPY:
-        raise BackendUnavailableError(
-            "backend 'numpy' clips segments only; geometry runs on 'numba' or 'opencl'")
     if dimension == 2 and options.mode is Mode.APPROX:
         raise InvalidOptionError(
             "mode='approx' cannot clip polygons: valid polygon output needs the exact "

@@ -50,7 +50,6 @@ class BackendName(str, Enum):
     """Backends the API names (DESIGN.md); `/v1/capabilities` lists those present here."""
 
     NUMBA = "numba"
-    NUMPY = "numpy"
     OPENCL = "opencl"
 
 

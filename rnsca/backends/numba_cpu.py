@@ -7,7 +7,7 @@ import numpy as np
 from rnsca.arrays import exclusive_sum
 from rnsca.backends.base import METHOD_ID
 from rnsca.clip_svg import clip_paths, flatten_paths
-from rnsca.formats.svgpath import parse_paths, write_paths
+from rnsca.io.svgpath import parse_paths, write_paths
 from rnsca.kernels import counters as C
 from rnsca.kernels import polygons as PG
 from rnsca.kernels import polylines as PL

@@ -44,10 +44,6 @@ def _build(kind: Backend) -> ClipBackend:
         from rnsca.backends.numba_cpu import NumbaBackend
 
         return NumbaBackend()
-    if kind is Backend.NUMPY:
-        from rnsca.backends.numpy_ref import NumpyBackend
-
-        return NumpyBackend()
     opencl = _opencl_module()
     return opencl.OpenCLBackend(_OPENCL["device"], _OPENCL["precision"])
 
@@ -135,7 +131,7 @@ def opencl_report() -> dict:
 
 def available_backends() -> list[Backend]:
     """Return the backends that can run here, default first."""
-    present = [Backend.NUMBA, Backend.NUMPY]
+    present = [Backend.NUMBA]
     if _opencl_reason() is None:
         present.append(Backend.OPENCL)
     return present

@@ -16,17 +16,17 @@ import math
 import numpy as np
 from numba import prange
 
-from rnsca.baselines.cohen_sutherland import cohen_sutherland_segment
-from rnsca.baselines.liang_barsky import (
+from rnsca.kernels import counters as C
+from rnsca.kernels.cohen_sutherland import cohen_sutherland_segment
+from rnsca.kernels.jit import borrowing, parallel, scalar
+from rnsca.kernels.liang_barsky import (
     count_divisions,
     leaf_cut,
     liang_barsky_leaf,
     liang_barsky_segment,
 )
-from rnsca.baselines.midpoint import midpoint_segment
-from rnsca.baselines.nicholl_lee_nicholl import nicholl_lee_nicholl_segment
-from rnsca.kernels import counters as C
-from rnsca.kernels.jit import borrowing, parallel, scalar
+from rnsca.kernels.midpoint import midpoint_segment
+from rnsca.kernels.nicholl_lee_nicholl import nicholl_lee_nicholl_segment
 from rnsca.kernels.outcode import (
     BOTTOM,
     LEFT,

@@ -17,7 +17,9 @@ def server():
     with LiveServer(env={"RNSCA_MAX_BODY_BYTES": str(MAX_BODY_BYTES),
                          "RNSCA_MAX_VERTICES": str(MAX_VERTICES),
                          "RNSCA_WORK_BUDGET": str(WORK_BUDGET),
-                         "RNSCA_VERIFY_MAX_VERTICES": "5000"}) as live:
+                         "RNSCA_VERIFY_MAX_VERTICES": "5000",
+                         # No such device: backend "opencl" answers 422 backend-unavailable.
+                         "RNSCA_OPENCL_DEVICE": "no such device"}) as live:
         yield live
 
 

@@ -166,8 +166,8 @@ def test_clip_segments_json_and_binary_agree(client):
 def test_clip_segments_binary_options_and_empty_input(client):
     segments = crossing_segments(20)
     result = client.clip_segments(segments, WINDOW, method="cohen_sutherland",
-                                  backend="numpy", verify=False)
-    assert result.method == "cohen_sutherland" and result.backend == "numpy"
+                                  backend="numba", verify=False)
+    assert result.method == "cohen_sutherland" and result.backend == "numba"
     assert result.verification is None
     empty = client.clip_segments(np.empty((0, 4)), WINDOW)
     assert len(empty) == 0 and empty.segments.shape == (0, 4)

@@ -34,7 +34,7 @@ import shapely
 
 import rnsca
 from rnsca import Fill, Window, parse_paths
-from rnsca.verify_paths import filled_region
+from rnsca.verify.paths import filled_region
 from tests.fonts import (
     FONTS,
     exact_signed_area,

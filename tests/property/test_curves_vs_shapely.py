@@ -23,7 +23,7 @@ from hypothesis import given, note
 from hypothesis import strategies as st
 
 from rnsca import Fill, clip_paths, parse_paths, verify
-from rnsca.verify_paths import filled_region
+from rnsca.verify.paths import filled_region
 from tests.curve_checks import (
     distance_to_paths,
     evaluate,

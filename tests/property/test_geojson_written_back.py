@@ -2,7 +2,7 @@
 
 `rnsca.clip_geojson` with nested lists (the default) writes a geometry the clip leaves
 as it was with the input's own ``coordinates`` member (see
-`rnsca.formats.geojson.to_geojson`). This property checks that it is invisible: the
+`rnsca.io.geojson.to_geojson`). This property checks that it is invisible: the
 output serializes byte for byte like the NumPy-array output, which always writes the
 clip's arrays, so a shared member is exactly what the clip returned. Inputs are parsed
 JSON (lists of floats) from the shared strategies.
@@ -17,7 +17,7 @@ from hypothesis import strategies as st
 from shapely.geometry import mapping
 
 import rnsca
-from rnsca.formats.geojson import dumps
+from rnsca.io.geojson import dumps
 from tests.property.geometry_strategies import cases
 
 ALL_KINDS = ["point", "multipoint", "linestring", "multilinestring", "polygon", "multipolygon"]

@@ -24,9 +24,8 @@ from hypothesis import assume, given
 from hypothesis import strategies as st
 
 from rnsca.errors import InvalidGeometryError, ParseError
-from rnsca.formats import svgpath
-from rnsca.formats.svgpath import parse_path, parse_paths, write_paths
-from rnsca.kernels import svgparse, svgwrite
+from rnsca.io import svgparse, svgpath, svgwrite
+from rnsca.io.svgpath import parse_path, parse_paths, write_paths
 
 WSP = " \t\n\r\x0c"
 ARGS = {"M": 2, "L": 2, "T": 2, "H": 1, "V": 1, "C": 6, "S": 4, "Q": 4, "A": 7, "Z": 0}

@@ -240,7 +240,7 @@ def test_clip_reports_a_bad_window_and_exits_2(runner, source, window, message):
     (["--tolerance", "-1"], "tolerance must be > 0"),
     (["--mode", "fast"], "mode must be one of"),
     (["--boundary", "side"], "boundary must be one of"),
-    (["--backend", "numpy"], "geometry runs on 'numba' or 'opencl'"),
+    (["--backend", "numpy"], "backend must be one of 'numba', 'opencl'"),
     (["--mode", "approx", "--verify"], "--approx-bound"),
 ])
 def test_clip_reports_a_bad_option_before_reading_and_exits_2(runner, options, message):

@@ -18,7 +18,7 @@ from shapely.geometry import mapping, shape
 
 from rnsca import ClipStats, InvalidGeometryError, InvalidOptionError, InvalidWindowError
 from rnsca.clip_geojson import clip_geojson, combine_stats
-from rnsca.formats.geojson import dumps, from_geojson
+from rnsca.io.geojson import dumps, from_geojson
 from rnsca.ragged import clip_ragged
 
 TOL = 1e-9

@@ -15,8 +15,8 @@ from rnsca.errors import (
     ParseError,
     UnsupportedGeometryError,
 )
-from rnsca.formats.svgdoc import MAX_NESTING, SVG_NAMESPACE
-from rnsca.formats.svgpath import PathArrays
+from rnsca.io.svgdoc import MAX_NESTING, SVG_NAMESPACE
+from rnsca.io.svgpath import PathArrays
 
 W10 = (0, 0, 10, 10)
 NS = {"svg": SVG_NAMESPACE}

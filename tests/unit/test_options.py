@@ -17,7 +17,7 @@ W = Window(0.0, 0.0, 10.0, 4.0)
     (Method, "MIDPOINT", Method.MIDPOINT),
     (Mode, "Approx", Mode.APPROX),
     (Backend, "NUMBA", Backend.NUMBA),
-    (Backend, "numpy", Backend.NUMPY),
+    (Backend, "OpenCL", Backend.OPENCL),
 ])
 def test_choices_are_looked_up_case_insensitively(enum, text, member):
     assert enum(text) is member
@@ -27,7 +27,7 @@ def test_choices_are_looked_up_case_insensitively(enum, text, member):
     (Method, "bresenham", "'rnsca', 'cohen_sutherland', 'liang_barsky', "
                           "'nicholl_lee_nicholl', 'midpoint'"),
     (Mode, "fast", "'exact', 'approx'"),
-    (Backend, "cuda", "'numba', 'numpy'"),
+    (Backend, "numpy", "'numba', 'opencl'"),
 ])
 def test_unknown_choice_error_lists_the_valid_ones(enum, bad, listed):
     with pytest.raises(InvalidOptionError) as info:

@@ -676,7 +676,7 @@ class OpenCLBackend:
             self.clip_polygons(ring, z, offsets, np.array([0, 1], dtype=np.int64), index,
                                windows, options)
         from rnsca.clip_svg import clip_svg
-        from rnsca.formats.svgpath import parse_paths
+        from rnsca.io.svgpath import parse_paths
 
         d = "M-1 0.5 C0 2 1 2 2 0.5 L 0.5 0.5 Z"
         paths = parse_paths([d])

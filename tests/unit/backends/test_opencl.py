@@ -143,7 +143,7 @@ def test_without_pyopencl_asking_for_opencl_says_what_to_install(monkeypatch,
     registry.configure_opencl()
     with pytest.raises(BackendUnavailableError, match=r"needs pyopencl.*rnsca\[opencl\]"):
         clip_segments([[0.0, 0.0, 1.0, 1.0]], W, backend="opencl")
-    assert [b.value for b in registry.available_backends()] == ["numba", "numpy"]
+    assert [b.value for b in registry.available_backends()] == ["numba"]
     report = registry.opencl_report()
     assert report["available"] is False and "needs pyopencl" in report["reason"]
     assert report["devices"] == []
@@ -222,7 +222,7 @@ def test_combined_stats_add_the_device_counters(opencl, rng):
 
 def test_concurrent_calls_give_the_same_pieces(opencl, rng):
     segs = rng.uniform(-10.0, 30.0, size=(5000, 4))
-    expected = clip_segments(segs, W, backend="numpy")
+    expected = clip_segments(segs, W, backend="numba")
     results = [None] * 4
 
     def run(k):
@@ -243,7 +243,7 @@ def test_two_backends_on_one_device_can_be_called_at_once(opencl, opencl_module,
     other = opencl_module.OpenCLBackend(opencl.device["id"], opencl.precision)
     segs = rng.uniform(-10.0, 30.0, size=(20000, 4))
     options = SegmentOptions.resolve(W)
-    expected = clip_segments(segs, W, backend="numpy")
+    expected = clip_segments(segs, W, backend="numba")
     results = [None] * 6
 
     def run(k):
@@ -290,7 +290,7 @@ def test_float32_pieces_are_within_the_documented_bound(float32, method, mode, r
     # The reference: the same input rounded to float32, clipped in float64 (by the NumPy
     # reference, fast also when the kernels run uncompiled).
     ref = clip_segments(_rounded(segs), _rounded(window.bounds), method=method, mode=mode,
-                        backend="numpy")
+                        backend="numba")
     size = np.maximum(np.abs(segs).max(axis=1), np.abs(window.bounds).max())
     bound = FLOAT32_RELATIVE_BOUND * size
     common, mine, theirs = np.intersect1d(source, ref.source, return_indices=True)
@@ -336,7 +336,7 @@ def test_float32_gives_the_same_decisions_on_exact_inputs(float32):
         for mode in Mode:
             options = SegmentOptions.resolve(W, method=method, mode=mode)
             pieces, source, t, stats = float32.clip_segments(segs, W, options)
-            ref = clip_segments(segs, W, method=method, mode=mode, backend="numpy")
+            ref = clip_segments(segs, W, method=method, mode=mode, backend="numba")
             np.testing.assert_array_equal(source, ref.source)
             np.testing.assert_allclose(pieces, ref.segments, rtol=0, atol=2.0 ** -22 * 20)
             if mode is Mode.EXACT:

@@ -12,7 +12,7 @@ import numpy as np
 import shapely
 
 from rnsca.clip_svg import Fill, flatten_paths
-from rnsca.formats.svgpath import PathArrays
+from rnsca.io.svgpath import PathArrays
 
 __all__ = ["paths_to_shapely", "filled_region", "winding_numbers"]
 

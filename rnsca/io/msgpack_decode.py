@@ -4,7 +4,7 @@ Positions out of MessagePack bytes, and geometries that two ragged arrays hold a
 
 `read_positions` decodes the MessagePack (https://msgpack.org, "spec.md") bytes of a list
 of coordinate arrays, each a list of positions, each a list of numbers: the form in
-which `rnsca.formats.geojson` has ormsgpack flatten the lists a parsed document holds
+which `rnsca.io.geojson` has ormsgpack flatten the lists a parsed document holds
 (one C pass that writes every number with a tag naming its type). It checks what the
 GeoJSON rules ask of each position and stops at the first thing it does not take, so
 the caller can let the exact, slow validator name the problem.

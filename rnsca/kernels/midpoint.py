@@ -15,9 +15,9 @@ lost per end; in exact mode the bracket is clipped with Liang–Barsky, as RNSCA
 
 import math
 
-from rnsca.baselines.liang_barsky import liang_barsky_leaf
 from rnsca.kernels import counters as C
 from rnsca.kernels.jit import scalar
+from rnsca.kernels.liang_barsky import liang_barsky_leaf
 from rnsca.kernels.outcode import (
     SURE_SHIFT,
     UNSURE_BITS,

@@ -17,7 +17,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from rnsca.kernels.geojson_io import MIXED, PLAIN, REFUSED, read_positions
+from rnsca.io.msgpack_decode import MIXED, PLAIN, REFUSED, read_positions
 
 
 def read(data: bytes, sizes, dim: int):

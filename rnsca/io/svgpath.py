@@ -44,7 +44,7 @@ from itertools import pairwise
 import numpy as np
 
 from rnsca.errors import InvalidGeometryError, InvalidOptionError, ParseError
-from rnsca.kernels import svgparse, svgwrite
+from rnsca.io import svgparse, svgwrite
 
 __all__ = [
     "ARC_RELATIVE_TOLERANCE",
@@ -491,7 +491,7 @@ def write_paths(p: PathArrays, *, precision: int | None = 6) -> list[str]:
     command letter is left out when it repeats the previous one (``L`` also after
     ``M``), and ``M`` after ``Z`` when the new subpath starts at the closed one's start.
     Numbers are formatted by a kernel, except the rare ones it cannot round with
-    certainty (see `rnsca.kernels.svgwrite`), which Python formats. They drop leading
+    certainty (see `rnsca.io.svgwrite`), which Python formats. They drop leading
     and trailing zeros (``.5``, ``2``), use an exponent when that is shorter (``1e6``,
     ``12e-7``), and are separated by a space only where neither a
     minus sign nor a second decimal point separates them (``1-2``, ``.5.5``). With a

@@ -27,10 +27,10 @@ from rnsca.errors import (
     ParseError,
     UnsupportedGeometryError,
 )
-from rnsca.formats.svgpath import PathArrays, parse_paths
+from rnsca.io.svgpath import PathArrays, parse_paths
 from rnsca.options import Boundary, Method, Mode
 from rnsca.ragged import RaggedClipResult, window_table
-from rnsca.verify_paths import paths_to_shapely
+from rnsca.verify.paths import paths_to_shapely
 from rnsca.window import Window
 
 __all__ = ["Verification", "verify", "approx_leaf_bound"]

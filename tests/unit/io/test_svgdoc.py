@@ -2,7 +2,7 @@
 
 import pytest
 
-from rnsca.formats.svgdoc import SVG_NAMESPACE, find_shapes, read_document
+from rnsca.io.svgdoc import SVG_NAMESPACE, find_shapes, read_document
 
 TRIANGLE = "M-5 5L15 5L5 15"
 

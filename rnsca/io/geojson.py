@@ -13,7 +13,7 @@ Reading is strict. The first problem, in document order, raises `InvalidGeometry
 reader does no per-coordinate Python work on valid input: it collects the coordinate
 arrays of every geometry and converts their positions a chunk at a time: ormsgpack
 writes the lists in C as MessagePack, which tags every number with its type, and a
-compiled decoder checks and reads them (`rnsca.kernels.geojson_io.read_positions`).
+compiled decoder checks and reads them (`rnsca.io.msgpack_decode.read_positions`).
 Sizes, finiteness and ring closure are checked in bulk too. Only when a bulk check fails
 does a second, slow walk run to find the exact path of the first problem.
 
@@ -53,7 +53,7 @@ from rnsca.errors import (
     LimitExceededError,
     ParseError,
 )
-from rnsca.kernels.geojson_io import REFUSED, read_positions, same_geometries
+from rnsca.io.msgpack_decode import REFUSED, read_positions, same_geometries
 
 __all__ = [
     "GEOMETRY_TYPES",

@@ -28,7 +28,7 @@ from xml.parsers import expat
 import numpy as np
 
 from rnsca.errors import InvalidGeometryError, ParseError, UnsupportedGeometryError
-from rnsca.formats.svgpath import PathArrays, parse_paths
+from rnsca.io.svgpath import PathArrays, parse_paths
 
 __all__ = ["IDENTITY", "MAX_NESTING", "SVG_NAMESPACE", "Shape", "SvgDocument", "find_shapes",
            "inverse_maps", "largest_stretch", "map_shapes", "parse_shapes", "read_document",

@@ -14,7 +14,7 @@ passes with one body and a ``write`` flag (count, prefix sum in the caller, writ
 2. `count_segments` / `write_segments`: interpret the groups as SVG does (relative
    coordinates, ``H``/``V``, the reflected control points of ``S``/``T``, ``Z``, arcs
    converted to cubic Béziers) into the columnar layout of
-   `rnsca.formats.svgpath.PathArrays`.
+   `rnsca.io.svgpath.PathArrays`.
 
 Number conversion (Clinger 1990, "How to read floating point numbers accurately"): a
 decimal ``m * 10**e`` whose integer mantissa ``m`` is below 2**53 and with
@@ -746,7 +746,7 @@ def _segment_problem(controls, degree, i, x, y):
 def check_layout(controls, degree, subpath_offsets, start):
     """Return ``(subpath, segment, code)`` of the first broken rule, or (-1, -1, 0).
 
-    Rules of `rnsca.formats.svgpath.PathArrays`: finite coordinates, unused control
+    Rules of `rnsca.io.svgpath.PathArrays`: finite coordinates, unused control
     rows equal to the end point, each segment starting at the previous one's end (the
     first at its subpath's start). The caller has checked shapes, degrees and offsets.
     One parallel pass over the subpaths, no temporaries.

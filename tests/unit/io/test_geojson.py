@@ -17,15 +17,15 @@ from rnsca.errors import (
     LimitExceededError,
     ParseError,
 )
-from rnsca.formats import geojson as geojson_module
-from rnsca.formats.geojson import (
+from rnsca.io import geojson as geojson_module
+from rnsca.io.geojson import (
     MAX_COLLECTION_DEPTH,
     dumps,
     from_geojson,
     loads,
     to_geojson,
 )
-from rnsca.kernels.geojson_io import same_geometries
+from rnsca.io.msgpack_decode import same_geometries
 
 SQUARE = [[0, 0], [10, 0], [10, 10], [0, 10], [0, 0]]
 HOLE = [[2, 2], [2, 4], [4, 4], [4, 2], [2, 2]]

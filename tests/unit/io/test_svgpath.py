@@ -6,14 +6,14 @@ import numpy as np
 import pytest
 
 from rnsca.errors import InvalidGeometryError, InvalidOptionError, ParseError
-from rnsca.formats.svgpath import (
+from rnsca.io.svgparse import arc_error
+from rnsca.io.svgpath import (
     PathArrays,
     parse_path,
     parse_paths,
     write_path,
     write_paths,
 )
-from rnsca.kernels.svgparse import arc_error
 
 
 def segments(d, **kwargs):

@@ -1,7 +1,0 @@
-"""Readers and writers of geometry text formats; they know nothing of clipping.
-
-Import the format modules directly, e.g. ``from rnsca.formats.geojson import from_geojson``
-or ``from rnsca.formats.svgpath import parse_paths``.
-"""
-
-__all__: list[str] = []

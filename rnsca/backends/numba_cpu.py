@@ -11,6 +11,7 @@ from rnsca.io.svgpath import parse_paths, write_paths
 from rnsca.kernels import counters as C
 from rnsca.kernels import polygons as PG
 from rnsca.kernels import polylines as PL
+from rnsca.kernels import records as R
 from rnsca.kernels import segments as K
 from rnsca.options import Backend, Method, Mode, SegmentOptions
 from rnsca.stats import ClipStats
@@ -64,10 +65,8 @@ class NumbaBackend:
         is clipped then). Count, prefix sum and write run in one kernel call
         (`polylines.clip_lines`).
         """
-        return PL.clip_lines(xy, z, part_offsets, geometry_parts, geometry_window, windows,
-                             METHOD_ID[options.method], options.n, options.max_depth,
-                             options.tolerance, options.auto_piece, options.mode is Mode.EXACT,
-                             drop_edge_runs)
+        lines = PL.Lines(part_offsets, geometry_parts, windows, geometry_window)
+        return PL.clip_lines(R.vertices(xy, z), lines, core_options(options), drop_edge_runs)
 
     def clip_polygons(self, xy, z, ring_offsets, polygon_offsets, polygon_window, windows,
                       options: SegmentOptions):
@@ -78,8 +77,8 @@ class NumbaBackend:
         n_polygons = polygon_offsets.shape[0] - 1
         nothing_i = np.empty(0, dtype=np.int64)
         # Runs and segments are clipped here, not decided elsewhere: no decision tables.
-        undecided = (False, nothing_i, np.empty(0, dtype=np.uint8), nothing_i,
-                     np.empty(0, dtype=np.bool_), np.empty((0, 6)))
+        undecided = PL.Decisions(False, nothing_i, np.empty(0, dtype=np.uint8), nothing_i,
+                                 np.empty(0, dtype=np.bool_), np.empty((0, 6)))
         return polygon_passes(xy, z, ring_offsets, polygon_offsets, polygon_window, windows,
                               options, np.empty(n_polygons, dtype=np.int8), undecided)
 
@@ -116,13 +115,19 @@ def _warm_up_curves() -> None:
     flatten_paths(paths, 1e-3, close=True)
 
 
+def core_options(options: SegmentOptions) -> R.CoreOptions:
+    """Return the kernels' record of the segment core's options (one type per field)."""
+    return R.CoreOptions(METHOD_ID[options.method], int(options.n), int(options.max_depth),
+                         float(options.tolerance), float(options.auto_piece),
+                         options.mode is Mode.EXACT)
+
+
 def polygon_passes(xy, z, ring_offsets, polygon_offsets, polygon_window, windows,
-                   options: SegmentOptions, polygon_class, decisions):
+                   options: SegmentOptions, polygon_class, decisions: PL.Decisions):
     """Run the polygon kernel's count pass, prefix sums and write pass.
 
     Shared by the Numba backend (`decisions` says nothing is decided) and the OpenCL
-    backend (`decisions` carries the device's run decisions and pieces: ``(True,
-    chunk_start, decision, piece_start, keep, pieces)``).
+    backend (`decisions` carries the device's run decisions and pieces).
 
     Returns
     -------
@@ -134,30 +139,34 @@ def polygon_passes(xy, z, ring_offsets, polygon_offsets, polygon_window, windows
     block = _block_size(n_polygons)
     n_blocks = max(1, -(-n_polygons // block))
     counters = np.zeros((n_blocks, C.WIDTH), dtype=np.int64)
-    scratch_v = np.zeros(n_polygons, dtype=np.int64)
-    scratch_c = np.zeros(n_polygons, dtype=np.int64)
-    n_vertices = np.empty(n_polygons, dtype=np.int64)
-    n_rings = np.empty(n_polygons, dtype=np.int64)
-    n_polys = np.empty(n_polygons, dtype=np.int64)
-    args = (xy, z, has_z, ring_offsets, polygon_offsets, polygon_window, windows,
-            METHOD_ID[options.method], options.n, options.max_depth, options.tolerance,
-            options.auto_piece, True, block)
+    vertices = R.vertices(xy, z)
+    polygons = PG.Polygons(ring_offsets, polygon_offsets, windows, polygon_window)
+    plan = PG.PolygonPlan(polygon_class, np.zeros(n_polygons, dtype=np.int64),
+                          np.zeros(n_polygons, dtype=np.int64))
     nothing_i = np.empty(0, dtype=np.int64)
-    PG.clip_polygon_blocks(*args, False, polygon_class, scratch_v, scratch_c, nothing_i,
-                           nothing_i, nothing_i, np.empty((0, 2)), np.empty(0), nothing_i,
-                           nothing_i, n_vertices, n_rings, n_polys, counters, *decisions)
-    vertex_start = exclusive_sum(n_vertices)
-    ring_start = exclusive_sum(n_rings)
-    poly_start = exclusive_sum(n_polys)
+    counts = PG.PolygonCounts(np.empty(n_polygons, dtype=np.int64),
+                              np.empty(n_polygons, dtype=np.int64),
+                              np.empty(n_polygons, dtype=np.int64), nothing_i, nothing_i,
+                              nothing_i)
+    nowhere = PG.PolygonsOut(False, np.empty((0, 2)), np.empty(0), nothing_i, nothing_i)
+    # Polygons are always clipped exactly: valid output needs exact cut points.
+    kernel_options = core_options(options)._replace(exact=True)
+    PG.clip_polygon_blocks(vertices, polygons, kernel_options, block, plan, counts, nowhere,
+                           counters, decisions)
+    vertex_start = exclusive_sum(counts.n_vertices)
+    ring_start = exclusive_sum(counts.n_rings)
+    poly_start = exclusive_sum(counts.n_polys)
     out_xy = np.empty((int(vertex_start[-1]), 2))
     out_z = np.empty(int(vertex_start[-1]) if has_z else 0)
     out_rings = np.empty(int(ring_start[-1]) + 1, dtype=np.int64)
     out_rings[-1] = out_xy.shape[0]
     out_poly_rings = np.empty(int(poly_start[-1]), dtype=np.int64)
-    PG.clip_polygon_blocks(*args, True, polygon_class, scratch_v, scratch_c, vertex_start,
-                           ring_start, poly_start, out_xy, out_z, out_rings, out_poly_rings,
-                           n_vertices, n_rings, n_polys, counters, *decisions)
-    return out_xy, out_z, out_rings, out_poly_rings, n_polys, counters
+    counts = counts._replace(vertex_start=vertex_start, ring_start=ring_start,
+                             poly_start=poly_start)
+    out = PG.PolygonsOut(True, out_xy, out_z, out_rings, out_poly_rings)
+    PG.clip_polygon_blocks(vertices, polygons, kernel_options, block, plan, counts, out,
+                           counters, decisions)
+    return out_xy, out_z, out_rings, out_poly_rings, counts.n_polys, counters
 
 
 def _block_size(n_items: int) -> int:

@@ -21,6 +21,7 @@ cut point has its edge coordinate exactly on the edge line (see `outcode.end_poi
 import math
 from typing import NamedTuple
 
+import numba
 import numpy as np
 from numba import prange
 
@@ -55,6 +56,9 @@ __all__ = [
     "signed_area",
     "sutherland_hodgman",
 ]
+
+# EXPERIMENT: a helper that allocates, with Numba's runtime whoever calls it.
+allocating = numba.njit(cache=True, nogil=True, error_model="numpy", _nrt=True)
 
 # Edges in counter-clockwise order, starting at (xmin, ymin).
 _BOTTOM, _RIGHT, _TOP, _LEFT = 0, 1, 2, 3
@@ -335,12 +339,12 @@ def _key_less(e1, s1, t1, e2, s2, t2):
     return e1 < e2 or (e1 == e2 and (s1 < s2 or (s1 == s2 and t1 < t2)))
 
 
-@borrowing
+@inlined
 def _chain_length(lc, k):
     return (lc.end1[k] - lc.start1[k]) + (lc.end2[k] - lc.start2[k])
 
 
-@borrowing
+@inlined
 def _chain_vertex(lc, k, j):
     """Return the scratch index of vertex j of logical chain k, in its oriented order.
 
@@ -352,7 +356,7 @@ def _chain_vertex(lc, k, j):
     return lc.start1[k] + j if j < n1 else lc.start2[k] + (j - n1)
 
 
-@borrowing
+@inlined
 def _event_angle(ch_xy, lc, k, at_start, edge, window):
     """Return the angle of chain k's direction into the window at its start or end.
 
@@ -392,7 +396,7 @@ def _put(out_xy, out_z, has_z, v, ring_start, x, y, z):
     return v + 1
 
 
-@borrowing
+@inlined
 def _put_chain(chains, has_z, lc, k, walk, m):
     """Append the vertices of logical chain k to the walk's ring at `m`; return the end."""
     for j in range(_chain_length(lc, k)):
@@ -535,7 +539,7 @@ def _node_touches(ring_xy, ring_z, has_z, m):
     return out_xy, out_z, k + 1
 
 
-@scalar
+@allocating
 def _split_loops(walk, has_z, m, node, closed, n_rg):
     """Store the closed walk ring ``walk.xy[0..m-1]`` as simple rings; return the ring count.
 
@@ -623,6 +627,8 @@ def sutherland_hodgman(line, first, last, reverse, window):
     most doubles the vertex count, hence the buffers.
     """
     xy = line.xy
+    z = line.z
+    has_z = line.has_z
     n = last - first  # without the closing vertex
     size = 16 * n + 16
     a = np.empty((size, 3), dtype=np.float64)
@@ -631,7 +637,7 @@ def sutherland_hodgman(line, first, last, reverse, window):
         i = last - k if reverse else first + k
         a[k, 0] = xy[i, 0]
         a[k, 1] = xy[i, 1]
-        a[k, 2] = line.z[i] if line.has_z else 0.0
+        a[k, 2] = z[i] if has_z else 0.0
     for edge in range(4):
         m = 0
         for k in range(n):
@@ -657,7 +663,7 @@ def sutherland_hodgman(line, first, last, reverse, window):
     return a, n + 1
 
 
-@scalar
+@allocating
 def _clip_rings_alone(line, ring_offsets, r_begin, r_end, ring_rev, window, out, v, n_rings,
                       n_polys):
     """Write an invalid polygon clipped ring by ring: one polygon, its shell then its holes.
@@ -665,6 +671,8 @@ def _clip_rings_alone(line, ring_offsets, r_begin, r_end, ring_rev, window, out,
     Without ``out.write`` only the counts advance. A shell clipped to nothing drops the
     polygon.
     """
+    write = out.write
+    has_z = line.has_z
     rings_before = n_rings
     for r in range(r_begin, r_end):
         first = ring_offsets[r]
@@ -676,23 +684,25 @@ def _clip_rings_alone(line, ring_offsets, r_begin, r_end, ring_rev, window, out,
             if r == r_begin:
                 return v, n_rings, n_polys
             continue
-        if out.write:
+        if write:
+            out_xy = out.xy
+            out_z = out.z
             out.ring_starts[n_rings] = v
             for k in range(m):
-                out.xy[v + k, 0] = ring[k, 0]
-                out.xy[v + k, 1] = ring[k, 1]
-                if line.has_z:
-                    out.z[v + k] = ring[k, 2]
+                out_xy[v + k, 0] = ring[k, 0]
+                out_xy[v + k, 1] = ring[k, 1]
+                if has_z:
+                    out_z[v + k] = ring[k, 2]
         v += m
         n_rings += 1
     if n_rings > rings_before:
-        if out.write:
+        if write:
             out.poly_rings[n_polys] = n_rings - rings_before
         n_polys += 1
     return v, n_rings, n_polys
 
 
-@scalar
+@borrowing
 def clip_polygon(line, polygons, p, window, options, decisions, scratch, out, v, n_rings,
                  n_polys, st):
     """Clip polygon p of `polygons` (on the vertices `line`) against `window`.
@@ -710,41 +720,45 @@ def clip_polygon(line, polygons, p, window, options, decisions, scratch, out, v,
     assembled from them (`polylines.assemble_chains`) instead of cut by
     `polylines.clip_chains`.
 
-    The steps: cut the rings into chains (`_cut_rings`); sort the chains' ends along
-    the boundary (`_sort_events`) and check that entries and exits alternate
-    (`_events_alternate`); walk from each exit to the next entry, through the corners
-    between, until the ring closes (`_walk`); keep the rings never cut
-    (`_add_uncut_rings`), or the window itself if no ring is cut and the window lies
+    The steps (each inlined here): cut the rings into chains (`_cut_rings`); sort the
+    chains' ends along the boundary (`_sort_events`) and check that exits and entries
+    alternate (`_events_alternate`); walk from each exit to the next entry, through the
+    corners between, until the ring closes (`_walk`); keep the rings never cut
+    (`_add_uncut_rings`), or the window itself if nothing is cut and the window lies
     inside the polygon (`_add_window_if_covered`); write each shell with its holes
-    (`_write_pieces`).
+    (`_write_pieces`). Only `_split_loops` and the fallback allocate (``allocating``):
+    no other array is reference-counted per polygon.
     """
     r_begin = polygons.polygon_offsets[p]
     r_end = polygons.polygon_offsets[p + 1]
     n_r = r_end - r_begin
     if n_r == 0:
         return v, n_rings, n_polys, True
+    has_z = line.has_z
     ring_offsets = polygons.ring_offsets
     # 1. Cut every ring into chains, oriented so the polygon's interior is on the left.
     n_lc, ok = _cut_rings(line, ring_offsets, r_begin, r_end, Cut(window, True, True),
                           options, decisions, scratch, st)
-    if line.has_z:
+    if has_z:
         _find_corner_z(line, ring_offsets, r_begin, r_end, window, scratch.corners)
-    # 2. The walk over boundary events (chain starts and ends), sorted counter-clockwise.
+    # 2. The walk goes over boundary events (chain starts and ends), sorted
+    # counter-clockwise: exits and entries must alternate.
     n_ev = _sort_events(scratch.chains.xy, scratch.logical, n_lc, window, scratch.events)
     if not (ok and _events_alternate(scratch.events, n_ev)):
         v, n_rings, n_polys = _clip_rings_alone(line, ring_offsets, r_begin, r_end,
                                                 scratch.rings.reversed, window, out, v,
                                                 n_rings, n_polys)
         return v, n_rings, n_polys, False
-    n_rg, walked = _walk(scratch, line.has_z, n_lc, n_ev, window)
-    # 3. Rings never cut: inside the window whole.
+    # 3. The walk: chains closed into rings along the boundary.
+    n_rg, walked = _walk(scratch, has_z, n_lc, n_ev, window)
+    # 4. Rings never cut: inside the window whole.
     n_rg, uncut_ok = _add_uncut_rings(line, n_r, n_lc, scratch, n_rg)
-    # 4. No chain and no uncut shell: the window lies inside the polygon or outside it.
+    # 5. No chain and no uncut shell: the window lies inside the polygon or outside it.
     if n_lc == 0 and scratch.rings.state[0] == _UNTOUCHED:
         n_rg = _add_window_if_covered(line, n_r, window, scratch, n_rg)
-    # 5. Output: each shell, then the holes inside it.
-    v, n_rings, n_polys, placed = _write_pieces(line.has_z, scratch.closed, n_rg, out, v,
-                                                n_rings, n_polys)
+    # 6. Output: each shell, then the holes inside it.
+    v, n_rings, n_polys, placed = _write_pieces(has_z, scratch.closed, n_rg, out, v, n_rings,
+                                                n_polys)
     return v, n_rings, n_polys, walked and uncut_ok and placed
 
 
@@ -1001,56 +1015,73 @@ def _walk_corners(scratch, has_z, k, nxt, window, m):
 def _walk(scratch, has_z, n_lc, n_ev, window):
     """Close the logical chains into rings along the boundary; return ``(n_closed, ok)``.
 
-    From each chain not yet visited: append it, go to the chain the ring continues with
-    (`_next_chain`) through the corners between (`_walk_corners`), until back at the
-    first. Each closed walk is split into simple rings (`_split_loops`) stored in
-    ``scratch.closed``. ``ok`` is False when the chains are inconsistent (invalid
-    input): what was walked is closed anyway.
+    Each walk (`_walk_from`) starts at a chain not yet visited and is split into simple
+    rings (`_split_loops`) stored in ``scratch.closed``. ``ok`` is False when the chains
+    are inconsistent (invalid input): what was walked is closed anyway.
+    """
+    walk = scratch.walk
+    closed = scratch.closed
+    visited = scratch.logical.visited
+    n_rg = 0
+    closed.start[0] = 0
+    ok = True
+    for k in range(n_lc):
+        visited[k] = False
+    for k0 in range(n_lc):
+        if visited[k0]:
+            continue
+        m, several_rings, consistent = _walk_from(scratch, has_z, k0, n_ev, window)
+        ok = ok and consistent
+        if m >= 4:
+            n_rg = _split_loops(walk, has_z, m, several_rings, closed, n_rg)
+    return n_rg, ok
+
+
+@inlined
+def _walk_from(scratch, has_z, k0, n_ev, window):
+    """Walk from chain k0 back to it into ``scratch.walk``: ``(m, several_rings, ok)``.
+
+    Appends each chain, goes to the chain the ring continues with (`_next_chain`)
+    through the corners between (`_walk_corners`), until back at k0, and closes the
+    ring (m vertices). `several_rings`: the walk joined chains of two or more rings.
+    ``ok`` is False if the chains are inconsistent (a chain without a next one, or one
+    visited before): the walk stops there.
     """
     lc = scratch.logical
     walk = scratch.walk
-    n_rg = 0
-    scratch.closed.start[0] = 0
     ok = True
-    for k in range(n_lc):
-        lc.visited[k] = False
-    for k0 in range(n_lc):
-        if lc.visited[k0]:
-            continue
-        m = 0
-        k = k0
-        # Only a walk joining chains of two or more rings (a cut hole and its shell) can
-        # pass a vertex of one inside an edge of the other (a hole touching its shell
-        # mid-edge), so only such a walk is noded (`_split_loops`): the chains of one
-        # valid ring never touch each other. Noding every walk of a polygon with holes
-        # took about a fifth of the polygon benchmark's time.
-        several_rings = False
-        while True:
-            lc.visited[k] = True
-            several_rings = several_rings or lc.ring[k] != lc.ring[k0]
-            m = _put_chain(scratch.chains, has_z, lc, k, walk, m)
-            nxt, direct = _next_chain(scratch.events, n_ev, k)
-            if nxt < 0:
-                ok = False
-                break
-            if not direct:
-                m = _walk_corners(scratch, has_z, k, nxt, window, m)
-            if nxt == k0:
-                break
-            if lc.visited[nxt]:
-                ok = False  # inconsistent chains (invalid input): close what we have
-                break
-            k = nxt
-        if m > 0 and not (walk.xy[m - 1, 0] == walk.xy[0, 0]
-                          and walk.xy[m - 1, 1] == walk.xy[0, 1]):
-            walk.xy[m, 0] = walk.xy[0, 0]
-            walk.xy[m, 1] = walk.xy[0, 1]
-            if has_z:
-                walk.z[m] = walk.z[0]
-            m += 1
-        if m >= 4:
-            n_rg = _split_loops(walk, has_z, m, several_rings, scratch.closed, n_rg)
-    return n_rg, ok
+    m = 0
+    k = k0
+    # Only a walk joining chains of two or more rings (a cut hole and its shell) can
+    # pass a vertex of one inside an edge of the other (a hole touching its shell
+    # mid-edge), so only such a walk is noded (`_split_loops`): the chains of one
+    # valid ring never touch each other. Noding every walk of a polygon with holes
+    # took about a fifth of the polygon benchmark's time.
+    several_rings = False
+    while True:
+        lc.visited[k] = True
+        several_rings = several_rings or lc.ring[k] != lc.ring[k0]
+        m = _put_chain(scratch.chains, has_z, lc, k, walk, m)
+        nxt, direct = _next_chain(scratch.events, n_ev, k)
+        if nxt < 0:
+            ok = False
+            break
+        if not direct:
+            m = _walk_corners(scratch, has_z, k, nxt, window, m)
+        if nxt == k0:
+            break
+        if lc.visited[nxt]:
+            ok = False  # inconsistent chains (invalid input): close what we have
+            break
+        k = nxt
+    if m > 0 and not (walk.xy[m - 1, 0] == walk.xy[0, 0]
+                      and walk.xy[m - 1, 1] == walk.xy[0, 1]):
+        walk.xy[m, 0] = walk.xy[0, 0]
+        walk.xy[m, 1] = walk.xy[0, 1]
+        if has_z:
+            walk.z[m] = walk.z[0]
+        m += 1
+    return m, several_rings, ok
 
 
 @inlined
@@ -1188,7 +1219,7 @@ def polygon_class_of(xy, ring_offsets, r_begin, r_end, window):
     return _OUTSIDE if lo & hi else (_INSIDE if strict else _AMBIGUOUS)
 
 
-@scalar
+@borrowing
 def _class_of(line, polygons, p):
     """Return `polygon_class_of` polygon p against its window."""
     return polygon_class_of(line.xy, polygons.ring_offsets, polygons.polygon_offsets[p],
@@ -1240,7 +1271,9 @@ def _polygon_block(blk, line, polygons, options, block_size, plan, counts, out, 
         st = np.zeros(C.WIDTH, dtype=np.int64)  # counted once, in the write pass
     max_v, max_c, max_r, max_out = _plan_block(line, polygons, lo_p, hi_p, not write, plan,
                                                counts)
-    if max_out == 1 and not write:
+    if write:
+        _copy_decided(line, polygons, lo_p, hi_p, plan.polygon_class, counts, out, st)
+    if max_out == 1:
         return  # no ambiguous polygon in this block
     has_z = line.has_z
     scratch = _polygon_scratch(max_v, max_c, max_r, max_out, has_z)
@@ -1250,18 +1283,28 @@ def _polygon_block(blk, line, polygons, options, block_size, plan, counts, out, 
                           np.empty(max_out if has_z else 0, dtype=np.float64),
                           np.empty(max_out // 4 + 2, dtype=np.int64),
                           np.empty(max_out // 4 + 2, dtype=np.int64))
+    _clip_ambiguous(line, polygons, lo_p, hi_p, options, decisions, plan.polygon_class, counts,
+                    scratch, dst, st)
+
+
+@borrowing
+def _clip_ambiguous(line, polygons, lo_p, hi_p, options, decisions, polygon_class, counts,
+                    scratch, out, st):
+    """Clip (`clip_polygon`) the ambiguous polygons among lo_p..hi_p-1 into `out`.
+
+    In the count pass (``out.write`` False, `out` one polygon's scratch) store their
+    output counts in `counts`; in the write pass write them from their starts.
+    """
+    write = out.write
     for p in range(lo_p, hi_p):
-        cls = plan.polygon_class[p]
-        if cls != _AMBIGUOUS:
-            if write:
-                _copy_whole(line, polygons, p, cls, out, counts, st)
+        if polygon_class[p] != _AMBIGUOUS:
             continue
         v0 = counts.vertex_start[p] if write else 0
         r0 = counts.ring_start[p] if write else 0
         q0 = counts.poly_start[p] if write else 0
         window = window_of(polygons.windows, polygons.polygon_window, p)
         v, nr, npoly, ok = clip_polygon(line, polygons, p, window, options, decisions, scratch,
-                                        dst, v0, r0, q0, st)
+                                        out, v0, r0, q0, st)
         if not ok:
             st[C.INVALID_POLYGONS] += 1
         if not write:
@@ -1270,7 +1313,7 @@ def _polygon_block(blk, line, polygons, options, block_size, plan, counts, out, 
             counts.n_polys[p] = npoly - q0
 
 
-@inlined
+@borrowing
 def _plan_block(line, polygons, lo_p, hi_p, classify, plan, counts):
     """Return the block's scratch sizes ``(vertices, chains, rings, output)``.
 
@@ -1357,34 +1400,39 @@ def _polygon_scratch(max_v, max_c, max_r, max_out, has_z):
         Chunks(nothing_i, no_codes, no_codes, np.empty((0, 2), dtype=np.int64), nothing_i))
 
 
-@inlined
-def _copy_whole(line, polygons, p, cls, out, counts, st):
-    """Write polygon p, which the window's box test decided whole: nothing, or all its rings.
+@borrowing
+def _copy_decided(line, polygons, lo_p, hi_p, polygon_class, counts, out, st):
+    """Write the polygons lo_p..hi_p-1 the window's box test decided whole.
 
-    Rings are oriented on the way (shells counter-clockwise, holes clockwise).
+    Outside: nothing; inside: all its rings, oriented on the way (shells
+    counter-clockwise, holes clockwise). Ambiguous polygons are left to `clip_polygon`.
     """
     ring_offsets = polygons.ring_offsets
-    r_begin = polygons.polygon_offsets[p]
-    r_end = polygons.polygon_offsets[p + 1]
-    n_segments = ring_offsets[r_end] - ring_offsets[r_begin] - (r_end - r_begin)
-    st[C.RUNS_EVALUATED] += 1
-    st[C.RUN_LEVELS] += 1
-    st[C.SEGMENT_LEVELS] += n_segments
-    if cls == _OUTSIDE:
-        st[C.RUNS_REJECTED] += 1
-        return
-    st[C.RUNS_ACCEPTED] += 1
-    v = counts.vertex_start[p]
-    invalid = False
-    for r in range(r_begin, r_end):
-        first = ring_offsets[r]
-        last = ring_offsets[r + 1] - 1
-        area = signed_area(line.xy, first, last) if last > first else 0.0
-        if area == 0.0:
-            invalid = True
-        out.ring_starts[counts.ring_start[p] + r - r_begin] = v
-        v = _put_ring(line.xy, line.z, line.has_z, first, last,
-                      (area < 0.0) if r == r_begin else (area > 0.0), out.xy, out.z, v)
-    out.poly_rings[counts.poly_start[p]] = r_end - r_begin
-    if invalid:
-        st[C.INVALID_POLYGONS] += 1  # a ring without area (a symmetric bow tie)
+    for p in range(lo_p, hi_p):
+        cls = polygon_class[p]
+        if cls == _AMBIGUOUS:
+            continue
+        r_begin = polygons.polygon_offsets[p]
+        r_end = polygons.polygon_offsets[p + 1]
+        n_segments = ring_offsets[r_end] - ring_offsets[r_begin] - (r_end - r_begin)
+        st[C.RUNS_EVALUATED] += 1
+        st[C.RUN_LEVELS] += 1
+        st[C.SEGMENT_LEVELS] += n_segments
+        if cls == _OUTSIDE:
+            st[C.RUNS_REJECTED] += 1
+            continue
+        st[C.RUNS_ACCEPTED] += 1
+        v = counts.vertex_start[p]
+        invalid = False
+        for r in range(r_begin, r_end):
+            first = ring_offsets[r]
+            last = ring_offsets[r + 1] - 1
+            area = signed_area(line.xy, first, last) if last > first else 0.0
+            if area == 0.0:
+                invalid = True
+            out.ring_starts[counts.ring_start[p] + r - r_begin] = v
+            v = _put_ring(line.xy, line.z, line.has_z, first, last,
+                          (area < 0.0) if r == r_begin else (area > 0.0), out.xy, out.z, v)
+        out.poly_rings[counts.poly_start[p]] = r_end - r_begin
+        if invalid:
+            st[C.INVALID_POLYGONS] += 1  # a ring without area (a symmetric bow tie)

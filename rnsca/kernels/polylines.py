@@ -716,17 +716,29 @@ def _line_block(blk, block_size, line, lines, options, drop_edge_runs, chunks, c
     (`emit_plan`) from ``counts.vertex_start[p]`` and ``counts.chain_start[p]``: runs
     are not decided twice, and only the segments of ambiguous chunks are clipped twice.
     """
-    part_offsets = lines.part_offsets
-    geometry_parts = lines.geometry_parts
     write = out.write
-    n_geometries = geometry_parts.shape[0] - 1
     st = np.zeros(C.WIDTH, dtype=np.int64) if write else counters[blk]
     # The write pass replays plans: it needs neither the run stack nor the code scratch.
     stacks = Stacks(np.empty((0 if write else RUN_STACK_CAPACITY, 3), dtype=np.int64),
                     np.empty((STACK_CAPACITY, 6), dtype=np.float64),
                     np.empty((STACK_CAPACITY, 3), dtype=np.int64))
     codes = np.empty(0 if write else CODE_SCRATCH_BYTES, dtype=np.uint8)
-    for g in range(blk * block_size, min(n_geometries, (blk + 1) * block_size)):
+    n_geometries = lines.geometry_parts.shape[0] - 1
+    _line_parts(blk * block_size, min(n_geometries, (blk + 1) * block_size), line, lines,
+                options, drop_edge_runs, chunks, counts, out, st, stacks, codes)
+
+
+@borrowing
+def _line_parts(g_begin, g_end, line, lines, options, drop_edge_runs, chunks, counts, out, st,
+                stacks, codes):
+    """Count or write the parts of geometries g_begin..g_end-1 (see `_line_block`).
+
+    `st` is the counter row, `stacks` and `codes` the block's scratch (`code_chunks`).
+    """
+    part_offsets = lines.part_offsets
+    geometry_parts = lines.geometry_parts
+    write = out.write
+    for g in range(g_begin, g_end):
         cut = Cut(window_of(lines.windows, lines.geometry_window, g), drop_edge_runs, False)
         for p in range(geometry_parts[g], geometry_parts[g + 1]):
             first = part_offsets[p]
@@ -844,8 +856,9 @@ def clip_lines(line, lines, options, drop_edge_runs):
     else:
         _line_pass(block_size, line, lines, options, drop_edge_runs, chunks, counts, nowhere,
                    counters)
+    n_vertices = counts.n_vertices
     for p in range(n_parts):
-        if counts.n_vertices[p] < 0:
+        if n_vertices[p] < 0:
             return nothing_xy, nothing_z, np.zeros(1, dtype=np.int64), \
                 np.zeros(n_geometries + 1, dtype=np.int64), counters, p
     vertex_start = _exclusive_sum(counts.n_vertices)
@@ -877,7 +890,7 @@ CHUNK_ACCEPTED = 1
 CHUNK_SEGMENTED = 2
 
 
-@scalar
+@borrowing
 def assemble_chains(line, first, last, cut, decisions, chunk0, out, v, c):
     """Emit the chains of the line ``line.xy[first..last]`` from decisions made elsewhere.
 
@@ -933,7 +946,7 @@ def assemble_line_blocks(line, part_offsets, windows, part_window, drop_edge_run
                         block_size, decisions, counts, out)
 
 
-@scalar
+@borrowing
 def _assemble_block(blk, line, part_offsets, windows, part_window, drop_edge_runs, block_size,
                     decisions, counts, out):
     """Count or write the chains of parts ``blk * block_size`` on (`assemble_line_blocks`)."""

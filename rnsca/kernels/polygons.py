@@ -30,10 +30,10 @@ from rnsca.kernels.jit import borrowing, inlined, parallel, scalar
 from rnsca.kernels.outcode import line_coordinate
 from rnsca.kernels.polylines import (
     RUN_STACK_CAPACITY,
+    BlockState,
     ChainsOut,
-    Chunks,
     Cut,
-    Stacks,
+    PartPlan,
     assemble_chains,
     bound_chains,
     clip_chains,
@@ -202,7 +202,7 @@ class Corners(NamedTuple):
 class PolygonScratch(NamedTuple):
     """One block's scratch for clipping its ambiguous polygons, sized by the largest."""
 
-    stacks: Stacks
+    block: BlockState
     chains: ChainsOut
     logical: LogicalChains
     events: Events
@@ -210,7 +210,7 @@ class PolygonScratch(NamedTuple):
     walk: Walk
     closed: ClosedRings
     corners: Corners
-    no_chunks: Chunks
+    no_plan: PartPlan
 
 
 @borrowing
@@ -704,21 +704,21 @@ def _clip_rings_alone(line, ring_offsets, r_begin, r_end, ring_rev, window, out,
 
 @borrowing
 def clip_polygon(line, polygons, p, window, options, decisions, scratch, out, v, n_rings,
-                 n_polys, st):
+                 n_polys):
     """Clip polygon p of `polygons` (on the vertices `line`) against `window`.
 
     Output polygons are written from ``out.xy[v]``, their rings' starts from
     ``out.ring_starts[n_rings]`` and their ring counts from ``out.poly_rings[n_polys]``;
     shells counter-clockwise, holes clockwise. `scratch` is the caller's, sized by the
-    bounds of `bound_chains`. Returns ``(v, n_rings, n_polys, ok)``; ``ok`` is False
-    when the input is found invalid: a cut ring without area, or chains whose entries
-    and exits do not alternate along the boundary (the rings cross); the polygon is
-    then clipped ring by ring (`sutherland_hodgman`), not repaired. In the counting
-    pass (``out.write`` False) that fallback only counts; the rest writes to `out`, the
-    caller's scratch then. With ``decisions.decided`` the rings' runs were pruned and
-    their segments clipped elsewhere (the OpenCL backend): ring r's chains are
-    assembled from them (`polylines.assemble_chains`) instead of cut by
-    `polylines.clip_chains`.
+    bounds of `bound_chains`; the stats go to its block's counter row. Returns
+    ``(v, n_rings, n_polys, ok)``; ``ok`` is False when the input is found invalid: a
+    cut ring without area, or chains whose entries and exits do not alternate along the
+    boundary (the rings cross); the polygon is then clipped ring by ring
+    (`sutherland_hodgman`), not repaired. In the counting pass (``out.write`` False)
+    that fallback only counts; the rest writes to `out`, the caller's scratch then.
+    With ``decisions.decided`` the rings' runs were pruned and their segments clipped
+    elsewhere (the OpenCL backend): ring r's chains are assembled from them
+    (`polylines.assemble_chains`) instead of cut by `polylines.clip_chains`.
 
     The steps (each inlined here): cut the rings into chains (`_cut_rings`); sort the
     chains' ends along the boundary (`_sort_events`) and check that exits and entries
@@ -737,8 +737,8 @@ def clip_polygon(line, polygons, p, window, options, decisions, scratch, out, v,
     has_z = line.has_z
     ring_offsets = polygons.ring_offsets
     # 1. Cut every ring into chains, oriented so the polygon's interior is on the left.
-    n_lc, ok = _cut_rings(line, ring_offsets, r_begin, r_end, Cut(window, True, True),
-                          options, decisions, scratch, st)
+    n_lc, ok = _cut_rings(line, ring_offsets, r_begin, r_end, Cut(window, True), options,
+                          decisions, scratch)
     if has_z:
         _find_corner_z(line, ring_offsets, r_begin, r_end, window, scratch.corners)
     # 2. The walk goes over boundary events (chain starts and ends), sorted
@@ -763,7 +763,7 @@ def clip_polygon(line, polygons, p, window, options, decisions, scratch, out, v,
 
 
 @inlined
-def _cut_rings(line, ring_offsets, r_begin, r_end, cut, options, decisions, scratch, st):
+def _cut_rings(line, ring_offsets, r_begin, r_end, cut, options, decisions, scratch):
     """Cut rings r_begin..r_end-1 into ``scratch.chains``; return ``(n_logical, ok)``.
 
     Fills ``scratch.rings`` (each ring's state and orientation) and
@@ -791,14 +791,14 @@ def _cut_rings(line, ring_offsets, r_begin, r_end, cut, options, decisions, scra
         c0 = c_ch
         if decisions.decided:
             v_ch, c_ch, at_first, at_last = assemble_chains(
-                line, first, last, cut, decisions, decisions.chunk_start[r], chains, v_ch,
-                c_ch)
+                line, first, last, cut, True, decisions, decisions.chunk_start[r], chains, True,
+                v_ch, c_ch)
         else:
             # Rings are short: their runs are coded from the vertices, and their chains
             # written as decided (no chunk codes, no plan).
             v_ch, c_ch, at_first, at_last, _ = clip_chains(
-                line, first, last, cut, options, chains, v_ch, c_ch, st, scratch.stacks,
-                scratch.no_chunks, 0)
+                line, first, last, cut, True, options, chains, True, v_ch, c_ch, scratch.block,
+                scratch.no_plan)
         starts[c_ch] = v_ch
         n_chains = c_ch - c0
         if last > first and area == 0.0:
@@ -1276,7 +1276,7 @@ def _polygon_block(blk, line, polygons, options, block_size, plan, counts, out, 
     if max_out == 1:
         return  # no ambiguous polygon in this block
     has_z = line.has_z
-    scratch = _polygon_scratch(max_v, max_c, max_r, max_out, has_z)
+    scratch = _polygon_scratch(st, max_v, max_c, max_r, max_out, has_z)
     dst = out
     if not write:
         dst = PolygonsOut(write, np.empty((max_out, 2), dtype=np.float64),
@@ -1284,12 +1284,12 @@ def _polygon_block(blk, line, polygons, options, block_size, plan, counts, out, 
                           np.empty(max_out // 4 + 2, dtype=np.int64),
                           np.empty(max_out // 4 + 2, dtype=np.int64))
     _clip_ambiguous(line, polygons, lo_p, hi_p, options, decisions, plan.polygon_class, counts,
-                    scratch, dst, st)
+                    scratch, dst)
 
 
 @borrowing
 def _clip_ambiguous(line, polygons, lo_p, hi_p, options, decisions, polygon_class, counts,
-                    scratch, out, st):
+                    scratch, out):
     """Clip (`clip_polygon`) the ambiguous polygons among lo_p..hi_p-1 into `out`.
 
     In the count pass (``out.write`` False, `out` one polygon's scratch) store their
@@ -1304,9 +1304,9 @@ def _clip_ambiguous(line, polygons, lo_p, hi_p, options, decisions, polygon_clas
         q0 = counts.poly_start[p] if write else 0
         window = window_of(polygons.windows, polygons.polygon_window, p)
         v, nr, npoly, ok = clip_polygon(line, polygons, p, window, options, decisions, scratch,
-                                        out, v0, r0, q0, st)
+                                        out, v0, r0, q0)
         if not ok:
-            st[C.INVALID_POLYGONS] += 1
+            scratch.block.st[C.INVALID_POLYGONS] += 1
         if not write:
             counts.n_vertices[p] = v - v0
             counts.n_rings[p] = nr - r0
@@ -1367,17 +1367,18 @@ def _plan_block(line, polygons, lo_p, hi_p, classify, plan, counts):
 
 
 @scalar
-def _polygon_scratch(max_v, max_c, max_r, max_out, has_z):
-    """Return the scratch to clip polygons of up to these sizes (see `_plan_block`)."""
-    nothing_i = np.empty(0, dtype=np.int64)
+def _polygon_scratch(st, max_v, max_c, max_r, max_out, has_z):
+    """Return the scratch to clip polygons of up to these sizes (see `_plan_block`).
+
+    `st` is the block's counter row.
+    """
     no_codes = np.empty(0, dtype=np.uint8)
     ch_xy = np.empty((max_v, 2), dtype=np.float64)
-    write = True
     return PolygonScratch(
-        Stacks(np.empty((RUN_STACK_CAPACITY, 3), dtype=np.int64),
-               np.empty((STACK_CAPACITY, 6), dtype=np.float64),
-               np.empty((STACK_CAPACITY, 3), dtype=np.int64)),
-        ChainsOut(write, ch_xy, ch_xy.reshape(-1), np.empty(max_v if has_z else 0),
+        BlockState(st, np.empty((RUN_STACK_CAPACITY, 3), dtype=np.int64),
+                   np.empty((STACK_CAPACITY, 6), dtype=np.float64),
+                   np.empty((STACK_CAPACITY, 3), dtype=np.int64), no_codes),
+        ChainsOut(ch_xy, ch_xy.reshape(-1), np.empty(max_v if has_z else 0),
                   np.empty(max_c + 1, dtype=np.int64)),
         LogicalChains(np.empty(max_c, dtype=np.int64), np.empty(max_c, dtype=np.int64),
                       np.empty(max_c, dtype=np.int64), np.empty(max_c, dtype=np.int64),
@@ -1397,7 +1398,7 @@ def _polygon_scratch(max_v, max_c, max_r, max_out, has_z):
                     np.empty(max_out // 4 + 2, dtype=np.int64),
                     np.empty(max_out // 4 + 2, dtype=np.bool_)),
         Corners(np.zeros(4), np.zeros(4, dtype=np.bool_)),
-        Chunks(nothing_i, no_codes, no_codes, np.empty((0, 2), dtype=np.int64), nothing_i))
+        PartPlan(no_codes, no_codes, np.empty((0, 2), dtype=np.int64)))
 
 
 @borrowing

@@ -62,7 +62,8 @@ __all__ = [
     "Lines",
     "PartCounts",
     "Piece",
-    "Stacks",
+    "BlockState",
+    "PartPlan",
     "assemble_chains",
     "assemble_line_blocks",
     "bound_chains",
@@ -99,42 +100,49 @@ SERIAL_VERTICES = 32768
 
 
 class Cut(NamedTuple):
-    """Where a line is cut into chains: the window, and where chains break.
+    """Where a line is cut into chains: its window, and whether edge pieces are dropped.
 
     With `drop_edge_runs` a piece along a window edge is not visible (lines with
-    ``boundary="interior"``, and rings); with `break_at_boundary` a chain also breaks at
-    a vertex on the boundary (rings: a ring touching the edge from inside is cut there).
+    ``boundary="interior"``, and rings). Whether chains also break at a vertex on the
+    boundary (rings) is each function's `break_at_boundary` argument: a constant where
+    it is passed (``False`` for lines, ``True`` for rings), so that Numba compiles the
+    line version without the test.
     """
 
     window: Window
     drop_edge_runs: bool
-    break_at_boundary: bool
 
 
 class ChainsOut(NamedTuple):
     """Where chains go: vertices from ``xy[v]`` (and ``z[v]``), chain starts from ``starts[c]``.
 
-    Without `write` (the counting pass) nothing is written and the arrays may be empty;
-    only the positions advance. `flat` is ``xy.reshape(-1)`` (see `Vertices`).
+    `flat` is ``xy.reshape(-1)`` (see `Vertices`). In the counting pass nothing is
+    written, and the arrays may be empty. Whether a function writes is its own `write`
+    argument, not a field: passed as a constant (``True``, ``False``), it lets Numba
+    compile the counting and the writing versions each without the other's branches.
     """
 
-    write: bool
     xy: np.ndarray
     flat: np.ndarray
     z: np.ndarray
     starts: np.ndarray
 
 
-class Stacks(NamedTuple):
-    """Scratch of one block: the run stack (`RUN_STACK_CAPACITY`, 3) and the segment core's.
+class BlockState(NamedTuple):
+    """What one block of geometries counts into and works in.
 
-    `stack_f` (`segments.STACK_CAPACITY`, 6) and `stack_i` (STACK_CAPACITY, 3) are
-    `segments.rnsca_segment`'s; `run_stack` may be empty where no run is decided.
+    `st` is the block's counter row (`counters`); `run_stack` (`RUN_STACK_CAPACITY`, 3)
+    the runs pending, empty where no run is decided; `stack_f`
+    (`segments.STACK_CAPACITY`, 6) and `stack_i` (STACK_CAPACITY, 3) the scratch of
+    `segments.rnsca_segment`; `codes` (`CODE_SCRATCH_BYTES`) that of `code_chunks`, empty
+    where nothing is coded.
     """
 
+    st: np.ndarray
     run_stack: np.ndarray
     stack_f: np.ndarray
     stack_i: np.ndarray
+    codes: np.ndarray
 
 
 class Piece(NamedTuple):
@@ -149,7 +157,7 @@ class Piece(NamedTuple):
 
 
 class Chunks(NamedTuple):
-    """The chunk codes and plans of a line array (`clip_lines`); all empty for rings.
+    """The chunk codes and plans of a line array (`clip_lines`).
 
     Part p's chunks are ``chunk_start[p]`` on: the OR and AND of each one's vertex codes
     (`code_chunks`), and from the same row on, the part's plan, the runs the count pass
@@ -161,6 +169,17 @@ class Chunks(NamedTuple):
     chunk_and: np.ndarray
     plan: np.ndarray
     plan_end: np.ndarray
+
+
+class PartPlan(NamedTuple):
+    """One part's chunk codes and plan rows (views of `Chunks` from its first chunk).
+
+    Empty (rings): the runs are coded from the vertices, and no plan is recorded.
+    """
+
+    chunk_or: np.ndarray
+    chunk_and: np.ndarray
+    plan: np.ndarray
 
 
 class Decisions(NamedTuple):
@@ -253,8 +272,8 @@ def bound_chains(xy, first, last, window):
 
 
 @inlined
-def _append(line, out, v, x, y, z):
-    if out.write:
+def _append(line, out, write, v, x, y, z):
+    if write:
         out.xy[v, 0] = x
         out.xy[v, 1] = y
         if line.has_z:
@@ -263,34 +282,34 @@ def _append(line, out, v, x, y, z):
 
 
 @inlined
-def _emit_piece(line, out, i, piece, v, c, last_v, breaks):
+def _emit_piece(line, out, write, i, piece, v, c, last_v, breaks):
     """Add `piece` of segment i to the chains; return (v, c, last_v).
 
     The piece continues the chain if the chain ends at vertex i and the piece starts
-    there, unless `breaks` (rings break at a vertex on the boundary). Without
-    ``out.write`` only the positions advance (the counting pass).
+    there, unless `breaks` (rings break at a vertex on the boundary). Without `write`
+    only the positions advance (the counting pass).
     """
     xy = line.xy
     z = line.z
     t0, t1, ax, ay, bx, by = piece
     if breaks or not (last_v == i and ax == xy[i, 0] and ay == xy[i, 1]):
-        if out.write:
+        if write:
             out.starts[c] = v
         c += 1
         za = 0.0
         if line.has_z:
             za = z[i] if t0 == 0.0 else z[i] + t0 * (z[i + 1] - z[i])
-        v = _append(line, out, v, ax, ay, za)
+        v = _append(line, out, write, v, ax, ay, za)
     end_is_vertex = bx == xy[i + 1, 0] and by == xy[i + 1, 1]
     zb = 0.0
     if line.has_z:
         zb = z[i + 1] if end_is_vertex else z[i] + t1 * (z[i + 1] - z[i])
-    v = _append(line, out, v, bx, by, zb)
+    v = _append(line, out, write, v, bx, by, zb)
     return v, c, (i + 1) if end_is_vertex else -1
 
 
 @inlined
-def _emit_run(line, out, a, b, v, c, last_v):
+def _emit_run(line, out, write, a, b, v, c, last_v):
     """Add the whole run of vertices a..b (inside the window); return (v, c, last_v).
 
     The copy runs over views of the coordinates as one row (``flat``) from index 0,
@@ -298,12 +317,12 @@ def _emit_run(line, out, a, b, v, c, last_v):
     """
     start = a + 1
     if last_v != a:
-        if out.write:
+        if write:
             out.starts[c] = v
         c += 1
         start = a
     count = b + 1 - start
-    if out.write:
+    if write:
         src = line.flat[2 * start:2 * (b + 1)]
         dst = out.flat[2 * v:2 * (v + count)]
         for k in range(src.shape[0]):
@@ -316,26 +335,30 @@ def _emit_run(line, out, a, b, v, c, last_v):
     return v + count, c, b
 
 
-@borrowing
-def _clip_segments(line, a, b, cut, options, out, v, c, last_v, st, stacks):
+@inlined
+def _clip_segments(line, a, b, cut, break_at_boundary, options, out, write, v, c, last_v,
+                   block):
     """Clip segments a..b-1 one by one into the chains; return (v, c, last_v).
 
-    With ``cut.break_at_boundary`` (rings) a chain also breaks at a vertex on the
-    boundary, so that a ring touching the window's edge from inside is cut there too.
+    With `break_at_boundary` (rings) a chain also breaks at a vertex on the boundary, so
+    that a ring touching the window's edge from inside is cut there too. Inlined: as a
+    call, passing its records' hundred-odd words cost more per run than the segments
+    (measured: the curve workload's write pass 20% slower).
     """
     xy = line.xy
     window = cut.window
     xmin, ymin, xmax, ymax = window
     method, n_fixed, max_depth, tol, auto_piece, exact = options
-    stack_f = stacks.stack_f
-    stack_i = stacks.stack_i
+    st = block.st
+    stack_f = block.stack_f
+    stack_i = block.stack_i
     if method != RNSCA:
         for i in range(a, b):
             keep, t0, t1, ax, ay, bx, by = clip_one(
                 method, xy[i, 0], xy[i, 1], xy[i + 1, 0], xy[i + 1, 1], xmin, ymin, xmax,
                 ymax, max_depth, tol, exact, st)
             v, c, last_v = _emit_visible(line, i, keep, Piece(t0, t1, ax, ay, bx, by), cut,
-                                         out, v, c, last_v)
+                                         break_at_boundary, out, write, v, c, last_v)
         return v, c, last_v
     # RNSCA's level 0 for every segment, decided here from its end points' outcodes
     # (each computed once) with the counts kept in registers: most segments of a leaf
@@ -353,9 +376,9 @@ def _clip_segments(line, a, b, cut, options, out, v, c, last_v, st, stacks):
             accepted += 1
             visible = not (cut.drop_edge_runs and on_one_edge(xy[i, 0], xy[i, 1], xy[i + 1, 0],
                                                               xy[i + 1, 1], window))
-            breaks = cut.break_at_boundary and _edge_bits(xy[i, 0], xy[i, 1], window) != 0
+            breaks = break_at_boundary and _edge_bits(xy[i, 0], xy[i, 1], window) != 0
             if stretch >= 0 and (breaks or not visible):
-                v, c, last_v = _emit_run(line, out, stretch, i, v, c, last_v)
+                v, c, last_v = _emit_run(line, out, write, stretch, i, v, c, last_v)
                 stretch = -1
             if visible and stretch < 0:
                 stretch = i
@@ -363,7 +386,7 @@ def _clip_segments(line, a, b, cut, options, out, v, c, last_v, st, stacks):
                     last_v = -1  # the stretch starts a chain of its own
             continue
         if stretch >= 0:
-            v, c, last_v = _emit_run(line, out, stretch, i, v, c, last_v)
+            v, c, last_v = _emit_run(line, out, write, stretch, i, v, c, last_v)
             stretch = -1
         if c0 & c1:
             rejected += 1
@@ -371,10 +394,10 @@ def _clip_segments(line, a, b, cut, options, out, v, c, last_v, st, stacks):
         keep, t0, t1, ax, ay, bx, by = rnsca_segment(
             xy[i, 0], xy[i, 1], xy[i + 1, 0], xy[i + 1, 1], xmin, ymin, xmax, ymax, n_fixed,
             max_depth, tol, auto_piece, exact, st, stack_f, stack_i)
-        v, c, last_v = _emit_visible(line, i, keep, Piece(t0, t1, ax, ay, bx, by), cut, out,
-                                     v, c, last_v)
+        v, c, last_v = _emit_visible(line, i, keep, Piece(t0, t1, ax, ay, bx, by), cut,
+                                     break_at_boundary, out, write, v, c, last_v)
     if stretch >= 0:
-        v, c, last_v = _emit_run(line, out, stretch, b, v, c, last_v)
+        v, c, last_v = _emit_run(line, out, write, stretch, b, v, c, last_v)
     st[C.EVALUATED] += accepted + rejected
     st[C.LEVELS] += accepted + rejected
     st[C.ACCEPTED] += accepted
@@ -383,13 +406,13 @@ def _clip_segments(line, a, b, cut, options, out, v, c, last_v, st, stacks):
 
 
 @inlined
-def _emit_visible(line, i, keep, piece, cut, out, v, c, last_v):
+def _emit_visible(line, i, keep, piece, cut, break_at_boundary, out, write, v, c, last_v):
     """Add the piece of segment i the segment core kept, unless it is not visible."""
     if keep and not (cut.drop_edge_runs and on_one_edge(piece.ax, piece.ay, piece.bx,
                                                         piece.by, cut.window)):
-        breaks = cut.break_at_boundary and _edge_bits(line.xy[i, 0], line.xy[i, 1],
-                                                      cut.window) != 0
-        return _emit_piece(line, out, i, piece, v, c, last_v, breaks)
+        breaks = break_at_boundary and _edge_bits(line.xy[i, 0], line.xy[i, 1],
+                                                  cut.window) != 0
+        return _emit_piece(line, out, write, i, piece, v, c, last_v, breaks)
     return v, c, last_v
 
 
@@ -530,7 +553,8 @@ def _vertex_run_codes(xy, a, b, window, strict):
 
 
 @borrowing
-def clip_chains(line, first, last, cut, options, out, v, c, st, stacks, chunks, c0):
+def clip_chains(line, first, last, cut, break_at_boundary, options, out, write, v, c, block,
+                part):
     """Clip the line through vertices ``line.xy[first..last]`` into chains.
 
     Writes the chains' vertices from ``out.xy[v]`` (and ``out.z``) on, and the start of
@@ -540,38 +564,39 @@ def clip_chains(line, first, last, cut, options, out, v, c, st, stacks, chunks, 
     last ends at vertex `last` (a ring's chains across its closing vertex join there),
     and the end of the plan (below).
 
+    With `break_at_boundary` (rings) a chain also breaks at a vertex on the boundary.
     Runs are whole chunks of `RUN_LEAF_SEGMENTS` segments, classified by the OR and AND
-    of their vertex codes: from the chunk codes at ``chunks.chunk_or[c0:]``,
-    ``chunks.chunk_and[c0:]`` (see `code_chunks`, which must have been given
+    of their vertex codes: from the part's chunk codes (``part.chunk_or``,
+    ``part.chunk_and``, see `code_chunks`, which must have been given
     ``strict=cut.drop_edge_runs``) or, if those are empty, from the vertices. Runs are
     pruned only for ``options.method == RNSCA``; the baselines clip every segment.
-    Without ``out.write`` nothing is written and only the counts come back (the exact
+    Without `write` nothing is written and only the counts come back (the exact
     counting pass).
 
-    If ``chunks.plan`` (int64 (k, 2)) is not empty, the decided runs that leave
-    something are also recorded from ``plan[c0]`` on, in input order, for `emit_plan`
-    to replay without deciding again: ``[first chunk, end chunk]`` for a run accepted
-    whole (adjacent ones merged), ``[first chunk, -end chunk]`` for a run clipped
-    segment by segment. A line of k chunks needs at most k rows.
+    If ``part.plan`` (int64 (k, 2)) is not empty, the decided runs that leave something
+    are also recorded in its rows, in input order, for `emit_plan` to replay without
+    deciding again: ``[first chunk, end chunk]`` for a run accepted whole (adjacent
+    ones merged), ``[first chunk, -end chunk]`` for a run clipped segment by segment. A
+    line of k chunks needs at most k rows; the last value returned is how many it took.
     """
     c_begin = c
     last_v = -1
-    plan0 = c0
     if last <= first:
-        return v, c, False, False, plan0
+        return v, c, False, False, 0
     xy = line.xy
     window = cut.window
     drop_edge_runs = cut.drop_edge_runs
-    chunk_or = chunks.chunk_or
-    chunk_and = chunks.chunk_and
-    plan = chunks.plan
-    run_stack = stacks.run_stack
+    chunk_or = part.chunk_or
+    chunk_and = part.chunk_and
+    plan = part.plan
+    st = block.st
+    run_stack = block.run_stack
     coded = chunk_or.shape[0] > 0
     recording = plan.shape[0] > 0
-    n_plan = plan0
+    n_plan = 0
     if options.method != RNSCA:
-        v, c, last_v = _clip_segments(line, first, last, cut, options, out, v, c, last_v, st,
-                                      stacks)
+        v, c, last_v = _clip_segments(line, first, last, cut, break_at_boundary, options, out,
+                                      write, v, c, last_v, block)
         if recording:
             plan[n_plan, 0] = 0
             plan[n_plan, 1] = -chunk_count(first, last)
@@ -601,16 +626,16 @@ def clip_chains(line, first, last, cut, options, out, v, c, st, stacks, chunks, 
             deepest = max(deepest, level)
             evaluated += 1
             if coded:
-                any_, every = _chunk_run_codes(chunk_or, chunk_and, c0 + ca, c0 + cb)
+                any_, every = _chunk_run_codes(chunk_or, chunk_and, ca, cb)
             else:
                 any_, every = _vertex_run_codes(xy, a, b, window, drop_edge_runs)
             if (any_ & OUTSIDE) == 0 and not (drop_edge_runs and (any_ & NOT_STRICTLY_INSIDE)):
                 accepted += 1
                 st[C.RUN_LEVELS + slot] += 1
                 st[C.SEGMENT_LEVELS + slot] += b - a
-                v, c, last_v = _emit_run(line, out, a, b, v, c, last_v)
+                v, c, last_v = _emit_run(line, out, write, a, b, v, c, last_v)
                 if recording:
-                    if n_plan > plan0 and plan[n_plan - 1, 1] == ca:
+                    if n_plan > 0 and plan[n_plan - 1, 1] == ca:
                         plan[n_plan - 1, 1] = cb  # continues the accepted run before it
                     else:
                         plan[n_plan, 0] = ca
@@ -624,8 +649,8 @@ def clip_chains(line, first, last, cut, options, out, v, c, st, stacks, chunks, 
                 segmented += 1
                 st[C.RUN_LEVELS + slot] += 1
                 st[C.SEGMENT_LEVELS + slot] += b - a
-                v, c, last_v = _clip_segments(line, a, b, cut, options, out, v, c, last_v, st,
-                                              stacks)
+                v, c, last_v = _clip_segments(line, a, b, cut, break_at_boundary, options, out,
+                                              write, v, c, last_v, block)
                 if recording:
                     plan[n_plan, 0] = ca
                     plan[n_plan, 1] = -cb
@@ -658,14 +683,14 @@ def clip_chains(line, first, last, cut, options, out, v, c, st, stacks, chunks, 
         st[C.RUNS_REJECTED] += rejected
         st[C.RUNS_SUBDIVIDED] += subdivided
         st[C.RUNS_SEGMENTED] += segmented
-    if c == c_begin or not out.write:
+    if c == c_begin or not write:
         return v, c, False, False, n_plan
-    starts_at_first = _starts_at(line, first, cut, out, c_begin)
+    starts_at_first = _starts_at(line, first, window, break_at_boundary, out, c_begin)
     return v, c, starts_at_first, last_v == last, n_plan
 
 
 @inlined
-def _starts_at(line, first, cut, out, c_begin):
+def _starts_at(line, first, window, break_at_boundary, out, c_begin):
     """Return whether chain `c_begin` (written) starts at vertex `first` and continues it.
 
     A ring breaks at its closing vertex on the boundary: its first chain then does not
@@ -675,108 +700,103 @@ def _starts_at(line, first, cut, out, c_begin):
     start = out.starts[c_begin]
     if not (out.xy[start, 0] == xy[first, 0] and out.xy[start, 1] == xy[first, 1]):
         return False
-    return not (cut.break_at_boundary and _edge_bits(xy[first, 0], xy[first, 1],
-                                                     cut.window) != 0)
+    return not (break_at_boundary and _edge_bits(xy[first, 0], xy[first, 1], window) != 0)
 
 
 @borrowing
-def emit_plan(line, first, last, cut, options, out, v, c, st, stacks, chunks, p):
-    """Write the chains of part p, ``line.xy[first..last]``, as `clip_chains` recorded them.
+def emit_plan(line, first, last, cut, options, out, v, c, block, plan):
+    """Write the chains of the line ``line.xy[first..last]`` as `clip_chains` recorded them.
 
-    Replays ``chunks.plan[chunks.chunk_start[p]:chunks.plan_end[p]]``: runs accepted
-    whole are copied, the others clipped segment by segment, exactly as `clip_chains`
-    did when it recorded them. Returns ``(v, c)``. The segment core counts into `st`
-    again (pass a scratch row).
+    Replays `plan` (the part's rows): runs accepted whole are copied, the others clipped
+    segment by segment, exactly as `clip_chains` did when it recorded them. Returns
+    ``(v, c)``. The segment core counts into ``block.st`` again (give it a scratch row).
     """
-    plan = chunks.plan
     last_v = -1
-    for k in range(chunks.chunk_start[p], chunks.plan_end[p]):
+    for k in range(plan.shape[0]):
         a = first + plan[k, 0] * RUN_LEAF_SEGMENTS
         if plan[k, 1] >= 0:
             b = min(first + plan[k, 1] * RUN_LEAF_SEGMENTS, last)
-            v, c, last_v = _emit_run(line, out, a, b, v, c, last_v)
+            v, c, last_v = _emit_run(line, out, True, a, b, v, c, last_v)
         else:
             b = min(first - plan[k, 1] * RUN_LEAF_SEGMENTS, last)
-            v, c, last_v = _clip_segments(line, a, b, cut, options, out, v, c, last_v, st,
-                                          stacks)
+            v, c, last_v = _clip_segments(line, a, b, cut, False, options, out, True, v, c,
+                                          last_v, block)
     return v, c
 
 
 @scalar
-def _line_block(blk, block_size, line, lines, options, drop_edge_runs, chunks, counts, out,
-                counters):
+def _line_block(blk, block_size, line, lines, options, drop_edge_runs, write, chunks, counts,
+                out, counters):
     """Count or write the parts of geometries ``blk * block_size`` on: the body of a pass.
 
-    The count pass (``out.write`` False) codes each part's chunks (`code_chunks`, which
-    also checks that the coordinates are finite: a part with a non-finite one gets
-    ``n_vertices = -1``), runs RNSCA over its runs (`clip_chains` without writing),
-    which counts the output exactly and the stats into the block's counter row, and
-    records the decided runs in the part's rows of ``chunks.plan`` (from
-    ``chunk_start[p]`` to ``plan_end[p]``). The write pass replays the plan
-    (`emit_plan`) from ``counts.vertex_start[p]`` and ``counts.chain_start[p]``: runs
-    are not decided twice, and only the segments of ambiguous chunks are clipped twice.
+    The count pass codes each part's chunks (`code_chunks`, which also checks that the
+    coordinates are finite: a part with a non-finite one gets ``n_vertices = -1``),
+    runs RNSCA over its runs (`clip_chains` without writing), which counts the output
+    exactly and the stats into the block's counter row, and records the decided runs in
+    the part's rows of ``chunks.plan`` (from ``chunk_start[p]`` to ``plan_end[p]``). The
+    write pass replays the plan (`emit_plan`) from ``counts.vertex_start[p]`` and
+    ``counts.chain_start[p]``: runs are not decided twice, and only the segments of
+    ambiguous chunks are clipped twice. Allocates the block's state; the parts are done
+    by `_line_parts`, which borrows it.
     """
-    write = out.write
     st = np.zeros(C.WIDTH, dtype=np.int64) if write else counters[blk]
     # The write pass replays plans: it needs neither the run stack nor the code scratch.
-    stacks = Stacks(np.empty((0 if write else RUN_STACK_CAPACITY, 3), dtype=np.int64),
-                    np.empty((STACK_CAPACITY, 6), dtype=np.float64),
-                    np.empty((STACK_CAPACITY, 3), dtype=np.int64))
-    codes = np.empty(0 if write else CODE_SCRATCH_BYTES, dtype=np.uint8)
+    block = BlockState(st, np.empty((0 if write else RUN_STACK_CAPACITY, 3), dtype=np.int64),
+                       np.empty((STACK_CAPACITY, 6), dtype=np.float64),
+                       np.empty((STACK_CAPACITY, 3), dtype=np.int64),
+                       np.empty(0 if write else CODE_SCRATCH_BYTES, dtype=np.uint8))
     n_geometries = lines.geometry_parts.shape[0] - 1
     _line_parts(blk * block_size, min(n_geometries, (blk + 1) * block_size), line, lines,
-                options, drop_edge_runs, chunks, counts, out, st, stacks, codes)
+                options, drop_edge_runs, write, chunks, counts, out, block)
 
 
 @borrowing
-def _line_parts(g_begin, g_end, line, lines, options, drop_edge_runs, chunks, counts, out, st,
-                stacks, codes):
-    """Count or write the parts of geometries g_begin..g_end-1 (see `_line_block`).
-
-    `st` is the counter row, `stacks` and `codes` the block's scratch (`code_chunks`).
-    """
+def _line_parts(g_begin, g_end, line, lines, options, drop_edge_runs, write, chunks, counts,
+                out, block):
+    """Count or write the parts of geometries g_begin..g_end-1 (see `_line_block`)."""
     part_offsets = lines.part_offsets
     geometry_parts = lines.geometry_parts
-    write = out.write
     for g in range(g_begin, g_end):
-        cut = Cut(window_of(lines.windows, lines.geometry_window, g), drop_edge_runs, False)
+        cut = Cut(window_of(lines.windows, lines.geometry_window, g), drop_edge_runs)
         for p in range(geometry_parts[g], geometry_parts[g + 1]):
             first = part_offsets[p]
             last = part_offsets[p + 1] - 1
+            c0 = chunks.chunk_start[p]
             if write:
                 emit_plan(line, first, last, cut, options, out, counts.vertex_start[p],
-                          counts.chain_start[p], st, stacks, chunks, p)
+                          counts.chain_start[p], block, chunks.plan[c0:chunks.plan_end[p]])
                 continue
-            c0 = chunks.chunk_start[p]
             line_or, _ = code_chunks(line.flat, first, last, cut.window, drop_edge_runs,
-                                     codes, chunks.chunk_or, chunks.chunk_and, c0)
+                                     block.codes, chunks.chunk_or, chunks.chunk_and, c0)
             if line_or & NOT_FINITE:
                 counts.n_vertices[p] = -1
                 counts.n_chains[p] = 0
                 chunks.plan_end[p] = c0
                 continue
-            v, c, _, _, chunks.plan_end[p] = clip_chains(line, first, last, cut, options, out,
-                                                         0, 0, st, stacks, chunks, c0)
+            part = PartPlan(chunks.chunk_or[c0:], chunks.chunk_and[c0:], chunks.plan[c0:])
+            v, c, _, _, rows = clip_chains(line, first, last, cut, False, options, out, False, 0,
+                                           0, block, part)
+            chunks.plan_end[p] = c0 + rows
             counts.n_vertices[p] = v
             counts.n_chains[p] = c
 
 
 @parallel
-def _line_pass(block_size, line, lines, options, drop_edge_runs, chunks, counts, out,
+def _line_pass(block_size, line, lines, options, drop_edge_runs, write, chunks, counts, out,
                counters):
     """Run `_line_block` over every block, one prange iteration each."""
     for blk in prange(counters.shape[0]):
-        _line_block(blk, block_size, line, lines, options, drop_edge_runs, chunks, counts,
-                    out, counters)
+        _line_block(blk, block_size, line, lines, options, drop_edge_runs, write, chunks,
+                    counts, out, counters)
 
 
 @scalar
-def _line_pass_serial(block_size, line, lines, options, drop_edge_runs, chunks, counts, out,
-                      counters):
+def _line_pass_serial(block_size, line, lines, options, drop_edge_runs, write, chunks, counts,
+                      out, counters):
     """Do what `_line_pass` does on the calling thread (small inputs)."""
     for blk in range(counters.shape[0]):
-        _line_block(blk, block_size, line, lines, options, drop_edge_runs, chunks, counts,
-                    out, counters)
+        _line_block(blk, block_size, line, lines, options, drop_edge_runs, write, chunks,
+                    counts, out, counters)
 
 
 @scalar
@@ -849,13 +869,13 @@ def clip_lines(line, lines, options, drop_edge_runs):
     nothing_z = np.empty(0, dtype=np.float64)
     counts = PartCounts(np.empty(n_parts, dtype=np.int64), np.empty(n_parts, dtype=np.int64),
                         nothing_i, nothing_i)
-    nowhere = ChainsOut(False, nothing_xy, nothing_xy.reshape(-1), nothing_z, nothing_i)
+    nowhere = ChainsOut(nothing_xy, nothing_xy.reshape(-1), nothing_z, nothing_i)
     if serial:
-        _line_pass_serial(block_size, line, lines, options, drop_edge_runs, chunks, counts,
-                          nowhere, counters)
+        _line_pass_serial(block_size, line, lines, options, drop_edge_runs, False, chunks,
+                          counts, nowhere, counters)
     else:
-        _line_pass(block_size, line, lines, options, drop_edge_runs, chunks, counts, nowhere,
-                   counters)
+        _line_pass(block_size, line, lines, options, drop_edge_runs, False, chunks, counts,
+                   nowhere, counters)
     n_vertices = counts.n_vertices
     for p in range(n_parts):
         if n_vertices[p] < 0:
@@ -869,12 +889,12 @@ def clip_lines(line, lines, options, drop_edge_runs):
     chain_offsets = np.empty(chain_start[n_parts] + 1, dtype=np.int64)
     chain_offsets[chain_start[n_parts]] = m
     counts = PartCounts(counts.n_vertices, counts.n_chains, vertex_start, chain_start)
-    out = ChainsOut(True, out_xy, out_xy.reshape(-1), out_z, chain_offsets)
+    out = ChainsOut(out_xy, out_xy.reshape(-1), out_z, chain_offsets)
     if serial:
-        _line_pass_serial(block_size, line, lines, options, drop_edge_runs, chunks, counts, out,
-                          counters)
+        _line_pass_serial(block_size, line, lines, options, drop_edge_runs, True, chunks,
+                          counts, out, counters)
     else:
-        _line_pass(block_size, line, lines, options, drop_edge_runs, chunks, counts, out,
+        _line_pass(block_size, line, lines, options, drop_edge_runs, True, chunks, counts, out,
                    counters)
     geometry_chains = np.empty(n_geometries + 1, dtype=np.int64)
     geometry_chains[0] = 0
@@ -891,7 +911,8 @@ CHUNK_SEGMENTED = 2
 
 
 @borrowing
-def assemble_chains(line, first, last, cut, decisions, chunk0, out, v, c):
+def assemble_chains(line, first, last, cut, break_at_boundary, decisions, chunk0, out, write,
+                    v, c):
     """Emit the chains of the line ``line.xy[first..last]`` from decisions made elsewhere.
 
     ``decisions.decision[chunk0 + k]`` says what became of the line's chunk k
@@ -912,7 +933,7 @@ def assemble_chains(line, first, last, cut, decisions, chunk0, out, v, c):
         b = min(a + RUN_LEAF_SEGMENTS, last)
         d = decision[chunk0 + k]
         if d == CHUNK_ACCEPTED:
-            v, c, last_v = _emit_run(line, out, a, b, v, c, last_v)
+            v, c, last_v = _emit_run(line, out, write, a, b, v, c, last_v)
         elif d == CHUNK_SEGMENTED:
             row = decisions.piece_start[chunk0 + k]
             for i in range(a, b):
@@ -921,19 +942,21 @@ def assemble_chains(line, first, last, cut, decisions, chunk0, out, v, c):
                                   pieces[row, 3], pieces[row, 4], pieces[row, 5])
                     if not (cut.drop_edge_runs and on_one_edge(piece.ax, piece.ay, piece.bx,
                                                                piece.by, cut.window)):
-                        breaks = cut.break_at_boundary and _edge_bits(
+                        breaks = break_at_boundary and _edge_bits(
                             xy[i, 0], xy[i, 1], cut.window) != 0
-                        v, c, last_v = _emit_piece(line, out, i, piece, v, c, last_v, breaks)
+                        v, c, last_v = _emit_piece(line, out, write, i, piece, v, c, last_v,
+                                                   breaks)
                 row += 1
-    if c == c_begin or not out.write:
+    if c == c_begin or not write:
         return v, c, False, False
-    return v, c, _starts_at(line, first, cut, out, c_begin), last_v == last
+    return v, c, _starts_at(line, first, cut.window, break_at_boundary, out, c_begin), \
+        last_v == last
 
 
 @parallel
 def assemble_line_blocks(line, part_offsets, windows, part_window, drop_edge_runs, block_size,
-                         decisions, counts, out):
-    """Count (``out.write`` False) or write the chains of every part from device decisions.
+                         write, decisions, counts, out):
+    """Count (``write=False``) or write the chains of every part from device decisions.
 
     The host half of the OpenCL line clip (`assemble_chains` per part, against
     ``window_of(windows, part_window, p)``); the counts and the layout are those of
@@ -943,20 +966,20 @@ def assemble_line_blocks(line, part_offsets, windows, part_window, drop_edge_run
     n_blocks = -(-n_parts // block_size)
     for blk in prange(n_blocks):
         _assemble_block(blk, line, part_offsets, windows, part_window, drop_edge_runs,
-                        block_size, decisions, counts, out)
+                        block_size, write, decisions, counts, out)
 
 
 @borrowing
 def _assemble_block(blk, line, part_offsets, windows, part_window, drop_edge_runs, block_size,
-                    decisions, counts, out):
+                    write, decisions, counts, out):
     """Count or write the chains of parts ``blk * block_size`` on (`assemble_line_blocks`)."""
     n_parts = part_offsets.shape[0] - 1
     for p in range(blk * block_size, min(n_parts, (blk + 1) * block_size)):
-        cut = Cut(window_of(windows, part_window, p), drop_edge_runs, False)
-        v0 = counts.vertex_start[p] if out.write else 0
-        c0 = counts.chain_start[p] if out.write else 0
-        v, c, _, _ = assemble_chains(line, part_offsets[p], part_offsets[p + 1] - 1, cut,
-                                     decisions, decisions.chunk_start[p], out, v0, c0)
-        if not out.write:
+        cut = Cut(window_of(windows, part_window, p), drop_edge_runs)
+        v0 = counts.vertex_start[p] if write else 0
+        c0 = counts.chain_start[p] if write else 0
+        v, c, _, _ = assemble_chains(line, part_offsets[p], part_offsets[p + 1] - 1, cut, False,
+                                     decisions, decisions.chunk_start[p], out, write, v0, c0)
+        if not write:
             counts.n_vertices[p] = v
             counts.n_chains[p] = c

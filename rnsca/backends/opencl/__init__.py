@@ -728,9 +728,9 @@ def _assemble_lines(xy, z, part_offsets, part_window, windows, drop_edge_runs, c
     decisions = PL.Decisions(True, chunk_start, decision, piece_start, keep, pieces)
     nowhere = np.empty((0, 2))
     PL.assemble_line_blocks(line, part_offsets, windows, part_window, drop_edge_runs, block,
-                            decisions, PL.PartCounts(n_vertices, n_chains, nothing_i, nothing_i),
-                            PL.ChainsOut(False, nowhere, nowhere.reshape(-1), np.empty(0),
-                                         nothing_i))
+                            False, decisions,
+                            PL.PartCounts(n_vertices, n_chains, nothing_i, nothing_i),
+                            PL.ChainsOut(nowhere, nowhere.reshape(-1), np.empty(0), nothing_i))
     vertex_start = np.zeros(n_parts + 1, dtype=np.int64)
     np.cumsum(n_vertices, out=vertex_start[1:])
     chain_start = np.zeros(n_parts + 1, dtype=np.int64)
@@ -740,10 +740,9 @@ def _assemble_lines(xy, z, part_offsets, part_window, windows, drop_edge_runs, c
     chain_offsets = np.empty(int(chain_start[-1]) + 1, dtype=np.int64)
     chain_offsets[-1] = out_xy.shape[0]
     PL.assemble_line_blocks(line, part_offsets, windows, part_window, drop_edge_runs, block,
-                            decisions,
+                            True, decisions,
                             PL.PartCounts(n_vertices, n_chains, vertex_start, chain_start),
-                            PL.ChainsOut(True, out_xy, out_xy.reshape(-1), out_z,
-                                         chain_offsets))
+                            PL.ChainsOut(out_xy, out_xy.reshape(-1), out_z, chain_offsets))
     return out_xy, out_z, chain_offsets, n_chains
 
 

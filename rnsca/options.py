@@ -6,15 +6,13 @@ import math
 from dataclasses import dataclass
 from enum import Enum
 
+from rnsca.constants import MAX_DEPTH_LIMIT, N_MAX, N_MIN
 from rnsca.errors import InvalidOptionError
 from rnsca.window import Window
 
 __all__ = ["Method", "Mode", "Backend", "Boundary", "Precision", "SegmentOptions", "N_MIN",
            "N_MAX", "MAX_DEPTH_LIMIT"]
 
-N_MIN = 2
-N_MAX = 64
-MAX_DEPTH_LIMIT = 32
 #: In approx mode the default tolerance is this fraction of the window's longer side.
 APPROX_RELATIVE_TOLERANCE = 1e-9
 

@@ -21,6 +21,7 @@ import math
 
 import numpy as np
 
+from rnsca.constants import AUTO_N_MIN, N_MAX
 from rnsca.options import APPROX_RELATIVE_TOLERANCE, MAX_DEPTH_LIMIT, Method, Mode
 from rnsca.window import Window
 from service.errors import TooManyVerticesError, WorkOverBudgetError
@@ -30,8 +31,9 @@ __all__ = ["subdivision_cost", "segment_work", "check_vertices", "check_work",
 
 #: Ambiguous pieces per level of one straight segment, at most.
 AMBIGUOUS_PER_LEVEL = 4
-#: ``n="auto"``: N = clamp(ceil(piece / window size), 8, 64) (see README, "Choosing N").
-AUTO_N = (8, 64)
+#: ``n="auto"``: N = clamp(ceil(piece / window size), 8, 64) (see README, "Choosing N"),
+#: the bounds the kernels use (`rnsca.constants`).
+AUTO_N = (AUTO_N_MIN, N_MAX)
 
 
 def _subdivides(options, window: Window) -> bool:

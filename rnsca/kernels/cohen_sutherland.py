@@ -8,6 +8,7 @@ than from the already-moved ends, so errors do not accumulate and the parameter
 interval of the piece is known.
 """
 
+from rnsca.constants import CS_MAX_MOVES as _MAX_MOVES
 from rnsca.kernels import counters as C
 from rnsca.kernels.jit import scalar
 from rnsca.kernels.outcode import (
@@ -23,14 +24,6 @@ from rnsca.kernels.outcode import (
     is_piece,
     outcode,
 )
-
-# In exact arithmetic each end moves at most twice (to an edge, then across a corner),
-# so four moves decide every segment. Rounding near a corner can make an end moved onto
-# one edge test a hair outside the other edge, whose crossing lies at or before that end
-# (t no further on): that bit is rounding noise and is cleared without moving the end.
-# Every step either moves an end to a later edge crossing (at most 4 per end) or clears
-# one of the at most 2 bits an outcode has, so 32 steps always decide the segment.
-_MAX_MOVES = 32
 
 
 @scalar

@@ -15,19 +15,22 @@ outcodes share a bit lies wholly beyond that edge; anything else is ambiguous.
 
 import math
 
+# The bits, the edge ids (NO_EDGE: the end was not cut) and the wide-code layout are
+# defined in rnsca.constants, shared with clip.cl; importable from here as before.
+from rnsca.constants import (
+    BOTTOM,
+    EDGE_BOTTOM,
+    EDGE_LEFT,
+    EDGE_RIGHT,
+    LEFT,
+    NO_EDGE,
+    RIGHT,
+    SURE_SHIFT,
+    TOP,
+    UNSURE_BITS,
+)
+from rnsca.constants import EDGE_TOP as EDGE_TOP  # re-exported (not used here)
 from rnsca.kernels.jit import scalar
-
-LEFT = 1
-RIGHT = 2
-BOTTOM = 4
-TOP = 8
-
-# Edge identifiers for the end of a clipped piece; NO_EDGE: the end was not cut.
-NO_EDGE = -1
-EDGE_LEFT = 0
-EDGE_RIGHT = 1
-EDGE_BOTTOM = 2
-EDGE_TOP = 3
 
 
 @scalar
@@ -46,8 +49,6 @@ def outcode(x, y, xmin, ymin, xmax, ymax):
 # inside (wide codes OR to 0), rejected only if both are surely beyond one edge (AND of
 # the high bits), and otherwise stays ambiguous, so it is refined, clipped exactly, or
 # (approx mode) dropped. An exact point (an input end point) has ``wide(c)``.
-SURE_SHIFT = 4
-UNSURE_BITS = 15
 
 
 @scalar

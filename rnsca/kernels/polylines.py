@@ -32,6 +32,15 @@ Stacks are explicit (no recursion), so the logic ports to OpenCL.
 import numpy as np
 from numba import prange
 
+# The chunk length, the run stack's size and the device's chunk decisions are defined in
+# rnsca.constants (shared with clip.cl); importable from here as before.
+from rnsca.constants import (
+    CHUNK_ACCEPTED,
+    CHUNK_REJECTED,
+    CHUNK_SEGMENTED,
+    RUN_LEAF_SEGMENTS,
+    RUN_STACK_CAPACITY,
+)
 from rnsca.kernels import counters as C
 from rnsca.kernels.jit import borrowing, inlined, parallel, scalar
 from rnsca.kernels.outcode import outcode
@@ -63,15 +72,9 @@ __all__ = [
     "vertex_code",
 ]
 
-# Runs of at most this many segments are clipped segment by segment: below it, a
-# bounding box costs about as much as the segments' own outcode tests.
-RUN_LEAF_SEGMENTS = 16
 # ``n="auto"`` for runs: a bounding box pass costs the same whatever N is, so a larger
 # N decides more of the run per pass; 16 keeps the stack and the per-child overhead small.
 RUN_N_AUTO = 16
-# Depth-first: at most N - 1 pending siblings per level, and a run of 2**63 vertices
-# split in two (the smallest N) is down to a leaf within 63 levels.
-RUN_STACK_CAPACITY = 64 * 64
 
 # Bits of a vertex code (`vertex_code`): the outcode, then two flags.
 OUTSIDE = 15                # the Cohen–Sutherland outcode (LEFT | RIGHT | BOTTOM | TOP)
@@ -770,13 +773,6 @@ def clip_lines(xy, z, part_offsets, geometry_parts, geometry_window, windows, me
     for g in range(n_geometries):
         geometry_chains[g + 1] = chain_start[geometry_parts[g + 1]]
     return out_xy, out_z, chain_offsets, geometry_chains, counters, -1
-
-
-# Decisions of chunks made on a device (the OpenCL backend's `classify_runs`): skipped,
-# copied whole, or clipped segment by segment.
-CHUNK_REJECTED = 0
-CHUNK_ACCEPTED = 1
-CHUNK_SEGMENTED = 2
 
 
 @scalar

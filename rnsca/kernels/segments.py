@@ -16,6 +16,18 @@ import math
 import numpy as np
 from numba import prange
 
+# Method ids, N's bounds and the stack size are defined in rnsca.constants (shared with
+# clip.cl and the service); importable from here as before.
+from rnsca.constants import (
+    AUTO_N_MIN,
+    COHEN_SUTHERLAND,
+    LIANG_BARSKY,
+    N_MAX,
+    NICHOLL_LEE_NICHOLL,
+    RNSCA,
+    STACK_CAPACITY,
+)
+from rnsca.constants import MIDPOINT as MIDPOINT  # re-exported (the driver's default case)
 from rnsca.kernels import counters as C
 from rnsca.kernels.cohen_sutherland import cohen_sutherland_segment
 from rnsca.kernels.jit import borrowing, parallel, scalar
@@ -45,29 +57,9 @@ from rnsca.kernels.outcode import (
     wide_outcode,
 )
 
-# Method ids as the driver knows them (rnsca.backends.numba_cpu maps the enum).
-RNSCA = 0
-COHEN_SUTHERLAND = 1
-LIANG_BARSKY = 2
-NICHOLL_LEE_NICHOLL = 3
-MIDPOINT = 4
-
-N_MAX = 64
-# A child is split further only if its two wide codes differ, that is, if it crosses one
-# of the eight lines that bound the edges' rounding bands (edge +- margin). A segment
-# crosses each line at most once and computed points are monotone in t, so at most
-# eight children of a piece are split, and the depth-first stack holds at most seven
-# pending siblings per level plus the current one.
-STACK_CAPACITY = 8 * (C.N_LEVELS + 1)
 # Stack rows: floats (ta, tb, xa, ya, xb, yb); ints (ca, cb, level).
 _TA, _TB, _XA, _YA, _XB, _YB = 0, 1, 2, 3, 4, 5
 _CA, _CB, _LEVEL = 0, 1, 2
-
-
-# `auto_n` never splits into fewer pieces than this: measured on uniform segments in
-# approx mode, N = 8 beats 2, 3, 4 and 16 (fewer levels and stack operations for a few
-# more outcode tests; see benchmarks/README.md).
-AUTO_N_MIN = 8
 
 
 @scalar

@@ -30,8 +30,11 @@ float64, so the output is the float64 output exactly (only the device's share di
 
 Devices and programs: the device is picked once per backend (`select_device`); each
 device gets one context and one profiling queue per process, and ``clip.cl`` is built
-once per (context, precision) and kept (`_Device.program`). pyopencl and the OpenCL
-driver also cache built binaries on disk, so a second process builds fast.
+once per (context, build options) and kept (`_Device.program`). The build options give
+it the precision, the work-group size and every constant it shares with the Numba
+kernels (`constant_options`: ``rnsca.constants``, which ``clip.cl`` never defines
+itself). pyopencl and the OpenCL driver also cache built binaries on disk (keyed on
+the source and the options), so a second process builds fast.
 
 Precision: float64 where the device has ``cl_khr_fp64``, else float32 (or float32 when
 asked for, on any device). The float32 path clips the input rounded to float32; see
@@ -54,6 +57,7 @@ import numpy as np
 import pyopencl as cl
 import pyopencl.array as cl_array
 
+from rnsca import constants
 from rnsca.arrays import exclusive_sum
 from rnsca.backends.base import METHOD_ID
 from rnsca.backends.numba_cpu import polygon_passes
@@ -75,8 +79,8 @@ _VENDORS = os.path.join(sys.prefix, "opencl-vendors")
 if os.path.isdir(_VENDORS):
     os.environ.setdefault("OCL_ICD_VENDORS", _VENDORS)
 
-__all__ = ["OpenCLBackend", "list_devices", "select_device", "FLOAT32_RELATIVE_BOUND",
-           "LOCAL_SIZE"]
+__all__ = ["OpenCLBackend", "list_devices", "select_device", "constant_options",
+           "FLOAT32_RELATIVE_BOUND", "LOCAL_SIZE"]
 
 #: Work-items per group: the stats are summed per group in local memory.
 LOCAL_SIZE = 64
@@ -86,10 +90,45 @@ LOCAL_SIZE = 64
 FLOAT32_RELATIVE_BOUND = 16 * 2.0 ** -24
 
 # Counters the segment kernel fills: the head of the row (rnsca.kernels.counters).
-_SEGMENT_COUNTERS = C.LEVELS + C.N_LEVELS
+_SEGMENT_COUNTERS = constants.SEGMENT_COUNTERS
 _F32 = np.finfo(np.float32)
 # `classify_curves`'s `flatten` as clip.cl numbers it (FLATTEN_*).
-_FLATTEN = {"none": 0, "accepted": 1, "all": 2}
+_FLATTEN = {"none": constants.FLATTEN_NONE, "accepted": constants.FLATTEN_ACCEPTED_CURVES,
+            "all": constants.FLATTEN_ALL}
+
+
+def constant_options() -> list[str]:
+    """Return the build options that give ``clip.cl`` the constants it shares with Numba.
+
+    One ``-DNAME=value`` per name in `rnsca.constants.__all__`, in that order; a
+    negative value is parenthesized, as a ``#define`` would write it.
+
+    Raises
+    ------
+    TypeError
+        If one of them is not an int (``clip.cl`` takes only ints from there: a float
+        literal would be a double, which a float32 device may not have).
+    """
+    options = []
+    for name in constants.__all__:
+        value = getattr(constants, name)
+        if type(value) is not int:
+            raise TypeError(f"rnsca.constants.{name} = {value!r} is not an int")
+        options.append(f"-D{name}={value}" if value >= 0 else f"-D{name}=({value})")
+    return options
+
+
+def _build_options(double: bool) -> tuple[str, ...]:
+    """Return the options ``clip.cl`` is built with for float64 (`double`) or float32."""
+    options = (f"-DREAL_IS_DOUBLE={int(double)}", f"-DLOCAL_SIZE={LOCAL_SIZE}",
+               *constant_options())
+    if not double:  # OpenCL's float32 division may be 2.5 ulp otherwise
+        options += ("-cl-fp32-correctly-rounded-divide-sqrt",)
+    return options
+
+
+# Per precision, made once: `_Device.program` looks them up on every call.
+_BUILD_OPTIONS = {double: _build_options(double) for double in (False, True)}
 
 
 def list_devices() -> list[dict]:
@@ -179,22 +218,23 @@ class _Device:
     # device: one call at a time sets and enqueues them.
     call_lock: threading.Lock = field(default_factory=threading.Lock)
 
-    def program(self, double: bool) -> cl.Program:
-        """Return ``clip.cl`` built for float64 (`double`) or float32, built once."""
+    def program(self, double: bool) -> _Kernels:
+        """Return the kernels of ``clip.cl`` built for float64 (`double`) or float32.
+
+        Built once per set of build options (`_build_options`), the key they are kept by.
+        """
+        options = _BUILD_OPTIONS[double]
         with self.lock:
-            if double not in self.programs:
+            if options not in self.programs:
                 source = resources.files(__package__).joinpath("clip.cl").read_text()
-                options = [f"-DREAL_IS_DOUBLE={int(double)}", f"-DLOCAL_SIZE={LOCAL_SIZE}"]
-                if not double:  # OpenCL's float32 division may be 2.5 ulp otherwise
-                    options.append("-cl-fp32-correctly-rounded-divide-sqrt")
-                program = _build_program(self.context, self.name, source, options)
+                program = _build_program(self.context, self.name, source, list(options))
                 # Kernel objects hold their arguments: one per program, used under `call_lock`.
-                self.programs[double] = _Kernels(
+                self.programs[options] = _Kernels(
                     program.clip_segments, program.write_pieces, program.chunk_boxes,
                     program.classify_runs, program.clip_chunk_segments,
                     program.classify_bezier, program.flatten_bezier,
                     program.classify_bezier_runs)
-            return self.programs[double]
+            return self.programs[options]
 
 
 def _build_program(context: cl.Context, name: str, source: str, options: list) -> cl.Program:

@@ -187,9 +187,11 @@ CS_MAX_MOVES = 32
 # the Numba kernel, which had 4096 entries (a bound for N = 2 taken with N = 64's
 # siblings), never used more than 694 of them either.
 RUN_STACK_CAPACITY = 64 * 34
-# The depth-first stack of a Bézier segment's pieces (`bezier.clip_path_blocks`): at
-# most N - 1 pending siblings per level, for levels 0..MAX_DEPTH_LIMIT, plus the current
-# one: 63 * 33 + 1 = 2080 entries for N <= 64; 64 * 34 holds them.
+# The depth-first stack of a Bézier segment's pieces (`bezier.clip_path_blocks`): pieces
+# are split at levels 0..MAX_DEPTH_LIMIT - 1, each split leaving at most N - 1 siblings
+# pending, and the deepest split needs N entries: 63 * 31 + 64 = 2017 for N <= 64.
+# A piece that would overflow it is a leaf instead; 64 * 34 is the size it was measured
+# with.
 CURVE_STACK_CAPACITY = N_MAX * (N_LEVELS + 1)
 
 # --- Runs of line segments (rnsca/kernels/polylines.py) ---------------------------------

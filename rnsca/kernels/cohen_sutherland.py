@@ -8,6 +8,7 @@ than from the already-moved ends, so errors do not accumulate and the parameter
 interval of the piece is known.
 """
 
+# The loop's bound: rnsca.constants says why 32 steps always decide a segment.
 from rnsca.constants import CS_MAX_MOVES as _MAX_MOVES
 from rnsca.kernels import counters as C
 from rnsca.kernels.jit import scalar

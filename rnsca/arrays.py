@@ -21,7 +21,8 @@ import shapely
 from rnsca.errors import InvalidGeometryError, UnsupportedGeometryError
 from rnsca.kernels.validate import all_finite, first_open_ring
 
-__all__ = ["GeometryKind", "Ragged", "OUTPUT_KIND", "exclusive_sum", "geometry_error"]
+__all__ = ["GeometryKind", "Ragged", "OUTPUT_KIND", "exclusive_sum", "geometry_error",
+           "group_offsets"]
 
 
 class GeometryKind(str, Enum):
@@ -213,6 +214,30 @@ class Ragged:
         """Return whether coordinates carry Z."""
         return self.coords.shape[1] == 3
 
+    def split_z(self) -> tuple[np.ndarray, np.ndarray]:
+        """Return ``(xy (n, 2), z (n,) or (0,))``, C-contiguous, as the kernels take them."""
+        if self.has_z:
+            return (np.ascontiguousarray(self.coords[:, :2]),
+                    np.ascontiguousarray(self.coords[:, 2]))
+        return self.coords, np.empty(0)
+
+    def item_offsets(self) -> tuple[np.ndarray, np.ndarray]:
+        """Return ``(vertex offsets of the items, item offsets of the geometries)``.
+
+        Items are the parts of lines (LINESTRING, MULTILINESTRING) or the polygons of
+        polygon kinds (POLYGON, MULTIPOLYGON: the second array then counts polygons, the
+        rings are ``offsets[0]``, the rings of each polygon ``offsets[1]``); a single
+        kind has one item per geometry.
+        """
+        if self.kind in (GeometryKind.LINESTRING, GeometryKind.POLYGON):
+            items = self.offsets[0] if self.kind is GeometryKind.LINESTRING else self.offsets[1]
+            return items, np.arange(self.count + 1, dtype=np.int64)
+        if self.kind is GeometryKind.MULTILINESTRING:
+            return self.offsets[0], self.offsets[1]
+        if self.kind is GeometryKind.MULTIPOLYGON:
+            return self.offsets[1], self.offsets[2]
+        raise UnsupportedGeometryError(f"{self.kind.value} has no parts or polygons")
+
     def to_shapely(self) -> np.ndarray:
         """Return the geometries as a Shapely array."""
         return shapely.from_ragged_array(self.kind.shapely_type, self.coords, self.offsets)
@@ -288,3 +313,14 @@ def exclusive_sum(counts) -> np.ndarray:
     out = np.zeros(counts.shape[0] + 1, dtype=np.int64)
     np.cumsum(counts, out=out[1:])
     return out
+
+
+def group_offsets(counts_per_item: np.ndarray, item_offsets: np.ndarray) -> np.ndarray:
+    """Return offsets of outputs per group, where group g owns items item_offsets[g]..[g+1].
+
+    Examples
+    --------
+    >>> group_offsets(np.array([1, 0, 2, 1]), np.array([0, 2, 4])).tolist()
+    [0, 1, 4]
+    """
+    return exclusive_sum(counts_per_item)[item_offsets]

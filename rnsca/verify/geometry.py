@@ -29,9 +29,9 @@ from rnsca.errors import (
 )
 from rnsca.io.svgpath import PathArrays, parse_paths
 from rnsca.options import Boundary, Method, Mode
-from rnsca.ragged import RaggedClipResult, window_table
+from rnsca.ragged import RaggedClipResult
 from rnsca.verify.paths import paths_to_shapely
-from rnsca.window import Window
+from rnsca.window import Window, WindowTable
 
 __all__ = ["Verification", "verify", "approx_leaf_bound"]
 
@@ -532,7 +532,7 @@ def _geojson_pair(original, clipped, window, boundary: Boundary):
 
 def _window_bounds(window, count: int) -> np.ndarray:
     """Return (count, 4) validated window bounds, one row per input."""
-    windows, index = window_table(window, count)
+    windows, index = WindowTable.of(window, count)
     return windows[index]
 
 

@@ -35,6 +35,7 @@ from rnsca.errors import (
 )
 from rnsca.io.geojson import dumps, loads
 from rnsca.options import Backend, Boundary, Mode
+from rnsca.runtime import configure_process
 
 __all__ = ["app", "PROGRESS_MIN_BYTES"]
 
@@ -69,6 +70,7 @@ def main(
         "else float32), float64 or float32")] = "auto",
 ) -> None:
     """Clip geometry against a rectangular window."""
+    configure_process()  # the CLI owns its process (see rnsca.runtime)
     try:
         configure_opencl(opencl_device, opencl_precision)
     except InvalidOptionError as exc:

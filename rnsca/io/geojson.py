@@ -35,9 +35,7 @@ Rules (where RFC 7946 leaves a choice, the choice is stated):
 
 from __future__ import annotations
 
-import gc
 import math
-from contextlib import contextmanager
 from dataclasses import dataclass
 from itertools import chain
 
@@ -295,9 +293,9 @@ def to_geojson(layout: GeoJSONLayout, points=None, lines=None, polygons=None, *,
     per geometry). Allocating them beside a large parsed document triggers full runs of
     Python's cyclic garbage collector, each traversing the whole heap: on a 68 MB
     FeatureCollection (1.6 M positions) writing took 1.9 s with the collector running and
-    0.37 s with it paused (``arrays=True``: 0.18 s). So the collector is paused while
-    writing and resumed after if it was running; reference counting still frees
-    everything, and nothing written here can form a cycle.
+    0.37 s with it paused (``arrays=True``: 0.18 s). The collector is process-wide, so
+    this function leaves it alone: an application that owns its process may pause it
+    around the call (`rnsca.runtime.collector_paused`), or ask for ``arrays=True``.
 
     Examples
     --------
@@ -307,19 +305,18 @@ def to_geojson(layout: GeoJSONLayout, points=None, lines=None, polygons=None, *,
     True
     """
     given = (points, lines, polygons)
-    with _collector_paused():
-        ragged, reuse = [], []
-        for kind in (_POINTS, _LINES, _POLYGONS):
-            own = getattr(layout, _KIND_NAME[kind])
-            coords, offsets = _checked_ragged(
-                kind, own if given[kind] is None else given[kind], own[2][-1].shape[0] - 1)
-            ragged.append((coords, offsets))
-            sources = None if arrays or layout.sources is None else layout.sources[kind]
-            reuse.append(None if sources is None else _unchanged(
-                own, None if given[kind] is None else (coords, offsets), sources))
-        writer = _Writer(ragged, reuse, layout.sources, 3 if layout.has_z else 2,
-                         bool(keep_empty), bool(arrays))
-        return writer.document(layout.document)
+    ragged, reuse = [], []
+    for kind in (_POINTS, _LINES, _POLYGONS):
+        own = getattr(layout, _KIND_NAME[kind])
+        coords, offsets = _checked_ragged(
+            kind, own if given[kind] is None else given[kind], own[2][-1].shape[0] - 1)
+        ragged.append((coords, offsets))
+        sources = None if arrays or layout.sources is None else layout.sources[kind]
+        reuse.append(None if sources is None else _unchanged(
+            own, None if given[kind] is None else (coords, offsets), sources))
+    writer = _Writer(ragged, reuse, layout.sources, 3 if layout.has_z else 2,
+                     bool(keep_empty), bool(arrays))
+    return writer.document(layout.document)
 
 
 def _unchanged(own: tuple, given: tuple | None, sources: list) -> np.ndarray | None:
@@ -337,18 +334,6 @@ def _unchanged(own: tuple, given: tuple | None, sources: list) -> np.ndarray | N
             return None
         reuse &= same_geometries(coords, offsets, given_coords, given_offsets)
     return reuse if reuse.any() else None
-
-
-@contextmanager
-def _collector_paused():
-    """Pause the cyclic garbage collector, resuming it after only if it was running."""
-    running = gc.isenabled()
-    gc.disable()
-    try:
-        yield
-    finally:
-        if running:
-            gc.enable()
 
 
 # --------------------------------------------------------------------------- reading

@@ -43,8 +43,6 @@ it, and turns a failure into `BackendUnavailableError`.
 
 from __future__ import annotations
 
-import os
-import sys
 import threading
 import warnings
 from dataclasses import dataclass, field
@@ -72,14 +70,6 @@ from rnsca.kernels.outcode import BOTTOM, LEFT, RIGHT, TOP
 from rnsca.options import Backend, Method, Mode, Precision, SegmentOptions
 from rnsca.stats import ClipStats, DeviceStats
 from rnsca.window import Window, WindowTable
-
-# OpenCL drivers that the development install registered in this environment (the
-# Makefile writes .venv/opencl-vendors: Intel's CPU runtime, for CPUs PoCL cannot build
-# for). The ICD loader reads OCL_ICD_VENDORS at its first platform query, not at import;
-# a value the user set is kept.
-_VENDORS = os.path.join(sys.prefix, "opencl-vendors")
-if os.path.isdir(_VENDORS):
-    os.environ.setdefault("OCL_ICD_VENDORS", _VENDORS)
 
 __all__ = ["OpenCLBackend", "list_devices", "select_device", "FLOAT32_RELATIVE_BOUND",
            "LOCAL_SIZE"]

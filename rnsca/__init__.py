@@ -5,7 +5,7 @@ The public API lives here; see README.md for a tour.
 
 from rnsca.arrays import GeometryKind, Ragged
 from rnsca.clip import SegmentClipResult, clip, clip_segments
-from rnsca.clip_geojson import clip_geojson
+from rnsca.clip_geojson import GeoJSONClipResult, clip_geojson
 from rnsca.clip_svg import Curves, Fill, PathClipResult, clip_paths, clip_svg, flatten_paths
 from rnsca.clip_svgdoc import FillMode, clip_svg_document
 from rnsca.errors import (
@@ -35,6 +35,7 @@ __all__ = [
     "Curves",
     "Fill",
     "FillMode",
+    "GeoJSONClipResult",
     "GeometryKind",
     "InvalidGeometryError",
     "InvalidOptionError",

@@ -255,12 +255,13 @@ def clip(
                                          precision=precision, keep_empty=keep_empty)
             else:
                 document = loads(_json_text(data, name))
-                clipped, clip_stats = rnsca.clip_geojson(
+                result = rnsca.clip_geojson(
                     document, bounds, keep_empty=keep_empty, arrays=True, **options)
+                clipped, clip_stats = result
                 report = {"stats": clip_stats.to_dict()}
                 if verify:
                     bar.phase(f"verifying {name}")
-                    verification = rnsca.verify(document, clipped, bounds, mode=mode,
+                    verification = rnsca.verify(document, result, bounds, mode=mode,
                                                 approx_bound=approx_bound, boundary=boundary)
                     report["verification"] = verification.to_dict()
                 text = dumps(clipped, indent=indent) + b"\n"

@@ -128,7 +128,7 @@ def clip_geojson(body: bytes, settings: Settings) -> Outcome:
     cap, by_budget = geometry_vertex_cap(options, window, settings.max_vertices,
                                          settings.work_budget)
     try:
-        clipped, stats = rnsca.clip_geojson(
+        result = rnsca.clip_geojson(
             request.geojson, window, keep_empty=options.keep_empty, max_vertices=cap,
             arrays=True, boundary=options.boundary, check_validity=options.check_validity,
             **arguments)
@@ -147,11 +147,14 @@ def clip_geojson(body: bytes, settings: Settings) -> Outcome:
         if path is not None:  # a JSON path inside the document: make it one in the body
             exc.path = "geojson" + (path if not path or path.startswith("[") else "." + path)
         raise
+    clipped, stats = result
     verification = None
     approx_unbounded = options.mode is Mode.APPROX and request.approx_bound is None
     if _verify_wanted(request.verify, stats.vertices_in, settings) and not (
             request.verify is None and approx_unbounded):
-        verification = rnsca.verify(request.geojson, clipped, window, mode=options.mode,
+        # The result holds the arrays clipped and their clips, one for one: nothing is
+        # read again.
+        verification = rnsca.verify(None, result, window, mode=options.mode,
                                     approx_bound=request.approx_bound,
                                     boundary=options.boundary)
     payload = {"geojson": clipped, "stats": stats.to_dict(),

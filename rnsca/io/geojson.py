@@ -61,6 +61,7 @@ __all__ = [
     "from_geojson",
     "loads",
     "to_geojson",
+    "write_geojson",
 ]
 
 #: The GeoJSON geometry type names, as RFC 7946 spells them (case-sensitive).
@@ -304,6 +305,34 @@ def to_geojson(layout: GeoJSONLayout, points=None, lines=None, polygons=None, *,
     >>> to_geojson(from_geojson(doc)) == doc
     True
     """
+    return write_geojson(layout, points, lines, polygons, keep_empty=keep_empty,
+                         arrays=arrays)[0]
+
+
+def write_geojson(layout: GeoJSONLayout, points=None, lines=None, polygons=None, *,
+                  keep_empty: bool = False, arrays: bool = False) -> tuple[dict, np.ndarray]:
+    """Return `to_geojson`'s document and, for each Feature written, its input Feature.
+
+    Parameters are those of `to_geojson`.
+
+    Returns
+    -------
+    document : dict
+    feature_source : ndarray of int64
+        For a FeatureCollection, the index in the input's ``features`` of each feature of
+        the output's (the ones left empty are dropped unless `keep_empty`); for a Feature
+        or a Geometry, ``[0]``.
+
+    Examples
+    --------
+    >>> doc = {"type": "FeatureCollection", "features": [
+    ...     {"type": "Feature", "properties": {}, "geometry": None},
+    ...     {"type": "Feature", "properties": {}, "geometry": {"type": "Point",
+    ...                                                        "coordinates": [1, 2]}}]}
+    >>> written, source = write_geojson(from_geojson(doc))
+    >>> len(written["features"]), source.tolist()
+    (1, [1])
+    """
     given = (points, lines, polygons)
     ragged, reuse = [], []
     for kind in (_POINTS, _LINES, _POLYGONS):
@@ -316,7 +345,8 @@ def to_geojson(layout: GeoJSONLayout, points=None, lines=None, polygons=None, *,
             own, None if given[kind] is None else (coords, offsets), sources))
     writer = _Writer(ragged, reuse, layout.sources, 3 if layout.has_z else 2,
                      bool(keep_empty), bool(arrays))
-    return writer.document(layout.document)
+    document = writer.document(layout.document)
+    return document, np.asarray(writer.feature_source, dtype=np.int64)
 
 
 def _unchanged(own: tuple, given: tuple | None, sources: list) -> np.ndarray | None:
@@ -810,6 +840,8 @@ class _Writer:
         self.next = [0, 0, 0]
         self.keep_empty = keep_empty
         self.dim = dim
+        # The input feature of each feature written (a single Feature or Geometry: [0]).
+        self.feature_source = [0]
 
     def document(self, doc: dict) -> dict:
         kind = doc["type"]
@@ -819,10 +851,12 @@ class _Writer:
             return self.geometry(doc, True, False)[0]
         want = "bbox" in doc
         features, box = [], None
-        for feature in doc["features"]:
+        self.feature_source = []
+        for index, feature in enumerate(doc["features"]):
             out, feature_box = self.feature(feature, self.keep_empty, want)
             if out is not None:
                 features.append(out)
+                self.feature_source.append(index)
                 box = _union(box, feature_box)
         return self.replace(doc, "features", features, box)
 

@@ -18,7 +18,7 @@ import numpy as np
 import shapely
 from shapely.geometry import shape
 
-from rnsca.arrays import Ragged
+from rnsca.arrays import PathArrays, Ragged
 from rnsca.clip import SegmentClipResult, as_segments
 from rnsca.clip_geojson import GeoJSONClipResult
 from rnsca.clip_svg import CURVE_RELATIVE_TOLERANCE, Fill, PathClipResult
@@ -28,7 +28,7 @@ from rnsca.errors import (
     ParseError,
     UnsupportedGeometryError,
 )
-from rnsca.io.svgpath import PathArrays, parse_paths
+from rnsca.io.svgpath import parse_paths
 from rnsca.options import Boundary, Method, Mode
 from rnsca.ragged import RaggedClipResult, to_shapely
 from rnsca.verify.paths import paths_to_shapely

@@ -20,6 +20,7 @@ import numpy as np
 import typer
 
 import rnsca
+from rnsca.backends.base import Operation
 from rnsca.backends.registry import (
     available_backends,
     configure_opencl,
@@ -34,6 +35,7 @@ from rnsca.errors import (
     RnscaError,
 )
 from rnsca.io.geojson import dumps, loads
+from rnsca.io.svgpath import warm_up_readers
 from rnsca.options import Backend, Boundary, Mode
 from rnsca.runtime import configure_process
 
@@ -81,12 +83,15 @@ def main(
 def backends() -> None:
     """List the backends that can run here, and the OpenCL devices found.
 
-    One backend per line on stdout; each OpenCL device indented below ``opencl``
-    (``*`` marks the one selected). Why OpenCL is unavailable goes to stderr.
+    One backend per line on stdout, with what it runs (its capabilities); each OpenCL
+    device indented below ``opencl`` (``*`` marks the one selected). Why OpenCL is
+    unavailable goes to stderr.
     """
     present = available_backends()
     for kind in present:
-        typer.echo(kind.value)
+        capabilities = get_backend(kind).capabilities
+        runs = ", ".join(o.value for o in Operation if o in capabilities.operations)
+        typer.echo(f"{kind.value}: {runs} ({capabilities.precision.value})")
     report = opencl_report()
     if Backend.OPENCL not in present:
         typer.echo(f"opencl is not available: {report['reason']}", err=True)
@@ -101,9 +106,8 @@ def backends() -> None:
 def warm_up() -> None:
     """Compile the kernels into the on-disk cache (later processes load them)."""
     for kind in available_backends():
-        engine = get_backend(kind)
-        if hasattr(engine, "warm_up"):
-            engine.warm_up()
+        get_backend(kind).warm_up()
+    warm_up_readers()
     typer.echo("kernels ready")
 
 

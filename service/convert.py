@@ -15,10 +15,9 @@ import numpy as np
 import orjson
 
 import rnsca
-from rnsca.backends.registry import available_backends, opencl_report
+from rnsca.backends.registry import available_backends, get_backend, opencl_report
 from rnsca.clip import as_segments
 from rnsca.errors import (
-    BackendUnavailableError,
     InvalidGeometryError,
     LimitExceededError,
     RnscaError,
@@ -76,6 +75,11 @@ def backend_report() -> list[dict]:
     report = []
     for name in BackendName:
         entry = {"name": name.value, "available": name.value in present}
+        if name.value in present:
+            # What it runs: the same capability query the library checks each call with.
+            capabilities = get_backend(name.value).capabilities.to_dict()
+            entry["devices"] = capabilities.pop("devices")
+            entry.update({k: v for k, v in capabilities.items() if k != "backend"})
         if name is BackendName.OPENCL:
             opencl = opencl_report()
             entry["devices"] = opencl["devices"]
@@ -83,26 +87,13 @@ def backend_report() -> list[dict]:
             entry["precision"] = opencl["precision"]
             if not opencl["available"]:
                 entry["reason"] = opencl["reason"]
-        elif name.value in present:
-            entry["devices"] = ["cpu"]
-        else:
-            entry["reason"] = _missing_reason(name)
         report.append(entry)
     return report
 
 
-def _missing_reason(name: BackendName) -> str:
-    if name is BackendName.OPENCL:
-        return opencl_report()["reason"]
-    return (f"backend {name.value!r} is not part of this build of rnsca "
-            f"(available: {', '.join(k.value for k in available_backends())})")
-
-
 def _library_options(options: ClipOptions, settings: Settings) -> dict:
-    """Return the keyword arguments of a library call; refuse a backend not present."""
+    """Return the keyword arguments of a library call (the library checks the backend)."""
     backend = options.backend.value if options.backend else settings.default_backend.value
-    if backend not in {kind.value for kind in available_backends()}:
-        raise BackendUnavailableError(_missing_reason(BackendName(backend)))
     return dict(method=options.method, n=options.n, max_depth=options.max_depth,
                 tolerance=options.tolerance, mode=options.mode, backend=backend)
 

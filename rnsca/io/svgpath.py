@@ -52,6 +52,7 @@ __all__ = [
     "PathArrays",
     "parse_path",
     "parse_paths",
+    "warm_up_readers",
     "write_path",
     "write_paths",
 ]
@@ -412,3 +413,16 @@ def _compact(text: str) -> str:
         positional = "." + "0" * (-q - n) + digits
     scientific = f"{digits}e{q}"
     return sign + (positional if len(positional) <= len(scientific) else scientific)
+
+
+def warm_up_readers() -> None:
+    """Compile (or load from Numba's cache) the path reader's and writer's kernels.
+
+    Reads a path of every command (arcs too) and writes it back, exactly and rounded,
+    with enough paths to take the parallel drivers as well.
+    """
+    sample = "M-1 .5C0 2 1-1 2 .5Q.5 3-1 .5S3 3 4 4T5 5A1 2 30 0 1 6 6H7V8L9 9Zm1 1h1v1z"
+    for count in (1, 256):
+        paths = parse_paths([sample] * count)
+        write_paths(paths, precision=None)
+        write_paths(paths, precision=6)

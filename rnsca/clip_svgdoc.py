@@ -13,7 +13,10 @@ import xml.etree.ElementTree as ET
 
 import numpy as np
 
-from rnsca.clip_svg import Fill, _resolve, clip_paths
+from rnsca.arrays import PathArrays
+from rnsca.backends.base import Operation
+from rnsca.backends.registry import get_backend
+from rnsca.clip_svg import clip_paths
 from rnsca.errors import InvalidOptionError
 from rnsca.io.svgdoc import (
     IDENTITY,
@@ -28,8 +31,8 @@ from rnsca.io.svgdoc import (
     set_path_data,
     write_document,
 )
-from rnsca.io.svgpath import PathArrays, write_paths
-from rnsca.options import _ChoiceEnum
+from rnsca.io.svgpath import write_paths
+from rnsca.options import Fill, PathOptions, _ChoiceEnum
 from rnsca.stats import ClipStats
 from rnsca.window import Window
 
@@ -178,7 +181,11 @@ def clip_svg_document(document, window, *, curves="preserve", fill_mode="auto",
     mode = FillMode(fill_mode)
     curve_options = dict(method="rnsca", n="auto", max_depth=None, mode="exact",
                          backend="numba") | options
-    _resolve(window, curves=curves, fill=None, tolerance=tolerance, **curve_options)
+    backend = curve_options.pop("backend")
+    checked = PathOptions.resolve(window, curves=curves, fill=None, tolerance=tolerance,
+                                  **curve_options)
+    get_backend(backend).capabilities.require(Operation.PATHS, checked.mode)
+    curve_options["backend"] = backend
     write_paths(PathArrays.empty(), precision=precision)  # checks `precision`
     doc = read_document(document)
     groups: dict[Fill | None, list[Shape]] = {}

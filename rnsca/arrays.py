@@ -12,10 +12,12 @@ the three shapes the kernels know: points, lines (parts) and polygons (rings).
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from enum import Enum
 
 import numpy as np
+import numpy.typing as npt
 import shapely
 
 from rnsca.errors import InvalidGeometryError, UnsupportedGeometryError
@@ -36,7 +38,7 @@ class GeometryKind(str, Enum):
     MULTIPOLYGON = "MultiPolygon"
 
     @classmethod
-    def of(cls, value) -> GeometryKind:
+    def of(cls, value: GeometryKind | shapely.GeometryType | str) -> GeometryKind:
         """Return the kind for a `GeometryKind`, a ``shapely.GeometryType`` or a name.
 
         Names are case-insensitive (``"linestring"``, ``"MULTIPOLYGON"``).
@@ -92,7 +94,7 @@ OUTPUT_KIND = {
 }
 
 
-def _offsets(array, name: str, length: int) -> np.ndarray:
+def _offsets(array: npt.ArrayLike, name: str, length: int) -> np.ndarray:
     """Return `array` as int64 offsets into a level of `length` items, or raise."""
     try:
         out = np.asarray(array)
@@ -143,7 +145,9 @@ class Ragged:
     offsets: tuple
 
     @classmethod
-    def of(cls, geometry_type, coords, offsets, *, check_finite: bool = True) -> Ragged:
+    def of(cls, geometry_type: GeometryKind | shapely.GeometryType | str,
+           coords: npt.ArrayLike, offsets: Sequence[npt.ArrayLike], *,
+           check_finite: bool = True) -> Ragged:
         """Return a validated `Ragged` from the triple ``shapely.to_ragged_array`` gives.
 
         With ``check_finite=False`` the caller takes over the finiteness check (it must
@@ -187,7 +191,7 @@ class Ragged:
         return ragged
 
     @classmethod
-    def from_shapely(cls, geometries, include_z: bool | None = None) -> Ragged:
+    def from_shapely(cls, geometries: npt.ArrayLike, include_z: bool | None = None) -> Ragged:
         """Return the ragged array of a Shapely geometry array (one geometry type).
 
         Raises
@@ -299,7 +303,7 @@ class Ragged:
         return g
 
 
-def exclusive_sum(counts) -> np.ndarray:
+def exclusive_sum(counts: npt.ArrayLike) -> np.ndarray:
     """Return int64 offsets ``[0, cumsum(counts)...]``.
 
     Where each counted run starts, and the total at the end.

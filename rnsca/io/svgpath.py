@@ -159,8 +159,9 @@ class PathArrays:
             raise error
 
     @classmethod
-    def from_kernel(cls, *, controls, degree, subpath_offsets, closed, start,
-                    path_offsets) -> PathArrays:
+    def from_kernel(cls, *, controls: np.ndarray, degree: np.ndarray,
+                    subpath_offsets: np.ndarray, closed: np.ndarray, start: np.ndarray,
+                    path_offsets: np.ndarray) -> PathArrays:
         """Return the arrays a kernel built to this layout as they are, unchecked.
 
         For library code whose kernel writes the layout by construction (the clip's

@@ -19,7 +19,7 @@ BEING_REMOVED = {
 
 @pytest.fixture(scope="module")
 def graph():
-    return grimp.build_graph("rnsca", "service")
+    return grimp.build_graph("rnsca", "service", cache_dir=None)
 
 
 def import_cycles(graph):

@@ -21,6 +21,7 @@ import numpy as np
 import typer
 
 import rnsca
+from rnsca.backends.base import Operation
 from rnsca.backends.registry import (
     available_backends,
     configure_opencl,
@@ -35,7 +36,9 @@ from rnsca.errors import (
     RnscaError,
 )
 from rnsca.io.geojson import dumps, loads
+from rnsca.io.svgpath import warm_up_readers
 from rnsca.options import Backend, Boundary, Mode
+from rnsca.runtime import configure_process
 
 if TYPE_CHECKING:
     from rich.progress import Progress, TaskID
@@ -73,6 +76,7 @@ def main(
         "else float32), float64 or float32")] = "auto",
 ) -> None:
     """Clip geometry against a rectangular window."""
+    configure_process()  # the CLI owns its process (see rnsca.runtime)
     try:
         configure_opencl(opencl_device, opencl_precision)
     except InvalidOptionError as exc:
@@ -83,12 +87,15 @@ def main(
 def backends() -> None:
     """List the backends that can run here, and the OpenCL devices found.
 
-    One backend per line on stdout; each OpenCL device indented below ``opencl``
-    (``*`` marks the one selected). Why OpenCL is unavailable goes to stderr.
+    One backend per line on stdout, with what it runs (its capabilities); each OpenCL
+    device indented below ``opencl`` (``*`` marks the one selected). Why OpenCL is
+    unavailable goes to stderr.
     """
     present = available_backends()
     for kind in present:
-        typer.echo(kind.value)
+        capabilities = get_backend(kind).capabilities
+        runs = ", ".join(o.value for o in Operation if o in capabilities.operations)
+        typer.echo(f"{kind.value}: {runs} ({capabilities.precision.value})")
     report = opencl_report()
     if Backend.OPENCL not in present:
         typer.echo(f"opencl is not available: {report['reason']}", err=True)
@@ -103,9 +110,8 @@ def backends() -> None:
 def warm_up() -> None:
     """Compile the kernels into the on-disk cache (later processes load them)."""
     for kind in available_backends():
-        engine = get_backend(kind)
-        if hasattr(engine, "warm_up"):
-            engine.warm_up()
+        get_backend(kind).warm_up()
+    warm_up_readers()
     typer.echo("kernels ready")
 
 
@@ -258,12 +264,13 @@ def clip(
                                          precision=precision, keep_empty=keep_empty)
             else:
                 document = loads(_json_text(data, name))
-                clipped, clip_stats = rnsca.clip_geojson(
+                result = rnsca.clip_geojson(
                     document, bounds, keep_empty=keep_empty, arrays=True, **options)
+                clipped, clip_stats = result
                 report = {"stats": clip_stats.to_dict()}
                 if verify:
                     bar.phase(f"verifying {name}")
-                    verification = rnsca.verify(document, clipped, bounds, mode=mode,
+                    verification = rnsca.verify(document, result, bounds, mode=mode,
                                                 approx_bound=approx_bound, boundary=boundary)
                     report["verification"] = verification.to_dict()
                 text = dumps(clipped, indent=indent) + b"\n"

@@ -15,7 +15,10 @@ from typing import Any
 
 import numpy as np
 
-from rnsca.clip_svg import Fill, _resolve, clip_paths
+from rnsca.arrays import PathArrays
+from rnsca.backends.base import Operation
+from rnsca.backends.registry import get_backend
+from rnsca.clip_svg import clip_paths
 from rnsca.errors import InvalidOptionError
 from rnsca.io.svgdoc import (
     IDENTITY,
@@ -31,8 +34,8 @@ from rnsca.io.svgdoc import (
     set_path_data,
     write_document,
 )
-from rnsca.io.svgpath import PathArrays, write_paths
-from rnsca.options import Curves, _ChoiceEnum
+from rnsca.io.svgpath import write_paths
+from rnsca.options import Curves, Fill, PathOptions, _ChoiceEnum
 from rnsca.stats import ClipStats
 from rnsca.window import Window
 
@@ -182,7 +185,11 @@ def clip_svg_document(document: str | bytes, window: Window | Iterable[float], *
     mode = FillMode(fill_mode)
     curve_options = dict(method="rnsca", n="auto", max_depth=None, mode="exact",
                          backend="numba") | options
-    _resolve(window, curves=curves, fill=None, tolerance=tolerance, **curve_options)
+    backend = curve_options.pop("backend")
+    checked = PathOptions.resolve(window, curves=curves, fill=None, tolerance=tolerance,
+                                  **curve_options)
+    get_backend(backend).capabilities.require(Operation.PATHS, checked.mode)
+    curve_options["backend"] = backend
     write_paths(PathArrays.empty(), precision=precision)  # checks `precision`
     doc = read_document(document)
     groups: dict[Fill | None, list[Shape]] = {}

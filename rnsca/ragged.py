@@ -15,7 +15,7 @@ import numpy as np
 import shapely
 
 from rnsca.arrays import GeometryKind, Ragged, exclusive_sum
-from rnsca.backends.base import Operation
+from rnsca.backends.base import LinePieces, Operation, PolygonPieces
 from rnsca.backends.registry import get_backend
 from rnsca.errors import InvalidOptionError
 from rnsca.kernels import counters as C
@@ -179,8 +179,10 @@ def clip_ragged(geometry_type, coords, offsets, window, *, boundary="closed", ke
     if ragged.kind.dimension == 0:
         return _clip_points(ragged, windows, side, keep_empty)
     if ragged.kind.dimension == 1:
-        return _clip_lines(engine, ragged, windows, options, side, keep_empty)
-    result = _clip_polygons(engine, ragged, windows, options, keep_empty)
+        return _line_result(ragged, engine.clip_lines(ragged, windows, options,
+                                                      side is Boundary.INTERIOR), keep_empty)
+    result = _polygon_result(ragged, engine.clip_polygons(ragged, windows, options),
+                             keep_empty)
     if check_validity:
         invalid = int((~shapely.is_valid(ragged.to_shapely())).sum())
         result = replace(result, stats=replace(result.stats, invalid_polygons=invalid))
@@ -232,9 +234,9 @@ def _clip_points(ragged: Ragged, windows: WindowTable, side: Boundary, keep_empt
                             source, stats)
 
 
-def _clip_lines(engine, ragged, windows, options, side, keep_empty):
+def _line_result(ragged: Ragged, out: LinePieces, keep_empty: bool) -> RaggedClipResult:
+    """Return the result of lines clipped into `out`: one output geometry per input kept."""
     part_offsets, _ = ragged.item_offsets()
-    out = engine.clip_lines(ragged, windows, options, side is Boundary.INTERIOR)
     xy, geometry_chains, chain_offsets = ragged.coords, out.geometry_chains, out.chain_offsets
     chains_per_geometry = np.diff(geometry_chains)
     # Parts of one position are refused by `Ragged.of`: every part but an empty one has
@@ -261,9 +263,9 @@ def _clip_lines(engine, ragged, windows, options, side, keep_empty):
                             (chain_offsets, geometry_offsets), source, stats)
 
 
-def _clip_polygons(engine, ragged, windows, options, keep_empty):
+def _polygon_result(ragged: Ragged, out: PolygonPieces, keep_empty: bool) -> RaggedClipResult:
+    """Return the result of polygons clipped into `out`: one output per input kept."""
     ring_offsets = ragged.offsets[0]
-    out = engine.clip_polygons(ragged, windows, options)
     output_ring_offsets = exclusive_sum(out.rings_per_output)
     geometry_offsets = out.geometry_outputs
     per_geometry = np.diff(geometry_offsets)

@@ -225,7 +225,10 @@ class Capabilities(BaseModel):
     methods: list[str]
     modes: list[str]
     backends: list[dict[str, Any]] = Field(description="Each backend: name, available, "
-                                                       "devices, and the reason if not.")
+                                                       "devices, and the reason if not; "
+                                                       "where available, the operations "
+                                                       "and modes it runs and its "
+                                                       "precision.")
     threading_layer: str | None = Field(description="Numba's threading layer in use.")
     serialized: bool = Field(description="Whether clipping calls run one at a time.")
     svg: bool = Field(description="Whether `/v1/clip/svg` is implemented here.")

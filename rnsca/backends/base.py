@@ -14,8 +14,8 @@ operation    input                                    result
 segments     (n, 4) float64 array, `Window`           `SegmentPieces`
 lines        `Ragged` lines, `WindowTable`            `LinePieces`
 polygons     `Ragged` polygons, `WindowTable`         `PolygonPieces`
-paths        path arrays (`PathInput`), `Window`      `PathPieces`
-flatten      path arrays (`PathInput`), tolerance     `Polylines`
+paths        `PathArrays`, `Window`                   `PathPieces`
+flatten      `PathArrays`, tolerance                  `Polylines`
 ===========  =======================================  ===========================
 
 Every result says where each output came from (`source`, or offsets per input) and
@@ -26,7 +26,7 @@ carries the kernels' counter rows (`rnsca.kernels.counters`) and, for a device, 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Protocol
+from typing import TYPE_CHECKING, NamedTuple, Protocol
 
 import numpy as np
 
@@ -36,7 +36,7 @@ from rnsca.options import Backend, Method, Mode, PathOptions, Precision, Segment
 from rnsca.window import Window, WindowTable
 
 if TYPE_CHECKING:
-    from rnsca.arrays import Ragged
+    from rnsca.arrays import PathArrays, Ragged
     from rnsca.stats import ClipStats, DeviceStats
 
 __all__ = [
@@ -45,7 +45,6 @@ __all__ = [
     "ClipBackend",
     "LinePieces",
     "Operation",
-    "PathInput",
     "PathPieces",
     "PolygonPieces",
     "Polylines",
@@ -199,60 +198,27 @@ class PolygonPieces:
 
 
 @dataclass(frozen=True, slots=True)
-class PathInput:
-    """Validated Bézier path arrays, the fields of `rnsca.io.svgpath.PathArrays`.
-
-    Backends take these arrays, not the `PathArrays` object, so that they need nothing
-    from `rnsca.io`; ``PathInput.of(paths)`` reads them off any object with those fields.
-    """
-
-    controls: np.ndarray
-    degree: np.ndarray
-    subpath_offsets: np.ndarray
-    closed: np.ndarray
-    start: np.ndarray
-    path_offsets: np.ndarray
-
-    @classmethod
-    def of(cls, paths) -> PathInput:
-        """Return the arrays of `paths` (a `PathArrays`)."""
-        return cls(paths.controls, paths.degree, paths.subpath_offsets, paths.closed,
-                   paths.start, paths.path_offsets)
-
-    @property
-    def count(self) -> int:
-        """Return the number of paths."""
-        return self.path_offsets.shape[0] - 1
-
-
-@dataclass(frozen=True, slots=True)
 class PathPieces:
-    """Clipped paths, in the layout of `PathInput`; path ``i`` of the output is input ``i``.
+    """Clipped paths: output path ``i`` is the clip of input path ``i``.
 
     Attributes
     ----------
-    controls, degree, subpath_offsets, closed, start, path_offsets : ndarray
-        As `PathInput` (one output path per input path, empty where nothing is left).
+    paths : PathArrays
+        One path per input path (empty where nothing is left).
     segments_in : int
         Segments the clip took in (with the closing edges of filled subpaths).
     counters : ndarray of int64, shape (rows, counters.WIDTH)
     device : DeviceStats or None
     """
 
-    controls: np.ndarray
-    degree: np.ndarray
-    subpath_offsets: np.ndarray
-    closed: np.ndarray
-    start: np.ndarray
-    path_offsets: np.ndarray
+    paths: PathArrays
     segments_in: int
     counters: np.ndarray
     device: DeviceStats | None = None
 
 
-@dataclass(frozen=True, slots=True)
-class Polylines:
-    """Paths turned into polylines: one per subpath that has a segment.
+class Polylines(NamedTuple):
+    """Paths turned into polylines: one per subpath that has a segment (a named tuple).
 
     Attributes
     ----------
@@ -265,10 +231,6 @@ class Polylines:
     coords: np.ndarray
     line_offsets: np.ndarray
     line_path: np.ndarray
-
-    def __iter__(self):
-        """Unpack as ``coords, line_offsets, line_path``."""
-        return iter((self.coords, self.line_offsets, self.line_path))
 
 
 class ClipBackend(Protocol):
@@ -305,11 +267,11 @@ class ClipBackend(Protocol):
         """Return the valid polygons each POLYGON or MULTIPOLYGON gives inside its window."""
         ...
 
-    def clip_paths(self, paths: PathInput, window: Window, options: PathOptions) -> PathPieces:
+    def clip_paths(self, paths: PathArrays, window: Window, options: PathOptions) -> PathPieces:
         """Return the paths clipped to the window (curves kept or flattened, strokes or fills)."""
         ...
 
-    def flatten_paths(self, paths: PathInput, tolerance: float, close: bool) -> Polylines:
+    def flatten_paths(self, paths: PathArrays, tolerance: float, close: bool) -> Polylines:
         """Return the paths as polylines within `tolerance` (`close`: every subpath closed)."""
         ...
 

@@ -4,22 +4,23 @@ from __future__ import annotations
 
 import numpy as np
 
-from rnsca.arrays import GeometryKind, Ragged, exclusive_sum, group_offsets
+from rnsca.arrays import GeometryKind, PathArrays, Ragged, exclusive_sum, group_offsets
 from rnsca.backends.base import (
     METHOD_ID,
     Capabilities,
     LinePieces,
+    PathPieces,
     PolygonPieces,
+    Polylines,
     SegmentPieces,
 )
-from rnsca.clip_svg import clip_paths, flatten_paths
-from rnsca.io.svgpath import parse_paths, write_paths
+from rnsca.kernels import bezier as BZ
 from rnsca.kernels import counters as C
 from rnsca.kernels import polygons as PG
 from rnsca.kernels import polylines as PL
 from rnsca.kernels import segments as K
 from rnsca.kernels.validate import all_finite
-from rnsca.options import Backend, Method, Mode, SegmentOptions
+from rnsca.options import Backend, Curves, Method, Mode, PathOptions, SegmentOptions
 from rnsca.stats import ClipStats
 from rnsca.window import Window, WindowTable
 
@@ -32,6 +33,15 @@ BLOCK_SIZE = 2048
 SERIAL_BLOCKS = 4
 _CAPABILITIES = Capabilities(Backend.NUMBA)
 _NO_INDEX = np.empty(0, dtype=np.int64)
+# Subpaths per block of the parallel path kernel: enough work per block to pay for its
+# scratch arrays, enough blocks to balance the threads (at most _PATH_BLOCK subpaths, and
+# at least _PATH_MIN_BLOCKS blocks when there are that many subpaths: a few long paths,
+# such as the 200 curves of 500 cubics of the benchmark, are still shared out evenly).
+_PATH_BLOCK = 64
+_PATH_MIN_BLOCKS = 32
+# The path kernel decides every segment itself: no run decisions, no device, no classes.
+_UNDECIDED_PATHS = (None, None, (False, np.empty(0, np.uint8), np.empty(0, dtype=np.int64),
+                                 np.empty((0, 2))))
 
 
 class NumbaBackend:
@@ -114,6 +124,22 @@ class NumbaBackend:
         return PolygonPieces(out_xy, out_z, out_rings, rings_per_output,
                              group_offsets(outputs_per_polygon, geometry_polygons), counters)
 
+    def clip_paths(self, paths: PathArrays, window: Window,
+                   options: PathOptions) -> PathPieces:
+        """Return the paths clipped to the window; see `ClipBackend.clip_paths`."""
+        return path_passes(paths, window, options, _UNDECIDED_PATHS)
+
+    def flatten_paths(self, paths: PathArrays, tolerance: float, close: bool) -> Polylines:
+        """Return the paths as polylines within `tolerance`; see `ClipBackend.flatten_paths`."""
+        steps = BZ.flatten_steps(paths.controls, paths.degree, float(tolerance))
+        segment_points = exclusive_sum(steps)
+        lines, closes, line_offsets = polyline_layout(paths, segment_points, close)
+        coords = np.empty((int(line_offsets[-1]), 2))
+        BZ.flatten_into(paths.controls, paths.degree, float(tolerance), paths.subpath_offsets,
+                        paths.start, lines, closes, steps, segment_points, line_offsets, coords)
+        line_path = np.repeat(np.arange(len(paths), dtype=np.int64), np.diff(paths.path_offsets))
+        return Polylines(coords, line_offsets, line_path[lines])
+
     def warm_up(self) -> None:
         """Compile (or load from the cache) the kernels, so the first real call is fast."""
         window = Window(0.0, 0.0, 1.0, 1.0)
@@ -122,18 +148,106 @@ class NumbaBackend:
             for method in Method:
                 self.clip_segments(segments, window, SegmentOptions.resolve(window, method=method))
         warm_up_geometry(self)
-        _warm_up_curves()
+        warm_up_paths(self)
 
 
-def _warm_up_curves() -> None:
-    """Compile the Bézier path kernels: parse, clip (each curve handling, fill), write."""
-    paths = parse_paths(["M-1 .5C0 2 1-1 2 .5Q.5 3-1 .5Z", "M-1 .25H2V.75Z", "M.2 .2L.8 .8"])
+def warm_up_paths(backend) -> None:
+    """Clip and flatten Bézier paths on `backend` in each curve handling, fill and mode.
+
+    Three subpaths: lines, quadratic and cubic curves crossing the window, and a closed
+    one (``M-1 .5 C0 2 1-1 2 .5 Q.5 3-1 .5Z``, ``M-1 .25 H2 V.75Z``, ``M.2 .2 L.8 .8``).
+    """
+    cubic = [[-1.0, 0.5], [0.0, 2.0], [1.0, -1.0], [2.0, 0.5]]
+    quadratic = [[2.0, 0.5], [0.5, 3.0], [-1.0, 0.5], [-1.0, 0.5]]
+    square = [[[-1.0, 0.25], [2.0, 0.25]], [[2.0, 0.25], [2.0, 0.75]]]
+    paths = PathArrays(
+        controls=np.array([cubic, quadratic]
+                          + [[a, b, b, b] for a, b in square] + [[[0.2, 0.2], [0.8, 0.8],
+                                                                    [0.8, 0.8], [0.8, 0.8]]]),
+        degree=np.array([3, 2, 1, 1, 1], dtype=np.int8),
+        subpath_offsets=np.array([0, 2, 4, 5], dtype=np.int64),
+        closed=np.array([True, True, False]), start=np.array([[-1.0, 0.5], [-1.0, 0.25],
+                                                              [0.2, 0.2]]),
+        path_offsets=np.array([0, 1, 2, 3], dtype=np.int64))
+    window = Window(0.0, 0.0, 1.0, 1.0)
     for curves, fill, mode in (("preserve", None, "exact"), ("preserve", "nonzero", "exact"),
                                ("flatten", None, "exact"), ("preserve", None, "approx")):
-        result = clip_paths(paths, (0.0, 0.0, 1.0, 1.0), curves=curves, fill=fill, mode=mode)
-        write_paths(result.paths, precision=None)
-        write_paths(result.paths, precision=6)
-    flatten_paths(paths, 1e-3, close=True)
+        backend.clip_paths(paths, window, PathOptions.resolve(window, curves=curves,
+                                                              fill=fill, mode=mode))
+    backend.flatten_paths(paths, 1e-3, True)
+
+
+def path_passes(paths: PathArrays, window: Window, options: PathOptions,
+                decisions) -> PathPieces:
+    """Run the path kernel's count pass, prefix sums and write pass.
+
+    Shared by the Numba backend (`decisions` says nothing is decided) and the OpenCL
+    backend (`decisions` carries the device's classes and flattened points: ``(True,
+    segment_class, point_start, points)``, and its run decisions and `DeviceStats`).
+    """
+    run_decisions, device_stats, decisions = decisions
+    n_subpaths = paths.closed.shape[0]
+    subpath_source = np.repeat(np.arange(len(paths), dtype=np.int64),
+                               np.diff(paths.path_offsets))
+    block = max(1, min(_PATH_BLOCK, n_subpaths // _PATH_MIN_BLOCKS))
+    n_blocks = max(1, -(-n_subpaths // block))
+    counters = np.zeros((n_blocks, C.WIDTH), dtype=np.int64)
+    n_segments = np.zeros(n_subpaths, dtype=np.int64)
+    n_out = np.zeros(n_subpaths, dtype=np.int64)
+    args = (paths.controls, paths.degree, paths.subpath_offsets, paths.closed, paths.start,
+            subpath_source, *window.bounds, options.fill is not None,
+            options.curves is Curves.FLATTEN, options.mode is Mode.EXACT, options.n_split,
+            options.leaf_depth, options.tolerance, block)
+    nothing = np.empty(0, dtype=np.int64)
+    if run_decisions is None:
+        run_decisions = np.empty(paths.degree.shape[0], dtype=np.int8)
+    BZ.clip_path_blocks(*args, False, nothing, nothing, np.empty((0, 4, 2)),
+                        np.empty(0, np.int8), nothing, np.empty((0, 2)), np.empty(0, bool),
+                        nothing, n_segments, n_out, run_decisions, counters, *decisions)
+    segment_start = exclusive_sum(n_segments)
+    subpath_start = exclusive_sum(n_out)
+    m = int(segment_start[-1])
+    k = int(subpath_start[-1])
+    out_ctrl = np.empty((m, 4, 2))
+    out_deg = np.empty(m, dtype=np.int8)
+    out_first = np.empty(k + 1, dtype=np.int64)
+    out_first[k] = m
+    out_start = np.empty((k, 2))
+    out_closed = np.empty(k, dtype=bool)
+    out_from = np.empty(k, dtype=np.int64)
+    BZ.clip_path_blocks(*args, True, segment_start, subpath_start, out_ctrl, out_deg,
+                        out_first, out_start, out_closed, out_from, n_segments, n_out,
+                        run_decisions, np.zeros((n_blocks, C.WIDTH), dtype=np.int64),
+                        *decisions)
+    kept = out_from >= 0
+    if not kept.all():  # entries freed by joining the two ends of a closed stroke
+        out_first = np.append(out_first[:-1][kept], m)
+        out_start, out_closed, out_from = out_start[kept], out_closed[kept], out_from[kept]
+    path_offsets = exclusive_sum(np.bincount(out_from, minlength=len(paths)))
+    clipped = PathArrays.from_kernel(controls=out_ctrl, degree=out_deg,
+                                     subpath_offsets=out_first, closed=out_closed,
+                                     start=out_start, path_offsets=path_offsets)
+    segments_in = paths.degree.shape[0] + BZ.closing_edges(
+        paths.controls, paths.subpath_offsets, paths.closed, paths.start, options.fill is not None)
+    return PathPieces(clipped, int(segments_in), counters, device_stats)
+
+
+def polyline_layout(paths: PathArrays, segment_points: np.ndarray, close: bool):
+    """Return where each subpath's polyline goes when paths are flattened.
+
+    `segment_points` are the offsets of each segment's flattened points (after the
+    subpath's start). Returns ``(lines, closes, line_offsets)``: the subpaths that have
+    a segment (one polyline each), whether each subpath's polyline returns to its start,
+    and the point offsets of the polylines.
+    """
+    sub = paths.subpath_offsets
+    has_line = np.diff(sub) > 0
+    closes = has_line & (paths.closed | close)
+    ends = paths.start.copy()
+    ends[has_line] = paths.controls[sub[1:][has_line] - 1, 3]
+    closes &= (ends != paths.start).any(axis=1)
+    points_per_line = segment_points[sub[1:]] - segment_points[sub[:-1]] + has_line + closes
+    return np.flatnonzero(has_line), closes, exclusive_sum(points_per_line[has_line])
 
 
 def polygon_geometry(geometry_polygons: np.ndarray) -> np.ndarray:

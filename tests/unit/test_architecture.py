@@ -9,13 +9,6 @@ package, so it misses a cycle through a package's own ``__init__`` (``rnsca`` im
 import grimp
 import pytest
 
-# Imports the cycle contract ignores too: each goes when its cycle is broken, and then its
-# line here goes as well (the test says so).
-BEING_REMOVED = {
-    ("rnsca.backends.numba_cpu", "rnsca.clip_svg"),  # removed by the paths contract (lead)
-    ("rnsca.backends.opencl", "rnsca.clip_svg"),  # removed by the paths contract (lead)
-}
-
 
 @pytest.fixture(scope="module")
 def graph():
@@ -74,10 +67,5 @@ def test_finds_a_cycle_through_a_package_init():
 
 
 def test_no_import_cycles(graph):
-    for importer, imported in sorted(BEING_REMOVED):
-        assert graph.direct_import_exists(importer=importer, imported=imported), (
-            f"{importer} no longer imports {imported}: delete it from BEING_REMOVED"
-        )
-        graph.remove_import(importer=importer, imported=imported)
     cycles = import_cycles(graph)
     assert cycles == [], f"modules that import each other, directly or not: {cycles}"

@@ -43,8 +43,6 @@ it, and turns a failure into `BackendUnavailableError`.
 
 from __future__ import annotations
 
-import os
-import sys
 import threading
 import warnings
 from dataclasses import dataclass, field
@@ -54,32 +52,33 @@ import numpy as np
 import pyopencl as cl
 import pyopencl.array as cl_array
 
-from rnsca.arrays import Ragged, exclusive_sum, group_offsets
+from rnsca.arrays import PathArrays, Ragged, exclusive_sum, group_offsets
 from rnsca.backends.base import (
     METHOD_ID,
     Capabilities,
     LinePieces,
+    PathPieces,
     PolygonPieces,
+    Polylines,
     SegmentPieces,
 )
-from rnsca.backends.numba_cpu import polygon_geometry, polygon_passes, warm_up_geometry
+from rnsca.backends.numba_cpu import (
+    path_passes,
+    polygon_geometry,
+    polygon_passes,
+    polyline_layout,
+    warm_up_geometry,
+    warm_up_paths,
+)
 from rnsca.errors import BackendUnavailableError, InvalidGeometryError, InvalidWindowError
 from rnsca.kernels import bezier as BZ
 from rnsca.kernels import counters as C
 from rnsca.kernels import polygons as PG
 from rnsca.kernels import polylines as PL
 from rnsca.kernels.outcode import BOTTOM, LEFT, RIGHT, TOP
-from rnsca.options import Backend, Method, Mode, Precision, SegmentOptions
+from rnsca.options import Backend, Curves, Method, Mode, PathOptions, Precision, SegmentOptions
 from rnsca.stats import ClipStats, DeviceStats
 from rnsca.window import Window, WindowTable
-
-# OpenCL drivers that the development install registered in this environment (the
-# Makefile writes .venv/opencl-vendors: Intel's CPU runtime, for CPUs PoCL cannot build
-# for). The ICD loader reads OCL_ICD_VENDORS at its first platform query, not at import;
-# a value the user set is kept.
-_VENDORS = os.path.join(sys.prefix, "opencl-vendors")
-if os.path.isdir(_VENDORS):
-    os.environ.setdefault("OCL_ICD_VENDORS", _VENDORS)
 
 __all__ = ["OpenCLBackend", "list_devices", "select_device", "FLOAT32_RELATIVE_BOUND",
            "LOCAL_SIZE"]
@@ -558,6 +557,48 @@ class OpenCLBackend:
         tables = (chunk_start[:-1].copy(), chunk_decision, piece_start, kept, pieces)
         return tables, counters, device_stats
 
+    def clip_paths(self, paths: PathArrays, window: Window,
+                   options: PathOptions) -> PathPieces:
+        """Return the paths clipped to the window; see `ClipBackend.clip_paths`.
+
+        The device classifies every segment by its control points, and runs of segments
+        by their box, and flattens the curves accepted whole (flatten mode); the
+        ambiguous segments and the output are done on the host by the Numba kernel, from
+        those decisions: the output is the Numba backend's.
+        """
+        segment_class, run_decisions, point_start, points, device_stats = \
+            self.classify_curves(paths.controls, paths.degree, window, options.tolerance,
+                                 "accepted" if options.curves is Curves.FLATTEN else "none",
+                                 paths.subpath_offsets)
+        return path_passes(paths, window, options, (run_decisions, device_stats, (
+            True, segment_class, point_start, points)))
+
+    def flatten_paths(self, paths: PathArrays, tolerance: float, close: bool) -> Polylines:
+        """Return the paths as polylines within `tolerance`; see `ClipBackend.flatten_paths`.
+
+        The device computes every segment's points (a float32 device: the host computes
+        them in float64, the same points); the host puts them after each subpath's start.
+        """
+        sub = paths.subpath_offsets
+        _, _, segment_points, points, _ = self.classify_curves(
+            paths.controls, paths.degree, None, float(tolerance), "all")
+        steps = np.diff(segment_points)
+        lines, closes, line_offsets = polyline_layout(paths, segment_points, close)
+        coords = np.empty((int(line_offsets[-1]), 2))
+        # The device's points are the segments' in order; each line adds its start
+        # point before them (and its start again after them where it closes).
+        has_line = np.diff(sub) > 0
+        segment_subpath = np.repeat(np.arange(sub.shape[0] - 1), np.diff(sub))
+        line_of_subpath = np.cumsum(has_line) - 1
+        shift = (line_offsets[:-1][line_of_subpath[segment_subpath]] + 1
+                 - segment_points[sub[:-1]][segment_subpath])
+        coords[np.repeat(shift, steps) + np.arange(points.shape[0])] = points
+        coords[line_offsets[:-1]] = paths.start[lines]
+        closing = closes[lines]
+        coords[line_offsets[1:][closing] - 1] = paths.start[lines[closing]]
+        line_path = np.repeat(np.arange(len(paths), dtype=np.int64), np.diff(paths.path_offsets))
+        return Polylines(coords, line_offsets, line_path[lines])
+
     def classify_curves(self, controls: np.ndarray, degree: np.ndarray, window: Window | None,
                         tolerance: float, flatten: str, subpath_offsets: np.ndarray | None = None):
         """Classify Bézier segments and runs of them, and flatten some segments, on the device.
@@ -693,18 +734,9 @@ class OpenCLBackend:
         for method in Method:
             self.clip_segments(segments, window, SegmentOptions.resolve(window, method=method))
         warm_up_geometry(self)
-        from rnsca.clip_svg import clip_svg
-        from rnsca.io.svgpath import parse_paths
-
-        d = "M-1 0.5 C0 2 1 2 2 0.5 L 0.5 0.5 Z"
-        paths = parse_paths([d])
-        for flatten in ("none", "accepted", "all"):
-            self.classify_curves(paths.controls, paths.degree, window, 0.01, flatten,
-                                 paths.subpath_offsets)
-        # The host kernel reading the device's decisions is the Numba backend's
-        # (the same types): compiled or loaded here.
-        for curves in ("preserve", "flatten"):
-            clip_svg(d, window.bounds, curves=curves, backend="numba")
+        # Curves: every flatten choice of the device, and the host kernel that reads
+        # the device's decisions (compiled or loaded here).
+        warm_up_paths(self)
 
 
 def _data(array):

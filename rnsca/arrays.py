@@ -94,25 +94,24 @@ OUTPUT_KIND = {
 }
 
 
-def _offsets(array: npt.ArrayLike, name: str, length: int) -> np.ndarray:
-    """Return `array` as int64 offsets into a level of `length` items, or raise."""
+def _offsets(array: npt.ArrayLike, name: str, length: int,
+             of: str = "the length of the level below") -> np.ndarray:
+    """Return `array` as int64 offsets into a level of `length` items (`of`), or raise."""
     try:
         out = np.asarray(array)
     except (TypeError, ValueError):
         raise InvalidGeometryError(f"{name} must be an integer array") from None
-    if out.ndim != 1 or out.dtype.kind not in "iu" or out.shape[0] < 1:
+    if out.ndim != 1 or out.shape[0] < 1 or (out.size and out.dtype.kind not in "iu"):
         raise InvalidGeometryError(
-            f"{name} must be a non-empty 1-d integer array, got shape {out.shape} "
-            f"of {out.dtype}")
+            f"{name} must be a 1-d integer array of at least one offset, got shape "
+            f"{out.shape} of {out.dtype}")
     out = np.ascontiguousarray(out, dtype=np.int64)
-    if out[0] != 0 or out[-1] != length:
-        raise InvalidGeometryError(
-            f"{name} must start at 0 and end at {length} (the length of the level below), "
-            f"got {out[0]} and {out[-1]}")
     steps = np.diff(out)
-    if (steps < 0).any():
-        at = int(np.argmax(steps < 0))
-        raise InvalidGeometryError(f"{name} decreases at index {at + 1}")
+    if out[0] != 0 or out[-1] != length or (steps < 0).any():
+        where = (f", decreasing at index {int(np.argmax(steps < 0)) + 1}"
+                 if (steps < 0).any() else f", got {out[0]} and {out[-1]}")
+        raise InvalidGeometryError(
+            f"{name} must start at 0, never decrease and end at {length} ({of}){where}")
     return out
 
 
@@ -388,7 +387,8 @@ class PathArrays:
         if degree.shape != (m,):
             raise InvalidGeometryError(f"degree must have shape ({m},) like controls, "
                                        f"not {degree.shape}")
-        subpath_offsets = _path_offsets(self.subpath_offsets, "subpath_offsets", m, "segments")
+        subpath_offsets = _offsets(self.subpath_offsets, "subpath_offsets", m,
+                                   "the number of segments")
         k = subpath_offsets.shape[0] - 1
         closed = _small_ints(self.closed, np.bool_, "closed", (0, 1))
         if closed.shape != (k,):
@@ -398,7 +398,7 @@ class PathArrays:
         if start.shape != (k, 2):
             raise InvalidGeometryError(f"start must have shape ({k}, 2), one per subpath, "
                                        f"not {start.shape}")
-        path_offsets = _path_offsets(self.path_offsets, "path_offsets", k, "subpaths")
+        path_offsets = _offsets(self.path_offsets, "path_offsets", k, "the number of subpaths")
         for name, value in (("controls", controls), ("degree", degree),
                             ("subpath_offsets", subpath_offsets), ("closed", closed),
                             ("start", start), ("path_offsets", path_offsets)):
@@ -485,15 +485,3 @@ def _small_ints(value: npt.ArrayLike, dtype: npt.DTypeLike, name: str,
     elif array.dtype != np.bool_ and not np.isin(array, allowed).all():
         raise InvalidGeometryError(f"{name} values must be in {allowed}")
     return np.ascontiguousarray(array, dtype=dtype)
-
-
-def _path_offsets(value: npt.ArrayLike, name: str, total: int, of: str) -> np.ndarray:
-    array = np.asarray(value)
-    if array.ndim != 1 or array.shape[0] < 1 or (array.size and array.dtype.kind not in "iu"):
-        raise InvalidGeometryError(f"{name} must be a 1-d integer array of at least one "
-                                   f"offset")
-    array = np.ascontiguousarray(array, dtype=np.int64)
-    if array[0] != 0 or array[-1] != total or (np.diff(array) < 0).any():
-        raise InvalidGeometryError(f"{name} must start at 0, never decrease and end at "
-                                   f"{total} (the number of {of})")
-    return array

@@ -14,8 +14,8 @@ from dataclasses import dataclass, replace
 import numpy as np
 import shapely
 
-from rnsca.arrays import GeometryKind, Ragged, exclusive_sum
-from rnsca.backends.base import LinePieces, Operation, PolygonPieces
+from rnsca.arrays import GeometryKind, Ragged
+from rnsca.backends.base import GeometryPieces, Operation
 from rnsca.backends.registry import get_backend
 from rnsca.errors import InvalidOptionError
 from rnsca.kernels import counters as C
@@ -234,10 +234,11 @@ def _clip_points(ragged: Ragged, windows: WindowTable, side: Boundary, keep_empt
                             source, stats)
 
 
-def _line_result(ragged: Ragged, out: LinePieces, keep_empty: bool) -> RaggedClipResult:
+def _line_result(ragged: Ragged, out: GeometryPieces, keep_empty: bool) -> RaggedClipResult:
     """Return the result of lines clipped into `out`: one output geometry per input kept."""
     part_offsets, _ = ragged.item_offsets()
-    xy, geometry_chains, chain_offsets = ragged.coords, out.geometry_chains, out.chain_offsets
+    xy = ragged.coords
+    chain_offsets, geometry_chains = out.offsets
     chains_per_geometry = np.diff(geometry_chains)
     # Parts of one position are refused by `Ragged.of`: every part but an empty one has
     # one segment fewer than positions.
@@ -263,14 +264,12 @@ def _line_result(ragged: Ragged, out: LinePieces, keep_empty: bool) -> RaggedCli
                             (chain_offsets, geometry_offsets), source, stats)
 
 
-def _polygon_result(ragged: Ragged, out: PolygonPieces, keep_empty: bool) -> RaggedClipResult:
+def _polygon_result(ragged: Ragged, out: GeometryPieces, keep_empty: bool) -> RaggedClipResult:
     """Return the result of polygons clipped into `out`: one output per input kept."""
     ring_offsets = ragged.offsets[0]
-    output_ring_offsets = exclusive_sum(out.rings_per_output)
-    geometry_offsets = out.geometry_outputs
+    out_rings, output_ring_offsets, geometry_offsets = out.offsets
     per_geometry = np.diff(geometry_offsets)
     segments_in = int(np.maximum(np.diff(ring_offsets) - 1, 0).sum())
-    out_rings = out.ring_offsets
     stats = _stats(out.counters, segments_in, out_rings.shape[0] - 1, ragged, out.xy.shape[0],
                    int((per_geometry > 0).sum()), out.device)
     coords = _with_z(out.xy, out.z, ragged.has_z)

@@ -12,8 +12,8 @@ Operations (one method each, the same signature on every backend):
 operation    input                                    result
 ===========  =======================================  ===========================
 segments     (n, 4) float64 array, `Window`           `SegmentPieces`
-lines        `Ragged` lines, `WindowTable`            `LinePieces`
-polygons     `Ragged` polygons, `WindowTable`         `PolygonPieces`
+lines        `Ragged` lines, `WindowTable`            `GeometryPieces`
+polygons     `Ragged` polygons, `WindowTable`         `GeometryPieces`
 paths        `PathArrays`, `Window`                   `PathPieces`
 flatten      `PathArrays`, tolerance                  `Polylines`
 ===========  =======================================  ===========================
@@ -43,10 +43,9 @@ __all__ = [
     "METHOD_ID",
     "Capabilities",
     "ClipBackend",
-    "LinePieces",
+    "GeometryPieces",
     "Operation",
     "PathPieces",
-    "PolygonPieces",
     "Polylines",
     "SegmentPieces",
 ]
@@ -145,54 +144,28 @@ class SegmentPieces:
 
 
 @dataclass(frozen=True, slots=True)
-class LinePieces:
-    """Lines cut into chains (connected visible parts), grouped by input geometry.
+class GeometryPieces:
+    """Clipped lines or polygons, grouped by input geometry, in the GeoArrow layout.
 
     Attributes
     ----------
     xy : ndarray of float64, shape (v, 2)
     z : ndarray of float64, shape (v,) or (0,)
         Interpolated Z, empty for 2D input.
-    chain_offsets : ndarray of int64, shape (c + 1,)
-        Vertex offsets of the chains.
-    geometry_chains : ndarray of int64, shape (g + 1,)
-        Chain offsets of the input geometries: geometry ``i`` gave chains
-        ``geometry_chains[i]:geometry_chains[i + 1]`` (none: it is empty).
+    offsets : tuple of ndarray of int64
+        Innermost level first, as ``shapely.from_ragged_array`` takes them. Lines:
+        vertex offsets of the chains (connected visible parts), then chain offsets of
+        the input geometries. Polygons: vertex offsets of the rings (closed; shells CCW,
+        holes CW), ring offsets of the output polygons (shell first), then polygon
+        offsets of the input geometries. Geometry ``i``'s outputs are
+        ``offsets[-1][i]:offsets[-1][i + 1]`` (none: nothing is left of it).
     counters : ndarray of int64, shape (rows, counters.WIDTH)
     device : DeviceStats or None
     """
 
     xy: np.ndarray
     z: np.ndarray
-    chain_offsets: np.ndarray
-    geometry_chains: np.ndarray
-    counters: np.ndarray
-    device: DeviceStats | None = None
-
-
-@dataclass(frozen=True, slots=True)
-class PolygonPieces:
-    """Polygons cut to the window: output polygons (shell first, then holes) per input.
-
-    Attributes
-    ----------
-    xy : ndarray of float64, shape (v, 2)
-    z : ndarray of float64, shape (v,) or (0,)
-    ring_offsets : ndarray of int64, shape (r + 1,)
-        Vertex offsets of the output rings (closed; shells CCW, holes CW).
-    rings_per_output : ndarray of int64, shape (p,)
-        Rings of each output polygon.
-    geometry_outputs : ndarray of int64, shape (g + 1,)
-        Output polygon offsets of the input geometries.
-    counters : ndarray of int64, shape (rows, counters.WIDTH)
-    device : DeviceStats or None
-    """
-
-    xy: np.ndarray
-    z: np.ndarray
-    ring_offsets: np.ndarray
-    rings_per_output: np.ndarray
-    geometry_outputs: np.ndarray
+    offsets: tuple
     counters: np.ndarray
     device: DeviceStats | None = None
 
@@ -252,7 +225,7 @@ class ClipBackend(Protocol):
         ...
 
     def clip_lines(self, lines: Ragged, windows: WindowTable, options: SegmentOptions,
-                   drop_edge_runs: bool) -> LinePieces:
+                   drop_edge_runs: bool) -> GeometryPieces:
         """Return the chains of each line geometry inside its window.
 
         `lines` is a LINESTRING or MULTILINESTRING `Ragged` (coordinates not yet checked
@@ -263,7 +236,7 @@ class ClipBackend(Protocol):
         ...
 
     def clip_polygons(self, polygons: Ragged, windows: WindowTable,
-                      options: SegmentOptions) -> PolygonPieces:
+                      options: SegmentOptions) -> GeometryPieces:
         """Return the valid polygons each POLYGON or MULTIPOLYGON gives inside its window."""
         ...
 

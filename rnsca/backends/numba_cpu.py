@@ -8,9 +8,8 @@ from rnsca.arrays import GeometryKind, PathArrays, Ragged, exclusive_sum, group_
 from rnsca.backends.base import (
     METHOD_ID,
     Capabilities,
-    LinePieces,
+    GeometryPieces,
     PathPieces,
-    PolygonPieces,
     Polylines,
     SegmentPieces,
 )
@@ -80,7 +79,7 @@ class NumbaBackend:
         return SegmentPieces(pieces, source, t, ClipStats.from_counters(counters, n, m))
 
     def clip_lines(self, lines: Ragged, windows: WindowTable, options: SegmentOptions,
-                   drop_edge_runs: bool) -> LinePieces:
+                   drop_edge_runs: bool) -> GeometryPieces:
         """Return the chains of each line geometry; see `ClipBackend.clip_lines`.
 
         Count, prefix sum and write run in one kernel call (`polylines.clip_lines`), which
@@ -101,10 +100,10 @@ class NumbaBackend:
             lines.check_finite()  # raises, naming the first bad coordinate
             raise AssertionError(f"the line kernel found a non-finite coordinate in part "
                                  f"{bad_part} that the full check did not")
-        return LinePieces(out_xy, out_z, chain_offsets, geometry_chains, counters)
+        return GeometryPieces(out_xy, out_z, (chain_offsets, geometry_chains), counters)
 
     def clip_polygons(self, polygons: Ragged, windows: WindowTable,
-                      options: SegmentOptions) -> PolygonPieces:
+                      options: SegmentOptions) -> GeometryPieces:
         """Return the output polygons of each geometry; see `ClipBackend.clip_polygons`.
 
         Count, prefix sum, write (`polygon_passes`).
@@ -121,8 +120,9 @@ class NumbaBackend:
             polygon_passes(xy, z, polygons.offsets[0], polygon_offsets, polygon_window,
                            windows.bounds, options, np.empty(n_polygons, dtype=np.int8),
                            undecided)
-        return PolygonPieces(out_xy, out_z, out_rings, rings_per_output,
-                             group_offsets(outputs_per_polygon, geometry_polygons), counters)
+        return GeometryPieces(out_xy, out_z, (
+            out_rings, exclusive_sum(rings_per_output),
+            group_offsets(outputs_per_polygon, geometry_polygons)), counters)
 
     def clip_paths(self, paths: PathArrays, window: Window,
                    options: PathOptions) -> PathPieces:

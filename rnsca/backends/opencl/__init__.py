@@ -56,9 +56,8 @@ from rnsca.arrays import PathArrays, Ragged, exclusive_sum, group_offsets
 from rnsca.backends.base import (
     METHOD_ID,
     Capabilities,
-    LinePieces,
+    GeometryPieces,
     PathPieces,
-    PolygonPieces,
     Polylines,
     SegmentPieces,
 )
@@ -407,7 +406,7 @@ class OpenCLBackend:
         return SegmentPieces(out_pieces, out_source, out_t.astype(np.float64), stats)
 
     def clip_lines(self, lines: Ragged, windows: WindowTable, options: SegmentOptions,
-                   drop_edge_runs: bool) -> LinePieces:
+                   drop_edge_runs: bool) -> GeometryPieces:
         """Return the chains of each line geometry; see `ClipBackend.clip_lines`.
 
         On the device (`_prune`): the chunk boxes, RNSCA over runs of
@@ -431,12 +430,12 @@ class OpenCLBackend:
                                                      None)
         out_xy, out_z, chain_offsets, chains_per_part = _assemble_lines(
             xy, z, part_offsets, part_window, windows.bounds, drop_edge_runs, *tables)
-        return LinePieces(out_xy, out_z, chain_offsets,
-                          group_offsets(chains_per_part, geometry_parts), counters,
-                          device_stats)
+        return GeometryPieces(out_xy, out_z, (
+            chain_offsets, group_offsets(chains_per_part, geometry_parts)), counters,
+            device_stats)
 
     def clip_polygons(self, polygons: Ragged, windows: WindowTable,
-                      options: SegmentOptions) -> PolygonPieces:
+                      options: SegmentOptions) -> GeometryPieces:
         """Return the output polygons of each geometry; see `ClipBackend.clip_polygons`.
 
         The shells' boxes classify the polygons on the host
@@ -463,9 +462,10 @@ class OpenCLBackend:
         out_xy, out_z, out_rings, rings_per_output, outputs_per_polygon, counters = \
             polygon_passes(xy, z, ring_offsets, polygon_offsets, polygon_window, windows,
                            options, polygon_class, (True, *tables))
-        return PolygonPieces(out_xy, out_z, out_rings, rings_per_output,
-                             group_offsets(outputs_per_polygon, geometry_polygons),
-                             np.concatenate([counters, device_counters]), device_stats)
+        return GeometryPieces(out_xy, out_z, (
+            out_rings, exclusive_sum(rings_per_output),
+            group_offsets(outputs_per_polygon, geometry_polygons)),
+            np.concatenate([counters, device_counters]), device_stats)
 
     def _prune(self, xy, part_offsets, part_window, windows, options: SegmentOptions,
                drop_edge_runs: bool, active):

@@ -12,10 +12,12 @@ the three shapes the kernels know: points, lines (parts) and polygons (rings).
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from enum import Enum
 
 import numpy as np
+import numpy.typing as npt
 import shapely
 
 from rnsca.errors import InvalidGeometryError, UnsupportedGeometryError
@@ -36,7 +38,7 @@ class GeometryKind(str, Enum):
     MULTIPOLYGON = "MultiPolygon"
 
     @classmethod
-    def of(cls, value) -> GeometryKind:
+    def of(cls, value: GeometryKind | shapely.GeometryType | str) -> GeometryKind:
         """Return the kind for a `GeometryKind`, a ``shapely.GeometryType`` or a name.
 
         Names are case-insensitive (``"linestring"``, ``"MULTIPOLYGON"``).
@@ -92,7 +94,7 @@ OUTPUT_KIND = {
 }
 
 
-def _offsets(array, name: str, length: int,
+def _offsets(array: npt.ArrayLike, name: str, length: int,
              of: str = "the length of the level below") -> np.ndarray:
     """Return `array` as int64 offsets into a level of `length` items (`of`), or raise."""
     try:
@@ -142,7 +144,9 @@ class Ragged:
     offsets: tuple
 
     @classmethod
-    def of(cls, geometry_type, coords, offsets, *, check_finite: bool = True) -> Ragged:
+    def of(cls, geometry_type: GeometryKind | shapely.GeometryType | str,
+           coords: npt.ArrayLike, offsets: Sequence[npt.ArrayLike], *,
+           check_finite: bool = True) -> Ragged:
         """Return a validated `Ragged` from the triple ``shapely.to_ragged_array`` gives.
 
         With ``check_finite=False`` the caller takes over the finiteness check (it must
@@ -186,7 +190,7 @@ class Ragged:
         return ragged
 
     @classmethod
-    def from_shapely(cls, geometries, include_z: bool | None = None) -> Ragged:
+    def from_shapely(cls, geometries: npt.ArrayLike, include_z: bool | None = None) -> Ragged:
         """Return the ragged array of a Shapely geometry array (one geometry type).
 
         Raises
@@ -298,7 +302,7 @@ class Ragged:
         return g
 
 
-def exclusive_sum(counts) -> np.ndarray:
+def exclusive_sum(counts: npt.ArrayLike) -> np.ndarray:
     """Return int64 offsets ``[0, cumsum(counts)...]``.
 
     Where each counted run starts, and the total at the end.
@@ -413,8 +417,9 @@ class PathArrays:
             raise error
 
     @classmethod
-    def from_kernel(cls, *, controls, degree, subpath_offsets, closed, start,
-                    path_offsets) -> PathArrays:
+    def from_kernel(cls, *, controls: np.ndarray, degree: np.ndarray,
+                    subpath_offsets: np.ndarray, closed: np.ndarray, start: np.ndarray,
+                    path_offsets: np.ndarray) -> PathArrays:
         """Return the arrays a kernel built to this layout as they are, unchecked.
 
         For library code whose kernel writes the layout by construction (the clip's
@@ -446,7 +451,7 @@ class PathArrays:
                    for name in ("controls", "degree", "subpath_offsets", "closed", "start",
                                 "path_offsets"))
 
-    __hash__ = None
+    __hash__ = None  # type: ignore[assignment]  # unhashable: == compares arrays
 
     def path(self, index: int) -> PathArrays:
         """Return path `index` (negative counts from the end) as a `PathArrays` of one."""
@@ -462,7 +467,7 @@ class PathArrays:
                           path_offsets=np.array([0, s1 - s0], dtype=np.int64))
 
 
-def _as_array(value, dtype, name: str) -> np.ndarray:
+def _as_array(value: npt.ArrayLike, dtype: npt.DTypeLike, name: str) -> np.ndarray:
     try:
         return np.ascontiguousarray(value, dtype=dtype)
     except (TypeError, ValueError) as exc:
@@ -470,7 +475,8 @@ def _as_array(value, dtype, name: str) -> np.ndarray:
                                    f"{exc}") from None
 
 
-def _small_ints(value, dtype, name: str, allowed: tuple[int, ...]) -> np.ndarray:
+def _small_ints(value: npt.ArrayLike, dtype: npt.DTypeLike, name: str,
+                allowed: tuple[int, ...]) -> np.ndarray:
     """Return `value` as `dtype` after checking its values (a cast must not wrap)."""
     array = np.asarray(value)
     if array.dtype != dtype:

@@ -12,9 +12,10 @@ from __future__ import annotations
 import json
 import re
 import sys
+from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Annotated, BinaryIO
+from typing import TYPE_CHECKING, Annotated, Any, BinaryIO, NoReturn
 
 import numpy as np
 import typer
@@ -38,6 +39,9 @@ from rnsca.io.geojson import dumps, loads
 from rnsca.io.svgpath import warm_up_readers
 from rnsca.options import Backend, Boundary, Mode
 from rnsca.runtime import configure_process
+
+if TYPE_CHECKING:
+    from rich.progress import Progress, TaskID
 
 __all__ = ["app", "PROGRESS_MIN_BYTES"]
 
@@ -177,9 +181,10 @@ def clip(
         metavar="INPUT", show_default=False,
         help="GeoJSON (.geojson or .json) or SVG (.svg) file; - or nothing reads "
              "stdin")] = None,
+    # Required: Typer reads the Ellipsis so (a default must follow `source`'s).
     window: Annotated[str, typer.Option(
         "--window", "-w", show_default=False,
-        help="xmin,ymin,xmax,ymax, e.g. 0,0,10,10 or -10,-10,10,10")] = ...,
+        help="xmin,ymin,xmax,ymax, e.g. 0,0,10,10 or -10,-10,10,10")] = ...,  # type: ignore[assignment]
     output: Annotated[str | None, typer.Option(
         "--output", "-o", show_default=False,
         help="file to write the clipped document to; default (or -): stdout")] = None,
@@ -232,9 +237,9 @@ def clip(
     --keep-empty keeps emptied shapes as empty paths.
     """
     bounds = _window_bounds(window)
-    options = dict(boundary=boundary, method=method, n=int(n) if n.isdigit() else n,
-                   max_depth=max_depth, tolerance=tolerance, mode=mode, backend=backend,
-                   check_validity=check_validity)
+    options: dict[str, Any] = dict(
+        boundary=boundary, method=method, n=int(n) if n.isdigit() else n, max_depth=max_depth,
+        tolerance=tolerance, mode=mode, backend=backend, check_validity=check_validity)
     with _reporting(EXIT_USAGE):
         _check_options(bounds, options)
         if verify and Mode(mode) is Mode.APPROX and approx_bound is None:
@@ -280,7 +285,7 @@ def clip(
               f"{verification.false_positives}, valid={verification.valid}", EXIT_DATA)
 
 
-def _fail(message, code: int):
+def _fail(message: object, code: int) -> NoReturn:
     """Print ``error: message`` on one line of stderr and exit with `code`."""
     text = " ".join(str(message).split())
     typer.echo(f"error: {text}", err=True)
@@ -288,7 +293,7 @@ def _fail(message, code: int):
 
 
 @contextmanager
-def _reporting(code: int):
+def _reporting(code: int) -> Iterator[None]:
     """Turn library and I/O errors into one line on stderr and an exit status.
 
     Options, windows and backends are the command line's fault (exit 2); anything else
@@ -311,16 +316,17 @@ def _window_bounds(text: str) -> tuple[float, float, float, float]:
     try:
         if len(parts) != 4:
             raise ValueError
-        bounds = tuple(float(part) for part in parts)
+        xmin, ymin, xmax, ymax = (float(part) for part in parts)
     except ValueError:
         _fail(f"--window needs four comma-separated numbers xmin,ymin,xmax,ymax, "
               f"got {text!r}", EXIT_USAGE)
+    bounds = (xmin, ymin, xmax, ymax)
     with _reporting(EXIT_USAGE):
         rnsca.Window(*bounds)
     return bounds
 
 
-def _check_options(bounds, options: dict) -> None:
+def _check_options(bounds: tuple[float, float, float, float], options: dict) -> None:
     """Raise the library's error for a bad option before any input is read.
 
     Clipping no geometry runs every check that does not depend on the input (whether
@@ -329,8 +335,8 @@ def _check_options(bounds, options: dict) -> None:
     rnsca.clip_ragged("Point", np.empty((0, 2)), (), bounds, **options)
 
 
-def _clip_svg(data: memoryview, bounds, options: dict, geojson_only: dict[str, bool],
-              **svg_options) -> tuple[bytes, dict]:
+def _clip_svg(data: memoryview, bounds: tuple[float, float, float, float], options: dict,
+              geojson_only: dict[str, bool], **svg_options: Any) -> tuple[bytes, dict]:
     """Return the clipped SVG document (UTF-8) and the report.
 
     Options that only GeoJSON input has (the flags of `geojson_only` that are set) are
@@ -381,7 +387,8 @@ def _read(path: Path | None, bar: _ProgressBar) -> memoryview:
         return _read_blocks(stream, path.stat().st_size, str(path), bar)
 
 
-def _read_blocks(stream: BinaryIO, size: int | None, name: str, bar: _ProgressBar):
+def _read_blocks(stream: BinaryIO, size: int | None, name: str,
+                 bar: _ProgressBar) -> memoryview:
     bar.phase(f"reading {name}", size)
     buffer = bytearray()
     while block := stream.read(_BLOCK):
@@ -446,8 +453,8 @@ class _ProgressBar:
 
     def __init__(self, enabled: bool | None) -> None:
         self.enabled = enabled
-        self._progress = None
-        self._task = None
+        self._progress: Progress | None = None
+        self._task: TaskID  # set with `_progress`
         self._phase: tuple[str, int | None] = ("", None)
 
     def phase(self, description: str, total: int | None = None) -> None:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable
 from dataclasses import dataclass
 
 import numpy as np
@@ -63,7 +64,7 @@ class Window:
             raise InvalidWindowError("window width and height must be finite in float64")
 
     @classmethod
-    def of(cls, window: Window | tuple | list) -> Window:
+    def of(cls, window: Window | Iterable[float]) -> Window:
         """Return `window` as a Window, from a Window or 4 bounds ``[xmin, ymin, xmax, ymax]``."""
         if isinstance(window, Window):
             return window
@@ -116,7 +117,8 @@ class WindowTable:
     index: np.ndarray
 
     @classmethod
-    def of(cls, window, count: int) -> WindowTable:
+    def of(cls, window: Window | Iterable[float] | Iterable[Iterable[float]],
+           count: int) -> WindowTable:
         """Return the table for `count` geometries.
 
         `window` is a `Window`, four bounds (one window for all), or an array of shape
@@ -153,7 +155,8 @@ class WindowTable:
                     except InvalidWindowError as exc:
                         raise InvalidWindowError(f"window {row}: {exc}") from None
                 return cls(np.ascontiguousarray(array), np.arange(count, dtype=np.int64))
-            single = Window.of(window)
+            # Not 2-D: four bounds, or an error that Window.of describes.
+            single = Window.of(window)  # type: ignore[arg-type]
         table = np.array([[single.xmin, single.ymin, single.xmax, single.ymax]])
         return cls(table, np.zeros(count, dtype=np.int64))
 

@@ -312,7 +312,10 @@ def test_no_arguments_lists_the_clip_command(runner):
 
 
 # --- a real process --------------------------------------------------------------------------
+# End to end through a new interpreter (seconds each, mostly importing and loading the
+# kernels): slow, so `make check` leaves them to `make test`.
 
+@pytest.mark.slow
 def test_clip_as_a_process_pipes_stdin_to_stdout():
     done = subprocess.run(
         [sys.executable, "-m", "rnsca.cli", "clip", "--window", "0,0,10,10"],
@@ -322,6 +325,7 @@ def test_clip_as_a_process_pipes_stdin_to_stdout():
     assert json.loads(done.stderr)["stats"]["geometries_out"] == 2
 
 
+@pytest.mark.slow
 def test_clip_as_a_process_fails_in_one_line_without_a_traceback():
     done = subprocess.run(
         [sys.executable, "-m", "rnsca.cli", "clip", "--window", "0,0,10,10"],

@@ -306,7 +306,7 @@ def clip_one(x0, y0, x1, y1, window, options, st):
     return midpoint_segment(x0, y0, x1, y1, window, options, st)
 
 
-@scalar
+@borrowing
 def _write_piece(out, k, i, t0, t1, ax, ay, bx, by, window):
     """Write piece `k` of `out`: segment `i`'s interval [t0, t1], ends clamped into `window`."""
     out.pieces[k, 0] = clamp(ax, window.xmin, window.xmax)

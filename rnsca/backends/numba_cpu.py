@@ -11,8 +11,8 @@ from rnsca.io.svgpath import parse_paths, write_paths
 from rnsca.kernels import counters as C
 from rnsca.kernels import polygons as PG
 from rnsca.kernels import polylines as PL
+from rnsca.kernels import records as R
 from rnsca.kernels import segments as K
-from rnsca.kernels.records import Bounds, Options
 from rnsca.options import Backend, Method, Mode, SegmentOptions
 from rnsca.stats import ClipStats
 from rnsca.window import Window
@@ -35,8 +35,8 @@ class NumbaBackend:
         """Return ``(pieces, source, t, stats)``; see `ClipBackend.clip_segments`."""
         n = segments.shape[0]
         n_blocks = max(1, -(-n // BLOCK_SIZE))
-        bounds = kernel_bounds(window)
-        settings = kernel_options(options)
+        bounds = R.Window(window.xmin, window.ymin, window.xmax, window.ymax)
+        settings = core_options(options)
         driver = K.clip_segment_blocks_serial if n_blocks <= SERIAL_BLOCKS \
             else K.clip_segment_blocks
         counted = K.SegmentOutput(
@@ -117,20 +117,11 @@ def _warm_up_curves() -> None:
     flatten_paths(paths, 1e-3, close=True)
 
 
-def kernel_bounds(window: Window) -> Bounds:
-    """Return `window` as the kernels' window record (`rnsca.kernels.records.Bounds`)."""
-    return Bounds(float(window.xmin), float(window.ymin), float(window.xmax),
-                  float(window.ymax))
-
-
-def kernel_options(options: SegmentOptions) -> Options:
-    """Return `options` as the kernels' options record.
-
-    Each field has one type whatever the caller passed, so each kernel compiles once.
-    """
-    return Options(METHOD_ID[options.method], int(options.n), int(options.max_depth),
-                   float(options.tolerance), float(options.auto_piece),
-                   options.mode is Mode.EXACT)
+def core_options(options: SegmentOptions) -> R.CoreOptions:
+    """Return the kernels' record of the segment core's options (one type per field)."""
+    return R.CoreOptions(METHOD_ID[options.method], int(options.n), int(options.max_depth),
+                         float(options.tolerance), float(options.auto_piece),
+                         options.mode is Mode.EXACT)
 
 
 def polygon_passes(xy, z, ring_offsets, polygon_offsets, polygon_window, windows,

@@ -49,7 +49,7 @@ def _edge_parameter(code, x0, y0, dx, dy, window):
 def cohen_sutherland_segment(x0, y0, x1, y1, window, st):
     """Clip one segment with Cohen–Sutherland; return (keep, t0, t1, ax, ay, bx, by).
 
-    `window` is a `rnsca.kernels.records.Bounds`; `st` the block's counter row.
+    `window` is a `rnsca.kernels.records.Window`; `st` the block's counter row.
     """
     xmin, ymin, xmax, ymax = window
     dx = x1 - x0

@@ -55,7 +55,7 @@ def _clipt(p, q, edge, u0, e0, u1, e1, st):
 
 @scalar
 def liang_barsky_interval(x0, y0, dx, dy, ta, tb, window, st):
-    """Return (ok, u0, e0, u1, e1): the part of [ta, tb] inside `window` (a `Bounds`).
+    """Return (ok, u0, e0, u1, e1): the part of [ta, tb] inside `window` (a `Window`).
 
     `e0`, `e1` name the edge that cut each end (``NO_EDGE`` if it was not cut).
     """
@@ -81,7 +81,7 @@ def liang_barsky_interval(x0, y0, dx, dy, ta, tb, window, st):
 def liang_barsky_segment(x0, y0, x1, y1, window, st):
     """Clip one segment with Liang–Barsky; return (keep, t0, t1, ax, ay, bx, by).
 
-    `window` is a `rnsca.kernels.records.Bounds`; `st` the block's counter row.
+    `window` is a `rnsca.kernels.records.Window`; `st` the block's counter row.
     """
     dx = x1 - x0
     dy = y1 - y0
@@ -144,10 +144,10 @@ def count_divisions(flags):
 def liang_barsky_leaf(x0, y0, x1, y1, leaf, window):
     """Return (ok, u0, ax, ay, u1, bx, by, divisions) for a leaf of a segment.
 
-    `leaf` is a `rnsca.kernels.records.Piece`: its ends are kept where no edge cuts
+    `leaf` is a `rnsca.kernels.records.Fragment`: its ends are kept where no edge cuts
     them. The half-planes that its ends' codes flag as unsure are tested, one division
     each (`divisions`). A cut end takes the edge's coordinate exactly and the other one
-    interpolated and clamped into `window` (a `Bounds`). Branch-free, for the hot loop.
+    interpolated and clamped into `window` (a `Window`). Branch-free, for the hot loop.
     """
     flags = (leaf.ca | leaf.cb) & UNSURE_BITS
     u0, e0, u1, e1 = leaf.ta, NO_EDGE, leaf.tb, NO_EDGE

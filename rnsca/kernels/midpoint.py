@@ -28,18 +28,17 @@ from rnsca.kernels.outcode import (
     wide,
     wide_outcode,
 )
-from rnsca.kernels.records import Piece
+from rnsca.kernels.records import Fragment
 
 
 @scalar
 def _search(x0, y0, x1, y1, c0, c1, length, toward_end, window, options, st):
-    """Return (bracket, level): the final bracket of one search, a `Piece`, and its depth.
+    """Return (bracket, level): the final bracket of one search, a `Fragment`, and its depth.
 
     ``toward_end=True`` brackets the exit (the farthest visible point from P0), else
     the entry (the farthest visible point from P1). `c0`, `c1` are the wide codes of
     P0 and P1, and the bracket's too (``rnsca.kernels.outcode``): bisection points are
-    rounded. `window` is a `Bounds`, `options` the `Options` (max_depth, tolerance,
-    exact).
+    rounded. `window` is a `Window`, `options` the `CoreOptions` (max_depth, tol, exact).
 
     The bracket's far end is surely past the searched end. Its near end, in exact mode,
     is the last point the search found surely inside (or the search's start point), so
@@ -49,7 +48,7 @@ def _search(x0, y0, x1, y1, c0, c1, length, toward_end, window, options, st):
     outside an edge never yields a piece.
     """
     max_depth = options.max_depth
-    tol = options.tolerance
+    tol = options.tol
     exact = options.exact
     dx = x1 - x0
     dy = y1 - y0
@@ -110,19 +109,19 @@ def _search(x0, y0, x1, y1, c0, c1, length, toward_end, window, options, st):
             a, xa, ya, ca = st_t, st_x, st_y, st_c
         else:
             ca = 0
-        return Piece(a, xa, ya, ca, b, xb, yb, cb), level
+        return Fragment(a, xa, ya, ca, b, xb, yb, cb), level
     if exact or not (found and (cb >> SURE_SHIFT) == 0):
         b, xb, yb, cb = st_t, st_x, st_y, st_c
     else:
         cb = 0
-    return Piece(a, xa, ya, ca, b, xb, yb, cb), level
+    return Fragment(a, xa, ya, ca, b, xb, yb, cb), level
 
 
 @scalar
 def _leaf(x0, y0, x1, y1, bracket, level, window, exact, st):
     """Decide a final bracket; return (ok, u0, ax, ay, u1, bx, by) of its visible part.
 
-    `bracket` is a `Piece` found at depth `level`. In approx mode the visible part is
+    `bracket` is a `Fragment` found at depth `level`. In approx mode the visible part is
     the bracket's visible end alone (u0 == u1).
     """
     a, xa, ya, ca, b, xb, yb, cb = bracket
@@ -159,8 +158,8 @@ def _leaf(x0, y0, x1, y1, bracket, level, window, exact, st):
 def midpoint_segment(x0, y0, x1, y1, window, options, st):
     """Clip one segment by midpoint subdivision; return (keep, t0, t1, ax, ay, bx, by).
 
-    `window` is a `rnsca.kernels.records.Bounds`, `options` the `Options` (max_depth,
-    tolerance, exact are read); `st` the block's counter row.
+    `window` is a `rnsca.kernels.records.Window`, `options` the `CoreOptions` (max_depth,
+    tol, exact are read); `st` the block's counter row.
     """
     exact = options.exact
     dx = x1 - x0
@@ -168,9 +167,9 @@ def midpoint_segment(x0, y0, x1, y1, window, options, st):
     length = math.hypot(dx, dy)
     c0 = outcode(x0, y0, window.xmin, window.ymin, window.xmax, window.ymax)
     c1 = outcode(x1, y1, window.xmin, window.ymin, window.xmax, window.ymax)
-    if (c0 | c1) == 0 or c0 & c1 or options.max_depth == 0 or length <= options.tolerance:
+    if (c0 | c1) == 0 or c0 & c1 or options.max_depth == 0 or length <= options.tol:
         # Decided at level 0 (accepted, rejected, or the whole segment is the leaf).
-        whole = Piece(0.0, x0, y0, wide(c0), 1.0, x1, y1, wide(c1))
+        whole = Fragment(0.0, x0, y0, wide(c0), 1.0, x1, y1, wide(c1))
         ok, t0, ax, ay, t1, bx, by = _leaf(x0, y0, x1, y1, whole, 0, window, exact, st)
         # A dropped approx leaf leaves one point. (In exact mode t0 == t1 can be a real piece:
         # a window far smaller than the segment lies within one rounding step of t.)

@@ -33,7 +33,7 @@ from rnsca.kernels.outcode import (
     is_piece,
     outcode,
 )
-from rnsca.kernels.records import Bounds
+from rnsca.kernels.records import Window
 
 # Products of numbers within these magnitudes neither overflow nor lose to underflow.
 _BIG = 2.0 ** 500
@@ -87,7 +87,7 @@ def _single_edge(code):
 def _parameter(edge, px, py, ex, ey, frame, st):
     """Return the parameter where P + t E meets the line of `edge` (one intersection).
 
-    `frame` is the window in the canonical frame (a `Bounds`), as for every helper here.
+    `frame` is the window in the canonical frame (a `Window`), as for every helper here.
     """
     st[C.INTERSECTIONS] += 1
     if edge == EDGE_LEFT:
@@ -132,7 +132,7 @@ def _exit_from_left(px, py, ex, ey, frame):
 def _canonical_clip(px, py, qx, qy, frame, st):
     """Clip P->Q in the canonical frame, P inside, left, or below-left of the window.
 
-    `frame` is the window in that frame (a `Bounds`). Returns (ok, u0, e0, u1, e1),
+    `frame` is the window in that frame (a `Window`). Returns (ok, u0, e0, u1, e1),
     edges in the canonical frame.
     """
     left, bottom, right, top = frame
@@ -188,7 +188,7 @@ def _original_edge(edge, flip_x, flip_y, swap):
 def nicholl_lee_nicholl_segment(x0, y0, x1, y1, window, st):
     """Clip one segment with Nicholl–Lee–Nicholl; return (keep, t0, t1, ax, ay, bx, by).
 
-    `window` is a `rnsca.kernels.records.Bounds`; `st` the block's counter row.
+    `window` is a `rnsca.kernels.records.Window`; `st` the block's counter row.
     """
     xmin, ymin, xmax, ymax = window
     dx = x1 - x0
@@ -216,7 +216,7 @@ def nicholl_lee_nicholl_segment(x0, y0, x1, y1, window, st):
     if swap:
         px, py, qx, qy = py, px, qy, qx
         left, bottom, right, top = bottom, left, top, right
-    ok, u0, e0, u1, e1 = _canonical_clip(px, py, qx, qy, Bounds(left, bottom, right, top), st)
+    ok, u0, e0, u1, e1 = _canonical_clip(px, py, qx, qy, Window(left, bottom, right, top), st)
     if not ok:
         st[C.REJECTED] += 1
         return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0

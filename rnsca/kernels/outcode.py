@@ -116,7 +116,7 @@ def interpolated_point(x0, y0, dx, dx_err, dy, dy_err, t):
 def wide_outcode(x, y, cx, mx, cy, my, window):
     """Return the wide code of the true point (x + cx, y + cy), known to within mx, my.
 
-    Distances to the edges of `window` (a `rnsca.kernels.records.Bounds`) are formed
+    Distances to the edges of `window` (a `rnsca.kernels.records.Window`) are formed
     from the rounded point (exact near an edge, where it matters) plus the correction,
     and compared with the margins: so a point is unsure only when it lies within its
     own tiny residual error of an edge.

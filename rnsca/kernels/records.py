@@ -1,23 +1,33 @@
-"""The records the kernels pass around: a window's bounds, the resolved options, a piece.
+"""Records the kernels pass around: named tuples of arrays and scalars.
 
-Values that always travel together travel as one named tuple. Numba passes a named
-tuple to a compiled function as its fields, one argument each, so a record costs
-nothing at a call, and a record of scalars built inside a kernel (``Bounds(...)``) is
-no more than its fields in registers. A record of arrays is borrowed like the arrays
-it holds: a ``borrowing`` function (``rnsca.kernels.jit``) counts no references to
-them either. Under ``NUMBA_DISABLE_JIT=1`` these are plain named tuples.
+Values that travel together (a window's four bounds, the segment core's six options,
+a geometry's coordinates and offsets) go into one record instead of one parameter each.
+Numba passes a named tuple by its members: a call that is not inlined receives them as
+separate arguments (no allocation, no indirection), and an inlined helper reads a member
+as it would a local. A record of arrays keeps what the jit preset of the function it is
+given to says of arrays (`rnsca.kernels.jit`): a ``borrowing`` function counts no
+references to them, a ``scalar`` one counts each, as it would the arrays passed one by one.
+Records are immutable; what a kernel writes goes into the arrays they hold.
 
-The host (``rnsca.backends.numba_cpu``) builds them once per call, with the field
-types below, so each kernel compiles one specialisation.
+Built on the host (the backends) or in the kernels, and under ``NUMBA_DISABLE_JIT=1``
+they are plain named tuples. Scalars must have one type per field wherever a record is
+built (float64 bounds, int64 counts), or the kernels compile once per mix. A record a
+``prange`` loop reads must be flat (arrays and scalars only: Numba's parallel lowering
+refuses a record inside a record) and built outside the loop (Numba 0.68 fails to lower
+one built inside); the loop body hands it to a per-block function, which may nest it.
+
+Numba's on-disk cache names each record class in its index: after renaming or removing
+one, a stale index fails to load (``AttributeError: Can't get attribute ...`` at the
+first call, numba#6018), so clear the cache (``find rnsca -name '*.nb[ic]' -delete``).
 """
 
 from typing import NamedTuple
 
-__all__ = ["Bounds", "Options", "Piece"]
+__all__ = ["CoreOptions", "Fragment", "Window"]
 
 
-class Bounds(NamedTuple):
-    """The clip window, closed: ``[xmin, xmax] x [ymin, ymax]``, finite, float64."""
+class Window(NamedTuple):
+    """The closed clip window ``[xmin, xmax] x [ymin, ymax]`` (float64 bounds)."""
 
     xmin: float
     ymin: float
@@ -25,39 +35,24 @@ class Bounds(NamedTuple):
     ymax: float
 
 
-class Options(NamedTuple):
-    """The resolved options of a segment clip (``rnsca.options.SegmentOptions``).
+class CoreOptions(NamedTuple):
+    """The segment core's resolved options (`segments.rnsca_segment`, `segments.clip_one`)."""
 
-    Attributes
-    ----------
-    method : int
-        The method id (``rnsca.kernels.segments.RNSCA``, ``COHEN_SUTHERLAND``, ...).
-    n : int
-        Pieces per subdivision, 2..64, or 0 for ``"auto"``.
-    max_depth : int
-        Deepest subdivision level, 0..32.
-    tolerance : float
-        A piece no longer than this is not subdivided further; may be infinite.
-    auto_piece : float
-        The piece length that ``n="auto"`` aims for (the window's longer side).
-    exact : bool
-        Exact mode (undecided leaves are clipped), else approx mode (they are dropped).
-    """
-
-    method: int
-    n: int
-    max_depth: int
-    tolerance: float
-    auto_piece: float
-    exact: bool
+    method: int         #: method id (`segments.RNSCA`, ...)
+    n_fixed: int        #: N, or 0 for auto
+    max_depth: int      #: deepest subdivision level
+    tol: float          #: pieces no longer than this are leaves
+    auto_piece: float   #: the piece length auto N aims at
+    exact: bool         #: clip undecided leaves exactly (else drop them: approx mode)
 
 
-class Piece(NamedTuple):
-    """A piece ``[ta, tb]`` of a segment: its parameters, end points and ends' wide codes.
+class Fragment(NamedTuple):
+    """A fragment ``[ta, tb]`` of a segment: its parameters, end points and ends' wide codes.
 
     The codes are wide codes (``rnsca.kernels.outcode``): an input end point has
-    ``wide(outcode)``, an interpolated one ``wide_outcode``. Subdivision methods hand
-    their undecided leaves to the leaf clip as a Piece.
+    ``wide(outcode)``, an interpolated one `wide_outcode`. The subdivision methods
+    (RNSCA, midpoint) keep their pending fragments in this form and hand their undecided
+    leaves to the leaf clip (`liang_barsky.liang_barsky_leaf`) as one.
     """
 
     ta: float

@@ -44,7 +44,7 @@ from rnsca.kernels.outcode import (
     wide,
     wide_outcode,
 )
-from rnsca.kernels.records import Piece
+from rnsca.kernels.records import Fragment
 
 # Method ids as the driver knows them (rnsca.backends.numba_cpu maps the enum).
 RNSCA = 0
@@ -129,31 +129,31 @@ def segment_stack():
 
 
 @borrowing
-def _push(stack, sp, piece, level):
-    """Write `piece` (a `Piece`) at level `level` into row `sp` of `stack`."""
-    stack.floats[sp, _TA] = piece.ta
-    stack.floats[sp, _TB] = piece.tb
-    stack.floats[sp, _XA] = piece.xa
-    stack.floats[sp, _YA] = piece.ya
-    stack.floats[sp, _XB] = piece.xb
-    stack.floats[sp, _YB] = piece.yb
-    stack.ints[sp, _CA] = piece.ca
-    stack.ints[sp, _CB] = piece.cb
+def _push(stack, sp, fragment, level):
+    """Write `fragment` (a `Fragment`) at level `level` into row `sp` of `stack`."""
+    stack.floats[sp, _TA] = fragment.ta
+    stack.floats[sp, _TB] = fragment.tb
+    stack.floats[sp, _XA] = fragment.xa
+    stack.floats[sp, _YA] = fragment.ya
+    stack.floats[sp, _XB] = fragment.xb
+    stack.floats[sp, _YB] = fragment.yb
+    stack.ints[sp, _CA] = fragment.ca
+    stack.ints[sp, _CB] = fragment.cb
     stack.ints[sp, _LEVEL] = level
 
 
 @borrowing
 def _pop(stack, sp):
-    """Return (piece, level): the `Piece` in row `sp` of `stack` and its level."""
-    piece = Piece(stack.floats[sp, _TA], stack.floats[sp, _XA], stack.floats[sp, _YA],
+    """Return (fragment, level): the `Fragment` in row `sp` of `stack` and its level."""
+    fragment = Fragment(stack.floats[sp, _TA], stack.floats[sp, _XA], stack.floats[sp, _YA],
                   stack.ints[sp, _CA], stack.floats[sp, _TB], stack.floats[sp, _XB],
                   stack.floats[sp, _YB], stack.ints[sp, _CB])
-    return piece, stack.ints[sp, _LEVEL]
+    return fragment, stack.ints[sp, _LEVEL]
 
 
 @borrowing
 def _clip_leaf(x0, y0, x1, y1, leaf, window, st):
-    """Clip the `leaf` (a `Piece`) of a segment; return (ok, u0, ax, ay, u1, bx, by)."""
+    """Clip the `leaf` (a `Fragment`) of a segment; return (ok, u0, ax, ay, u1, bx, by)."""
     ok, u0, ax, ay, u1, bx, by, divisions = liang_barsky_leaf(x0, y0, x1, y1, leaf, window)
     st[C.INTERSECTIONS] += divisions
     return ok and is_piece(False, u0, u1, ax, ay, bx, by), u0, ax, ay, u1, bx, by
@@ -167,8 +167,8 @@ def rnsca_segment(x0, y0, x1, y1, window, options, st, stack):
     ----------
     x0, y0, x1, y1 : float
         The segment, finite, with finite differences.
-    window : Bounds
-    options : Options
+    window : Window
+    options : CoreOptions
         Its subdivision fields are read: `n` is N, or 0 for auto (see `auto_n`).
     st : int64 (counters.WIDTH,)
         The block's counter row.
@@ -189,8 +189,8 @@ def rnsca_segment(x0, y0, x1, y1, window, options, st, stack):
     length = math.hypot(x1 - x0, y1 - y0)
     # Children's ends are interpolated: classify them, and the ends, with wide codes
     # (see outcode.py).
-    whole = Piece(0.0, x0, y0, wide(c0), 1.0, x1, y1, wide(c1))
-    if options.max_depth == 0 or length <= options.tolerance:
+    whole = Fragment(0.0, x0, y0, wide(c0), 1.0, x1, y1, wide(c1))
+    if options.max_depth == 0 or length <= options.tol:
         # The whole segment is the leaf.
         st[C.LEVELS] += 1
         if not options.exact:
@@ -207,13 +207,13 @@ def rnsca_segment(x0, y0, x1, y1, window, options, st, stack):
 def _subdivide(x0, y0, x1, y1, whole, length, window, options, st, stack):
     """Split an ambiguous segment depth-first; return (keep, t0, t1, ax, ay, bx, by).
 
-    `whole` is the segment as a `Piece`, `length` its length; the other parameters are
+    `whole` is the segment as a `Fragment`, `length` its length; the other parameters are
     those of `rnsca_segment`. The accepted children and clipped leaves are merged into
     one interval as they come.
     """
-    n_fixed = options.n
+    n_fixed = options.n_fixed
     max_depth = options.max_depth
-    tol = options.tolerance
+    tol = options.tol
     exact = options.exact
     dx = x1 - x0
     dy = y1 - y0
@@ -228,22 +228,22 @@ def _subdivide(x0, y0, x1, y1, whole, length, window, options, st, stack):
     sp = 1
     while sp > 0:
         sp -= 1
-        piece, level = _pop(stack, sp)
+        fragment, level = _pop(stack, sp)
         level += 1
-        step = piece.tb - piece.ta
+        step = fragment.tb - fragment.ta
         n = n_fixed if n_fixed > 0 else auto_n(step * length, options.auto_piece)
         # Walk the n children left to right; (pt, px, py, pc) is the current child's start.
-        pt = piece.ta
-        px = piece.xa
-        py = piece.ya
-        pc = piece.ca
+        pt = fragment.ta
+        px = fragment.xa
+        py = fragment.ya
+        pc = fragment.ca
         if level > st[C.DEEPEST]:
             st[C.DEEPEST] = level
         for j in range(1, n + 1):
             if j == n:
-                t, x, y, c = piece.tb, piece.xb, piece.yb, piece.cb
+                t, x, y, c = fragment.tb, fragment.xb, fragment.yb, fragment.cb
             else:
-                t = piece.ta + step * j / n
+                t = fragment.ta + step * j / n
                 x, y, cx, mx, cy, my = interpolated_point(x0, y0, dx, dx_err, dy, dy_err, t)
                 c = wide_outcode(x, y, cx, mx, cy, my, window)
                 # Ends of accepted pieces are output: give them the corrected position.
@@ -271,7 +271,7 @@ def _subdivide(x0, y0, x1, y1, whole, length, window, options, st, stack):
                 if exact:
                     st[C.CLIPPED] += 1
                     ok, u0, ax, ay, u1, bx, by = _clip_leaf(
-                        x0, y0, x1, y1, Piece(pt, px, py, pc, t, x, y, c), window, st)
+                        x0, y0, x1, y1, Fragment(pt, px, py, pc, t, x, y, c), window, st)
                     if ok:
                         if u0 < lo_t:
                             lo_t, lo_x, lo_y = u0, ax, ay
@@ -281,7 +281,7 @@ def _subdivide(x0, y0, x1, y1, whole, length, window, options, st, stack):
                     st[C.DROPPED] += 1
             else:
                 st[C.SUBDIVIDED] += 1
-                _push(stack, sp, Piece(pt, px, py, pc, t, x, y, c), level)
+                _push(stack, sp, Fragment(pt, px, py, pc, t, x, y, c), level)
                 sp += 1
             pt, px, py, pc = t, x, y, c
     if not lo_t <= hi_t:
@@ -293,7 +293,7 @@ def _subdivide(x0, y0, x1, y1, whole, length, window, options, st, stack):
 def clip_one(x0, y0, x1, y1, window, options, st):
     """Clip one segment with the baseline ``options.method``; return (keep, t0, t1, ax, ay, bx, by).
 
-    `window` is a `Bounds`, `options` an `Options`, `st` the block's counter row. RNSCA
+    `window` is a `Window`, `options` a `CoreOptions`, `st` the block's counter row. RNSCA
     is not here: it runs block-wise (`_rnsca_block`).
     """
     method = options.method
@@ -331,7 +331,7 @@ def _rnsca_block(segments, first, last, window, options, st, write, k, out):
     """
     xmin, ymin, xmax, ymax = window
     max_depth = options.max_depth
-    tol = options.tolerance
+    tol = options.tol
     exact = options.exact
     size = last - first
     x0 = np.empty(size)
@@ -456,8 +456,8 @@ def clip_segment_blocks(segments, window, options, block_size, write, out):
     ----------
     segments : float64 (n, 4)
         C-contiguous, finite, with finite differences.
-    window : Bounds
-    options : Options
+    window : Window
+    options : CoreOptions
     block_size : int
         Segments per block; ``out.block_count`` has one slot per block.
     write : bool

@@ -19,9 +19,10 @@ import numpy as np
 import shapely
 
 from rnsca.errors import InvalidGeometryError, UnsupportedGeometryError
-from rnsca.kernels.validate import all_finite, first_open_ring
+from rnsca.kernels.validate import LAYOUT_MESSAGES, all_finite, check_layout, first_open_ring
 
-__all__ = ["GeometryKind", "Ragged", "OUTPUT_KIND", "exclusive_sum", "geometry_error"]
+__all__ = ["GeometryKind", "Ragged", "PathArrays", "OUTPUT_KIND", "exclusive_sum",
+           "geometry_error", "group_offsets"]
 
 
 class GeometryKind(str, Enum):
@@ -213,6 +214,30 @@ class Ragged:
         """Return whether coordinates carry Z."""
         return self.coords.shape[1] == 3
 
+    def split_z(self) -> tuple[np.ndarray, np.ndarray]:
+        """Return ``(xy (n, 2), z (n,) or (0,))``, C-contiguous, as the kernels take them."""
+        if self.has_z:
+            return (np.ascontiguousarray(self.coords[:, :2]),
+                    np.ascontiguousarray(self.coords[:, 2]))
+        return self.coords, np.empty(0)
+
+    def item_offsets(self) -> tuple[np.ndarray, np.ndarray]:
+        """Return ``(vertex offsets of the items, item offsets of the geometries)``.
+
+        Items are the parts of lines (LINESTRING, MULTILINESTRING) or the polygons of
+        polygon kinds (POLYGON, MULTIPOLYGON: the second array then counts polygons, the
+        rings are ``offsets[0]``, the rings of each polygon ``offsets[1]``); a single
+        kind has one item per geometry.
+        """
+        if self.kind in (GeometryKind.LINESTRING, GeometryKind.POLYGON):
+            items = self.offsets[0] if self.kind is GeometryKind.LINESTRING else self.offsets[1]
+            return items, np.arange(self.count + 1, dtype=np.int64)
+        if self.kind is GeometryKind.MULTILINESTRING:
+            return self.offsets[0], self.offsets[1]
+        if self.kind is GeometryKind.MULTIPOLYGON:
+            return self.offsets[1], self.offsets[2]
+        raise UnsupportedGeometryError(f"{self.kind.value} has no parts or polygons")
+
     def to_shapely(self) -> np.ndarray:
         """Return the geometries as a Shapely array."""
         return shapely.from_ragged_array(self.kind.shapely_type, self.coords, self.offsets)
@@ -288,3 +313,181 @@ def exclusive_sum(counts) -> np.ndarray:
     out = np.zeros(counts.shape[0] + 1, dtype=np.int64)
     np.cumsum(counts, out=out[1:])
     return out
+
+
+def group_offsets(counts_per_item: np.ndarray, item_offsets: np.ndarray) -> np.ndarray:
+    """Return offsets of outputs per group, where group g owns items item_offsets[g]..[g+1].
+
+    Examples
+    --------
+    >>> group_offsets(np.array([1, 0, 2, 1]), np.array([0, 2, 4])).tolist()
+    [0, 1, 4]
+    """
+    return exclusive_sum(counts_per_item)[item_offsets]
+
+
+@dataclass(frozen=True, eq=False, kw_only=True)
+class PathArrays:
+    """Many SVG paths as columnar arrays of Bézier segments.
+
+    Path ``i`` is subpaths ``path_offsets[i]:path_offsets[i + 1]``; subpath ``s`` is
+    segments ``subpath_offsets[s]:subpath_offsets[s + 1]``, each starting where the
+    previous one ends, the first at ``start[s]``.
+
+    Attributes
+    ----------
+    controls : ndarray of float64, shape (m, 4, 2)
+        Control points of each segment from its start point: degree 1 uses rows 0-1,
+        degree 2 rows 0-2, degree 3 rows 0-3. Unused rows repeat the end point, so row
+        3 is always the end point and a bounding box may take all four rows.
+    degree : ndarray of int8, shape (m,)
+        1 (line), 2 (quadratic) or 3 (cubic).
+    subpath_offsets : ndarray of int64, shape (k + 1,)
+        Segment offsets of the subpaths.
+    closed : ndarray of bool, shape (k,)
+        Whether the subpath ended with Z: its closing edge, from the end of its last
+        segment back to `start`, is implicit (never a segment).
+    start : ndarray of float64, shape (k, 2)
+        Each subpath's start point (a subpath may have no segments: ``"M1 2"``).
+    path_offsets : ndarray of int64, shape (n + 1,)
+        Subpath offsets of the paths.
+
+    Raises
+    ------
+    InvalidGeometryError
+        On construction, if a shape, an offset array (must start at 0, never decrease
+        and end at the length of what it indexes), a degree, the continuity of segments
+        or the repetition of unused control rows is wrong, or a coordinate is not
+        finite. The message and the ``path_index`` attribute name the path when one is
+        at fault.
+
+    Notes
+    -----
+    Arrays are converted to the dtypes above and made C-contiguous (a copy only when
+    needed). ``==`` compares every array exactly.
+    """
+
+    controls: np.ndarray
+    degree: np.ndarray
+    subpath_offsets: np.ndarray
+    closed: np.ndarray
+    start: np.ndarray
+    path_offsets: np.ndarray
+
+    def __post_init__(self) -> None:
+        controls = _as_array(self.controls, np.float64, "controls")
+        m = controls.shape[0] if controls.ndim == 3 else -1
+        if controls.shape[1:] != (4, 2):
+            raise InvalidGeometryError(f"controls must have shape (m, 4, 2), "
+                                       f"not {controls.shape}")
+        degree = _small_ints(self.degree, np.int8, "degree", (1, 2, 3))
+        if degree.shape != (m,):
+            raise InvalidGeometryError(f"degree must have shape ({m},) like controls, "
+                                       f"not {degree.shape}")
+        subpath_offsets = _path_offsets(self.subpath_offsets, "subpath_offsets", m, "segments")
+        k = subpath_offsets.shape[0] - 1
+        closed = _small_ints(self.closed, np.bool_, "closed", (0, 1))
+        if closed.shape != (k,):
+            raise InvalidGeometryError(f"closed must have shape ({k},), one per subpath, "
+                                       f"not {closed.shape}")
+        start = _as_array(self.start, np.float64, "start")
+        if start.shape != (k, 2):
+            raise InvalidGeometryError(f"start must have shape ({k}, 2), one per subpath, "
+                                       f"not {start.shape}")
+        path_offsets = _path_offsets(self.path_offsets, "path_offsets", k, "subpaths")
+        for name, value in (("controls", controls), ("degree", degree),
+                            ("subpath_offsets", subpath_offsets), ("closed", closed),
+                            ("start", start), ("path_offsets", path_offsets)):
+            object.__setattr__(self, name, value)
+        self._check_geometry()
+
+    def _check_geometry(self) -> None:
+        sub, seg, code = check_layout(self.controls, self.degree, self.subpath_offsets,
+                                      self.start)
+        if code != 0:
+            path = int(np.searchsorted(self.path_offsets, sub, side="right") - 1)
+            where = f" (segment {seg})" if seg >= 0 else " (subpath start)"
+            error = InvalidGeometryError(
+                f"path {path}: {LAYOUT_MESSAGES[int(code)]}{where}")
+            error.path_index = path
+            raise error
+
+    @classmethod
+    def from_kernel(cls, *, controls, degree, subpath_offsets, closed, start,
+                    path_offsets) -> PathArrays:
+        """Return the arrays a kernel built to this layout as they are, unchecked.
+
+        For library code whose kernel writes the layout by construction (the clip's
+        output): the checks of the constructor would cost a third of a clip. The arrays
+        must already have the dtypes, shapes and contents the class describes.
+        """
+        paths = object.__new__(cls)
+        for name, value in (("controls", controls), ("degree", degree),
+                            ("subpath_offsets", subpath_offsets), ("closed", closed),
+                            ("start", start), ("path_offsets", path_offsets)):
+            object.__setattr__(paths, name, value)
+        return paths
+
+    @classmethod
+    def empty(cls) -> PathArrays:
+        """Return a `PathArrays` of no paths."""
+        return cls(controls=np.empty((0, 4, 2)), degree=np.empty(0, np.int8),
+                   subpath_offsets=np.zeros(1, np.int64), closed=np.empty(0, bool),
+                   start=np.empty((0, 2)), path_offsets=np.zeros(1, np.int64))
+
+    def __len__(self) -> int:
+        """Return the number of paths."""
+        return self.path_offsets.shape[0] - 1
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, PathArrays):
+            return NotImplemented
+        return all(np.array_equal(getattr(self, name), getattr(other, name))
+                   for name in ("controls", "degree", "subpath_offsets", "closed", "start",
+                                "path_offsets"))
+
+    __hash__ = None
+
+    def path(self, index: int) -> PathArrays:
+        """Return path `index` (negative counts from the end) as a `PathArrays` of one."""
+        n = len(self)
+        if not -n <= index < n:
+            raise IndexError(f"path index {index} out of range for {n} paths")
+        index %= n
+        s0, s1 = int(self.path_offsets[index]), int(self.path_offsets[index + 1])
+        g0, g1 = int(self.subpath_offsets[s0]), int(self.subpath_offsets[s1])
+        return PathArrays(controls=self.controls[g0:g1], degree=self.degree[g0:g1],
+                          subpath_offsets=self.subpath_offsets[s0:s1 + 1] - g0,
+                          closed=self.closed[s0:s1], start=self.start[s0:s1],
+                          path_offsets=np.array([0, s1 - s0], dtype=np.int64))
+
+
+def _as_array(value, dtype, name: str) -> np.ndarray:
+    try:
+        return np.ascontiguousarray(value, dtype=dtype)
+    except (TypeError, ValueError) as exc:
+        raise InvalidGeometryError(f"{name} must be convertible to {np.dtype(dtype)}: "
+                                   f"{exc}") from None
+
+
+def _small_ints(value, dtype, name: str, allowed: tuple[int, ...]) -> np.ndarray:
+    """Return `value` as `dtype` after checking its values (a cast must not wrap)."""
+    array = np.asarray(value)
+    if array.dtype != dtype:
+        if array.dtype.kind not in "biu" or not np.isin(array, allowed).all():
+            raise InvalidGeometryError(f"{name} values must be in {allowed}")
+    elif array.dtype != np.bool_ and not np.isin(array, allowed).all():
+        raise InvalidGeometryError(f"{name} values must be in {allowed}")
+    return np.ascontiguousarray(array, dtype=dtype)
+
+
+def _path_offsets(value, name: str, total: int, of: str) -> np.ndarray:
+    array = np.asarray(value)
+    if array.ndim != 1 or array.shape[0] < 1 or (array.size and array.dtype.kind not in "iu"):
+        raise InvalidGeometryError(f"{name} must be a 1-d integer array of at least one "
+                                   f"offset")
+    array = np.ascontiguousarray(array, dtype=np.int64)
+    if array[0] != 0 or array[-1] != total or (np.diff(array) < 0).any():
+        raise InvalidGeometryError(f"{name} must start at 0, never decrease and end at "
+                                   f"{total} (the number of {of})")
+    return array

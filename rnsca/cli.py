@@ -35,6 +35,7 @@ from rnsca.errors import (
 )
 from rnsca.io.geojson import dumps, loads
 from rnsca.options import Backend, Boundary, Mode
+from rnsca.runtime import configure_process
 
 __all__ = ["app", "PROGRESS_MIN_BYTES"]
 
@@ -69,6 +70,7 @@ def main(
         "else float32), float64 or float32")] = "auto",
 ) -> None:
     """Clip geometry against a rectangular window."""
+    configure_process()  # the CLI owns its process (see rnsca.runtime)
     try:
         configure_opencl(opencl_device, opencl_precision)
     except InvalidOptionError as exc:
@@ -253,12 +255,13 @@ def clip(
                                          precision=precision, keep_empty=keep_empty)
             else:
                 document = loads(_json_text(data, name))
-                clipped, clip_stats = rnsca.clip_geojson(
+                result = rnsca.clip_geojson(
                     document, bounds, keep_empty=keep_empty, arrays=True, **options)
+                clipped, clip_stats = result
                 report = {"stats": clip_stats.to_dict()}
                 if verify:
                     bar.phase(f"verifying {name}")
-                    verification = rnsca.verify(document, clipped, bounds, mode=mode,
+                    verification = rnsca.verify(document, result, bounds, mode=mode,
                                                 approx_bound=approx_bound, boundary=boundary)
                     report["verification"] = verification.to_dict()
                 text = dumps(clipped, indent=indent) + b"\n"

@@ -11,9 +11,9 @@ from rnsca.backends.registry import get_backend
 from rnsca.errors import InvalidGeometryError, UnsupportedGeometryError
 from rnsca.kernels.validate import first_invalid_segment
 from rnsca.options import Backend, Method, Mode, SegmentOptions
-from rnsca.ragged import clip_ragged, resolve_geometry_options, window_table
+from rnsca.ragged import clip_ragged, resolve_geometry_options
 from rnsca.stats import ClipStats
-from rnsca.window import Window
+from rnsca.window import Window, WindowTable
 
 __all__ = ["SegmentClipResult", "clip_segments", "as_segments", "clip"]
 
@@ -147,9 +147,9 @@ def clip_segments(segments, window, *, method="rnsca", n="auto", max_depth=None,
                                      tolerance=tolerance, mode=mode)
     engine = get_backend(backend)
     array = as_segments(segments)
-    pieces, source, t, stats = engine.clip_segments(array, window, options)
-    return SegmentClipResult(pieces, source, t, stats, options.method, options.mode,
-                             engine.kind, options)
+    out = engine.clip_segments(array, window, options)
+    return SegmentClipResult(out.pieces, out.source, out.t, out.stats, options.method,
+                             options.mode, engine.kind, options)
 
 
 def clip(obj, window, **options):
@@ -218,7 +218,8 @@ def _clip_geometries(geometries: np.ndarray, window, options: dict) -> np.ndarra
 
     options = {k: v for k, v in options.items() if k != "keep_empty"}
     count = geometries.shape[0]
-    windows, index = window_table(window, count)
+    table = WindowTable.of(window, count)
+    windows, index = table.bounds, table.index
     rings = shapely.get_type_id(geometries) == shapely.GeometryType.LINEARRING
     if rings.any():
         # A ring clipped is a line: its visible parts (GEOS gives line strings too).
@@ -243,7 +244,7 @@ def _clip_geometries(geometries: np.ndarray, window, options: dict) -> np.ndarra
         rows = np.flatnonzero((type_ids == type_id) & (has_z == include_z))
         input_name = shapely.GeometryType(type_id).name
         # Options are checked even if every geometry is decided by its bounding box.
-        resolve_geometry_options(windows, GeometryKind.of(input_name).dimension,
+        resolve_geometry_options(table, GeometryKind.of(input_name).dimension,
                                  **{k: v for k, v in options.items() if k != "check_validity"})
         empty_geometry = shapely.from_wkt(f"{input_name} EMPTY")
         # Bounding boxes first: geometries beyond the window or strictly inside it need

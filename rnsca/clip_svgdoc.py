@@ -13,6 +13,7 @@ import xml.etree.ElementTree as ET
 
 import numpy as np
 
+from rnsca.arrays import PathArrays
 from rnsca.clip_svg import Fill, _resolve, clip_paths
 from rnsca.errors import InvalidOptionError
 from rnsca.io.svgdoc import (
@@ -28,7 +29,7 @@ from rnsca.io.svgdoc import (
     set_path_data,
     write_document,
 )
-from rnsca.io.svgpath import PathArrays, write_paths
+from rnsca.io.svgpath import write_paths
 from rnsca.options import _ChoiceEnum
 from rnsca.stats import ClipStats
 from rnsca.window import Window

@@ -9,14 +9,19 @@ from enum import Enum
 from rnsca.errors import InvalidOptionError
 from rnsca.window import Window
 
-__all__ = ["Method", "Mode", "Backend", "Boundary", "Precision", "SegmentOptions", "N_MIN",
-           "N_MAX", "MAX_DEPTH_LIMIT"]
+__all__ = ["Method", "Mode", "Backend", "Boundary", "Precision", "SegmentOptions", "Curves",
+           "Fill", "PathOptions", "N_MIN", "N_MAX", "MAX_DEPTH_LIMIT",
+           "CURVE_RELATIVE_TOLERANCE"]
 
 N_MIN = 2
 N_MAX = 64
 MAX_DEPTH_LIMIT = 32
 #: In approx mode the default tolerance is this fraction of the window's longer side.
 APPROX_RELATIVE_TOLERANCE = 1e-9
+#: Default `tolerance` of curve clipping, relative to the window's longer side: how far
+#: flattened lines may stray from the curve (``curves="flatten"``), and the size below
+#: which approx mode stops subdividing.
+CURVE_RELATIVE_TOLERANCE = 1e-6
 
 
 class _ChoiceEnum(str, Enum):
@@ -179,3 +184,87 @@ def _integer(name: str, value, low: int, high: int) -> int:
     if not low <= value <= high:
         raise InvalidOptionError(f"{name} must be in {low}..{high}, got {value}")
     return value
+
+
+class Curves(_ChoiceEnum):
+    """What clipped paths are made of."""
+
+    PRESERVE = "preserve"
+    """Béziers of the input's degrees, cut where they cross the window's edges."""
+    FLATTEN = "flatten"
+    """Lines: curves flattened within `tolerance`, then clipped as lines."""
+
+
+class Fill(str, Enum):
+    """How a closed path is filled; the clip keeps the fill inside the window."""
+
+    NONZERO = "nonzero"
+    EVENODD = "evenodd"
+
+    @classmethod
+    def of(cls, value) -> Fill | None:
+        """Return the fill rule, or None (strokes) for None or "none"."""
+        if value is None or (isinstance(value, str) and value.lower() == "none"):
+            return None
+        if isinstance(value, cls):
+            return value
+        if isinstance(value, str):
+            for member in cls:
+                if member.value == value.lower():
+                    return member
+        raise InvalidOptionError(
+            f"fill must be 'nonzero', 'evenodd' or None (strokes), got {value!r}")
+
+
+@dataclass(frozen=True, slots=True)
+class PathOptions:
+    """Validated options for one path clipping call.
+
+    Attributes
+    ----------
+    curves : Curves
+    fill : Fill or None
+        None: strokes.
+    mode : Mode
+    n_split : int
+        Pieces per subdivision of an ambiguous curve.
+    leaf_depth : int
+        Deepest subdivision level.
+    tolerance : float
+        Flattening accuracy and approx mode's smallest piece (absolute units).
+    """
+
+    curves: Curves
+    fill: Fill | None
+    mode: Mode
+    n_split: int
+    leaf_depth: int
+    tolerance: float
+
+    @classmethod
+    def resolve(cls, window: Window, *, curves="preserve", fill=None, tolerance=None,
+                method="rnsca", n="auto", max_depth=None, mode="exact") -> PathOptions:
+        """Return checked options, with defaults filled in for `window`.
+
+        Defaults: N = `bezier.CURVE_N_AUTO` for ``n="auto"``; depth
+        `bezier.EXACT_LEAF_DEPTH` in exact preserve mode (an ambiguous segment is solved
+        exactly whole: measured fastest), 32 otherwise; tolerance
+        `CURVE_RELATIVE_TOLERANCE` times the window's longer side.
+        """
+        from rnsca.kernels.bezier import CURVE_N_AUTO, EXACT_LEAF_DEPTH
+
+        curves = Curves(curves)
+        fill = Fill.of(fill)
+        mode = Mode(mode)
+        if Method(method) is not Method.RNSCA:
+            raise InvalidOptionError(
+                f"curves are clipped by method='rnsca' only, got {method!r} (the line "
+                "baselines clip curves after flatten_paths)")
+        n_split = subdivision_n(n)
+        if n_split is None:
+            n_split = CURVE_N_AUTO
+        depth = subdivision_depth(max_depth, EXACT_LEAF_DEPTH if (
+            mode is Mode.EXACT and curves is Curves.PRESERVE) else MAX_DEPTH_LIMIT)
+        tol = window.size * CURVE_RELATIVE_TOLERANCE if tolerance is None else \
+            positive_tolerance(tolerance, finite=True)
+        return cls(curves, fill, mode, n_split, depth, tol)

@@ -17,6 +17,7 @@ from starlette.middleware.gzip import GZipMiddleware
 
 import rnsca
 from rnsca.backends.registry import available_backends, configure_opencl, get_backend
+from rnsca.runtime import configure_process
 from service.config import Settings
 from service.convert import warm_up_svg
 from service.errors import install_handlers
@@ -49,6 +50,9 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     """
     settings = settings or Settings()
     configure_logging(settings.log_level)
+    # The service owns its process: idle OpenMP threads sleep, the environment's OpenCL
+    # drivers are found (before any kernel runs or device is listed).
+    configure_process()
     configure_opencl(settings.opencl_device, settings.opencl_precision)
     runner = ClipRunner(settings.clip_threads, settings.request_time_limit)
     runner.prepare(settings.threading_layer)

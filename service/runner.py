@@ -21,6 +21,7 @@ import time
 from concurrent.futures import ThreadPoolExecutor
 from contextlib import nullcontext
 
+from rnsca.runtime import numba_threads_started
 from service.errors import TimeLimitError
 
 __all__ = ["ClipRunner"]
@@ -62,9 +63,8 @@ class ClipRunner:
     def prepare(self, layer: str) -> None:
         """Ask Numba for threading layer `layer` unless its layer is already started."""
         import numba
-        from numba.np.ufunc import parallel
 
-        if "NUMBA_THREADING_LAYER" in os.environ or parallel._is_initialized:
+        if "NUMBA_THREADING_LAYER" in os.environ or numba_threads_started():
             return
         numba.config.THREADING_LAYER = layer
 

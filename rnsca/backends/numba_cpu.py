@@ -4,8 +4,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from rnsca.arrays import exclusive_sum
-from rnsca.backends.base import METHOD_ID
+from rnsca.arrays import GeometryKind, Ragged, exclusive_sum, group_offsets
+from rnsca.backends.base import (
+    METHOD_ID,
+    Capabilities,
+    LinePieces,
+    PolygonPieces,
+    SegmentPieces,
+)
 from rnsca.clip_svg import clip_paths, flatten_paths
 from rnsca.io.svgpath import parse_paths, write_paths
 from rnsca.kernels import counters as C
@@ -13,9 +19,10 @@ from rnsca.kernels import polygons as PG
 from rnsca.kernels import polylines as PL
 from rnsca.kernels import records as R
 from rnsca.kernels import segments as K
+from rnsca.kernels.validate import all_finite
 from rnsca.options import Backend, Method, Mode, SegmentOptions
 from rnsca.stats import ClipStats
-from rnsca.window import Window
+from rnsca.window import Window, WindowTable
 
 __all__ = ["NumbaBackend"]
 
@@ -24,6 +31,8 @@ __all__ = ["NumbaBackend"]
 BLOCK_SIZE = 2048
 # Inputs of at most this many blocks run on the calling thread (see the serial driver).
 SERIAL_BLOCKS = 4
+_CAPABILITIES = Capabilities(Backend.NUMBA)
+_NO_INDEX = np.empty(0, dtype=np.int64)
 
 
 class NumbaBackend:
@@ -31,8 +40,14 @@ class NumbaBackend:
 
     kind = Backend.NUMBA
 
-    def clip_segments(self, segments: np.ndarray, window: Window, options: SegmentOptions):
-        """Return ``(pieces, source, t, stats)``; see `ClipBackend.clip_segments`."""
+    @property
+    def capabilities(self) -> Capabilities:
+        """Return what this backend runs: every operation, both modes, in float64."""
+        return _CAPABILITIES
+
+    def clip_segments(self, segments: np.ndarray, window: Window,
+                      options: SegmentOptions) -> SegmentPieces:
+        """Return the visible piece of each segment; see `ClipBackend.clip_segments`."""
         n = segments.shape[0]
         n_blocks = max(1, -(-n // BLOCK_SIZE))
         bounds = R.Window(window.xmin, window.ymin, window.xmax, window.ymax)
@@ -52,37 +67,53 @@ class NumbaBackend:
             np.empty((m, 2), dtype=np.float64), block_start,
             np.empty(n_blocks, dtype=np.int64), np.zeros_like(counted.counters))
         driver(segments, bounds, settings, BLOCK_SIZE, True, written)
-        return (written.pieces, written.source, written.t,
-                ClipStats.from_counters(counted.counters, n, m))
+        return SegmentPieces(written.pieces, written.source, written.t,
+                             ClipStats.from_counters(counted.counters, n, m))
 
-    def clip_lines(self, xy, z, part_offsets, geometry_parts, geometry_window, windows,
-                   options: SegmentOptions, drop_edge_runs: bool):
-        """Return ``(xy, z, chain_offsets, geometry_chains, counters, bad_part)``.
+    def clip_lines(self, lines: Ragged, windows: WindowTable, options: SegmentOptions,
+                   drop_edge_runs: bool) -> LinePieces:
+        """Return the chains of each line geometry; see `ClipBackend.clip_lines`.
 
-        Geometry g owns parts ``geometry_parts[g]..geometry_parts[g+1]-1`` and is clipped
-        against ``windows[geometry_window[g]]`` (`geometry_window` empty: row 0 for
-        all). `bad_part` is -1, or the first part with a non-finite coordinate (nothing
-        is clipped then). Count, prefix sum and write run in one kernel call
-        (`polylines.clip_lines`).
+        Count, prefix sum and write run in one kernel call (`polylines.clip_lines`), which
+        also checks the coordinates (their first pass) and reports the first part with a
+        non-finite one (nothing is clipped then; the error names it).
         """
-        return PL.clip_lines(xy, z, part_offsets, geometry_parts, geometry_window, windows,
-                             METHOD_ID[options.method], options.n, options.max_depth,
-                             options.tolerance, options.auto_piece, options.mode is Mode.EXACT,
-                             drop_edge_runs)
+        xy, z = lines.split_z()
+        if lines.has_z and not all_finite(z):
+            lines.check_finite()  # raises, naming the first bad coordinate
+        part_offsets, geometry_parts = lines.item_offsets()
+        # One window for all: the kernel takes row 0 of the table for every geometry.
+        geometry_window = _NO_INDEX if windows.is_single else windows.index
+        out_xy, out_z, chain_offsets, geometry_chains, counters, bad_part = PL.clip_lines(
+            xy, z, part_offsets, geometry_parts, geometry_window, windows.bounds,
+            METHOD_ID[options.method], options.n, options.max_depth, options.tolerance,
+            options.auto_piece, options.mode is Mode.EXACT, drop_edge_runs)
+        if bad_part >= 0:
+            lines.check_finite()  # raises, naming the first bad coordinate
+            raise AssertionError(f"the line kernel found a non-finite coordinate in part "
+                                 f"{bad_part} that the full check did not")
+        return LinePieces(out_xy, out_z, chain_offsets, geometry_chains, counters)
 
-    def clip_polygons(self, xy, z, ring_offsets, polygon_offsets, polygon_window, windows,
-                      options: SegmentOptions):
-        """Return ``(xy, z, ring_offsets, rings_per_output, outputs_per_polygon, counters)``.
+    def clip_polygons(self, polygons: Ragged, windows: WindowTable,
+                      options: SegmentOptions) -> PolygonPieces:
+        """Return the output polygons of each geometry; see `ClipBackend.clip_polygons`.
 
-        See `ClipBackend.clip_polygons`; count, prefix sum, write.
+        Count, prefix sum, write (`polygon_passes`).
         """
+        xy, z = polygons.split_z()
+        polygon_offsets, geometry_polygons = polygons.item_offsets()
         n_polygons = polygon_offsets.shape[0] - 1
+        polygon_window = windows.of_items(polygon_geometry(geometry_polygons))
         nothing_i = np.empty(0, dtype=np.int64)
         # Runs and segments are clipped here, not decided elsewhere: no decision tables.
         undecided = (False, nothing_i, np.empty(0, dtype=np.uint8), nothing_i,
                      np.empty(0, dtype=np.bool_), np.empty((0, 6)))
-        return polygon_passes(xy, z, ring_offsets, polygon_offsets, polygon_window, windows,
-                              options, np.empty(n_polygons, dtype=np.int8), undecided)
+        out_xy, out_z, out_rings, rings_per_output, outputs_per_polygon, counters = \
+            polygon_passes(xy, z, polygons.offsets[0], polygon_offsets, polygon_window,
+                           windows.bounds, options, np.empty(n_polygons, dtype=np.int8),
+                           undecided)
+        return PolygonPieces(out_xy, out_z, out_rings, rings_per_output,
+                             group_offsets(outputs_per_polygon, geometry_polygons), counters)
 
     def warm_up(self) -> None:
         """Compile (or load from the cache) the kernels, so the first real call is fast."""
@@ -91,18 +122,7 @@ class NumbaBackend:
             segments = np.tile([[-1.0, 0.5, 2.0, 0.5]], (n, 1))
             for method in Method:
                 self.clip_segments(segments, window, SegmentOptions.resolve(window, method=method))
-        # Lines and polygons: one square ring crossing the window, 2D and 3D.
-        ring = np.array([[-1.0, 0.25], [2.0, 0.25], [2.0, 0.75], [-1.0, 0.75], [-1.0, 0.25]])
-        offsets = np.array([0, 5], dtype=np.int64)
-        windows = np.array([[0.0, 0.0, 1.0, 1.0]])
-        index = np.zeros(1, dtype=np.int64)
-        options = SegmentOptions.resolve(window)
-        for z in (np.empty(0), np.zeros(5)):
-            for drop in (False, True):
-                self.clip_lines(ring, z, offsets, np.array([0, 1], dtype=np.int64), index,
-                                windows, options, drop)
-            self.clip_polygons(ring, z, offsets, np.array([0, 1], dtype=np.int64), index,
-                               windows, options)
+        warm_up_geometry(self)
         _warm_up_curves()
 
 
@@ -115,6 +135,31 @@ def _warm_up_curves() -> None:
         write_paths(result.paths, precision=None)
         write_paths(result.paths, precision=6)
     flatten_paths(paths, 1e-3, close=True)
+
+
+def polygon_geometry(geometry_polygons: np.ndarray) -> np.ndarray:
+    """Return the geometry of each polygon, given the polygon offsets of the geometries."""
+    return np.repeat(np.arange(geometry_polygons.shape[0] - 1, dtype=np.int64),
+                     np.diff(geometry_polygons))
+
+
+def warm_up_geometry(backend) -> None:
+    """Clip lines and polygons on `backend`: one square ring across the window, 2D and 3D.
+
+    Every kernel specialisation a geometry clip uses is compiled (or loaded) by it.
+    """
+    ring = [[-1.0, 0.25], [2.0, 0.25], [2.0, 0.75], [-1.0, 0.75], [-1.0, 0.25]]
+    offsets = np.array([0, 5], dtype=np.int64)
+    one = np.array([0, 1], dtype=np.int64)
+    windows = WindowTable.of(Window(0.0, 0.0, 1.0, 1.0), 1)
+    options = SegmentOptions.resolve(Window(0.0, 0.0, 1.0, 1.0))
+    for coords in (np.array(ring), np.array([[x, y, 0.0] for x, y in ring])):
+        for kind, levels in ((GeometryKind.LINESTRING, (offsets,)),
+                             (GeometryKind.MULTILINESTRING, (offsets, one))):
+            for drop in (False, True):
+                backend.clip_lines(Ragged.of(kind, coords, levels), windows, options, drop)
+        backend.clip_polygons(Ragged.of(GeometryKind.POLYGON, coords, (offsets, one)),
+                              windows, options)
 
 
 def core_options(options: SegmentOptions) -> R.CoreOptions:

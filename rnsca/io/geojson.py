@@ -35,9 +35,7 @@ Rules (where RFC 7946 leaves a choice, the choice is stated):
 
 from __future__ import annotations
 
-import gc
 import math
-from contextlib import contextmanager
 from dataclasses import dataclass
 from itertools import chain
 
@@ -63,6 +61,7 @@ __all__ = [
     "from_geojson",
     "loads",
     "to_geojson",
+    "write_geojson",
 ]
 
 #: The GeoJSON geometry type names, as RFC 7946 spells them (case-sensitive).
@@ -295,9 +294,9 @@ def to_geojson(layout: GeoJSONLayout, points=None, lines=None, polygons=None, *,
     per geometry). Allocating them beside a large parsed document triggers full runs of
     Python's cyclic garbage collector, each traversing the whole heap: on a 68 MB
     FeatureCollection (1.6 M positions) writing took 1.9 s with the collector running and
-    0.37 s with it paused (``arrays=True``: 0.18 s). So the collector is paused while
-    writing and resumed after if it was running; reference counting still frees
-    everything, and nothing written here can form a cycle.
+    0.37 s with it paused (``arrays=True``: 0.18 s). The collector is process-wide, so
+    this function leaves it alone: an application that owns its process may pause it
+    around the call (`rnsca.runtime.collector_paused`), or ask for ``arrays=True``.
 
     Examples
     --------
@@ -306,20 +305,48 @@ def to_geojson(layout: GeoJSONLayout, points=None, lines=None, polygons=None, *,
     >>> to_geojson(from_geojson(doc)) == doc
     True
     """
+    return write_geojson(layout, points, lines, polygons, keep_empty=keep_empty,
+                         arrays=arrays)[0]
+
+
+def write_geojson(layout: GeoJSONLayout, points=None, lines=None, polygons=None, *,
+                  keep_empty: bool = False, arrays: bool = False) -> tuple[dict, np.ndarray]:
+    """Return `to_geojson`'s document and, for each Feature written, its input Feature.
+
+    Parameters are those of `to_geojson`.
+
+    Returns
+    -------
+    document : dict
+    feature_source : ndarray of int64
+        For a FeatureCollection, the index in the input's ``features`` of each feature of
+        the output's (the ones left empty are dropped unless `keep_empty`); for a Feature
+        or a Geometry, ``[0]``.
+
+    Examples
+    --------
+    >>> doc = {"type": "FeatureCollection", "features": [
+    ...     {"type": "Feature", "properties": {}, "geometry": None},
+    ...     {"type": "Feature", "properties": {}, "geometry": {"type": "Point",
+    ...                                                        "coordinates": [1, 2]}}]}
+    >>> written, source = write_geojson(from_geojson(doc))
+    >>> len(written["features"]), source.tolist()
+    (1, [1])
+    """
     given = (points, lines, polygons)
-    with _collector_paused():
-        ragged, reuse = [], []
-        for kind in (_POINTS, _LINES, _POLYGONS):
-            own = getattr(layout, _KIND_NAME[kind])
-            coords, offsets = _checked_ragged(
-                kind, own if given[kind] is None else given[kind], own[2][-1].shape[0] - 1)
-            ragged.append((coords, offsets))
-            sources = None if arrays or layout.sources is None else layout.sources[kind]
-            reuse.append(None if sources is None else _unchanged(
-                own, None if given[kind] is None else (coords, offsets), sources))
-        writer = _Writer(ragged, reuse, layout.sources, 3 if layout.has_z else 2,
-                         bool(keep_empty), bool(arrays))
-        return writer.document(layout.document)
+    ragged, reuse = [], []
+    for kind in (_POINTS, _LINES, _POLYGONS):
+        own = getattr(layout, _KIND_NAME[kind])
+        coords, offsets = _checked_ragged(
+            kind, own if given[kind] is None else given[kind], own[2][-1].shape[0] - 1)
+        ragged.append((coords, offsets))
+        sources = None if arrays or layout.sources is None else layout.sources[kind]
+        reuse.append(None if sources is None else _unchanged(
+            own, None if given[kind] is None else (coords, offsets), sources))
+    writer = _Writer(ragged, reuse, layout.sources, 3 if layout.has_z else 2,
+                     bool(keep_empty), bool(arrays))
+    document = writer.document(layout.document)
+    return document, np.asarray(writer.feature_source, dtype=np.int64)
 
 
 def _unchanged(own: tuple, given: tuple | None, sources: list) -> np.ndarray | None:
@@ -337,18 +364,6 @@ def _unchanged(own: tuple, given: tuple | None, sources: list) -> np.ndarray | N
             return None
         reuse &= same_geometries(coords, offsets, given_coords, given_offsets)
     return reuse if reuse.any() else None
-
-
-@contextmanager
-def _collector_paused():
-    """Pause the cyclic garbage collector, resuming it after only if it was running."""
-    running = gc.isenabled()
-    gc.disable()
-    try:
-        yield
-    finally:
-        if running:
-            gc.enable()
 
 
 # --------------------------------------------------------------------------- reading
@@ -825,6 +840,8 @@ class _Writer:
         self.next = [0, 0, 0]
         self.keep_empty = keep_empty
         self.dim = dim
+        # The input feature of each feature written (a single Feature or Geometry: [0]).
+        self.feature_source = [0]
 
     def document(self, doc: dict) -> dict:
         kind = doc["type"]
@@ -834,10 +851,12 @@ class _Writer:
             return self.geometry(doc, True, False)[0]
         want = "bbox" in doc
         features, box = [], None
-        for feature in doc["features"]:
+        self.feature_source = []
+        for index, feature in enumerate(doc["features"]):
             out, feature_box = self.feature(feature, self.keep_empty, want)
             if out is not None:
                 features.append(out)
+                self.feature_source.append(index)
                 box = _union(box, feature_box)
         return self.replace(doc, "features", features, box)
 

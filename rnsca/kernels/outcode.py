@@ -137,7 +137,7 @@ def clamp(v, low, high):
 
 
 # Veltkamp's splitter for Dekker's exact product (2**27 + 1): no fused multiply-add is
-# needed, so the kernels, plain Python and the NumPy reference round identically.
+# needed, so the compiled kernels, plain Python and OpenCL round identically.
 _SPLITTER = 134217729.0
 
 

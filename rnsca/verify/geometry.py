@@ -18,8 +18,9 @@ import numpy as np
 import shapely
 from shapely.geometry import shape
 
-from rnsca.arrays import Ragged
+from rnsca.arrays import PathArrays, Ragged
 from rnsca.clip import SegmentClipResult, as_segments
+from rnsca.clip_geojson import GeoJSONClipResult
 from rnsca.clip_svg import CURVE_RELATIVE_TOLERANCE, Fill, PathClipResult
 from rnsca.errors import (
     InvalidGeometryError,
@@ -27,11 +28,11 @@ from rnsca.errors import (
     ParseError,
     UnsupportedGeometryError,
 )
-from rnsca.io.svgpath import PathArrays, parse_paths
+from rnsca.io.svgpath import parse_paths
 from rnsca.options import Boundary, Method, Mode
-from rnsca.ragged import RaggedClipResult, window_table
+from rnsca.ragged import RaggedClipResult, to_shapely
 from rnsca.verify.paths import paths_to_shapely
-from rnsca.window import Window
+from rnsca.window import Window, WindowTable
 
 __all__ = ["Verification", "verify", "approx_leaf_bound"]
 
@@ -134,16 +135,20 @@ def verify(original, clipped, window, *, mode=None, approx_bound=None,
           nothing is left);
         - the ``(geometry_type, coords, offsets)`` triple (or a `Ragged`, or a Shapely
           array) for a `RaggedClipResult`, whose ``source`` aligns the two;
-        - a GeoJSON dict (Geometry, Feature or FeatureCollection) for a GeoJSON dict.
-          Feature collections are aligned feature by feature when `clipped` has as many
-          features, or has one for each input feature whose clip is not empty (features
-          left empty were dropped); otherwise the two collections are compared whole.
+        - for a `GeoJSONClipResult` (what `rnsca.clip_geojson` returns), the document
+          that was clipped, or None: the result holds the arrays read from it and their
+          clips, one output per input, so nothing is read again or matched by guess;
+        - a GeoJSON dict (Geometry, Feature or FeatureCollection) for a GeoJSON dict
+          made elsewhere. Feature collections are aligned feature by feature when
+          `clipped` has as many features; otherwise the two collections are compared
+          whole (pass the `GeoJSONClipResult` to compare feature by feature).
         - SVG path data (a str or a list of them) or a `PathArrays`, for a
           `PathClipResult` or path data. Both sides are flattened within `tolerance`
           and compared as lines (strokes) or as the regions their fill rule paints.
     clipped
         The clip: a `SegmentClipResult`, Shapely geometry or array, `RaggedClipResult`,
-        GeoJSON dict, `PathClipResult` or SVG path data. Z values are ignored.
+        `GeoJSONClipResult`, GeoJSON dict, `PathClipResult` or SVG path data. Z values
+        are ignored.
     window : Window, sequence of 4 floats, or array_like (G, 4)
         ``(xmin, ymin, xmax, ymax)``; for geometries also one window per input.
     mode : {"exact", "approx"}, optional
@@ -219,9 +224,10 @@ def verify(original, clipped, window, *, mode=None, approx_bound=None,
         raise InvalidOptionError(
             "verify in approx mode needs approx_bound (the largest deviation to accept) "
             "for geometries")
-    if isinstance(clipped, dict):
-        originals, delivered, source, window = _geojson_pair(original, clipped, window,
-                                                             boundary)
+    if isinstance(clipped, GeoJSONClipResult):
+        originals, delivered, source = _geojson_result_pairs(clipped)
+    elif isinstance(clipped, dict):
+        originals, delivered, source, window = _geojson_pair(original, clipped, window)
     elif isinstance(clipped, RaggedClipResult):
         originals = _ragged_originals(original)
         delivered, source = _ragged_outputs(clipped, originals.shape[0])
@@ -230,7 +236,8 @@ def verify(original, clipped, window, *, mode=None, approx_bound=None,
         source = np.arange(delivered.shape[0])
     else:
         raise UnsupportedGeometryError(
-            "verify compares a SegmentClipResult, a RaggedClipResult, Shapely geometries or "
+            "verify compares a SegmentClipResult, a RaggedClipResult, a GeoJSONClipResult, "
+            "Shapely geometries or "
             f"a GeoJSON dict, got {type(clipped).__name__}")
     bounds = _window_bounds(window, originals.shape[0])
     return _verify_geometries(originals, delivered, source, bounds, mode, approx_bound,
@@ -504,23 +511,33 @@ def _shape(geometry, path: str):
         raise ParseError(f"{path} is not a GeoJSON geometry: {exc}") from None
 
 
-def _geojson_pair(original, clipped, window, boundary: Boundary):
+def _geojson_result_pairs(result: GeoJSONClipResult):
+    """Return the inputs and outputs a GeoJSON clip holds, kind after kind, and the sources.
+
+    Output ``i`` of each kind is the clip of input ``i`` (`GeoJSONClipResult.outputs`).
+    """
+    originals, delivered = [], []
+    for kind, clipped in result.outputs.items():
+        geometry_type, coords, offsets = result.inputs[kind]
+        originals.append(to_shapely(geometry_type, coords, offsets))
+        delivered.append(clipped.to_shapely())
+    if not originals:
+        nothing = np.empty(0, dtype=object)
+        return nothing, nothing, np.empty(0, dtype=np.int64)
+    originals_array = np.concatenate(originals)
+    return originals_array, np.concatenate(delivered), np.arange(originals_array.shape[0])
+
+
+def _geojson_pair(original, clipped, window):
     """Return original and clipped geometries of two GeoJSON dicts, aligned, and the window.
 
-    Features are matched one to one when there are as many on both sides, else with the
-    originals whose clip is not empty (what ``keep_empty=False`` keeps); failing both,
-    the collections are compared whole, as one input in one window.
+    Features are matched one to one when there are as many on both sides; otherwise the
+    collections are compared whole, as one input in one window.
     """
-    originals, is_collection = _geojson_geometries(original, "original")
+    originals, _ = _geojson_geometries(original, "original")
     outputs, _ = _geojson_geometries(clipped, "clipped")
     if outputs.shape == originals.shape:
         return originals, outputs, np.arange(outputs.shape[0]), window
-    if is_collection:
-        kept = np.flatnonzero(
-            _clip_is_not_empty(originals, _window_bounds(window, originals.shape[0]),
-                               boundary))
-        if kept.shape == outputs.shape:
-            return originals, outputs, kept, window
     if not isinstance(window, Window) and np.ndim(window) == 2:
         raise InvalidGeometryError(
             f"verify cannot match {outputs.shape[0]} clipped features with "
@@ -532,7 +549,7 @@ def _geojson_pair(original, clipped, window, boundary: Boundary):
 
 def _window_bounds(window, count: int) -> np.ndarray:
     """Return (count, 4) validated window bounds, one row per input."""
-    windows, index = window_table(window, count)
+    windows, index = WindowTable.of(window, count)
     return windows[index]
 
 
@@ -993,21 +1010,3 @@ def _ratio(measures, scales: np.ndarray, dim: int) -> float:
     if total_expected == 0.0:
         return 1.0 if total_ours == 0.0 else float("inf")
     return total_ours / total_expected
-
-
-def _clip_is_not_empty(originals, bounds: np.ndarray, boundary: Boundary) -> np.ndarray:
-    """Return, per input, whether Shapely's clip keeps something of the input's dimension."""
-    originals = shapely.force_2d(originals)
-    _check_finite(originals)
-    count = originals.shape[0]
-    scales = _unit_scales(bounds, originals, np.empty(0, dtype=object),
-                          np.empty(0, dtype=np.int64))
-    parts, index = _atomic_parts(_scaled(originals, scales))
-    dims = _dimensions(parts)
-    valid = _polygons_valid(parts, index, count)
-    kept = np.zeros(count, dtype=bool)
-    for dim in (0, 1, 2):
-        _, expected_index = _expected_parts(parts[dims == dim], index[dims == dim],
-                                            bounds * scales[:, None], dim, boundary, valid)
-        kept[expected_index] = True
-    return kept

@@ -11,8 +11,8 @@ from __future__ import annotations
 import numpy as np
 import shapely
 
+from rnsca.arrays import PathArrays
 from rnsca.clip_svg import Fill, flatten_paths
-from rnsca.io.svgpath import PathArrays
 
 __all__ = ["paths_to_shapely", "filled_region", "winding_numbers"]
 

@@ -291,9 +291,10 @@ def test_clip_exits_1_when_verification_fails(runner, source, monkeypatch):
     clip_geojson = rnsca.clip_geojson
 
     def overshooting(document, window, **options):
-        clipped, stats = clip_geojson(document, window, **options)
-        clipped["features"][0]["geometry"]["coordinates"][0][0] = [-1.0, 1.0]
-        return clipped, stats
+        result = clip_geojson(document, window, **options)
+        # The arrays verification reads; the CLI's document (arrays=True) holds views.
+        result.outputs["lines"].coords[0, :2] = [-1.0, 1.0]
+        return result
 
     monkeypatch.setattr(rnsca, "clip_geojson", overshooting)
     result = run(runner, str(source), *WINDOW, "--verify")

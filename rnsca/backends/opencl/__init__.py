@@ -43,8 +43,6 @@ it, and turns a failure into `BackendUnavailableError`.
 
 from __future__ import annotations
 
-import os
-import sys
 import threading
 import warnings
 from dataclasses import dataclass, field
@@ -54,9 +52,15 @@ import numpy as np
 import pyopencl as cl
 import pyopencl.array as cl_array
 
-from rnsca.arrays import exclusive_sum
-from rnsca.backends.base import METHOD_ID
-from rnsca.backends.numba_cpu import polygon_passes
+from rnsca.arrays import Ragged, exclusive_sum, group_offsets
+from rnsca.backends.base import (
+    METHOD_ID,
+    Capabilities,
+    LinePieces,
+    PolygonPieces,
+    SegmentPieces,
+)
+from rnsca.backends.numba_cpu import polygon_geometry, polygon_passes, warm_up_geometry
 from rnsca.errors import BackendUnavailableError, InvalidGeometryError, InvalidWindowError
 from rnsca.kernels import bezier as BZ
 from rnsca.kernels import counters as C
@@ -65,15 +69,7 @@ from rnsca.kernels import polylines as PL
 from rnsca.kernels.outcode import BOTTOM, LEFT, RIGHT, TOP
 from rnsca.options import Backend, Method, Mode, Precision, SegmentOptions
 from rnsca.stats import ClipStats, DeviceStats
-from rnsca.window import Window
-
-# OpenCL drivers that the development install registered in this environment (the
-# Makefile writes .venv/opencl-vendors: Intel's CPU runtime, for CPUs PoCL cannot build
-# for). The ICD loader reads OCL_ICD_VENDORS at its first platform query, not at import;
-# a value the user set is kept.
-_VENDORS = os.path.join(sys.prefix, "opencl-vendors")
-if os.path.isdir(_VENDORS):
-    os.environ.setdefault("OCL_ICD_VENDORS", _VENDORS)
+from rnsca.window import Window, WindowTable
 
 __all__ = ["OpenCLBackend", "list_devices", "select_device", "FLOAT32_RELATIVE_BOUND",
            "LOCAL_SIZE"]
@@ -325,12 +321,19 @@ class OpenCLBackend:
         self._device.program(self.precision is Precision.FLOAT64)  # a build error shows now
 
     @property
+    def capabilities(self) -> Capabilities:
+        """Return what this backend runs: every operation, both modes, on its device."""
+        return Capabilities(Backend.OPENCL, precision=self.precision,
+                            devices=(self.device["id"],))
+
+    @property
     def real(self) -> type:
         """Return the NumPy dtype of device coordinates."""
         return np.float64 if self.precision is Precision.FLOAT64 else np.float32
 
-    def clip_segments(self, segments: np.ndarray, window: Window, options: SegmentOptions):
-        """Return ``(pieces, source, t, stats)``; see `ClipBackend.clip_segments`.
+    def clip_segments(self, segments: np.ndarray, window: Window,
+                      options: SegmentOptions) -> SegmentPieces:
+        """Return the visible piece of each segment; see `ClipBackend.clip_segments`.
 
         ``stats.device`` holds the device, the precision, and the transfers and times.
 
@@ -392,14 +395,13 @@ class OpenCLBackend:
         full = np.zeros((groups, C.WIDTH), dtype=np.int64)
         full[:, :_SEGMENT_COUNTERS] = rows
         stats = ClipStats.from_counters(full, n, m, device=device_stats)
-        return out_pieces, out_source, out_t.astype(np.float64), stats
+        return SegmentPieces(out_pieces, out_source, out_t.astype(np.float64), stats)
 
-    def clip_lines(self, xy, z, part_offsets, part_window, windows, options: SegmentOptions,
-                   drop_edge_runs: bool):
-        """Return ``(xy, z, chain_offsets, chains_per_part, counters, device_stats)``.
+    def clip_lines(self, lines: Ragged, windows: WindowTable, options: SegmentOptions,
+                   drop_edge_runs: bool) -> LinePieces:
+        """Return the chains of each line geometry; see `ClipBackend.clip_lines`.
 
-        See `rnsca.backends.numba_cpu.NumbaBackend.clip_lines` (the same arrays, and the
-        `DeviceStats` too). On the device (`_prune`): the chunk boxes, RNSCA over runs of
+        On the device (`_prune`): the chunk boxes, RNSCA over runs of
         chunks (one work-item per part) and the clip of the segments of undecided chunks
         (one work-item per chunk); on the host, with the Numba kernel that does it for
         the Numba backend, the chains: accepted chunks copied, clipped pieces joined.
@@ -409,23 +411,36 @@ class OpenCLBackend:
         InvalidGeometryError, InvalidWindowError
             In float32, for coordinates beyond its range or a window that collapses.
         """
-        tables, counters, device_stats = self._prune(xy, part_offsets, part_window, windows,
-                                                     options, drop_edge_runs, None)
-        out = _assemble_lines(xy, z, part_offsets, part_window, windows, drop_edge_runs,
-                              *tables)
-        return (*out, counters, device_stats)
+        lines.check_finite()  # the device kernels take finite coordinates
+        xy, z = lines.split_z()
+        part_offsets, geometry_parts = lines.item_offsets()
+        part_geometry = np.repeat(np.arange(lines.count, dtype=np.int64),
+                                  np.diff(geometry_parts))
+        part_window = windows.of_items(part_geometry)
+        tables, counters, device_stats = self._prune(xy, part_offsets, part_window,
+                                                     windows.bounds, options, drop_edge_runs,
+                                                     None)
+        out_xy, out_z, chain_offsets, chains_per_part = _assemble_lines(
+            xy, z, part_offsets, part_window, windows.bounds, drop_edge_runs, *tables)
+        return LinePieces(out_xy, out_z, chain_offsets,
+                          group_offsets(chains_per_part, geometry_parts), counters,
+                          device_stats)
 
-    def clip_polygons(self, xy, z, ring_offsets, polygon_offsets, polygon_window, windows,
-                      options: SegmentOptions):
-        """Return the Numba backend's `clip_polygons` arrays and counters, and `DeviceStats`.
+    def clip_polygons(self, polygons: Ragged, windows: WindowTable,
+                      options: SegmentOptions) -> PolygonPieces:
+        """Return the output polygons of each geometry; see `ClipBackend.clip_polygons`.
 
-        ``(xy, z, ring_offsets, rings_per_output, outputs_per_polygon, counters,
-        device_stats)``. The shells' boxes classify the polygons on the host
+        The shells' boxes classify the polygons on the host
         (`polygons.classify_polygons`); the rings of the ambiguous ones are pruned and
         their undecided segments clipped on the device (`_prune`, rings broken along the
         window's edges); the rings are closed along the window on the host by the Numba
         polygon kernel, from the device's decisions and pieces.
         """
+        xy, z = polygons.split_z()
+        ring_offsets = polygons.offsets[0]
+        polygon_offsets, geometry_polygons = polygons.item_offsets()
+        polygon_window = windows.of_items(polygon_geometry(geometry_polygons))
+        windows = windows.bounds
         n_polygons = polygon_offsets.shape[0] - 1
         polygon_class = np.empty(n_polygons, dtype=np.int8)
         PG.classify_polygons(xy, ring_offsets, polygon_offsets, polygon_window, windows,
@@ -436,10 +451,12 @@ class OpenCLBackend:
         active = (polygon_class[ring_polygon] == PG.AMBIGUOUS).astype(np.uint8)
         tables, device_counters, device_stats = self._prune(
             xy, ring_offsets, ring_window, windows, options, True, active)
-        *clipped, counters = polygon_passes(xy, z, ring_offsets, polygon_offsets,
-                                            polygon_window, windows, options, polygon_class,
-                                            (True, *tables))
-        return (*clipped, np.concatenate([counters, device_counters]), device_stats)
+        out_xy, out_z, out_rings, rings_per_output, outputs_per_polygon, counters = \
+            polygon_passes(xy, z, ring_offsets, polygon_offsets, polygon_window, windows,
+                           options, polygon_class, (True, *tables))
+        return PolygonPieces(out_xy, out_z, out_rings, rings_per_output,
+                             group_offsets(outputs_per_polygon, geometry_polygons),
+                             np.concatenate([counters, device_counters]), device_stats)
 
     def _prune(self, xy, part_offsets, part_window, windows, options: SegmentOptions,
                drop_edge_runs: bool, active):
@@ -665,16 +682,7 @@ class OpenCLBackend:
         segments = np.array([[-1.0, 0.5, 2.0, 0.5], [0.2, 0.2, 0.8, 0.8]])
         for method in Method:
             self.clip_segments(segments, window, SegmentOptions.resolve(window, method=method))
-        ring = np.array([[-1.0, 0.25], [2.0, 0.25], [2.0, 0.75], [-1.0, 0.75], [-1.0, 0.25]])
-        offsets = np.array([0, 5], dtype=np.int64)
-        windows = np.array([[0.0, 0.0, 1.0, 1.0]])
-        index = np.zeros(1, dtype=np.int64)
-        options = SegmentOptions.resolve(window)
-        for z in (np.empty(0), np.zeros(5)):
-            for drop in (False, True):
-                self.clip_lines(ring, z, offsets, index, windows, options, drop)
-            self.clip_polygons(ring, z, offsets, np.array([0, 1], dtype=np.int64), index,
-                               windows, options)
+        warm_up_geometry(self)
         from rnsca.clip_svg import clip_svg
         from rnsca.io.svgpath import parse_paths
 

@@ -254,9 +254,9 @@ def test_two_backends_on_one_device_can_be_called_at_once(opencl, opencl_module,
         t.start()
     for t in threads:
         t.join()
-    for pieces, source, _, _ in results:
-        np.testing.assert_array_equal(source, expected.source)
-        np.testing.assert_allclose(pieces, expected.segments, rtol=1e-12, atol=1e-12)
+    for out in results:
+        np.testing.assert_array_equal(out.source, expected.source)
+        np.testing.assert_allclose(out.pieces, expected.segments, rtol=1e-12, atol=1e-12)
 
 
 # --- float32 -------------------------------------------------------------------------------
@@ -285,10 +285,10 @@ def test_float32_pieces_are_within_the_documented_bound(float32, method, mode, r
         rng.integers(-2, 5, size=(300, 4)) * 0.5,  # on edges and corners
     ]) * scale + offset
     options = SegmentOptions.resolve(window, method=method, mode=mode)
-    pieces, source, t, stats = float32.clip_segments(segs, window, options)
+    out = float32.clip_segments(segs, window, options)
+    pieces, source, stats = out.pieces, out.source, out.stats
     assert stats.device.precision == "float32"
-    # The reference: the same input rounded to float32, clipped in float64 (by the NumPy
-    # reference, fast also when the kernels run uncompiled).
+    # The reference: the same input rounded to float32, clipped in float64 by Numba.
     ref = clip_segments(_rounded(segs), _rounded(window.bounds), method=method, mode=mode,
                         backend="numba")
     size = np.maximum(np.abs(segs).max(axis=1), np.abs(window.bounds).max())
@@ -335,7 +335,8 @@ def test_float32_gives_the_same_decisions_on_exact_inputs(float32):
     for method in Method:
         for mode in Mode:
             options = SegmentOptions.resolve(W, method=method, mode=mode)
-            pieces, source, t, stats = float32.clip_segments(segs, W, options)
+            out = float32.clip_segments(segs, W, options)
+            pieces, source, stats = out.pieces, out.source, out.stats
             ref = clip_segments(segs, W, method=method, mode=mode, backend="numba")
             np.testing.assert_array_equal(source, ref.source)
             np.testing.assert_allclose(pieces, ref.segments, rtol=0, atol=2.0 ** -22 * 20)

@@ -17,6 +17,7 @@ from rnsca.kernels import bezier as BZ
 from rnsca.kernels import counters as C
 from rnsca.kernels import polygons as PG
 from rnsca.kernels import polylines as PL
+from rnsca.kernels import records as R
 from rnsca.kernels import segments as K
 from rnsca.kernels.validate import all_finite
 from rnsca.options import Backend, Curves, Method, Mode, PathOptions, SegmentOptions
@@ -58,25 +59,25 @@ class NumbaBackend:
         """Return the visible piece of each segment; see `ClipBackend.clip_segments`."""
         n = segments.shape[0]
         n_blocks = max(1, -(-n // BLOCK_SIZE))
-        args = (segments, window.xmin, window.ymin, window.xmax, window.ymax,
-                METHOD_ID[options.method], options.n, options.max_depth, options.tolerance,
-                options.auto_piece, options.mode is Mode.EXACT, BLOCK_SIZE)
+        bounds = R.Window(window.xmin, window.ymin, window.xmax, window.ymax)
+        settings = core_options(options)
         driver = K.clip_segment_blocks_serial if n_blocks <= SERIAL_BLOCKS \
             else K.clip_segment_blocks
-        block_count = np.zeros(n_blocks, dtype=np.int64)
-        counters = np.zeros((n_blocks, C.WIDTH), dtype=np.int64)
-        no_pieces = (np.empty((0, 4)), np.empty(0, dtype=np.int64), np.empty((0, 2)))
-        driver(*args, False, np.zeros(n_blocks, dtype=np.int64), *no_pieces,
-                              block_count, counters)
+        counted = K.SegmentOutput(
+            np.empty((0, 4)), np.empty(0, dtype=np.int64), np.empty((0, 2)),
+            np.zeros(n_blocks, dtype=np.int64), np.zeros(n_blocks, dtype=np.int64),
+            np.zeros((n_blocks, C.WIDTH), dtype=np.int64))
+        driver(segments, bounds, settings, BLOCK_SIZE, False, counted)
         block_start = np.zeros(n_blocks, dtype=np.int64)
-        np.cumsum(block_count[:-1], out=block_start[1:])
-        m = int(block_count.sum())
-        pieces = np.empty((m, 4), dtype=np.float64)
-        source = np.empty(m, dtype=np.int64)
-        t = np.empty((m, 2), dtype=np.float64)
-        driver(*args, True, block_start, pieces, source, t,
-                              np.empty(n_blocks, dtype=np.int64), np.zeros_like(counters))
-        return SegmentPieces(pieces, source, t, ClipStats.from_counters(counters, n, m))
+        np.cumsum(counted.block_count[:-1], out=block_start[1:])
+        m = int(counted.block_count.sum())
+        written = K.SegmentOutput(
+            np.empty((m, 4), dtype=np.float64), np.empty(m, dtype=np.int64),
+            np.empty((m, 2), dtype=np.float64), block_start,
+            np.empty(n_blocks, dtype=np.int64), np.zeros_like(counted.counters))
+        driver(segments, bounds, settings, BLOCK_SIZE, True, written)
+        return SegmentPieces(written.pieces, written.source, written.t,
+                             ClipStats.from_counters(counted.counters, n, m))
 
     def clip_lines(self, lines: Ragged, windows: WindowTable, options: SegmentOptions,
                    drop_edge_runs: bool) -> GeometryPieces:
@@ -273,6 +274,13 @@ def warm_up_geometry(backend) -> None:
                 backend.clip_lines(Ragged.of(kind, coords, levels), windows, options, drop)
         backend.clip_polygons(Ragged.of(GeometryKind.POLYGON, coords, (offsets, one)),
                               windows, options)
+
+
+def core_options(options: SegmentOptions) -> R.CoreOptions:
+    """Return the kernels' record of the segment core's options (one type per field)."""
+    return R.CoreOptions(METHOD_ID[options.method], int(options.n), int(options.max_depth),
+                         float(options.tolerance), float(options.auto_piece),
+                         options.mode is Mode.EXACT)
 
 
 def polygon_passes(xy, z, ring_offsets, polygon_offsets, polygon_window, windows,

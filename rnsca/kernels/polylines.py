@@ -44,9 +44,11 @@ from rnsca.constants import (
 from rnsca.kernels import counters as C
 from rnsca.kernels.jit import borrowing, inlined, parallel, scalar
 from rnsca.kernels.outcode import outcode
+from rnsca.kernels.records import CoreOptions, Window
 from rnsca.kernels.segments import (
     RNSCA,
     STACK_CAPACITY,
+    SegmentStack,
     clip_one,
     rnsca_segment,
 )
@@ -208,8 +210,8 @@ def _clip_segments(xy, z, has_z, write, a, b, xmin, ymin, xmax, ymax, method, n_
     if method != RNSCA:
         for i in range(a, b):
             keep, t0, t1, ax, ay, bx, by = clip_one(
-                method, xy[i, 0], xy[i, 1], xy[i + 1, 0], xy[i + 1, 1], xmin, ymin, xmax,
-                ymax, max_depth, tol, exact, st)
+                xy[i, 0], xy[i, 1], xy[i + 1, 0], xy[i + 1, 1], Window(xmin, ymin, xmax, ymax),
+                CoreOptions(method, n_fixed, max_depth, tol, auto_piece, exact), st)
             v, c, last_v = _emit_visible(xy, z, has_z, write, i, keep, t0, t1, ax, ay, bx,
                                          by, xmin, ymin, xmax, ymax, drop_edge_runs,
                                          break_at_boundary, out_xy, out_z, out_starts, v, c,
@@ -251,8 +253,9 @@ def _clip_segments(xy, z, has_z, write, a, b, xmin, ymin, xmax, ymax, method, n_
             rejected += 1
             continue
         keep, t0, t1, ax, ay, bx, by = rnsca_segment(
-            xy[i, 0], xy[i, 1], xy[i + 1, 0], xy[i + 1, 1], xmin, ymin, xmax, ymax, n_fixed,
-            max_depth, tol, auto_piece, exact, st, stack_f, stack_i)
+            xy[i, 0], xy[i, 1], xy[i + 1, 0], xy[i + 1, 1], Window(xmin, ymin, xmax, ymax),
+            CoreOptions(method, n_fixed, max_depth, tol, auto_piece, exact), st,
+            SegmentStack(stack_f, stack_i))
         v, c, last_v = _emit_visible(xy, z, has_z, write, i, keep, t0, t1, ax, ay, bx, by,
                                      xmin, ymin, xmax, ymax, drop_edge_runs, break_at_boundary,
                                      out_xy, out_z, out_starts, v, c, last_v)

@@ -113,11 +113,14 @@ def approx_leaf_bound(lengths: np.ndarray, result: SegmentClipResult) -> np.ndar
     ``L / 2**d`` long (``L / N**d`` for a fixed N); a piece becomes a leaf at
     ``max_depth`` or once it is no longer than `tolerance`. Each end of an approx piece
     is therefore within one leaf of the true end, and a visible part shorter than two
-    leaves may vanish, so a segment's deviation is at most twice this bound.
+    leaves may vanish, so a segment's deviation is at most twice this bound. No leaf is
+    shorter than the parameter's resolution, ``eps * L`` (README, "Limits": a segment
+    ~1e15 windows long cannot be cut finer than about a tenth of the window).
     """
     options = result.options
     base = 2 if options.n == 0 else options.n
-    return np.maximum(options.tolerance, lengths / float(base) ** options.max_depth)
+    leaf = np.maximum(options.tolerance, lengths / float(base) ** options.max_depth)
+    return np.maximum(leaf, lengths * np.finfo(np.float64).eps)
 
 
 def verify(original, clipped, window, *, mode=None, approx_bound=None,

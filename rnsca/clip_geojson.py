@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, fields
 from itertools import zip_longest
+from typing import Any
 
 import numpy as np
 
@@ -48,20 +50,22 @@ class GeoJSONClipResult:
     inputs: dict
     outputs: dict
 
-    def __iter__(self):
+    def __iter__(self) -> Iterator[Any]:
         """Unpack as ``document, stats``."""
         return iter((self.document, self.stats))
 
     def __len__(self) -> int:
         return 2
 
-    def __getitem__(self, index: int):
+    def __getitem__(self, index: int) -> Any:
         """Return ``(document, stats)[index]``."""
         return (self.document, self.stats)[index]
 
 
-def clip_geojson(obj, window, *, keep_empty: bool = False, max_vertices: int | None = None,
-                 arrays: bool = False, **options) -> GeoJSONClipResult:
+def clip_geojson(obj: dict | str | bytes | bytearray | memoryview,
+                 window: Window | Iterable[float], *, keep_empty: bool = False,
+                 max_vertices: int | None = None, arrays: bool = False,
+                 **options: Any) -> GeoJSONClipResult:
     """Return a GeoJSON object clipped to a rectangular window, and the stats of the clip.
 
     Every geometry is clipped as ``shapely.intersection`` with the window would, keeping
@@ -136,11 +140,15 @@ def clip_geojson(obj, window, *, keep_empty: bool = False, max_vertices: int | N
         if layout.geometry_count(kind) == 0:
             continue
         inputs[kind] = getattr(layout, kind)
-        outputs[kind] = clip_ragged(*inputs[kind], window, keep_empty=True, **options)
+        geometry_type, coords, offsets = inputs[kind]
+        outputs[kind] = clip_ragged(geometry_type, coords, offsets, window, keep_empty=True,
+                                    **options)
     stats = [result.stats for result in outputs.values()]
     if not stats:
         # Nothing to clip: still check the options, and report zero counts.
-        stats.append(clip_ragged(*layout.points, window, keep_empty=True, **options).stats)
+        geometry_type, coords, offsets = layout.points
+        stats.append(clip_ragged(geometry_type, coords, offsets, window, keep_empty=True,
+                                 **options).stats)
     clipped = {kind: (result.geometry_type, result.coords, result.offsets)
                for kind, result in outputs.items()}
     document, feature_source = write_geojson(layout, **clipped, keep_empty=keep_empty,
@@ -148,7 +156,7 @@ def clip_geojson(obj, window, *, keep_empty: bool = False, max_vertices: int | N
     return GeoJSONClipResult(document, combine_stats(stats), feature_source, inputs, outputs)
 
 
-def combine_stats(stats) -> ClipStats:
+def combine_stats(stats: Iterable[ClipStats]) -> ClipStats:
     """Return the stats of several clipping calls as those of one.
 
     Counters and per-level tuples add up (tuples elementwise); the deepest levels are the
@@ -165,7 +173,7 @@ def combine_stats(stats) -> ClipStats:
     stats = list(stats)
     if len(stats) == 1:
         return stats[0]
-    values = {}
+    values: dict[str, Any] = {}
     for field in fields(ClipStats):
         parts = [getattr(s, field.name) for s in stats]
         if field.name == "device":

@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from enum import Enum
+from typing import SupportsIndex
 
 from rnsca.constants import MAX_DEPTH_LIMIT, N_MAX, N_MIN
 from rnsca.errors import InvalidOptionError
@@ -26,7 +27,7 @@ class _ChoiceEnum(str, Enum):
     """A string enum whose lookup error lists the valid choices (case-insensitive)."""
 
     @classmethod
-    def _missing_(cls, value):
+    def _missing_(cls, value: object) -> _ChoiceEnum:
         if isinstance(value, str):
             for member in cls:
                 if member.value == value.lower():
@@ -116,8 +117,10 @@ class SegmentOptions:
     auto_piece: float
 
     @classmethod
-    def resolve(cls, window: Window, *, method="rnsca", n="auto", max_depth=None,
-                tolerance=None, mode="exact") -> SegmentOptions:
+    def resolve(cls, window: Window, *, method: Method | str = "rnsca",
+                n: SupportsIndex | str = "auto", max_depth: SupportsIndex | None = None,
+                tolerance: float | None = None,
+                mode: Mode | str = "exact") -> SegmentOptions:
         """Return checked options, with defaults filled in for `window`.
 
         Defaults: ``max_depth=32``; ``tolerance`` is ``1e-9 * window.size`` in approx mode
@@ -142,7 +145,7 @@ class SegmentOptions:
         return cls(method, mode, n_value, depth, tol, window.size)
 
 
-def subdivision_n(n) -> int | None:
+def subdivision_n(n: SupportsIndex | str) -> int | None:
     """Return `n` checked (an integer N_MIN..N_MAX), or None for ``"auto"``."""
     if isinstance(n, str):
         if n.lower() != "auto":
@@ -152,13 +155,13 @@ def subdivision_n(n) -> int | None:
     return _integer("n", n, N_MIN, N_MAX)
 
 
-def subdivision_depth(max_depth, default: int) -> int:
+def subdivision_depth(max_depth: SupportsIndex | None, default: int) -> int:
     """Return `max_depth` checked (an integer 0..MAX_DEPTH_LIMIT), or `default` for None."""
     return default if max_depth is None else _integer("max_depth", max_depth, 0,
                                                       MAX_DEPTH_LIMIT)
 
 
-def positive_tolerance(value, *, finite: bool = False) -> float:
+def positive_tolerance(value: float, *, finite: bool = False) -> float:
     """Return `value` as a float > 0 (and finite if asked), else InvalidOptionError."""
     if isinstance(value, bool):
         raise InvalidOptionError(f"tolerance must be a positive number, got {value!r}")
@@ -173,7 +176,7 @@ def positive_tolerance(value, *, finite: bool = False) -> float:
     return tol
 
 
-def _integer(name: str, value, low: int, high: int) -> int:
+def _integer(name: str, value: SupportsIndex, low: int, high: int) -> int:
     if isinstance(value, bool) or not isinstance(value, (int,)) and not (
         hasattr(value, "__index__")
     ):
@@ -200,7 +203,7 @@ class Fill(str, Enum):
     EVENODD = "evenodd"
 
     @classmethod
-    def of(cls, value) -> Fill | None:
+    def of(cls, value: Fill | str | None) -> Fill | None:
         """Return the fill rule, or None (strokes) for None or "none"."""
         if value is None or (isinstance(value, str) and value.lower() == "none"):
             return None
@@ -240,8 +243,11 @@ class PathOptions:
     tolerance: float
 
     @classmethod
-    def resolve(cls, window: Window, *, curves="preserve", fill=None, tolerance=None,
-                method="rnsca", n="auto", max_depth=None, mode="exact") -> PathOptions:
+    def resolve(cls, window: Window, *, curves: Curves | str = "preserve",
+                fill: Fill | str | None = None, tolerance: float | None = None,
+                method: Method | str = "rnsca", n: SupportsIndex | str = "auto",
+                max_depth: SupportsIndex | None = None,
+                mode: Mode | str = "exact") -> PathOptions:
         """Return checked options, with defaults filled in for `window`.
 
         Defaults: N = `bezier.CURVE_N_AUTO` for ``n="auto"``; depth

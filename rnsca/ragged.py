@@ -9,19 +9,22 @@ onto geometries, with `source` saying which input each output geometry came from
 
 from __future__ import annotations
 
+from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass, replace
+from typing import Any, SupportsIndex
 
 import numpy as np
+import numpy.typing as npt
 import shapely
 
 from rnsca.arrays import GeometryKind, Ragged
-from rnsca.backends.base import GeometryPieces, Operation
+from rnsca.backends.base import ClipBackend, GeometryPieces, Operation
 from rnsca.backends.registry import get_backend
 from rnsca.errors import InvalidOptionError
 from rnsca.kernels import counters as C
-from rnsca.options import Boundary, Mode, SegmentOptions
-from rnsca.stats import ClipStats
-from rnsca.window import WindowTable
+from rnsca.options import Backend, Boundary, Method, Mode, SegmentOptions
+from rnsca.stats import ClipStats, DeviceStats
+from rnsca.window import Window, WindowTable
 
 __all__ = ["RaggedClipResult", "clip_ragged", "resolve_geometry_options", "to_shapely"]
 
@@ -52,7 +55,7 @@ class RaggedClipResult:
     def __len__(self) -> int:
         return self.source.shape[0]
 
-    def __iter__(self):
+    def __iter__(self) -> Iterator[Any]:
         """Unpack as ``geometry_type, coords, offsets, source, stats``."""
         return iter((self.geometry_type, self.coords, self.offsets, self.source, self.stats))
 
@@ -61,7 +64,8 @@ class RaggedClipResult:
         return to_shapely(self.geometry_type, self.coords, self.offsets)
 
 
-def to_shapely(geometry_type, coords, offsets) -> np.ndarray:
+def to_shapely(geometry_type: shapely.GeometryType | int, coords: np.ndarray,
+               offsets: Sequence[np.ndarray]) -> np.ndarray:
     """Return ``shapely.from_ragged_array(...)``, also when there are no coordinates.
 
     (Shapely 2.2 fails on line arrays whose geometries are all empty.)
@@ -79,9 +83,12 @@ def _with_z(xy: np.ndarray, z: np.ndarray, has_z: bool) -> np.ndarray:
     return np.ascontiguousarray(np.column_stack([xy, z]))
 
 
-def resolve_geometry_options(windows: WindowTable, dimension: int, *, boundary="closed",
-                             method="rnsca", n="auto", max_depth=None, tolerance=None,
-                             mode="exact", backend="numba"):
+def resolve_geometry_options(
+        windows: WindowTable, dimension: int, *, boundary: Boundary | str = "closed",
+        method: Method | str = "rnsca", n: SupportsIndex | str = "auto",
+        max_depth: SupportsIndex | None = None, tolerance: float | None = None,
+        mode: Mode | str = "exact", backend: Backend | str = "numba",
+) -> tuple[SegmentOptions, Boundary, ClipBackend]:
     """Return ``(SegmentOptions, Boundary, backend)`` for clipping geometry of `dimension`.
 
     Default tolerances follow the smallest of the `windows`.
@@ -107,9 +114,14 @@ def resolve_geometry_options(windows: WindowTable, dimension: int, *, boundary="
     return options, side, engine
 
 
-def clip_ragged(geometry_type, coords, offsets, window, *, boundary="closed", keep_empty=False,
-                check_validity=False, method="rnsca", n="auto", max_depth=None, tolerance=None,
-                mode="exact", backend="numba") -> RaggedClipResult:
+def clip_ragged(geometry_type: shapely.GeometryType | GeometryKind | str, coords: npt.ArrayLike,
+                offsets: Sequence[npt.ArrayLike],
+                window: Window | Iterable[float] | Iterable[Iterable[float]], *,
+                boundary: Boundary | str = "closed", keep_empty: bool = False,
+                check_validity: bool = False, method: Method | str = "rnsca",
+                n: SupportsIndex | str = "auto", max_depth: SupportsIndex | None = None,
+                tolerance: float | None = None, mode: Mode | str = "exact",
+                backend: Backend | str = "numba") -> RaggedClipResult:
     """Return the geometries of a ragged array clipped to a rectangular window.
 
     The columnar fast path: the triple ``shapely.to_ragged_array`` returns (and GeoArrow
@@ -189,15 +201,16 @@ def clip_ragged(geometry_type, coords, offsets, window, *, boundary="closed", ke
     return result
 
 
-def _stats(counters, segments_in, pieces_out, ragged: Ragged, vertices_out, geometries_out,
-           device):
+def _stats(counters: np.ndarray, segments_in: int, pieces_out: int, ragged: Ragged,
+           vertices_out: int, geometries_out: int, device: DeviceStats | None) -> ClipStats:
     return ClipStats.from_counters(
         counters, segments_in, pieces_out, geometries_in=ragged.count,
         geometries_out=geometries_out, vertices_in=ragged.coords.shape[0],
         vertices_out=vertices_out, device=device)
 
 
-def _clip_points(ragged: Ragged, windows: WindowTable, side: Boundary, keep_empty):
+def _clip_points(ragged: Ragged, windows: WindowTable, side: Boundary,
+                 keep_empty: bool) -> RaggedClipResult:
     xy = ragged.coords
     count = ragged.count
     if ragged.kind is GeometryKind.POINT:

@@ -16,7 +16,7 @@ import orjson
 
 import rnsca
 from rnsca.backends.registry import available_backends, get_backend, opencl_report
-from rnsca.clip import as_segments
+from rnsca.clip import SegmentClipResult, as_segments
 from rnsca.errors import (
     InvalidGeometryError,
     LimitExceededError,
@@ -24,6 +24,7 @@ from rnsca.errors import (
 )
 from rnsca.options import Mode
 from rnsca.stats import ClipStats
+from rnsca.verify import Verification
 from rnsca.window import Window
 from service.budget import (
     check_vertices,
@@ -156,7 +157,8 @@ def clip_geojson(body: bytes, settings: Settings) -> Outcome:
 
 
 def _clip_segments(array: np.ndarray, window: Window, options: ClipOptions,
-                   verify: bool | None, settings: Settings):
+                   verify: bool | None,
+                   settings: Settings) -> tuple[SegmentClipResult, Verification | None]:
     check_vertices(2 * array.shape[0], settings.max_vertices)
     arguments = _library_options(options, settings)
     segments = as_segments(array)

@@ -26,7 +26,7 @@ carries the kernels' counter rows (`rnsca.kernels.counters`) and, for a device, 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, NamedTuple, Protocol
+from typing import TYPE_CHECKING, Any, NamedTuple, Protocol
 
 import numpy as np
 
@@ -93,10 +93,10 @@ class Capabilities:
     """
 
     backend: Backend
-    operations: frozenset = field(default_factory=lambda: frozenset(Operation))
-    modes: frozenset = field(default_factory=lambda: frozenset(Mode))
+    operations: frozenset[Operation] = field(default_factory=lambda: frozenset(Operation))
+    modes: frozenset[Mode] = field(default_factory=lambda: frozenset(Mode))
     precision: Precision = Precision.FLOAT64
-    devices: tuple = ("cpu",)
+    devices: tuple[str, ...] = ("cpu",)
 
     def supports(self, operation: Operation | str, mode: Mode | str = Mode.EXACT) -> bool:
         """Return whether `operation` runs here in `mode`."""
@@ -114,7 +114,7 @@ class Capabilities:
             raise BackendUnavailableError(
                 f"backend {self.backend.value!r} does not run mode={mode.value!r}")
 
-    def to_dict(self) -> dict:
+    def to_dict(self) -> dict[str, Any]:
         """Return the capabilities as JSON-ready values (sorted lists of names)."""
         return {"backend": self.backend.value,
                 "operations": sorted(o.value for o in self.operations),

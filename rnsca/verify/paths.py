@@ -47,7 +47,7 @@ def paths_to_shapely(paths: PathArrays, tolerance: float, fill: Fill | None) -> 
     return out
 
 
-def filled_region(rings: list[np.ndarray], fill: Fill):
+def filled_region(rings: list[np.ndarray], fill: Fill) -> shapely.MultiPolygon:
     """Return the region that closed polylines `rings` paint under the fill rule.
 
     The outlines are noded and polygonized; each face is kept when the winding number

@@ -31,6 +31,18 @@ the write pass takes each run's decision from the count pass instead of testing 
 import numpy as np
 from numba import prange
 
+# The device's segment classes, the run decisions (kept by the count pass for the write
+# pass) and the stack's size are defined in rnsca.constants (shared with clip.cl);
+# importable from here as before.
+from rnsca.constants import CURVE_RUN_ACCEPTED as _RUN_ACCEPTED
+from rnsca.constants import CURVE_RUN_REJECTED as _RUN_REJECTED
+from rnsca.constants import CURVE_RUN_SEGMENTED as _RUN_SEGMENTED
+from rnsca.constants import (
+    CURVE_STACK_CAPACITY,
+    SEGMENT_ACCEPTED,
+    SEGMENT_AMBIGUOUS,
+    SEGMENT_REJECTED,
+)
 from rnsca.kernels import counters as C
 from rnsca.kernels.jit import borrowing, parallel, scalar
 from rnsca.kernels.outcode import BOTTOM, LEFT, RIGHT, TOP, clamp, outcode
@@ -73,13 +85,6 @@ BREAK_CAPACITY = 16
 # before any segment is (run-level RNSCA, as for polylines): a path that lies mostly
 # inside or outside is copied or skipped a run at a time.
 RUN_SEGMENTS = 16
-# Classes of a segment decided elsewhere (the OpenCL backend's ``classify_bezier``) by
-# the outcodes of its control points: all beyond one edge, all inside, or neither.
-SEGMENT_REJECTED = 0
-SEGMENT_ACCEPTED = 1
-SEGMENT_AMBIGUOUS = 2
-# Depth-first stack: at most N - 1 pending siblings per level, 33 levels, N <= 64.
-CURVE_STACK_CAPACITY = 64 * 34
 
 # Float state of the subpath being clipped (see `_emit_piece`, `_clamp_to`).
 _CUR_X = 0        # current point: the end of the output so far
@@ -106,10 +111,6 @@ _FIRST_AT_START = 9  # the subpath's first chain starts at its start point (stro
 _V_END = 10       # end of the subpath's counted output: a closing line dropped later
                   # (a whole closed stroke: Z draws it) is not written past it
 _INT_STATE_WIDTH = 11
-# Decisions of a run of segments, kept by the count pass for the write pass.
-_RUN_ACCEPTED = 0
-_RUN_REJECTED = 1
-_RUN_SEGMENTED = 2
 
 
 @scalar

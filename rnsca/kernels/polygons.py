@@ -21,12 +21,11 @@ cut point has its edge coordinate exactly on the edge line (see `outcode.end_poi
 import math
 from typing import NamedTuple
 
-import numba
 import numpy as np
 from numba import prange
 
 from rnsca.kernels import counters as C
-from rnsca.kernels.jit import borrowing, inlined, parallel, scalar
+from rnsca.kernels.jit import allocating, borrowing, inlined, parallel, scalar
 from rnsca.kernels.outcode import line_coordinate
 from rnsca.kernels.polylines import (
     RUN_STACK_CAPACITY,
@@ -40,7 +39,7 @@ from rnsca.kernels.polylines import (
     run_box_codes,
 )
 from rnsca.kernels.records import window_of
-from rnsca.kernels.segments import STACK_CAPACITY
+from rnsca.kernels.segments import segment_stack
 
 __all__ = [
     "AMBIGUOUS",
@@ -56,9 +55,6 @@ __all__ = [
     "signed_area",
     "sutherland_hodgman",
 ]
-
-# EXPERIMENT: a helper that allocates, with Numba's runtime whoever calls it.
-allocating = numba.njit(cache=True, nogil=True, error_model="numpy", _nrt=True)
 
 # Edges in counter-clockwise order, starting at (xmin, ymin).
 _BOTTOM, _RIGHT, _TOP, _LEFT = 0, 1, 2, 3
@@ -1375,9 +1371,8 @@ def _polygon_scratch(st, max_v, max_c, max_r, max_out, has_z):
     no_codes = np.empty(0, dtype=np.uint8)
     ch_xy = np.empty((max_v, 2), dtype=np.float64)
     return PolygonScratch(
-        BlockState(st, np.empty((RUN_STACK_CAPACITY, 3), dtype=np.int64),
-                   np.empty((STACK_CAPACITY, 6), dtype=np.float64),
-                   np.empty((STACK_CAPACITY, 3), dtype=np.int64), no_codes),
+        BlockState(st, np.empty((RUN_STACK_CAPACITY, 3), dtype=np.int64), segment_stack(),
+                   no_codes),
         ChainsOut(ch_xy, ch_xy.reshape(-1), np.empty(max_v if has_z else 0),
                   np.empty(max_c + 1, dtype=np.int64)),
         LogicalChains(np.empty(max_c, dtype=np.int64), np.empty(max_c, dtype=np.int64),

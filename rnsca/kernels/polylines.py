@@ -34,15 +34,25 @@ from typing import NamedTuple
 import numpy as np
 from numba import prange
 
+# The chunk length, the run stack's size and the device's chunk decisions are defined in
+# rnsca.constants (shared with clip.cl); importable from here as before.
+from rnsca.constants import (
+    CHUNK_ACCEPTED,
+    CHUNK_REJECTED,
+    CHUNK_SEGMENTED,
+    RUN_LEAF_SEGMENTS,
+    RUN_STACK_CAPACITY,
+)
 from rnsca.kernels import counters as C
 from rnsca.kernels.jit import borrowing, inlined, parallel, scalar
 from rnsca.kernels.outcode import outcode
 from rnsca.kernels.records import Window, window_of
 from rnsca.kernels.segments import (
     RNSCA,
-    STACK_CAPACITY,
+    SegmentStack,
     clip_one,
     rnsca_segment,
+    segment_stack,
 )
 
 __all__ = [
@@ -75,15 +85,9 @@ __all__ = [
     "vertex_code",
 ]
 
-# Runs of at most this many segments are clipped segment by segment: below it, a
-# bounding box costs about as much as the segments' own outcode tests.
-RUN_LEAF_SEGMENTS = 16
 # ``n="auto"`` for runs: a bounding box pass costs the same whatever N is, so a larger
 # N decides more of the run per pass; 16 keeps the stack and the per-child overhead small.
 RUN_N_AUTO = 16
-# Depth-first: at most N - 1 pending siblings per level, and a run of 2**63 vertices
-# split in two (the smallest N) is down to a leaf within 63 levels.
-RUN_STACK_CAPACITY = 64 * 64
 
 # Bits of a vertex code (`vertex_code`): the outcode, then two flags.
 OUTSIDE = 15                # the Cohen–Sutherland outcode (LEFT | RIGHT | BOTTOM | TOP)
@@ -132,16 +136,14 @@ class BlockState(NamedTuple):
     """What one block of geometries counts into and works in.
 
     `st` is the block's counter row (`counters`); `run_stack` (`RUN_STACK_CAPACITY`, 3)
-    the runs pending, empty where no run is decided; `stack_f`
-    (`segments.STACK_CAPACITY`, 6) and `stack_i` (STACK_CAPACITY, 3) the scratch of
+    the runs pending, empty where no run is decided; `segment_stack` the scratch of
     `segments.rnsca_segment`; `codes` (`CODE_SCRATCH_BYTES`) that of `code_chunks`, empty
     where nothing is coded.
     """
 
     st: np.ndarray
     run_stack: np.ndarray
-    stack_f: np.ndarray
-    stack_i: np.ndarray
+    segment_stack: SegmentStack
     codes: np.ndarray
 
 
@@ -348,15 +350,11 @@ def _clip_segments(line, a, b, cut, break_at_boundary, options, out, write, v, c
     xy = line.xy
     window = cut.window
     xmin, ymin, xmax, ymax = window
-    method, n_fixed, max_depth, tol, auto_piece, exact = options
     st = block.st
-    stack_f = block.stack_f
-    stack_i = block.stack_i
-    if method != RNSCA:
+    if options.method != RNSCA:
         for i in range(a, b):
             keep, t0, t1, ax, ay, bx, by = clip_one(
-                method, xy[i, 0], xy[i, 1], xy[i + 1, 0], xy[i + 1, 1], xmin, ymin, xmax,
-                ymax, max_depth, tol, exact, st)
+                xy[i, 0], xy[i, 1], xy[i + 1, 0], xy[i + 1, 1], window, options, st)
             v, c, last_v = _emit_visible(line, i, keep, Piece(t0, t1, ax, ay, bx, by), cut,
                                          break_at_boundary, out, write, v, c, last_v)
         return v, c, last_v
@@ -392,8 +390,8 @@ def _clip_segments(line, a, b, cut, break_at_boundary, options, out, write, v, c
             rejected += 1
             continue
         keep, t0, t1, ax, ay, bx, by = rnsca_segment(
-            xy[i, 0], xy[i, 1], xy[i + 1, 0], xy[i + 1, 1], xmin, ymin, xmax, ymax, n_fixed,
-            max_depth, tol, auto_piece, exact, st, stack_f, stack_i)
+            xy[i, 0], xy[i, 1], xy[i + 1, 0], xy[i + 1, 1], window, options, st,
+            block.segment_stack)
         v, c, last_v = _emit_visible(line, i, keep, Piece(t0, t1, ax, ay, bx, by), cut,
                                      break_at_boundary, out, write, v, c, last_v)
     if stretch >= 0:
@@ -742,8 +740,7 @@ def _line_block(blk, block_size, line, lines, options, drop_edge_runs, write, ch
     st = np.zeros(C.WIDTH, dtype=np.int64) if write else counters[blk]
     # The write pass replays plans: it needs neither the run stack nor the code scratch.
     block = BlockState(st, np.empty((0 if write else RUN_STACK_CAPACITY, 3), dtype=np.int64),
-                       np.empty((STACK_CAPACITY, 6), dtype=np.float64),
-                       np.empty((STACK_CAPACITY, 3), dtype=np.int64),
+                       segment_stack(),
                        np.empty(0 if write else CODE_SCRATCH_BYTES, dtype=np.uint8))
     n_geometries = lines.geometry_parts.shape[0] - 1
     _line_parts(blk * block_size, min(n_geometries, (blk + 1) * block_size), line, lines,
@@ -901,13 +898,6 @@ def clip_lines(line, lines, options, drop_edge_runs):
     for g in range(n_geometries):
         geometry_chains[g + 1] = chain_start[geometry_parts[g + 1]]
     return out_xy, out_z, chain_offsets, geometry_chains, counters, -1
-
-
-# Decisions of chunks made on a device (the OpenCL backend's `classify_runs`): skipped,
-# copied whole, or clipped segment by segment.
-CHUNK_REJECTED = 0
-CHUNK_ACCEPTED = 1
-CHUNK_SEGMENTED = 2
 
 
 @borrowing

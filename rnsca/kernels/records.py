@@ -1,4 +1,4 @@
-"""Records the line and polygon kernels pass around: named tuples of arrays and scalars.
+"""Records the kernels pass around: named tuples of arrays and scalars.
 
 Values that travel together (a window's four bounds, the segment core's six options,
 a geometry's coordinates and offsets) go into one record instead of one parameter each.
@@ -15,6 +15,10 @@ built (float64 bounds, int64 counts), or the kernels compile once per mix. A rec
 ``prange`` loop reads must be flat (arrays and scalars only: Numba's parallel lowering
 refuses a record inside a record) and built outside the loop (Numba 0.68 fails to lower
 one built inside); the loop body hands it to a per-block function, which may nest it.
+
+Numba's on-disk cache names each record class in its index: after renaming or removing
+one, a stale index fails to load (``AttributeError: Can't get attribute ...`` at the
+first call, numba#6018), so clear the cache (``find rnsca -name '*.nb[ic]' -delete``).
 """
 
 from typing import NamedTuple
@@ -23,7 +27,7 @@ import numpy as np
 
 from rnsca.kernels.jit import inlined
 
-__all__ = ["CoreOptions", "Vertices", "Window", "vertices", "window_of"]
+__all__ = ["CoreOptions", "Fragment", "Vertices", "Window", "vertices", "window_of"]
 
 
 class Window(NamedTuple):
@@ -73,3 +77,22 @@ def window_of(windows, index, g):
     """
     w = index[g] if index.shape[0] > 0 else 0
     return Window(windows[w, 0], windows[w, 1], windows[w, 2], windows[w, 3])
+
+
+class Fragment(NamedTuple):
+    """A fragment ``[ta, tb]`` of a segment: its parameters, end points and ends' wide codes.
+
+    The codes are wide codes (``rnsca.kernels.outcode``): an input end point has
+    ``wide(outcode)``, an interpolated one `wide_outcode`. The subdivision methods
+    (RNSCA, midpoint) keep their pending fragments in this form and hand their undecided
+    leaves to the leaf clip (`liang_barsky.liang_barsky_leaf`) as one.
+    """
+
+    ta: float
+    xa: float
+    ya: float
+    ca: int
+    tb: float
+    xb: float
+    yb: float
+    cb: int

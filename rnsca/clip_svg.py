@@ -146,6 +146,18 @@ def _resolve(window: Window, *, curves, fill, tolerance, method, n, max_depth, m
     return _CurveOptions(curves, fill, mode, n_split, depth, tol, backend)
 
 
+def _kernel_input(paths: PathArrays, subpath_source, window: Window,
+                  options: _CurveOptions) -> tuple[BZ.PathInput, BZ.Box, BZ.Options]:
+    """Return the path kernel's records of the paths, the window and the options."""
+    return (BZ.PathInput(paths.controls, paths.degree, paths.subpath_offsets, paths.closed,
+                         paths.start, subpath_source),
+            BZ.Box(*window.bounds),
+            BZ.Options(fill=options.fill is not None, flatten=options.curves is Curves.FLATTEN,
+                       exact=options.mode is Mode.EXACT, n_split=int(options.n_split),
+                       leaf_depth=int(options.leaf_depth),
+                       tolerance=float(options.tolerance)))
+
+
 def clip_paths(paths: PathArrays, window, *, curves="preserve", fill=None, tolerance=None,
                method="rnsca", n="auto", max_depth=None, mode="exact",
                backend="numba") -> PathClipResult:
@@ -201,12 +213,8 @@ def clip_paths(paths: PathArrays, window, *, curves="preserve", fill=None, toler
     counters = np.zeros((n_blocks, C.WIDTH), dtype=np.int64)
     n_segments = np.zeros(n_subpaths, dtype=np.int64)
     n_out = np.zeros(n_subpaths, dtype=np.int64)
-    args = (paths.controls, paths.degree, paths.subpath_offsets, paths.closed, paths.start,
-            subpath_source, *window.bounds, options.fill is not None,
-            options.curves is Curves.FLATTEN, options.mode is Mode.EXACT, options.n_split,
-            options.leaf_depth, options.tolerance, block)
+    kernel_input = _kernel_input(paths, subpath_source, window, options)
     nothing = np.empty(0, dtype=np.int64)
-    run_decisions = np.empty(paths.degree.shape[0], dtype=np.int8)
     device_stats = None
     if options.backend is Backend.OPENCL:
         segment_class, run_decisions, point_start, points, device_stats = get_backend(
@@ -214,12 +222,15 @@ def clip_paths(paths: PathArrays, window, *, curves="preserve", fill=None, toler
                 paths.controls, paths.degree, window, options.tolerance,
                 "accepted" if options.curves is Curves.FLATTEN else "none",
                 paths.subpath_offsets)
-        decisions = (True, segment_class, point_start, points)
+        decisions = BZ.Decisions(True, run_decisions, segment_class, point_start, points)
     else:
-        decisions = (False, np.empty(0, np.uint8), nothing, np.empty((0, 2)))
-    BZ.clip_path_blocks(*args, False, nothing, nothing, np.empty((0, 4, 2)),
-                        np.empty(0, np.int8), nothing, np.empty((0, 2)), np.empty(0, bool),
-                        nothing, n_segments, n_out, run_decisions, counters, *decisions)
+        decisions = BZ.Decisions(False, np.empty(paths.degree.shape[0], dtype=np.int8),
+                                 np.empty(0, np.uint8), nothing, np.empty((0, 2)))
+    BZ.clip_path_blocks(*kernel_input, decisions,
+                        BZ.Layout(n_segments, n_out, nothing, nothing),
+                        BZ.Output(False, np.empty((0, 4, 2)), np.empty(0, np.int8), nothing,
+                                  np.empty((0, 2)), np.empty(0, bool), nothing),
+                        counters, block)
     segment_start = exclusive_sum(n_segments)
     subpath_start = exclusive_sum(n_out)
     m = int(segment_start[-1])
@@ -231,10 +242,11 @@ def clip_paths(paths: PathArrays, window, *, curves="preserve", fill=None, toler
     out_start = np.empty((k, 2))
     out_closed = np.empty(k, dtype=bool)
     out_from = np.empty(k, dtype=np.int64)
-    BZ.clip_path_blocks(*args, True, segment_start, subpath_start, out_ctrl, out_deg,
-                        out_first, out_start, out_closed, out_from, n_segments, n_out,
-                        run_decisions, np.zeros((n_blocks, C.WIDTH), dtype=np.int64),
-                        *decisions)
+    BZ.clip_path_blocks(*kernel_input, decisions,
+                        BZ.Layout(n_segments, n_out, segment_start, subpath_start),
+                        BZ.Output(True, out_ctrl, out_deg, out_first, out_start, out_closed,
+                                  out_from),
+                        np.zeros((n_blocks, C.WIDTH), dtype=np.int64), block)
     kept = out_from >= 0
     if not kept.all():  # entries freed by joining the two ends of a closed stroke
         out_first = np.append(out_first[:-1][kept], m)

@@ -32,7 +32,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import prange
 
-from rnsca.kernels.jit import parallel, scalar
+from rnsca.kernels.jit import borrowing, parallel, scalar
 
 __all__ = [
     "ERROR_MESSAGES",
@@ -479,22 +479,25 @@ def _put(controls, degree, at, deg, x0, y0, x1, y1, x2, y2, x3, y3):
     degree[at] = deg
 
 
-@scalar
-def _arc(x0, y0, rx, ry, angle, large, sweep, x, y, tolerance, out, at):
-    """Return the number of segments of one SVG arc; with ``out.write``, write them at `at`.
+@borrowing
+def _arc(start, rx, ry, angle, large, sweep, end, tolerance, write, out, at):
+    """Return the number of segments of one SVG arc; with `write`, write them at `at`.
 
-    The arc goes from (x0, y0) to (x, y) with the radii, rotation and flags given.
+    The arc goes from the point `start` to the point `end`, (x, y) tuples, with the
+    radii, rotation and flags given; `out` is a `Segments` record.
     """
+    x0, y0 = start
+    x, y = end
     kind, cx, cy, rx, ry, cos_phi, sin_phi, theta, delta = _arc_setup(
         x0, y0, rx, ry, angle, large, sweep, x, y)
     if kind == 0:
         return 0
     if kind == 1:
-        if out.write:
+        if write:
             _put(out.controls, out.degree, at, 1, x0, y0, x, y, x, y, x, y)
         return 1
     n = _arc_pieces(rx, ry, delta, tolerance)
-    if not out.write:
+    if not write:
         return n
     step = delta / n
     k = (4.0 / 3.0) * math.tan(0.25 * step)
@@ -532,10 +535,9 @@ def _arc(x0, y0, rx, ry, angle, large, sweep, x, y, tolerance, out, at):
 class Segments(NamedTuple):
     """The arrays `_build` writes, in the layout of `rnsca.io.svgpath.PathArrays`.
 
-    Without `write` (the count pass) they are empty and untouched.
+    The count pass gives empty ones, untouched.
     """
 
-    write: bool
     controls: np.ndarray         # float64 (m, 4, 2)
     degree: np.ndarray           # int8 (m,)
     start: np.ndarray            # float64 (k, 2)
@@ -543,19 +545,18 @@ class Segments(NamedTuple):
     subpath_offsets: np.ndarray  # int64 (k + 1,) each subpath's first segment
 
 
-@scalar
-def _build(nums, num_at, cmds, cmd_first, cmd_last, tolerance, out, seg_at, sub_at):
+@borrowing
+def _build(nums, num_at, cmds, cmd_first, cmd_last, tolerance, write, out, seg_at, sub_at):
     """Interpret one path's groups as segments and subpaths (SVG 2, section 9.3).
 
     The groups are ``cmds[cmd_first:cmd_last]``, their numbers ``nums[num_at:]``; arcs
     become cubics within `tolerance` (`ArcTolerance`). Returns ``(n_segments,
-    n_subpaths)``. With ``out.write``, segment rows go to ``out.controls[seg_at:]`` and
-    ``out.degree[seg_at:]``, subpath rows to ``out.start[sub_at:]``,
-    ``out.closed[sub_at:]`` and ``out.subpath_offsets[sub_at:]`` (the global index of
-    each subpath's first segment). The first group is a moveto (checked by the
-    tokenizer).
+    n_subpaths)``. With `write` (a literal, so the count pass compiles without the
+    writes), segment rows go to ``out.controls[seg_at:]`` and ``out.degree[seg_at:]``,
+    subpath rows to ``out.start[sub_at:]``, ``out.closed[sub_at:]`` and
+    ``out.subpath_offsets[sub_at:]`` (the global index of each subpath's first
+    segment). The first group is a moveto (checked by the tokenizer).
     """
-    write = out.write
     controls = out.controls
     degree = out.degree
     start = out.start
@@ -689,8 +690,8 @@ def _build(nums, num_at, cmds, cmd_first, cmd_last, tolerance, out, seg_at, sub_
         else:                                 # A
             x = nums[q + 5] + ox
             y = nums[q + 6] + oy
-            n_seg += _arc(cx, cy, nums[q], nums[q + 1], nums[q + 2], nums[q + 3] != 0.0,
-                          nums[q + 4] != 0.0, x, y, tolerance, out, at)
+            n_seg += _arc((cx, cy), nums[q], nums[q + 1], nums[q + 2], nums[q + 3] != 0.0,
+                          nums[q + 4] != 0.0, (x, y), tolerance, write, out, at)
             q += 7
             cx = x
             cy = y
@@ -708,12 +709,12 @@ def count_segments(nums, num_offsets, cmds, cmd_offsets, tol_abs, tol_rel):
     n = num_offsets.shape[0] - 1
     out = np.zeros((n, 2), dtype=np.int64)
     tolerance = ArcTolerance(tol_abs, tol_rel)
-    nothing = Segments(False, np.empty((0, 4, 2), dtype=np.float64), np.empty(0, dtype=np.int8),
+    nothing = Segments(np.empty((0, 4, 2), dtype=np.float64), np.empty(0, dtype=np.int8),
                        np.empty((0, 2), dtype=np.float64), np.empty(0, dtype=np.bool_),
                        np.empty(0, dtype=np.int64))
     for p in prange(n):
         n_seg, n_sub = _build(nums, num_offsets[p], cmds, cmd_offsets[p], cmd_offsets[p + 1],
-                              tolerance, nothing, 0, 0)
+                              tolerance, False, nothing, 0, 0)
         out[p, 0] = n_seg
         out[p, 1] = n_sub
     return out
@@ -737,10 +738,10 @@ def write_segments(nums, num_offsets, cmds, cmd_offsets, tol_abs, tol_rel, seg_o
     subpath_offsets = np.empty(k + 1, dtype=np.int64)
     subpath_offsets[k] = m
     tolerance = ArcTolerance(tol_abs, tol_rel)
-    segments = Segments(True, controls, degree, start, closed, subpath_offsets)
+    segments = Segments(controls, degree, start, closed, subpath_offsets)
     for p in prange(n):
         _build(nums, num_offsets[p], cmds, cmd_offsets[p], cmd_offsets[p + 1], tolerance,
-               segments, seg_offsets[p], sub_offsets[p])
+               True, segments, seg_offsets[p], sub_offsets[p])
     return controls, degree, start, closed, subpath_offsets
 
 

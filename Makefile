@@ -7,7 +7,7 @@ SERVE_STAMP := $(VENV)/.installed-service
 HOST ?= 127.0.0.1
 PORT ?= 8000
 
-.PHONY: serve test bench lint clean
+.PHONY: serve test check bench lint clean
 
 # The client SDK (clients/python, package rnsca-client) is installed beside rnsca so that
 # `make test` tests it against live servers.
@@ -32,8 +32,17 @@ $(SERVE_STAMP): pyproject.toml
 serve: $(SERVE_STAMP)
 	$(VENV)/bin/rnsca serve --host $(HOST) --port $(PORT)
 
+# Ruff (style, NumPy docstrings, return types of public functions), the layer rules
+# (import-linter: [tool.importlinter] in pyproject.toml) and the type checker (mypy:
+# [tool.mypy], rnsca outside its kernels, and the service).
 lint: $(STAMP)
 	$(VENV)/bin/ruff check .
+	$(VENV)/bin/lint-imports
+	$(VENV)/bin/mypy
+
+# The quick check before a commit: lint, then the unit tests (compiled; not the slow ones).
+check: $(STAMP) lint
+	$(PY) -m pytest -n 2 -q tests/unit -k "not slow"
 
 # Lint, the whole suite (doctests and the service's live-server tests included), then the
 # kernel unit tests once more in pure Python (NUMBA_DISABLE_JIT=1) so every kernel line
@@ -46,4 +55,4 @@ bench: $(STAMP)
 	$(PY) -m benchmarks.run
 
 clean:
-	rm -rf $(VENV) .pytest_cache .hypothesis .ruff_cache
+	rm -rf $(VENV) .pytest_cache .hypothesis .ruff_cache .mypy_cache .import_linter_cache

@@ -80,7 +80,7 @@ __all__ = [
 EXTENT = (0.0, 0.0, 1000.0, 1000.0)
 #: Segment counts of the paper's Table 2.
 PAPER_SIZES = (100, 500, 1_000, 5_000, 10_000)
-#: Added here: the NumPy backend's largest size, and the throughput sizes.
+#: Added here: the throughput sizes.
 LARGE_SIZES = (100_000, 1_000_000, 10_000_000)
 
 UNIFORM_WINDOW = (250.0, 250.0, 750.0, 750.0)

@@ -45,6 +45,7 @@ from benchmarks.report import print_geometry_summary, print_summary
 from benchmarks.startup import measure_startup
 from benchmarks.timing import Policy
 from rnsca.backends.registry import configure_opencl
+from rnsca.runtime import configure_process
 
 SCHEMA = "rnsca-bench-segments/1"
 GEOMETRY_SCHEMA = "rnsca-bench-geometry/1"
@@ -280,6 +281,7 @@ def run_svg(quick: bool, out_dir: Path) -> dict:
 
 def main(argv: list[str] | None = None) -> int:
     """Parse the command line, run, print the summary."""
+    configure_process()  # as the CLI and the service do (see rnsca.runtime)
     parser = argparse.ArgumentParser(prog="python -m benchmarks.run", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--quick", action="store_true",

@@ -3,9 +3,9 @@
 The public API lives here; see README.md for a tour.
 """
 
-from rnsca.arrays import GeometryKind, Ragged
+from rnsca.arrays import GeometryKind, PathArrays, Ragged
 from rnsca.clip import SegmentClipResult, clip, clip_segments
-from rnsca.clip_geojson import clip_geojson
+from rnsca.clip_geojson import GeoJSONClipResult, clip_geojson
 from rnsca.clip_svg import Curves, Fill, PathClipResult, clip_paths, clip_svg, flatten_paths
 from rnsca.clip_svgdoc import FillMode, clip_svg_document
 from rnsca.errors import (
@@ -18,7 +18,7 @@ from rnsca.errors import (
     RnscaError,
     UnsupportedGeometryError,
 )
-from rnsca.io.svgpath import PathArrays, parse_path, parse_paths, write_path, write_paths
+from rnsca.io.svgpath import parse_path, parse_paths, write_path, write_paths
 from rnsca.options import Backend, Boundary, Method, Mode
 from rnsca.ragged import RaggedClipResult, clip_ragged
 from rnsca.stats import ClipStats
@@ -35,6 +35,7 @@ __all__ = [
     "Curves",
     "Fill",
     "FillMode",
+    "GeoJSONClipResult",
     "GeometryKind",
     "InvalidGeometryError",
     "InvalidOptionError",

@@ -12,16 +12,19 @@ the three shapes the kernels know: points, lines (parts) and polygons (rings).
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from enum import Enum
 
 import numpy as np
+import numpy.typing as npt
 import shapely
 
 from rnsca.errors import InvalidGeometryError, UnsupportedGeometryError
-from rnsca.kernels.validate import all_finite, first_open_ring
+from rnsca.kernels.validate import LAYOUT_MESSAGES, all_finite, check_layout, first_open_ring
 
-__all__ = ["GeometryKind", "Ragged", "OUTPUT_KIND", "exclusive_sum", "geometry_error"]
+__all__ = ["GeometryKind", "Ragged", "PathArrays", "OUTPUT_KIND", "exclusive_sum",
+           "geometry_error", "group_offsets"]
 
 
 class GeometryKind(str, Enum):
@@ -35,7 +38,7 @@ class GeometryKind(str, Enum):
     MULTIPOLYGON = "MultiPolygon"
 
     @classmethod
-    def of(cls, value) -> GeometryKind:
+    def of(cls, value: GeometryKind | shapely.GeometryType | str) -> GeometryKind:
         """Return the kind for a `GeometryKind`, a ``shapely.GeometryType`` or a name.
 
         Names are case-insensitive (``"linestring"``, ``"MULTIPOLYGON"``).
@@ -91,25 +94,24 @@ OUTPUT_KIND = {
 }
 
 
-def _offsets(array, name: str, length: int) -> np.ndarray:
-    """Return `array` as int64 offsets into a level of `length` items, or raise."""
+def _offsets(array: npt.ArrayLike, name: str, length: int,
+             of: str = "the length of the level below") -> np.ndarray:
+    """Return `array` as int64 offsets into a level of `length` items (`of`), or raise."""
     try:
         out = np.asarray(array)
     except (TypeError, ValueError):
         raise InvalidGeometryError(f"{name} must be an integer array") from None
-    if out.ndim != 1 or out.dtype.kind not in "iu" or out.shape[0] < 1:
+    if out.ndim != 1 or out.shape[0] < 1 or (out.size and out.dtype.kind not in "iu"):
         raise InvalidGeometryError(
-            f"{name} must be a non-empty 1-d integer array, got shape {out.shape} "
-            f"of {out.dtype}")
+            f"{name} must be a 1-d integer array of at least one offset, got shape "
+            f"{out.shape} of {out.dtype}")
     out = np.ascontiguousarray(out, dtype=np.int64)
-    if out[0] != 0 or out[-1] != length:
-        raise InvalidGeometryError(
-            f"{name} must start at 0 and end at {length} (the length of the level below), "
-            f"got {out[0]} and {out[-1]}")
     steps = np.diff(out)
-    if (steps < 0).any():
-        at = int(np.argmax(steps < 0))
-        raise InvalidGeometryError(f"{name} decreases at index {at + 1}")
+    if out[0] != 0 or out[-1] != length or (steps < 0).any():
+        where = (f", decreasing at index {int(np.argmax(steps < 0)) + 1}"
+                 if (steps < 0).any() else f", got {out[0]} and {out[-1]}")
+        raise InvalidGeometryError(
+            f"{name} must start at 0, never decrease and end at {length} ({of}){where}")
     return out
 
 
@@ -142,7 +144,9 @@ class Ragged:
     offsets: tuple
 
     @classmethod
-    def of(cls, geometry_type, coords, offsets, *, check_finite: bool = True) -> Ragged:
+    def of(cls, geometry_type: GeometryKind | shapely.GeometryType | str,
+           coords: npt.ArrayLike, offsets: Sequence[npt.ArrayLike], *,
+           check_finite: bool = True) -> Ragged:
         """Return a validated `Ragged` from the triple ``shapely.to_ragged_array`` gives.
 
         With ``check_finite=False`` the caller takes over the finiteness check (it must
@@ -186,7 +190,7 @@ class Ragged:
         return ragged
 
     @classmethod
-    def from_shapely(cls, geometries, include_z: bool | None = None) -> Ragged:
+    def from_shapely(cls, geometries: npt.ArrayLike, include_z: bool | None = None) -> Ragged:
         """Return the ragged array of a Shapely geometry array (one geometry type).
 
         Raises
@@ -212,6 +216,30 @@ class Ragged:
     def has_z(self) -> bool:
         """Return whether coordinates carry Z."""
         return self.coords.shape[1] == 3
+
+    def split_z(self) -> tuple[np.ndarray, np.ndarray]:
+        """Return ``(xy (n, 2), z (n,) or (0,))``, C-contiguous, as the kernels take them."""
+        if self.has_z:
+            return (np.ascontiguousarray(self.coords[:, :2]),
+                    np.ascontiguousarray(self.coords[:, 2]))
+        return self.coords, np.empty(0)
+
+    def item_offsets(self) -> tuple[np.ndarray, np.ndarray]:
+        """Return ``(vertex offsets of the items, item offsets of the geometries)``.
+
+        Items are the parts of lines (LINESTRING, MULTILINESTRING) or the polygons of
+        polygon kinds (POLYGON, MULTIPOLYGON: the second array then counts polygons, the
+        rings are ``offsets[0]``, the rings of each polygon ``offsets[1]``); a single
+        kind has one item per geometry.
+        """
+        if self.kind in (GeometryKind.LINESTRING, GeometryKind.POLYGON):
+            items = self.offsets[0] if self.kind is GeometryKind.LINESTRING else self.offsets[1]
+            return items, np.arange(self.count + 1, dtype=np.int64)
+        if self.kind is GeometryKind.MULTILINESTRING:
+            return self.offsets[0], self.offsets[1]
+        if self.kind is GeometryKind.MULTIPOLYGON:
+            return self.offsets[1], self.offsets[2]
+        raise UnsupportedGeometryError(f"{self.kind.value} has no parts or polygons")
 
     def to_shapely(self) -> np.ndarray:
         """Return the geometries as a Shapely array."""
@@ -274,7 +302,7 @@ class Ragged:
         return g
 
 
-def exclusive_sum(counts) -> np.ndarray:
+def exclusive_sum(counts: npt.ArrayLike) -> np.ndarray:
     """Return int64 offsets ``[0, cumsum(counts)...]``.
 
     Where each counted run starts, and the total at the end.
@@ -288,3 +316,172 @@ def exclusive_sum(counts) -> np.ndarray:
     out = np.zeros(counts.shape[0] + 1, dtype=np.int64)
     np.cumsum(counts, out=out[1:])
     return out
+
+
+def group_offsets(counts_per_item: np.ndarray, item_offsets: np.ndarray) -> np.ndarray:
+    """Return offsets of outputs per group, where group g owns items item_offsets[g]..[g+1].
+
+    Examples
+    --------
+    >>> group_offsets(np.array([1, 0, 2, 1]), np.array([0, 2, 4])).tolist()
+    [0, 1, 4]
+    """
+    return exclusive_sum(counts_per_item)[item_offsets]
+
+
+@dataclass(frozen=True, eq=False, kw_only=True)
+class PathArrays:
+    """Many SVG paths as columnar arrays of Bézier segments.
+
+    Path ``i`` is subpaths ``path_offsets[i]:path_offsets[i + 1]``; subpath ``s`` is
+    segments ``subpath_offsets[s]:subpath_offsets[s + 1]``, each starting where the
+    previous one ends, the first at ``start[s]``.
+
+    Attributes
+    ----------
+    controls : ndarray of float64, shape (m, 4, 2)
+        Control points of each segment from its start point: degree 1 uses rows 0-1,
+        degree 2 rows 0-2, degree 3 rows 0-3. Unused rows repeat the end point, so row
+        3 is always the end point and a bounding box may take all four rows.
+    degree : ndarray of int8, shape (m,)
+        1 (line), 2 (quadratic) or 3 (cubic).
+    subpath_offsets : ndarray of int64, shape (k + 1,)
+        Segment offsets of the subpaths.
+    closed : ndarray of bool, shape (k,)
+        Whether the subpath ended with Z: its closing edge, from the end of its last
+        segment back to `start`, is implicit (never a segment).
+    start : ndarray of float64, shape (k, 2)
+        Each subpath's start point (a subpath may have no segments: ``"M1 2"``).
+    path_offsets : ndarray of int64, shape (n + 1,)
+        Subpath offsets of the paths.
+
+    Raises
+    ------
+    InvalidGeometryError
+        On construction, if a shape, an offset array (must start at 0, never decrease
+        and end at the length of what it indexes), a degree, the continuity of segments
+        or the repetition of unused control rows is wrong, or a coordinate is not
+        finite. The message and the ``path_index`` attribute name the path when one is
+        at fault.
+
+    Notes
+    -----
+    Arrays are converted to the dtypes above and made C-contiguous (a copy only when
+    needed). ``==`` compares every array exactly.
+    """
+
+    controls: np.ndarray
+    degree: np.ndarray
+    subpath_offsets: np.ndarray
+    closed: np.ndarray
+    start: np.ndarray
+    path_offsets: np.ndarray
+
+    def __post_init__(self) -> None:
+        controls = _as_array(self.controls, np.float64, "controls")
+        m = controls.shape[0] if controls.ndim == 3 else -1
+        if controls.shape[1:] != (4, 2):
+            raise InvalidGeometryError(f"controls must have shape (m, 4, 2), "
+                                       f"not {controls.shape}")
+        degree = _small_ints(self.degree, np.int8, "degree", (1, 2, 3))
+        if degree.shape != (m,):
+            raise InvalidGeometryError(f"degree must have shape ({m},) like controls, "
+                                       f"not {degree.shape}")
+        subpath_offsets = _offsets(self.subpath_offsets, "subpath_offsets", m,
+                                   "the number of segments")
+        k = subpath_offsets.shape[0] - 1
+        closed = _small_ints(self.closed, np.bool_, "closed", (0, 1))
+        if closed.shape != (k,):
+            raise InvalidGeometryError(f"closed must have shape ({k},), one per subpath, "
+                                       f"not {closed.shape}")
+        start = _as_array(self.start, np.float64, "start")
+        if start.shape != (k, 2):
+            raise InvalidGeometryError(f"start must have shape ({k}, 2), one per subpath, "
+                                       f"not {start.shape}")
+        path_offsets = _offsets(self.path_offsets, "path_offsets", k, "the number of subpaths")
+        for name, value in (("controls", controls), ("degree", degree),
+                            ("subpath_offsets", subpath_offsets), ("closed", closed),
+                            ("start", start), ("path_offsets", path_offsets)):
+            object.__setattr__(self, name, value)
+        self._check_geometry()
+
+    def _check_geometry(self) -> None:
+        sub, seg, code = check_layout(self.controls, self.degree, self.subpath_offsets,
+                                      self.start)
+        if code != 0:
+            path = int(np.searchsorted(self.path_offsets, sub, side="right") - 1)
+            where = f" (segment {seg})" if seg >= 0 else " (subpath start)"
+            error = InvalidGeometryError(
+                f"path {path}: {LAYOUT_MESSAGES[int(code)]}{where}")
+            error.path_index = path
+            raise error
+
+    @classmethod
+    def from_kernel(cls, *, controls: np.ndarray, degree: np.ndarray,
+                    subpath_offsets: np.ndarray, closed: np.ndarray, start: np.ndarray,
+                    path_offsets: np.ndarray) -> PathArrays:
+        """Return the arrays a kernel built to this layout as they are, unchecked.
+
+        For library code whose kernel writes the layout by construction (the clip's
+        output): the checks of the constructor would cost a third of a clip. The arrays
+        must already have the dtypes, shapes and contents the class describes.
+        """
+        paths = object.__new__(cls)
+        for name, value in (("controls", controls), ("degree", degree),
+                            ("subpath_offsets", subpath_offsets), ("closed", closed),
+                            ("start", start), ("path_offsets", path_offsets)):
+            object.__setattr__(paths, name, value)
+        return paths
+
+    @classmethod
+    def empty(cls) -> PathArrays:
+        """Return a `PathArrays` of no paths."""
+        return cls(controls=np.empty((0, 4, 2)), degree=np.empty(0, np.int8),
+                   subpath_offsets=np.zeros(1, np.int64), closed=np.empty(0, bool),
+                   start=np.empty((0, 2)), path_offsets=np.zeros(1, np.int64))
+
+    def __len__(self) -> int:
+        """Return the number of paths."""
+        return self.path_offsets.shape[0] - 1
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, PathArrays):
+            return NotImplemented
+        return all(np.array_equal(getattr(self, name), getattr(other, name))
+                   for name in ("controls", "degree", "subpath_offsets", "closed", "start",
+                                "path_offsets"))
+
+    __hash__ = None  # type: ignore[assignment]  # unhashable: == compares arrays
+
+    def path(self, index: int) -> PathArrays:
+        """Return path `index` (negative counts from the end) as a `PathArrays` of one."""
+        n = len(self)
+        if not -n <= index < n:
+            raise IndexError(f"path index {index} out of range for {n} paths")
+        index %= n
+        s0, s1 = int(self.path_offsets[index]), int(self.path_offsets[index + 1])
+        g0, g1 = int(self.subpath_offsets[s0]), int(self.subpath_offsets[s1])
+        return PathArrays(controls=self.controls[g0:g1], degree=self.degree[g0:g1],
+                          subpath_offsets=self.subpath_offsets[s0:s1 + 1] - g0,
+                          closed=self.closed[s0:s1], start=self.start[s0:s1],
+                          path_offsets=np.array([0, s1 - s0], dtype=np.int64))
+
+
+def _as_array(value: npt.ArrayLike, dtype: npt.DTypeLike, name: str) -> np.ndarray:
+    try:
+        return np.ascontiguousarray(value, dtype=dtype)
+    except (TypeError, ValueError) as exc:
+        raise InvalidGeometryError(f"{name} must be convertible to {np.dtype(dtype)}: "
+                                   f"{exc}") from None
+
+
+def _small_ints(value: npt.ArrayLike, dtype: npt.DTypeLike, name: str,
+                allowed: tuple[int, ...]) -> np.ndarray:
+    """Return `value` as `dtype` after checking its values (a cast must not wrap)."""
+    array = np.asarray(value)
+    if array.dtype != dtype:
+        if array.dtype.kind not in "biu" or not np.isin(array, allowed).all():
+            raise InvalidGeometryError(f"{name} values must be in {allowed}")
+    elif array.dtype != np.bool_ and not np.isin(array, allowed).all():
+        raise InvalidGeometryError(f"{name} values must be in {allowed}")
+    return np.ascontiguousarray(array, dtype=dtype)

@@ -12,14 +12,16 @@ from __future__ import annotations
 import json
 import re
 import sys
+from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Annotated, BinaryIO
+from typing import TYPE_CHECKING, Annotated, Any, BinaryIO, NoReturn
 
 import numpy as np
 import typer
 
 import rnsca
+from rnsca.backends.base import Operation
 from rnsca.backends.registry import (
     available_backends,
     configure_opencl,
@@ -34,7 +36,12 @@ from rnsca.errors import (
     RnscaError,
 )
 from rnsca.io.geojson import dumps, loads
+from rnsca.io.svgpath import warm_up_readers
 from rnsca.options import Backend, Boundary, Mode
+from rnsca.runtime import configure_process
+
+if TYPE_CHECKING:
+    from rich.progress import Progress, TaskID
 
 __all__ = ["app", "PROGRESS_MIN_BYTES"]
 
@@ -69,6 +76,7 @@ def main(
         "else float32), float64 or float32")] = "auto",
 ) -> None:
     """Clip geometry against a rectangular window."""
+    configure_process()  # the CLI owns its process (see rnsca.runtime)
     try:
         configure_opencl(opencl_device, opencl_precision)
     except InvalidOptionError as exc:
@@ -79,12 +87,15 @@ def main(
 def backends() -> None:
     """List the backends that can run here, and the OpenCL devices found.
 
-    One backend per line on stdout; each OpenCL device indented below ``opencl``
-    (``*`` marks the one selected). Why OpenCL is unavailable goes to stderr.
+    One backend per line on stdout, with what it runs (its capabilities); each OpenCL
+    device indented below ``opencl`` (``*`` marks the one selected). Why OpenCL is
+    unavailable goes to stderr.
     """
     present = available_backends()
     for kind in present:
-        typer.echo(kind.value)
+        capabilities = get_backend(kind).capabilities
+        runs = ", ".join(o.value for o in Operation if o in capabilities.operations)
+        typer.echo(f"{kind.value}: {runs} ({capabilities.precision.value})")
     report = opencl_report()
     if Backend.OPENCL not in present:
         typer.echo(f"opencl is not available: {report['reason']}", err=True)
@@ -99,9 +110,8 @@ def backends() -> None:
 def warm_up() -> None:
     """Compile the kernels into the on-disk cache (later processes load them)."""
     for kind in available_backends():
-        engine = get_backend(kind)
-        if hasattr(engine, "warm_up"):
-            engine.warm_up()
+        get_backend(kind).warm_up()
+    warm_up_readers()
     typer.echo("kernels ready")
 
 
@@ -171,9 +181,10 @@ def clip(
         metavar="INPUT", show_default=False,
         help="GeoJSON (.geojson or .json) or SVG (.svg) file; - or nothing reads "
              "stdin")] = None,
+    # Required: Typer reads the Ellipsis so (a default must follow `source`'s).
     window: Annotated[str, typer.Option(
         "--window", "-w", show_default=False,
-        help="xmin,ymin,xmax,ymax, e.g. 0,0,10,10 or -10,-10,10,10")] = ...,
+        help="xmin,ymin,xmax,ymax, e.g. 0,0,10,10 or -10,-10,10,10")] = ...,  # type: ignore[assignment]
     output: Annotated[str | None, typer.Option(
         "--output", "-o", show_default=False,
         help="file to write the clipped document to; default (or -): stdout")] = None,
@@ -226,9 +237,9 @@ def clip(
     --keep-empty keeps emptied shapes as empty paths.
     """
     bounds = _window_bounds(window)
-    options = dict(boundary=boundary, method=method, n=int(n) if n.isdigit() else n,
-                   max_depth=max_depth, tolerance=tolerance, mode=mode, backend=backend,
-                   check_validity=check_validity)
+    options: dict[str, Any] = dict(
+        boundary=boundary, method=method, n=int(n) if n.isdigit() else n, max_depth=max_depth,
+        tolerance=tolerance, mode=mode, backend=backend, check_validity=check_validity)
     with _reporting(EXIT_USAGE):
         _check_options(bounds, options)
         if verify and Mode(mode) is Mode.APPROX and approx_bound is None:
@@ -253,12 +264,13 @@ def clip(
                                          precision=precision, keep_empty=keep_empty)
             else:
                 document = loads(_json_text(data, name))
-                clipped, clip_stats = rnsca.clip_geojson(
+                result = rnsca.clip_geojson(
                     document, bounds, keep_empty=keep_empty, arrays=True, **options)
+                clipped, clip_stats = result
                 report = {"stats": clip_stats.to_dict()}
                 if verify:
                     bar.phase(f"verifying {name}")
-                    verification = rnsca.verify(document, clipped, bounds, mode=mode,
+                    verification = rnsca.verify(document, result, bounds, mode=mode,
                                                 approx_bound=approx_bound, boundary=boundary)
                     report["verification"] = verification.to_dict()
                 text = dumps(clipped, indent=indent) + b"\n"
@@ -273,7 +285,7 @@ def clip(
               f"{verification.false_positives}, valid={verification.valid}", EXIT_DATA)
 
 
-def _fail(message, code: int):
+def _fail(message: object, code: int) -> NoReturn:
     """Print ``error: message`` on one line of stderr and exit with `code`."""
     text = " ".join(str(message).split())
     typer.echo(f"error: {text}", err=True)
@@ -281,7 +293,7 @@ def _fail(message, code: int):
 
 
 @contextmanager
-def _reporting(code: int):
+def _reporting(code: int) -> Iterator[None]:
     """Turn library and I/O errors into one line on stderr and an exit status.
 
     Options, windows and backends are the command line's fault (exit 2); anything else
@@ -304,16 +316,17 @@ def _window_bounds(text: str) -> tuple[float, float, float, float]:
     try:
         if len(parts) != 4:
             raise ValueError
-        bounds = tuple(float(part) for part in parts)
+        xmin, ymin, xmax, ymax = (float(part) for part in parts)
     except ValueError:
         _fail(f"--window needs four comma-separated numbers xmin,ymin,xmax,ymax, "
               f"got {text!r}", EXIT_USAGE)
+    bounds = (xmin, ymin, xmax, ymax)
     with _reporting(EXIT_USAGE):
         rnsca.Window(*bounds)
     return bounds
 
 
-def _check_options(bounds, options: dict) -> None:
+def _check_options(bounds: tuple[float, float, float, float], options: dict) -> None:
     """Raise the library's error for a bad option before any input is read.
 
     Clipping no geometry runs every check that does not depend on the input (whether
@@ -322,8 +335,8 @@ def _check_options(bounds, options: dict) -> None:
     rnsca.clip_ragged("Point", np.empty((0, 2)), (), bounds, **options)
 
 
-def _clip_svg(data: memoryview, bounds, options: dict, geojson_only: dict[str, bool],
-              **svg_options) -> tuple[bytes, dict]:
+def _clip_svg(data: memoryview, bounds: tuple[float, float, float, float], options: dict,
+              geojson_only: dict[str, bool], **svg_options: Any) -> tuple[bytes, dict]:
     """Return the clipped SVG document (UTF-8) and the report.
 
     Options that only GeoJSON input has (the flags of `geojson_only` that are set) are
@@ -374,7 +387,8 @@ def _read(path: Path | None, bar: _ProgressBar) -> memoryview:
         return _read_blocks(stream, path.stat().st_size, str(path), bar)
 
 
-def _read_blocks(stream: BinaryIO, size: int | None, name: str, bar: _ProgressBar):
+def _read_blocks(stream: BinaryIO, size: int | None, name: str,
+                 bar: _ProgressBar) -> memoryview:
     bar.phase(f"reading {name}", size)
     buffer = bytearray()
     while block := stream.read(_BLOCK):
@@ -439,8 +453,8 @@ class _ProgressBar:
 
     def __init__(self, enabled: bool | None) -> None:
         self.enabled = enabled
-        self._progress = None
-        self._task = None
+        self._progress: Progress | None = None
+        self._task: TaskID  # set with `_progress`
         self._phase: tuple[str, int | None] = ("", None)
 
     def phase(self, description: str, total: int | None = None) -> None:

@@ -2,18 +2,21 @@
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass
+from typing import Any, SupportsIndex, cast
 
 import numpy as np
+import numpy.typing as npt
 
 from rnsca.arrays import GeometryKind, geometry_error
 from rnsca.backends.registry import get_backend
 from rnsca.errors import InvalidGeometryError, UnsupportedGeometryError
 from rnsca.kernels.validate import first_invalid_segment
 from rnsca.options import Backend, Method, Mode, SegmentOptions
-from rnsca.ragged import clip_ragged, resolve_geometry_options, window_table
+from rnsca.ragged import clip_ragged, resolve_geometry_options
 from rnsca.stats import ClipStats
-from rnsca.window import Window
+from rnsca.window import Window, WindowTable
 
 __all__ = ["SegmentClipResult", "clip_segments", "as_segments", "clip"]
 
@@ -51,7 +54,7 @@ class SegmentClipResult:
         return self.segments.shape[0]
 
 
-def as_segments(segments) -> np.ndarray:
+def as_segments(segments: npt.ArrayLike) -> np.ndarray:
     """Return `segments` as a validated float64 (n, 4) C-contiguous array.
 
     Accepts (n, 4) ``[x0, y0, x1, y1]`` rows or (n, 2, 2) ``[[x0, y0], [x1, y1]]``, of any
@@ -93,8 +96,11 @@ def as_segments(segments) -> np.ndarray:
     return array
 
 
-def clip_segments(segments, window, *, method="rnsca", n="auto", max_depth=None,
-                  tolerance=None, mode="exact", backend="numba") -> SegmentClipResult:
+def clip_segments(segments: npt.ArrayLike, window: Window | Iterable[float], *,
+                  method: Method | str = "rnsca", n: SupportsIndex | str = "auto",
+                  max_depth: SupportsIndex | None = None, tolerance: float | None = None,
+                  mode: Mode | str = "exact", backend: Backend | str = "numba",
+                  ) -> SegmentClipResult:
     """Return the parts of line segments inside a closed rectangular window.
 
     Each segment gives at most one piece (the window is convex). Boundary rules, the
@@ -147,12 +153,13 @@ def clip_segments(segments, window, *, method="rnsca", n="auto", max_depth=None,
                                      tolerance=tolerance, mode=mode)
     engine = get_backend(backend)
     array = as_segments(segments)
-    pieces, source, t, stats = engine.clip_segments(array, window, options)
-    return SegmentClipResult(pieces, source, t, stats, options.method, options.mode,
-                             engine.kind, options)
+    out = engine.clip_segments(array, window, options)
+    return SegmentClipResult(out.pieces, out.source, out.t, out.stats, options.method,
+                             options.mode, engine.kind, options)
 
 
-def clip(obj, window, **options):
+def clip(obj: Any, window: Window | Iterable[float] | Iterable[Iterable[float]],
+         **options: Any) -> Any:
     """Return `obj` clipped to the window, in the form it came in.
 
     Parameters
@@ -191,9 +198,11 @@ def clip(obj, window, **options):
     if isinstance(obj, dict):
         from rnsca.clip_geojson import clip_geojson
 
-        return clip_geojson(obj, window, **options)[0]
+        # A document takes one window (`Window.of` refuses a table of them).
+        return clip_geojson(obj, cast("Window | Iterable[float]", window), **options)[0]
     if isinstance(obj, tuple) and len(obj) == 3:
-        return clip_ragged(*obj, window, **options)
+        geometry_type, coords, offsets = obj
+        return clip_ragged(geometry_type, coords, offsets, window, **options)
     if isinstance(obj, shapely.Geometry):
         return _clip_geometries(np.array([obj], dtype=object), window, options)[0]
     try:
@@ -212,13 +221,16 @@ _SINGLE_OF_MULTI = {"MULTIPOINT": "POINT", "MULTILINESTRING": "LINESTRING",
                     "MULTIPOLYGON": "POLYGON"}
 
 
-def _clip_geometries(geometries: np.ndarray, window, options: dict) -> np.ndarray:
+def _clip_geometries(geometries: np.ndarray,
+                     window: Window | Iterable[float] | Iterable[Iterable[float]],
+                     options: dict[str, Any]) -> np.ndarray:
     """Clip a Shapely array, one `clip_ragged` call per geometry type present."""
     import shapely
 
     options = {k: v for k, v in options.items() if k != "keep_empty"}
     count = geometries.shape[0]
-    windows, index = window_table(window, count)
+    table = WindowTable.of(window, count)
+    windows, index = table.bounds, table.index
     rings = shapely.get_type_id(geometries) == shapely.GeometryType.LINEARRING
     if rings.any():
         # A ring clipped is a line: its visible parts (GEOS gives line strings too).
@@ -229,10 +241,11 @@ def _clip_geometries(geometries: np.ndarray, window, options: dict) -> np.ndarra
     collections = np.flatnonzero(type_ids == shapely.GeometryType.GEOMETRYCOLLECTION)
     for i in collections:
         members = shapely.get_parts(geometries[i])
-        clipped = _clip_geometries(np.asarray(members, dtype=object),
-                                   np.repeat(windows[index[i]][None, :], len(members), axis=0),
-                                   options) if len(members) else []
-        kept = [g for g in clipped if not g.is_empty]
+        clipped_members: np.ndarray | list[Any] = _clip_geometries(
+            np.asarray(members, dtype=object),
+            np.repeat(windows[index[i]][None, :], len(members), axis=0),
+            options) if len(members) else []
+        kept = [g for g in clipped_members if not g.is_empty]
         out[i] = shapely.GeometryCollection(kept)
     has_z = shapely.has_z(geometries)
     # One call per (type, 2D or 3D): a ragged array has one type and one dimension.
@@ -243,7 +256,7 @@ def _clip_geometries(geometries: np.ndarray, window, options: dict) -> np.ndarra
         rows = np.flatnonzero((type_ids == type_id) & (has_z == include_z))
         input_name = shapely.GeometryType(type_id).name
         # Options are checked even if every geometry is decided by its bounding box.
-        resolve_geometry_options(windows, GeometryKind.of(input_name).dimension,
+        resolve_geometry_options(table, GeometryKind.of(input_name).dimension,
                                  **{k: v for k, v in options.items() if k != "check_validity"})
         empty_geometry = shapely.from_wkt(f"{input_name} EMPTY")
         # Bounding boxes first: geometries beyond the window or strictly inside it need
@@ -264,11 +277,13 @@ def _clip_geometries(geometries: np.ndarray, window, options: dict) -> np.ndarra
         if rows.shape[0] == 0:
             continue
         subset = geometries[rows]
-        triple = shapely.to_ragged_array(subset, include_z=include_z)
+        geometry_type, coords, offsets = shapely.to_ragged_array(subset, include_z=include_z)
         try:
-            result = clip_ragged(*triple, windows[index[rows]], keep_empty=True, **options)
+            result = clip_ragged(geometry_type, coords, offsets, windows[index[rows]],
+                                 keep_empty=True, **options)
         except InvalidGeometryError as exc:
-            if getattr(exc, "geometry", None) is None:
+            # `geometry_error` sets both; an error without them is not about one geometry.
+            if exc.geometry is None or exc.detail is None:
                 raise
             raise geometry_error(int(rows[exc.geometry]), exc.detail) from None
         clipped = result.to_shapely()

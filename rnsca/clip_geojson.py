@@ -2,21 +2,70 @@
 
 from __future__ import annotations
 
-from dataclasses import fields
+from collections.abc import Iterable, Iterator
+from dataclasses import dataclass, fields
 from itertools import zip_longest
+from typing import Any
 
-from rnsca.io.geojson import from_geojson, to_geojson
-from rnsca.ragged import clip_ragged
+import numpy as np
+
+from rnsca.io.geojson import from_geojson, write_geojson
+from rnsca.ragged import RaggedClipResult, clip_ragged
 from rnsca.stats import ClipStats, DeviceStats
 from rnsca.window import Window
 
-__all__ = ["clip_geojson", "combine_stats"]
+__all__ = ["GeoJSONClipResult", "clip_geojson", "combine_stats"]
 
 _KINDS = ("points", "lines", "polygons")
 
 
-def clip_geojson(obj, window, *, keep_empty: bool = False, max_vertices: int | None = None,
-                 arrays: bool = False, **options) -> tuple[dict, ClipStats]:
+@dataclass(frozen=True, slots=True)
+class GeoJSONClipResult:
+    """A clipped GeoJSON document, its stats, and where every output came from.
+
+    Unpacks (and indexes) as ``(document, stats)``.
+
+    Attributes
+    ----------
+    document : dict
+        The clipped GeoJSON object (see `clip_geojson`).
+    stats : ClipStats
+    feature_source : ndarray of int64
+        For a FeatureCollection, the input feature of each output feature; ``[0]`` for a
+        Feature or a Geometry.
+    inputs : dict
+        For each geometry kind the document holds (``"points"``, ``"lines"``,
+        ``"polygons"``), the ``(geometry_type, coords, offsets)`` read from it: geometry
+        ``i`` is the ``i``-th of that kind walking the document (see
+        `rnsca.io.geojson.GeoJSONLayout`).
+    outputs : dict
+        For the same kinds, the `RaggedClipResult` of clipping them: output ``i`` is the
+        clip of input ``i`` (empty where nothing is left), so `rnsca.verify` compares them
+        without reading either document again.
+    """
+
+    document: dict
+    stats: ClipStats
+    feature_source: np.ndarray
+    inputs: dict
+    outputs: dict
+
+    def __iter__(self) -> Iterator[Any]:
+        """Unpack as ``document, stats``."""
+        return iter((self.document, self.stats))
+
+    def __len__(self) -> int:
+        return 2
+
+    def __getitem__(self, index: int) -> Any:
+        """Return ``(document, stats)[index]``."""
+        return (self.document, self.stats)[index]
+
+
+def clip_geojson(obj: dict | str | bytes | bytearray | memoryview,
+                 window: Window | Iterable[float], *, keep_empty: bool = False,
+                 max_vertices: int | None = None, arrays: bool = False,
+                 **options: Any) -> GeoJSONClipResult:
     """Return a GeoJSON object clipped to a rectangular window, and the stats of the clip.
 
     Every geometry is clipped as ``shapely.intersection`` with the window would, keeping
@@ -50,10 +99,11 @@ def clip_geojson(obj, window, *, keep_empty: bool = False, max_vertices: int | N
 
     Returns
     -------
-    dict
-        The clipped document (see `rnsca.io.geojson.to_geojson`).
-    ClipStats
-        The stats of the up to three clips (points, lines, polygons) added up.
+    GeoJSONClipResult
+        Unpacks as ``(document, stats)``: the clipped document (see
+        `rnsca.io.geojson.to_geojson`) and the stats of the up to three clips (points,
+        lines, polygons) added up; it also holds which input feature each output feature
+        came from, and the arrays clipped and their clips (for `rnsca.verify`).
 
     Raises
     ------
@@ -84,21 +134,29 @@ def clip_geojson(obj, window, *, keep_empty: bool = False, max_vertices: int | N
     """
     window = Window.of(window)
     layout = from_geojson(obj, max_vertices=max_vertices)
-    clipped, stats = {}, []
+    inputs: dict[str, tuple] = {}
+    outputs: dict[str, RaggedClipResult] = {}
     for kind in _KINDS:
         if layout.geometry_count(kind) == 0:
             continue
-        result = clip_ragged(*getattr(layout, kind), window, keep_empty=True, **options)
-        clipped[kind] = (result.geometry_type, result.coords, result.offsets)
-        stats.append(result.stats)
+        inputs[kind] = getattr(layout, kind)
+        geometry_type, coords, offsets = inputs[kind]
+        outputs[kind] = clip_ragged(geometry_type, coords, offsets, window, keep_empty=True,
+                                    **options)
+    stats = [result.stats for result in outputs.values()]
     if not stats:
         # Nothing to clip: still check the options, and report zero counts.
-        stats.append(clip_ragged(*layout.points, window, keep_empty=True, **options).stats)
-    document = to_geojson(layout, **clipped, keep_empty=keep_empty, arrays=arrays)
-    return document, combine_stats(stats)
+        geometry_type, coords, offsets = layout.points
+        stats.append(clip_ragged(geometry_type, coords, offsets, window, keep_empty=True,
+                                 **options).stats)
+    clipped = {kind: (result.geometry_type, result.coords, result.offsets)
+               for kind, result in outputs.items()}
+    document, feature_source = write_geojson(layout, **clipped, keep_empty=keep_empty,
+                                             arrays=arrays)
+    return GeoJSONClipResult(document, combine_stats(stats), feature_source, inputs, outputs)
 
 
-def combine_stats(stats) -> ClipStats:
+def combine_stats(stats: Iterable[ClipStats]) -> ClipStats:
     """Return the stats of several clipping calls as those of one.
 
     Counters and per-level tuples add up (tuples elementwise); the deepest levels are the
@@ -115,7 +173,7 @@ def combine_stats(stats) -> ClipStats:
     stats = list(stats)
     if len(stats) == 1:
         return stats[0]
-    values = {}
+    values: dict[str, Any] = {}
     for field in fields(ClipStats):
         parts = [getattr(s, field.name) for s in stats]
         if field.name == "device":

@@ -10,14 +10,20 @@ document again.
 from __future__ import annotations
 
 import xml.etree.ElementTree as ET
+from collections.abc import Iterable
+from typing import Any
 
 import numpy as np
 
-from rnsca.clip_svg import Fill, _resolve, clip_paths
+from rnsca.arrays import PathArrays
+from rnsca.backends.base import Operation
+from rnsca.backends.registry import get_backend
+from rnsca.clip_svg import clip_paths
 from rnsca.errors import InvalidOptionError
 from rnsca.io.svgdoc import (
     IDENTITY,
     Shape,
+    SvgDocument,
     find_shapes,
     inverse_maps,
     largest_stretch,
@@ -28,8 +34,8 @@ from rnsca.io.svgdoc import (
     set_path_data,
     write_document,
 )
-from rnsca.io.svgpath import PathArrays, write_paths
-from rnsca.options import _ChoiceEnum
+from rnsca.io.svgpath import write_paths
+from rnsca.options import Curves, Fill, PathOptions, _ChoiceEnum
 from rnsca.stats import ClipStats
 from rnsca.window import Window
 
@@ -48,7 +54,7 @@ class FillMode(_ChoiceEnum):
     """Every shape as a fill under its fill-rule (a <line> has no inside: a stroke)."""
 
     @classmethod
-    def _missing_(cls, value):
+    def _missing_(cls, value: object) -> FillMode:
         choices = ", ".join(repr(m.value) for m in cls)
         if isinstance(value, str):
             for member in cls:
@@ -57,9 +63,10 @@ class FillMode(_ChoiceEnum):
         raise InvalidOptionError(f"fill_mode must be one of {choices}, got {value!r}")
 
 
-def clip_svg_document(document, window, *, curves="preserve", fill_mode="auto",
-                      tolerance=None, precision=None, keep_empty=False,
-                      **options) -> tuple[str, ClipStats]:
+def clip_svg_document(document: str | bytes, window: Window | Iterable[float], *,
+                      curves: Curves | str = "preserve", fill_mode: FillMode | str = "auto",
+                      tolerance: float | None = None, precision: int | None = None,
+                      keep_empty: bool = False, **options: Any) -> tuple[str, ClipStats]:
     """Return an SVG document with every drawn shape clipped to a window, and the stats.
 
     Every ``<path>`` drawn where it stands (in the root or in ``<g>``, ``<a>`` and
@@ -178,7 +185,11 @@ def clip_svg_document(document, window, *, curves="preserve", fill_mode="auto",
     mode = FillMode(fill_mode)
     curve_options = dict(method="rnsca", n="auto", max_depth=None, mode="exact",
                          backend="numba") | options
-    _resolve(window, curves=curves, fill=None, tolerance=tolerance, **curve_options)
+    backend = curve_options.pop("backend")
+    checked = PathOptions.resolve(window, curves=curves, fill=None, tolerance=tolerance,
+                                  **curve_options)
+    get_backend(backend).capabilities.require(Operation.PATHS, checked.mode)
+    curve_options["backend"] = backend
     write_paths(PathArrays.empty(), precision=precision)  # checks `precision`
     doc = read_document(document)
     groups: dict[Fill | None, list[Shape]] = {}
@@ -197,9 +208,10 @@ def clip_svg_document(document, window, *, curves="preserve", fill_mode="auto",
     return write_document(doc), ClipStats.combine(stats)
 
 
-def _clip_group(doc, shapes: list[Shape], fill: Fill | None, window: Window,
-                removals: dict, *, curves, tolerance, precision, keep_empty,
-                options) -> ClipStats:
+def _clip_group(doc: SvgDocument, shapes: list[Shape], fill: Fill | None, window: Window,
+                removals: dict[int, tuple[ET.Element, set[int]]], *, curves: Curves | str,
+                tolerance: float | None, precision: int | None, keep_empty: bool,
+                options: dict[str, Any]) -> ClipStats:
     """Clip `shapes` (all clipped the same way) in one call; rewrite their elements."""
     matrices = np.array([shape.matrix for shape in shapes], dtype=np.float64)
     identity = bool((matrices == IDENTITY).all())
@@ -247,7 +259,7 @@ def _inside(paths: PathArrays, window: Window) -> np.ndarray:
             & (high[:, 0] <= xmax) & (high[:, 1] <= ymax))
 
 
-def _reduce(ufunc, values: np.ndarray, offsets: np.ndarray, empty: float) -> np.ndarray:
+def _reduce(ufunc: np.ufunc, values: np.ndarray, offsets: np.ndarray, empty: float) -> np.ndarray:
     """Return `ufunc` reduced over each run ``offsets[i]:offsets[i + 1]`` of `values`.
 
     Runs are contiguous; an empty run gives `empty`. Only non-empty runs are passed to

@@ -13,7 +13,38 @@ __all__ = [
 
 
 class RnscaError(Exception):
-    """Root of every error rnsca raises; never raised directly."""
+    """Root of every error rnsca raises; never raised directly.
+
+    Where the input is at fault, the code that finds it says where in attributes of the
+    error, so that callers (the CLI, the service) can point there in their own terms; an
+    attribute no one set is None.
+
+    Attributes
+    ----------
+    path : str or None
+        JSON path of the bad member of a GeoJSON document (the service prefixes its own).
+    position : int or None
+        Offset in the text (SVG path data, JSON) where parsing stopped.
+    path_index : int or None
+        Index of the SVG path at fault among those parsed together.
+    line, column : int or None
+        Line (and column, from 1) of the SVG document element at fault.
+    geometry : int or None
+        Index of the geometry at fault in a ragged array.
+    row : int or None
+        Index of the segment (row of the segments array) at fault.
+    detail : str or None
+        The message without its location, for callers that name the location themselves.
+    """
+
+    path: str | None = None
+    position: int | None = None
+    path_index: int | None = None
+    line: int | None = None
+    column: int | None = None
+    geometry: int | None = None
+    row: int | None = None
+    detail: str | None = None
 
 
 class ParseError(RnscaError, ValueError):

@@ -5,25 +5,29 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from enum import Enum
+from typing import SupportsIndex
 
+from rnsca.constants import MAX_DEPTH_LIMIT, N_MAX, N_MIN
 from rnsca.errors import InvalidOptionError
 from rnsca.window import Window
 
-__all__ = ["Method", "Mode", "Backend", "Boundary", "Precision", "SegmentOptions", "N_MIN",
-           "N_MAX", "MAX_DEPTH_LIMIT"]
+__all__ = ["Method", "Mode", "Backend", "Boundary", "Precision", "SegmentOptions", "Curves",
+           "Fill", "PathOptions", "N_MIN", "N_MAX", "MAX_DEPTH_LIMIT",
+           "CURVE_RELATIVE_TOLERANCE"]
 
-N_MIN = 2
-N_MAX = 64
-MAX_DEPTH_LIMIT = 32
 #: In approx mode the default tolerance is this fraction of the window's longer side.
 APPROX_RELATIVE_TOLERANCE = 1e-9
+#: Default `tolerance` of curve clipping, relative to the window's longer side: how far
+#: flattened lines may stray from the curve (``curves="flatten"``), and the size below
+#: which approx mode stops subdividing.
+CURVE_RELATIVE_TOLERANCE = 1e-6
 
 
 class _ChoiceEnum(str, Enum):
     """A string enum whose lookup error lists the valid choices (case-insensitive)."""
 
     @classmethod
-    def _missing_(cls, value):
+    def _missing_(cls, value: object) -> _ChoiceEnum:
         if isinstance(value, str):
             for member in cls:
                 if member.value == value.lower():
@@ -113,8 +117,10 @@ class SegmentOptions:
     auto_piece: float
 
     @classmethod
-    def resolve(cls, window: Window, *, method="rnsca", n="auto", max_depth=None,
-                tolerance=None, mode="exact") -> SegmentOptions:
+    def resolve(cls, window: Window, *, method: Method | str = "rnsca",
+                n: SupportsIndex | str = "auto", max_depth: SupportsIndex | None = None,
+                tolerance: float | None = None,
+                mode: Mode | str = "exact") -> SegmentOptions:
         """Return checked options, with defaults filled in for `window`.
 
         Defaults: ``max_depth=32``; ``tolerance`` is ``1e-9 * window.size`` in approx mode
@@ -139,7 +145,7 @@ class SegmentOptions:
         return cls(method, mode, n_value, depth, tol, window.size)
 
 
-def subdivision_n(n) -> int | None:
+def subdivision_n(n: SupportsIndex | str) -> int | None:
     """Return `n` checked (an integer N_MIN..N_MAX), or None for ``"auto"``."""
     if isinstance(n, str):
         if n.lower() != "auto":
@@ -149,13 +155,13 @@ def subdivision_n(n) -> int | None:
     return _integer("n", n, N_MIN, N_MAX)
 
 
-def subdivision_depth(max_depth, default: int) -> int:
+def subdivision_depth(max_depth: SupportsIndex | None, default: int) -> int:
     """Return `max_depth` checked (an integer 0..MAX_DEPTH_LIMIT), or `default` for None."""
     return default if max_depth is None else _integer("max_depth", max_depth, 0,
                                                       MAX_DEPTH_LIMIT)
 
 
-def positive_tolerance(value, *, finite: bool = False) -> float:
+def positive_tolerance(value: float, *, finite: bool = False) -> float:
     """Return `value` as a float > 0 (and finite if asked), else InvalidOptionError."""
     if isinstance(value, bool):
         raise InvalidOptionError(f"tolerance must be a positive number, got {value!r}")
@@ -170,7 +176,7 @@ def positive_tolerance(value, *, finite: bool = False) -> float:
     return tol
 
 
-def _integer(name: str, value, low: int, high: int) -> int:
+def _integer(name: str, value: SupportsIndex, low: int, high: int) -> int:
     if isinstance(value, bool) or not isinstance(value, (int,)) and not (
         hasattr(value, "__index__")
     ):
@@ -179,3 +185,90 @@ def _integer(name: str, value, low: int, high: int) -> int:
     if not low <= value <= high:
         raise InvalidOptionError(f"{name} must be in {low}..{high}, got {value}")
     return value
+
+
+class Curves(_ChoiceEnum):
+    """What clipped paths are made of."""
+
+    PRESERVE = "preserve"
+    """Béziers of the input's degrees, cut where they cross the window's edges."""
+    FLATTEN = "flatten"
+    """Lines: curves flattened within `tolerance`, then clipped as lines."""
+
+
+class Fill(str, Enum):
+    """How a closed path is filled; the clip keeps the fill inside the window."""
+
+    NONZERO = "nonzero"
+    EVENODD = "evenodd"
+
+    @classmethod
+    def of(cls, value: Fill | str | None) -> Fill | None:
+        """Return the fill rule, or None (strokes) for None or "none"."""
+        if value is None or (isinstance(value, str) and value.lower() == "none"):
+            return None
+        if isinstance(value, cls):
+            return value
+        if isinstance(value, str):
+            for member in cls:
+                if member.value == value.lower():
+                    return member
+        raise InvalidOptionError(
+            f"fill must be 'nonzero', 'evenodd' or None (strokes), got {value!r}")
+
+
+@dataclass(frozen=True, slots=True)
+class PathOptions:
+    """Validated options for one path clipping call.
+
+    Attributes
+    ----------
+    curves : Curves
+    fill : Fill or None
+        None: strokes.
+    mode : Mode
+    n_split : int
+        Pieces per subdivision of an ambiguous curve.
+    leaf_depth : int
+        Deepest subdivision level.
+    tolerance : float
+        Flattening accuracy and approx mode's smallest piece (absolute units).
+    """
+
+    curves: Curves
+    fill: Fill | None
+    mode: Mode
+    n_split: int
+    leaf_depth: int
+    tolerance: float
+
+    @classmethod
+    def resolve(cls, window: Window, *, curves: Curves | str = "preserve",
+                fill: Fill | str | None = None, tolerance: float | None = None,
+                method: Method | str = "rnsca", n: SupportsIndex | str = "auto",
+                max_depth: SupportsIndex | None = None,
+                mode: Mode | str = "exact") -> PathOptions:
+        """Return checked options, with defaults filled in for `window`.
+
+        Defaults: N = `bezier.CURVE_N_AUTO` for ``n="auto"``; depth
+        `bezier.EXACT_LEAF_DEPTH` in exact preserve mode (an ambiguous segment is solved
+        exactly whole: measured fastest), 32 otherwise; tolerance
+        `CURVE_RELATIVE_TOLERANCE` times the window's longer side.
+        """
+        from rnsca.kernels.bezier import CURVE_N_AUTO, EXACT_LEAF_DEPTH
+
+        curves = Curves(curves)
+        fill = Fill.of(fill)
+        mode = Mode(mode)
+        if Method(method) is not Method.RNSCA:
+            raise InvalidOptionError(
+                f"curves are clipped by method='rnsca' only, got {method!r} (the line "
+                "baselines clip curves after flatten_paths)")
+        n_split = subdivision_n(n)
+        if n_split is None:
+            n_split = CURVE_N_AUTO
+        depth = subdivision_depth(max_depth, EXACT_LEAF_DEPTH if (
+            mode is Mode.EXACT and curves is Curves.PRESERVE) else MAX_DEPTH_LIMIT)
+        tol = window.size * CURVE_RELATIVE_TOLERANCE if tolerance is None else \
+            positive_tolerance(tolerance, finite=True)
+        return cls(curves, fill, mode, n_split, depth, tol)

@@ -9,22 +9,24 @@ onto geometries, with `source` saying which input each output geometry came from
 
 from __future__ import annotations
 
+from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass, replace
+from typing import Any, SupportsIndex
 
 import numpy as np
+import numpy.typing as npt
 import shapely
 
 from rnsca.arrays import GeometryKind, Ragged
+from rnsca.backends.base import ClipBackend, GeometryPieces, Operation
 from rnsca.backends.registry import get_backend
-from rnsca.errors import InvalidOptionError, InvalidWindowError
+from rnsca.errors import InvalidOptionError
 from rnsca.kernels import counters as C
-from rnsca.kernels.validate import all_finite
-from rnsca.options import Backend, Boundary, Mode, SegmentOptions
-from rnsca.stats import ClipStats
-from rnsca.window import Window
+from rnsca.options import Backend, Boundary, Method, Mode, SegmentOptions
+from rnsca.stats import ClipStats, DeviceStats
+from rnsca.window import Window, WindowTable
 
-__all__ = ["RaggedClipResult", "clip_ragged", "resolve_geometry_options", "to_shapely",
-           "window_table"]
+__all__ = ["RaggedClipResult", "clip_ragged", "resolve_geometry_options", "to_shapely"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -53,7 +55,7 @@ class RaggedClipResult:
     def __len__(self) -> int:
         return self.source.shape[0]
 
-    def __iter__(self):
+    def __iter__(self) -> Iterator[Any]:
         """Unpack as ``geometry_type, coords, offsets, source, stats``."""
         return iter((self.geometry_type, self.coords, self.offsets, self.source, self.stats))
 
@@ -62,7 +64,8 @@ class RaggedClipResult:
         return to_shapely(self.geometry_type, self.coords, self.offsets)
 
 
-def to_shapely(geometry_type, coords, offsets) -> np.ndarray:
+def to_shapely(geometry_type: shapely.GeometryType | int, coords: np.ndarray,
+               offsets: Sequence[np.ndarray]) -> np.ndarray:
     """Return ``shapely.from_ragged_array(...)``, also when there are no coordinates.
 
     (Shapely 2.2 fails on line arrays whose geometries are all empty.)
@@ -74,84 +77,30 @@ def to_shapely(geometry_type, coords, offsets) -> np.ndarray:
     return shapely.from_ragged_array(geometry_type, coords, offsets)
 
 
-def window_table(window, count: int) -> tuple[np.ndarray, np.ndarray]:
-    """Return ``(windows (w, 4), index (count,))``: the window of each of `count` geometries.
-
-    `window` is a `Window`, four bounds, or an array of shape (count, 4) with one window
-    per geometry.
-
-    Raises
-    ------
-    InvalidWindowError
-        For a bound that is not finite, ``min >= max``, or a window array of the wrong
-        length; the message names the row.
-    """
-    if isinstance(window, Window):
-        single = window
-    else:
-        try:
-            array = np.asarray(window, dtype=np.float64)
-        except (TypeError, ValueError):
-            raise InvalidWindowError(
-                f"window must be [xmin, ymin, xmax, ymax] or an (n, 4) array, got {window!r}"
-            ) from None
-        if array.ndim == 2:
-            if array.shape != (count, 4):
-                raise InvalidWindowError(
-                    f"a window array needs one row [xmin, ymin, xmax, ymax] per geometry: "
-                    f"shape ({count}, 4), got {array.shape}")
-            good = (np.isfinite(array).all(axis=1) & (array[:, 0] < array[:, 2])
-                    & (array[:, 1] < array[:, 3])
-                    & np.isfinite(array[:, 2] - array[:, 0])
-                    & np.isfinite(array[:, 3] - array[:, 1]))
-            if not good.all():
-                row = int(np.argmax(~good))
-                try:
-                    Window(*array[row])
-                except InvalidWindowError as exc:
-                    raise InvalidWindowError(f"window {row}: {exc}") from None
-            return np.ascontiguousarray(array), np.arange(count, dtype=np.int64)
-        single = Window.of(window)
-    table = np.array([[single.xmin, single.ymin, single.xmax, single.ymax]])
-    return table, np.zeros(count, dtype=np.int64)
-
-
-def _reference_window(windows: np.ndarray) -> Window:
-    """Return the window whose size sets default tolerances: the smallest one."""
-    if windows.shape[0] == 0:
-        return Window(0.0, 0.0, 1.0, 1.0)
-    size = np.maximum(windows[:, 2] - windows[:, 0], windows[:, 3] - windows[:, 1])
-    return Window(*windows[int(np.argmin(size))])
-
-
-def _group(counts_per_item: np.ndarray, item_offsets: np.ndarray) -> np.ndarray:
-    """Return offsets of outputs per group, where group g owns items item_offsets[g]..[g+1]."""
-    cumulative = np.zeros(counts_per_item.shape[0] + 1, dtype=np.int64)
-    np.cumsum(counts_per_item, out=cumulative[1:])
-    return cumulative[item_offsets]
-
-
 def _with_z(xy: np.ndarray, z: np.ndarray, has_z: bool) -> np.ndarray:
     if not has_z:
         return xy
     return np.ascontiguousarray(np.column_stack([xy, z]))
 
 
-def resolve_geometry_options(windows: np.ndarray, dimension: int, *, boundary="closed",
-                             method="rnsca", n="auto", max_depth=None, tolerance=None,
-                             mode="exact", backend="numba"):
+def resolve_geometry_options(
+        windows: WindowTable, dimension: int, *, boundary: Boundary | str = "closed",
+        method: Method | str = "rnsca", n: SupportsIndex | str = "auto",
+        max_depth: SupportsIndex | None = None, tolerance: float | None = None,
+        mode: Mode | str = "exact", backend: Backend | str = "numba",
+) -> tuple[SegmentOptions, Boundary, ClipBackend]:
     """Return ``(SegmentOptions, Boundary, backend)`` for clipping geometry of `dimension`.
 
-    Default tolerances follow the smallest of `windows` (w, 4).
+    Default tolerances follow the smallest of the `windows`.
 
     Raises
     ------
     InvalidOptionError
         For a bad option, or ``mode="approx"`` with polygons (dimension 2).
     BackendUnavailableError
-        For a backend that does not clip geometry.
+        For a backend that cannot run here or does not clip this kind.
     """
-    options = SegmentOptions.resolve(_reference_window(windows), method=method, n=n,
+    options = SegmentOptions.resolve(windows.smallest(), method=method, n=n,
                                      max_depth=max_depth, tolerance=tolerance, mode=mode)
     side = Boundary(boundary)
     engine = get_backend(backend)
@@ -159,12 +108,20 @@ def resolve_geometry_options(windows: np.ndarray, dimension: int, *, boundary="c
         raise InvalidOptionError(
             "mode='approx' cannot clip polygons: valid polygon output needs the exact "
             "boundary crossings (use mode='exact')")
+    if dimension > 0:
+        engine.capabilities.require(
+            Operation.LINES if dimension == 1 else Operation.POLYGONS, options.mode)
     return options, side, engine
 
 
-def clip_ragged(geometry_type, coords, offsets, window, *, boundary="closed", keep_empty=False,
-                check_validity=False, method="rnsca", n="auto", max_depth=None, tolerance=None,
-                mode="exact", backend="numba") -> RaggedClipResult:
+def clip_ragged(geometry_type: shapely.GeometryType | GeometryKind | str, coords: npt.ArrayLike,
+                offsets: Sequence[npt.ArrayLike],
+                window: Window | Iterable[float] | Iterable[Iterable[float]], *,
+                boundary: Boundary | str = "closed", keep_empty: bool = False,
+                check_validity: bool = False, method: Method | str = "rnsca",
+                n: SupportsIndex | str = "auto", max_depth: SupportsIndex | None = None,
+                tolerance: float | None = None, mode: Mode | str = "exact",
+                backend: Backend | str = "numba") -> RaggedClipResult:
     """Return the geometries of a ragged array clipped to a rectangular window.
 
     The columnar fast path: the triple ``shapely.to_ragged_array`` returns (and GeoArrow
@@ -227,29 +184,33 @@ def clip_ragged(geometry_type, coords, offsets, window, *, boundary="closed", ke
     kind = GeometryKind.of(geometry_type)
     # Lines are checked for non-finite coordinates by the clip's first pass over them.
     ragged = Ragged.of(kind, coords, offsets, check_finite=kind.dimension != 1)
-    windows, window_index = window_table(window, ragged.count)
+    windows = WindowTable.of(window, ragged.count)
     options, side, engine = resolve_geometry_options(
         windows, ragged.kind.dimension, boundary=boundary, method=method, n=n,
         max_depth=max_depth, tolerance=tolerance, mode=mode, backend=backend)
     if ragged.kind.dimension == 0:
-        return _clip_points(ragged, windows, window_index, side, keep_empty)
+        return _clip_points(ragged, windows, side, keep_empty)
     if ragged.kind.dimension == 1:
-        return _clip_lines(engine, ragged, windows, window_index, options, side, keep_empty)
-    result = _clip_polygons(engine, ragged, windows, window_index, options, keep_empty)
+        return _line_result(ragged, engine.clip_lines(ragged, windows, options,
+                                                      side is Boundary.INTERIOR), keep_empty)
+    result = _polygon_result(ragged, engine.clip_polygons(ragged, windows, options),
+                             keep_empty)
     if check_validity:
         invalid = int((~shapely.is_valid(ragged.to_shapely())).sum())
         result = replace(result, stats=replace(result.stats, invalid_polygons=invalid))
     return result
 
 
-def _stats(counters, segments_in, pieces_out, ragged: Ragged, vertices_out, geometries_out):
+def _stats(counters: np.ndarray, segments_in: int, pieces_out: int, ragged: Ragged,
+           vertices_out: int, geometries_out: int, device: DeviceStats | None) -> ClipStats:
     return ClipStats.from_counters(
         counters, segments_in, pieces_out, geometries_in=ragged.count,
         geometries_out=geometries_out, vertices_in=ragged.coords.shape[0],
-        vertices_out=vertices_out)
+        vertices_out=vertices_out, device=device)
 
 
-def _clip_points(ragged: Ragged, windows, window_index, side: Boundary, keep_empty):
+def _clip_points(ragged: Ragged, windows: WindowTable, side: Boundary,
+                 keep_empty: bool) -> RaggedClipResult:
     xy = ragged.coords
     count = ragged.count
     if ragged.kind is GeometryKind.POINT:
@@ -257,7 +218,7 @@ def _clip_points(ragged: Ragged, windows, window_index, side: Boundary, keep_emp
     else:
         geometry_of_point = np.repeat(np.arange(count, dtype=np.int64),
                                       np.diff(ragged.offsets[0]))
-    w = windows[window_index[geometry_of_point]]
+    w = windows.bounds[windows.index[geometry_of_point]]
     x = xy[:, 0]
     y = xy[:, 1]
     if side is Boundary.CLOSED:
@@ -286,56 +247,20 @@ def _clip_points(ragged: Ragged, windows, window_index, side: Boundary, keep_emp
                             source, stats)
 
 
-_NO_INDEX = np.empty(0, dtype=np.int64)
-
-
-def _split_z(ragged: Ragged):
-    if ragged.has_z:
-        return (np.ascontiguousarray(ragged.coords[:, :2]),
-                np.ascontiguousarray(ragged.coords[:, 2]))
-    return ragged.coords, np.empty(0)
-
-
-def _clip_lines(engine, ragged, windows, window_index, options, side, keep_empty):
-    xy, z = _split_z(ragged)
-    if ragged.has_z and not all_finite(z):
-        ragged.check_finite()  # raises, naming the first bad coordinate
-    if ragged.kind is GeometryKind.LINESTRING:
-        part_offsets = ragged.offsets[0]
-        geometry_parts = np.arange(ragged.count + 1, dtype=np.int64)
-    else:
-        part_offsets, geometry_parts = ragged.offsets
-    device = None
-    if engine.kind is Backend.NUMBA:
-        # One window for all: the kernel takes row 0 of `windows` for every geometry.
-        geometry_window = window_index if windows.shape[0] > 1 else _NO_INDEX
-        out_xy, out_z, chain_offsets, geometry_chains, counters, bad_part = engine.clip_lines(
-            xy, z, part_offsets, geometry_parts, geometry_window, windows, options,
-            side is Boundary.INTERIOR)
-        if bad_part >= 0:
-            ragged.check_finite()  # raises, naming the first bad coordinate
-            raise AssertionError(f"the line kernel found a non-finite coordinate in part "
-                                 f"{bad_part} that the full check did not")
-    else:
-        ragged.check_finite()  # the device kernels take finite coordinates
-        part_geometry = np.repeat(np.arange(ragged.count, dtype=np.int64),
-                                  np.diff(geometry_parts))
-        part_window = np.ascontiguousarray(window_index[part_geometry])
-        # OpenCL also says where it ran and what it moved (a sixth value).
-        out_xy, out_z, chain_offsets, chains_per_part, counters, device = engine.clip_lines(
-            xy, z, part_offsets, part_window, windows, options, side is Boundary.INTERIOR)
-        geometry_chains = _group(chains_per_part, geometry_parts)
+def _line_result(ragged: Ragged, out: GeometryPieces, keep_empty: bool) -> RaggedClipResult:
+    """Return the result of lines clipped into `out`: one output geometry per input kept."""
+    part_offsets, _ = ragged.item_offsets()
+    xy = ragged.coords
+    chain_offsets, geometry_chains = out.offsets
     chains_per_geometry = np.diff(geometry_chains)
     # Parts of one position are refused by `Ragged.of`: every part but an empty one has
     # one segment fewer than positions.
     segments_in = xy.shape[0] - int(np.count_nonzero(np.diff(part_offsets)))
     count = chains_per_geometry.shape[0]
     source = np.flatnonzero(chains_per_geometry)
-    stats = _stats(counters, segments_in, chain_offsets.shape[0] - 1, ragged, out_xy.shape[0],
-                   source.shape[0])
-    if device is not None:
-        stats = replace(stats, device=device)
-    coords = _with_z(out_xy, out_z, ragged.has_z)
+    stats = _stats(out.counters, segments_in, chain_offsets.shape[0] - 1, ragged,
+                   out.xy.shape[0], source.shape[0], out.device)
+    coords = _with_z(out.xy, out.z, ragged.has_z)
     if keep_empty or source.shape[0] == count:
         source = np.arange(count, dtype=np.int64)
         geometry_offsets = geometry_chains
@@ -352,29 +277,15 @@ def _clip_lines(engine, ragged, windows, window_index, options, side, keep_empty
                             (chain_offsets, geometry_offsets), source, stats)
 
 
-def _clip_polygons(engine, ragged, windows, window_index, options, keep_empty):
-    xy, z = _split_z(ragged)
-    if ragged.kind is GeometryKind.POLYGON:
-        ring_offsets, polygon_rings = ragged.offsets
-        geometry_polygons = np.arange(ragged.count + 1, dtype=np.int64)
-    else:
-        ring_offsets, polygon_rings, geometry_polygons = ragged.offsets
-    polygon_geometry = np.repeat(np.arange(ragged.count, dtype=np.int64),
-                                 np.diff(geometry_polygons))
-    polygon_window = np.ascontiguousarray(window_index[polygon_geometry])
-    out_xy, out_z, out_rings, rings_per_output, outputs_per_polygon, counters, *device = \
-        engine.clip_polygons(xy, z, ring_offsets, polygon_rings, polygon_window, windows,
-                             options)
-    output_ring_offsets = np.zeros(rings_per_output.shape[0] + 1, dtype=np.int64)
-    np.cumsum(rings_per_output, out=output_ring_offsets[1:])
-    geometry_offsets = _group(outputs_per_polygon, geometry_polygons)
+def _polygon_result(ragged: Ragged, out: GeometryPieces, keep_empty: bool) -> RaggedClipResult:
+    """Return the result of polygons clipped into `out`: one output per input kept."""
+    ring_offsets = ragged.offsets[0]
+    out_rings, output_ring_offsets, geometry_offsets = out.offsets
     per_geometry = np.diff(geometry_offsets)
     segments_in = int(np.maximum(np.diff(ring_offsets) - 1, 0).sum())
-    stats = _stats(counters, segments_in, out_rings.shape[0] - 1, ragged, out_xy.shape[0],
-                   int((per_geometry > 0).sum()))
-    if device:
-        stats = replace(stats, device=device[0])
-    coords = _with_z(out_xy, out_z, ragged.has_z)
+    stats = _stats(out.counters, segments_in, out_rings.shape[0] - 1, ragged, out.xy.shape[0],
+                   int((per_geometry > 0).sum()), out.device)
+    coords = _with_z(out.xy, out.z, ragged.has_z)
     count = ragged.count
     source = np.arange(count, dtype=np.int64)
     if not keep_empty:

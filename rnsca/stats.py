@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Iterable
 from dataclasses import asdict, dataclass, fields
+from typing import Any
 
 import numpy as np
 
@@ -45,18 +47,18 @@ class DeviceStats:
     kernel_seconds: float = dataclasses.field(default=0.0, compare=False)
 
     @classmethod
-    def combine(cls, parts) -> DeviceStats | None:
+    def combine(cls, parts: Iterable[DeviceStats | None]) -> DeviceStats | None:
         """Return the sum of several calls' device stats (None if there are none)."""
-        parts = [part for part in parts if part is not None]
-        if not parts:
+        present = [part for part in parts if part is not None]
+        if not present:
             return None
-        names = {part.device for part in parts}
-        precisions = {part.precision for part in parts}
+        names = {part.device for part in present}
+        precisions = {part.precision for part in present}
         return cls(
-            device=parts[0].device if len(names) == 1 else ", ".join(sorted(names)),
-            precision=parts[0].precision if len(precisions) == 1
+            device=present[0].device if len(names) == 1 else ", ".join(sorted(names)),
+            precision=present[0].precision if len(precisions) == 1
             else ", ".join(sorted(precisions)),
-            **{name: sum(getattr(part, name) for part in parts)
+            **{name: sum(getattr(part, name) for part in present)
                for name in ("transfers", "bytes_to_device", "bytes_from_device",
                             "transfer_seconds", "kernel_seconds")})
 
@@ -154,7 +156,7 @@ class ClipStats:
 
     @classmethod
     def from_counters(cls, rows: np.ndarray, segments_in: int, pieces_out: int,
-                      **geometry) -> ClipStats:
+                      **geometry: Any) -> ClipStats:
         """Return the stats of per-block counter rows, shape (blocks, counters.WIDTH).
 
         `geometry` holds the counts only the caller knows (``geometries_in``, ...).
@@ -191,7 +193,7 @@ class ClipStats:
         )
 
     @classmethod
-    def combine(cls, parts) -> ClipStats:
+    def combine(cls, parts: Iterable[ClipStats]) -> ClipStats:
         """Return the stats of several clipping calls taken as one.
 
         Counters and per-level tuples add up; the deepest levels are the deepest of
@@ -206,7 +208,7 @@ class ClipStats:
         (3, 1, (2, 2))
         """
         parts = list(parts)
-        values = {}
+        values: dict[str, Any] = {}
         for field in fields(cls):
             column = [getattr(part, field.name) for part in parts]
             if field.name == "device":
@@ -216,7 +218,7 @@ class ClipStats:
             elif field.name.endswith("per_level"):
                 total = np.sum(column, axis=0, dtype=np.int64) if column \
                     else np.zeros(C.N_LEVELS, np.int64)
-                values[field.name] = tuple(total.tolist())
+                values[field.name] = tuple(np.asarray(total).tolist())
             else:
                 values[field.name] = sum(column)
         return cls(**values)

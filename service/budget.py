@@ -18,35 +18,41 @@ one fragment per segment (a few more for Cohen–Sutherland, counted as one).
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
 
+from rnsca.constants import AUTO_N_MIN, N_MAX
 from rnsca.options import APPROX_RELATIVE_TOLERANCE, MAX_DEPTH_LIMIT, Method, Mode
 from rnsca.window import Window
 from service.errors import TooManyVerticesError, WorkOverBudgetError
+
+if TYPE_CHECKING:
+    from service.schemas import ClipOptions
 
 __all__ = ["subdivision_cost", "segment_work", "check_vertices", "check_work",
            "geometry_vertex_cap", "AMBIGUOUS_PER_LEVEL", "AUTO_N"]
 
 #: Ambiguous pieces per level of one straight segment, at most.
 AMBIGUOUS_PER_LEVEL = 4
-#: ``n="auto"``: N = clamp(ceil(piece / window size), 8, 64) (see README, "Choosing N").
-AUTO_N = (8, 64)
+#: ``n="auto"``: N = clamp(ceil(piece / window size), 8, 64) (see README, "Choosing N"),
+#: the bounds the kernels use (`rnsca.constants`).
+AUTO_N = (AUTO_N_MIN, N_MAX)
 
 
-def _subdivides(options, window: Window) -> bool:
+def _subdivides(options: ClipOptions, window: Window) -> bool:
     if options.method not in (Method.RNSCA, Method.MIDPOINT):
         return False
     return options.mode is Mode.APPROX or options.tolerance is not None
 
 
-def _tolerance(options, window: Window) -> float:
+def _tolerance(options: ClipOptions, window: Window) -> float:
     if options.tolerance is not None:
         return options.tolerance
     return window.size * APPROX_RELATIVE_TOLERANCE
 
 
-def subdivision_cost(options, window: Window, length: float | None) -> int:
+def subdivision_cost(options: ClipOptions, window: Window, length: float | None) -> int:
     """Return the most fragments one ambiguous segment of `length` can add below level 0.
 
     `length` None means unknown (the bound then runs to ``max_depth``).
@@ -84,7 +90,7 @@ def subdivision_cost(options, window: Window, length: float | None) -> int:
     return cost
 
 
-def segment_work(segments: np.ndarray, window: Window, options) -> int:
+def segment_work(segments: np.ndarray, window: Window, options: ClipOptions) -> int:
     """Return the bound on fragments evaluated for clipping `segments` (n, 4) float64."""
     count = segments.shape[0]
     if count == 0 or not _subdivides(options, window):
@@ -102,7 +108,7 @@ def segment_work(segments: np.ndarray, window: Window, options) -> int:
         options, window, longest if math.isfinite(longest) else None)
 
 
-def _outcodes(x, y, window: Window) -> np.ndarray:
+def _outcodes(x: np.ndarray, y: np.ndarray, window: Window) -> np.ndarray:
     return ((x < window.xmin).astype(np.uint8) | (x > window.xmax) << 1
             | (y < window.ymin) << 2 | (y > window.ymax) << 3)
 
@@ -124,7 +130,7 @@ def check_work(work: int, budget: int) -> None:
             "mode with no tolerance, or send less input", work=work, budget=budget)
 
 
-def geometry_vertex_cap(options, window: Window, max_vertices: int,
+def geometry_vertex_cap(options: ClipOptions, window: Window, max_vertices: int,
                         budget: int) -> tuple[int, bool]:
     """Return the most vertices a geometry request may have, and whether the budget set it.
 

@@ -9,23 +9,22 @@ geometry beyond what the library returns.
 
 from __future__ import annotations
 
-import re
 from dataclasses import dataclass, field
 
 import numpy as np
 import orjson
 
 import rnsca
-from rnsca.backends.registry import available_backends, opencl_report
-from rnsca.clip import as_segments
+from rnsca.backends.registry import available_backends, get_backend, opencl_report
+from rnsca.clip import SegmentClipResult, as_segments
 from rnsca.errors import (
-    BackendUnavailableError,
     InvalidGeometryError,
     LimitExceededError,
     RnscaError,
 )
 from rnsca.options import Mode
 from rnsca.stats import ClipStats
+from rnsca.verify import Verification
 from rnsca.window import Window
 from service.budget import (
     check_vertices,
@@ -77,6 +76,11 @@ def backend_report() -> list[dict]:
     report = []
     for name in BackendName:
         entry = {"name": name.value, "available": name.value in present}
+        if name.value in present:
+            # What it runs: the same capability query the library checks each call with.
+            capabilities = get_backend(name.value).capabilities.to_dict()
+            entry["devices"] = capabilities.pop("devices")
+            entry.update({k: v for k, v in capabilities.items() if k != "backend"})
         if name is BackendName.OPENCL:
             opencl = opencl_report()
             entry["devices"] = opencl["devices"]
@@ -84,26 +88,13 @@ def backend_report() -> list[dict]:
             entry["precision"] = opencl["precision"]
             if not opencl["available"]:
                 entry["reason"] = opencl["reason"]
-        elif name.value in present:
-            entry["devices"] = ["cpu"]
-        else:
-            entry["reason"] = _missing_reason(name)
         report.append(entry)
     return report
 
 
-def _missing_reason(name: BackendName) -> str:
-    if name is BackendName.OPENCL:
-        return opencl_report()["reason"]
-    return (f"backend {name.value!r} is not part of this build of rnsca "
-            f"(available: {', '.join(k.value for k in available_backends())})")
-
-
 def _library_options(options: ClipOptions, settings: Settings) -> dict:
-    """Return the keyword arguments of a library call; refuse a backend not present."""
+    """Return the keyword arguments of a library call (the library checks the backend)."""
     backend = options.backend.value if options.backend else settings.default_backend.value
-    if backend not in {kind.value for kind in available_backends()}:
-        raise BackendUnavailableError(_missing_reason(BackendName(backend)))
     return dict(method=options.method, n=options.n, max_depth=options.max_depth,
                 tolerance=options.tolerance, mode=options.mode, backend=backend)
 
@@ -128,7 +119,7 @@ def clip_geojson(body: bytes, settings: Settings) -> Outcome:
     cap, by_budget = geometry_vertex_cap(options, window, settings.max_vertices,
                                          settings.work_budget)
     try:
-        clipped, stats = rnsca.clip_geojson(
+        result = rnsca.clip_geojson(
             request.geojson, window, keep_empty=options.keep_empty, max_vertices=cap,
             arrays=True, boundary=options.boundary, check_validity=options.check_validity,
             **arguments)
@@ -147,11 +138,14 @@ def clip_geojson(body: bytes, settings: Settings) -> Outcome:
         if path is not None:  # a JSON path inside the document: make it one in the body
             exc.path = "geojson" + (path if not path or path.startswith("[") else "." + path)
         raise
+    clipped, stats = result
     verification = None
     approx_unbounded = options.mode is Mode.APPROX and request.approx_bound is None
     if _verify_wanted(request.verify, stats.vertices_in, settings) and not (
             request.verify is None and approx_unbounded):
-        verification = rnsca.verify(request.geojson, clipped, window, mode=options.mode,
+        # The result holds the arrays clipped and their clips, one for one: nothing is
+        # read again.
+        verification = rnsca.verify(None, result, window, mode=options.mode,
                                     approx_bound=request.approx_bound,
                                     boundary=options.boundary)
     payload = {"geojson": clipped, "stats": stats.to_dict(),
@@ -163,7 +157,8 @@ def clip_geojson(body: bytes, settings: Settings) -> Outcome:
 
 
 def _clip_segments(array: np.ndarray, window: Window, options: ClipOptions,
-                   verify: bool | None, settings: Settings):
+                   verify: bool | None,
+                   settings: Settings) -> tuple[SegmentClipResult, Verification | None]:
     check_vertices(2 * array.shape[0], settings.max_vertices)
     arguments = _library_options(options, settings)
     segments = as_segments(array)
@@ -229,9 +224,6 @@ def clip_segments_binary(body: bytes, window: Window, options: ClipOptions,
 
 # --- SVG -----------------------------------------------------------------------------
 
-_NUMBER = re.compile(rb"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
-
-
 def warm_up_svg() -> None:
     """Compile the SVG path kernels (the backends' warm-up covers segments and geometry).
 
@@ -254,38 +246,33 @@ def warm_up_svg() -> None:
 
 
 def clip_svg(body: bytes, settings: Settings) -> Outcome:
-    """Answer ``POST /v1/clip/svg`` through `rnsca.clip_svg`."""
+    """Answer ``POST /v1/clip/svg``: parse once, budget, clip, write, verify the arrays."""
     request = ClipSVGRequest.model_validate_json(body)
     window = Window(*request.window)
     arguments = _library_options(request.options, settings)
-    # Each vertex is two numbers: bound the input before the library reads it.
-    vertices = sum(len(_NUMBER.findall(d.encode())) for d in request.paths) // 2
-    check_vertices(vertices, settings.max_vertices)
-    check_work(vertices * (1 + subdivision_cost(request.options, window, None)),
-               settings.work_budget)
-    paths, stats, verification = _call_clip_svg(request, window, arguments, vertices, settings)
-    payload = {"paths": paths, "stats": stats.to_dict(),
-               "verification": _dict_or_none(verification)}
-    return Outcome(orjson.dumps(payload, option=_JSON), stats)
-
-
-def _call_clip_svg(request: ClipSVGRequest, window: Window, arguments: dict, vertices: int,
-                   settings: Settings):
-    """Return ``(paths, stats, verification)`` from `rnsca.clip_svg`."""
     options = request.options
+    # The path text is read once (the body limit bounds the time that takes); the
+    # budget counts the control points read, verification compares the arrays.
     try:
-        paths, stats = rnsca.clip_svg(request.paths, window, curves=options.curves,
-                                      fill=options.fill, **arguments)
+        paths = rnsca.parse_paths(request.paths, tolerance=arguments["tolerance"])
+        vertices = int(paths.degree.sum()) + paths.closed.shape[0]
+        check_vertices(vertices, settings.max_vertices)
+        check_work(vertices * (1 + subdivision_cost(options, window, None)),
+                   settings.work_budget)
+        result = rnsca.clip_paths(paths, window, curves=options.curves, fill=options.fill,
+                                  **arguments)
     except RnscaError as exc:
         if getattr(exc, "path_index", None) is not None:  # `position` is within that path
             exc.path = f"paths[{exc.path_index}]"
         raise
+    written = rnsca.write_paths(result.paths, precision=None)  # exact, as clip_svg writes
     verification = None
     # Approx mode has no bound to judge against unless one is set: not verified by default.
     if (request.paths and Mode(options.mode) is not Mode.APPROX
             and _verify_wanted(request.verify, vertices, settings)):
         # A flattened clip strays from the curves by its own tolerance: compare at it.
         tolerance = arguments.get("tolerance") if options.curves == "flatten" else None
-        verification = rnsca.verify(list(request.paths), list(paths), window,
-                                    fill=options.fill, tolerance=tolerance)
-    return list(paths), stats, verification
+        verification = rnsca.verify(paths, result, window, tolerance=tolerance)
+    payload = {"paths": written, "stats": result.stats.to_dict(),
+               "verification": _dict_or_none(verification)}
+    return Outcome(orjson.dumps(payload, option=_JSON), result.stats)

@@ -13,6 +13,8 @@ from __future__ import annotations
 
 import logging
 import re
+from collections.abc import Iterable
+from typing import Any
 
 import orjson
 from fastapi import FastAPI, Request
@@ -64,7 +66,8 @@ class ServiceError(Exception):
     slug = "internal-error"
     title = "Internal server error"
 
-    def __init__(self, detail: str, *, headers: dict | None = None, **extensions) -> None:
+    def __init__(self, detail: str, *, headers: dict | None = None,
+                 **extensions: object) -> None:
         super().__init__(detail)
         self.detail = detail
         self.headers = headers or {}
@@ -134,7 +137,7 @@ _HTTP_SLUGS = {404: "not-found", 405: "method-not-allowed"}
 
 
 def problem(status: int, slug: str, title: str, detail: str, *, instance: str | None = None,
-            headers: dict | None = None, **extensions) -> Response:
+            headers: dict | None = None, **extensions: object) -> Response:
     """Return an ``application/problem+json`` response.
 
     Examples
@@ -151,7 +154,7 @@ def problem(status: int, slug: str, title: str, detail: str, *, instance: str | 
 
 
 def problem_bytes(status: int, slug: str, title: str, detail: str, *,
-                  instance: str | None = None, **extensions) -> bytes:
+                  instance: str | None = None, **extensions: object) -> bytes:
     """Return the body of a problem response (also used by the pure ASGI middleware)."""
     body = {"type": _TYPE_PREFIX + slug, "title": title, "status": status, "detail": detail}
     if instance is not None:
@@ -160,7 +163,7 @@ def problem_bytes(status: int, slug: str, title: str, detail: str, *,
     return orjson.dumps(body, default=str)
 
 
-def json_path(location) -> str:
+def json_path(location: Iterable[str | int]) -> str:
     """Return a pydantic error location as a JSON path.
 
     Examples
@@ -186,7 +189,7 @@ def json_path(location) -> str:
 def _library_problem(request: Request, exc: RnscaError) -> Response:
     status, slug, title = next(
         _LIBRARY[cls] for cls in type(exc).__mro__ if cls in _LIBRARY)
-    extensions = {}
+    extensions: dict[str, Any] = {}
     if isinstance(exc, InvalidWindowError):
         extensions["path"] = "window"
     elif isinstance(exc, InvalidOptionError):

@@ -42,14 +42,17 @@ class JsonFormatter(logging.Formatter):
         return orjson.dumps(line, default=str).decode()
 
 
+class _ServiceHandler(logging.StreamHandler):
+    """The handler `configure_logging` adds: found again, so that it is added once."""
+
+
 def configure_logging(level: str) -> None:
     """Send the service's loggers to stderr as JSON lines at `level` (idempotent)."""
     logger = logging.getLogger("rnsca.service")
     logger.setLevel(level.upper())
-    if not any(getattr(h, "_rnsca", False) for h in logger.handlers):
-        handler = logging.StreamHandler()
+    if not any(isinstance(h, _ServiceHandler) for h in logger.handlers):
+        handler = _ServiceHandler()
         handler.setFormatter(JsonFormatter())
-        handler._rnsca = True
         logger.addHandler(handler)
     logger.propagate = False
 

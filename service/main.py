@@ -7,6 +7,7 @@ Run it with ``rnsca serve`` or ``python -m service`` (settings from ``RNSCA_*``)
 from __future__ import annotations
 
 import asyncio
+from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
 
 from fastapi import FastAPI
@@ -17,6 +18,7 @@ from starlette.middleware.gzip import GZipMiddleware
 
 import rnsca
 from rnsca.backends.registry import available_backends, configure_opencl, get_backend
+from rnsca.runtime import configure_process
 from service.config import Settings
 from service.convert import warm_up_svg
 from service.errors import install_handlers
@@ -49,13 +51,16 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     """
     settings = settings or Settings()
     configure_logging(settings.log_level)
+    # The service owns its process: idle OpenMP threads sleep, the environment's OpenCL
+    # drivers are found (before any kernel runs or device is listed).
+    configure_process()
     configure_opencl(settings.opencl_device, settings.opencl_precision)
     runner = ClipRunner(settings.clip_threads, settings.request_time_limit)
     runner.prepare(settings.threading_layer)
     metrics = Metrics()
 
     @asynccontextmanager
-    async def lifespan(app: FastAPI):
+    async def lifespan(app: FastAPI) -> AsyncIterator[None]:
         if settings.warm_up:
             backends = [get_backend(kind) for kind in available_backends()]
             warming = asyncio.create_task(runner.start(backends, (warm_up_svg,)))
@@ -87,7 +92,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.state.metrics = metrics
     install_handlers(app)
     app.include_router(api_router)
-    app.openapi = lambda: _openapi(app)
+    app.openapi = lambda: _openapi(app)  # type: ignore[method-assign]  # as FastAPI documents
     return app
 
 

@@ -5,6 +5,8 @@ from __future__ import annotations
 import logging
 import time
 
+from starlette.types import ASGIApp, Receive, Scope, Send
+
 from service.errors import BodyTooLargeError, problem_bytes
 from service.logs import ACCESS_LOGGER
 from service.metrics import Metrics
@@ -14,8 +16,8 @@ __all__ = ["BodyLimitMiddleware", "AccessMiddleware"]
 _access = logging.getLogger(ACCESS_LOGGER)
 
 
-async def _send_problem(send, status: int, slug: str, title: str, detail: str,
-                        instance: str, **extensions) -> None:
+async def _send_problem(send: Send, status: int, slug: str, title: str, detail: str,
+                        instance: str, **extensions: object) -> None:
     body = problem_bytes(status, slug, title, detail, instance=instance, **extensions)
     await send({"type": "http.response.start", "status": status,
                 "headers": [(b"content-type", b"application/problem+json"),
@@ -33,11 +35,11 @@ class BodyLimitMiddleware:
     handler answers it (and, should the response not have started otherwise, here).
     """
 
-    def __init__(self, app, max_bytes: int) -> None:
+    def __init__(self, app: ASGIApp, max_bytes: int) -> None:
         self.app = app
         self.max_bytes = max_bytes
 
-    async def __call__(self, scope, receive, send):  # noqa: D102
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:  # noqa: D102
         if scope["type"] != "http":
             return await self.app(scope, receive, send)
         limit = self.max_bytes
@@ -83,11 +85,11 @@ class AccessMiddleware:
     ``duration_ms``, ``request_bytes`` and ``response_bytes`` (as sent, so after gzip).
     """
 
-    def __init__(self, app, metrics: Metrics) -> None:
+    def __init__(self, app: ASGIApp, metrics: Metrics) -> None:
         self.app = app
         self.metrics = metrics
 
-    async def __call__(self, scope, receive, send):  # noqa: D102
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:  # noqa: D102
         if scope["type"] != "http":
             return await self.app(scope, receive, send)
         started = time.perf_counter()

@@ -18,14 +18,19 @@ import logging
 import os
 import threading
 import time
+from collections.abc import Callable, Iterable
 from concurrent.futures import ThreadPoolExecutor
 from contextlib import nullcontext
+from typing import Any, TypeVar
 
+from rnsca.runtime import numba_threads_started
 from service.errors import TimeLimitError
 
 __all__ = ["ClipRunner"]
 
 _log = logging.getLogger("rnsca.service")
+_T = TypeVar("_T")
+
 #: Layers that accept concurrent callers (Numba's own classification).
 THREAD_SAFE_LAYERS = ("tbb", "omp")
 
@@ -62,13 +67,13 @@ class ClipRunner:
     def prepare(self, layer: str) -> None:
         """Ask Numba for threading layer `layer` unless its layer is already started."""
         import numba
-        from numba.np.ufunc import parallel
 
-        if "NUMBA_THREADING_LAYER" in os.environ or parallel._is_initialized:
+        if "NUMBA_THREADING_LAYER" in os.environ or numba_threads_started():
             return
         numba.config.THREADING_LAYER = layer
 
-    def warm_up(self, backends, extra=()) -> None:
+    def warm_up(self, backends: Iterable[object],
+                extra: Iterable[Callable[[], object]] = ()) -> None:
         """Compile (or load) the kernels: `backends`, then each warm-up function of `extra`.
 
         Then settle how calls may overlap. Runs in a pool thread at start-up; sets
@@ -104,7 +109,8 @@ class ClipRunner:
         self._serial = None if self.threading_layer in THREAD_SAFE_LAYERS else self._serial
         self._settled = True
 
-    async def start(self, backends, extra=()) -> None:
+    async def start(self, backends: Iterable[object],
+                    extra: Iterable[Callable[[], object]] = ()) -> None:
         """Warm up in the pool, off the event loop (so `/healthz` answers meanwhile)."""
         loop = asyncio.get_running_loop()
         try:
@@ -114,7 +120,7 @@ class ClipRunner:
             self.failure = f"{type(exc).__name__}: {exc}"
             _log.error("warming up the kernels failed", exc_info=exc)
 
-    async def run(self, function, *args):
+    async def run(self, function: Callable[..., _T], *args: Any) -> _T:
         """Return ``function(*args)`` run in the pool; raise `TimeLimitError` past the limit."""
         loop = asyncio.get_running_loop()
         future = loop.run_in_executor(self._executor(), self._call, function, args)

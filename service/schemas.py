@@ -101,7 +101,7 @@ _VERIFY = Field(None, description="Compare with Shapely's exact intersection. De
                                   "`verify_max_vertices`.")
 
 
-def _stats_fields() -> dict:
+def _stats_fields() -> dict[str, Any]:
     hints = typing.get_type_hints(ClipStats)
     fields = {f.name: (list[int] if hints[f.name] == tuple[int, ...] else hints[f.name], ...)
               for f in dataclasses.fields(ClipStats)}
@@ -112,12 +112,14 @@ def _stats_fields() -> dict:
 StatsModel = create_model(
     "ClipStats", __doc__="What the clip did (see `rnsca.ClipStats` for each counter).",
     **_stats_fields())
+_VERIFICATION_FIELDS: dict[str, Any] = {
+    f.name: (typing.get_type_hints(Verification)[f.name], ...)
+    for f in dataclasses.fields(Verification)}
 VerificationModel = create_model(
     "Verification", __doc__="The comparison with Shapely's intersection (`rnsca.verify`).",
-    **{f.name: (typing.get_type_hints(Verification)[f.name], ...)
-       for f in dataclasses.fields(Verification)})
+    **_VERIFICATION_FIELDS)
 
-_LINE = {"type": "Feature", "id": 1, "properties": {"name": "road"},
+_LINE: dict[str, Any] = {"type": "Feature", "id": 1, "properties": {"name": "road"},
          "geometry": {"type": "LineString",
                       "coordinates": [[-5, 1], [5, 1], [5, 20], [8, 20], [8, 5], [15, 5]]}}
 
@@ -223,7 +225,10 @@ class Capabilities(BaseModel):
     methods: list[str]
     modes: list[str]
     backends: list[dict[str, Any]] = Field(description="Each backend: name, available, "
-                                                       "devices, and the reason if not.")
+                                                       "devices, and the reason if not; "
+                                                       "where available, the operations "
+                                                       "and modes it runs and its "
+                                                       "precision.")
     threading_layer: str | None = Field(description="Numba's threading layer in use.")
     serialized: bool = Field(description="Whether clipping calls run one at a time.")
     svg: bool = Field(description="Whether `/v1/clip/svg` is implemented here.")

@@ -14,6 +14,12 @@ from Numba's cache), which would blow any per-example deadline.
 
 import os
 
+import rnsca.runtime
+
+# The tests own their process, as the CLI and the service do: OpenCL drivers of this
+# environment, idle OpenMP threads asleep. Before any kernel runs.
+rnsca.runtime.configure_process()
+
 import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 from hypothesis import HealthCheck, settings  # noqa: E402

@@ -1,17 +1,54 @@
-"""The interface every backend implements."""
+"""The contract every backend implements: the operations, their inputs and their results.
+
+A backend is a place where the kernels run (`NumbaBackend` on the CPU, `OpenCLBackend`
+on an OpenCL device). The library (`rnsca.clip`, `rnsca.ragged`, `rnsca.clip_svg`)
+resolves options, takes the caller's objects apart into the containers below, calls
+one operation of the backend, and builds its public result from what comes back. It
+never asks which backend it holds: what a backend can do is its `Capabilities`.
+
+Operations (one method each, the same signature on every backend):
+
+===========  =======================================  ===========================
+operation    input                                    result
+===========  =======================================  ===========================
+segments     (n, 4) float64 array, `Window`           `SegmentPieces`
+lines        `Ragged` lines, `WindowTable`            `GeometryPieces`
+polygons     `Ragged` polygons, `WindowTable`         `GeometryPieces`
+paths        `PathArrays`, `Window`                   `PathPieces`
+flatten      `PathArrays`, tolerance                  `Polylines`
+===========  =======================================  ===========================
+
+Every result says where each output came from (`source`, or offsets per input) and
+carries the kernels' counter rows (`rnsca.kernels.counters`) and, for a device, its
+`DeviceStats`; the library turns them into `ClipStats`.
+"""
 
 from __future__ import annotations
 
-from typing import Protocol
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any, NamedTuple, Protocol
 
 import numpy as np
 
+from rnsca.errors import BackendUnavailableError
 from rnsca.kernels import segments as K
-from rnsca.options import Backend, Method, SegmentOptions
-from rnsca.stats import ClipStats
-from rnsca.window import Window
+from rnsca.options import Backend, Method, Mode, PathOptions, Precision, SegmentOptions, _ChoiceEnum
+from rnsca.window import Window, WindowTable
 
-__all__ = ["METHOD_ID", "ClipBackend"]
+if TYPE_CHECKING:
+    from rnsca.arrays import PathArrays, Ragged
+    from rnsca.stats import ClipStats, DeviceStats
+
+__all__ = [
+    "METHOD_ID",
+    "Capabilities",
+    "ClipBackend",
+    "GeometryPieces",
+    "Operation",
+    "PathPieces",
+    "Polylines",
+    "SegmentPieces",
+]
 
 #: The number each segment kernel (Numba and OpenCL) knows a method by.
 METHOD_ID = {
@@ -23,17 +60,194 @@ METHOD_ID = {
 }
 
 
+class Operation(_ChoiceEnum):
+    """An operation a backend runs (a method of `ClipBackend`)."""
+
+    SEGMENTS = "segments"
+    """Clip line segments (`ClipBackend.clip_segments`)."""
+    LINES = "lines"
+    """Clip lines and multi-lines into chains (`ClipBackend.clip_lines`)."""
+    POLYGONS = "polygons"
+    """Clip polygons into valid polygons (`ClipBackend.clip_polygons`)."""
+    PATHS = "paths"
+    """Clip Bézier paths (`ClipBackend.clip_paths`)."""
+    FLATTEN = "flatten"
+    """Turn Bézier paths into polylines (`ClipBackend.flatten_paths`)."""
+
+
+@dataclass(frozen=True, slots=True)
+class Capabilities:
+    """What a backend can run here: the one answer the library, the CLI and the service use.
+
+    Attributes
+    ----------
+    backend : Backend
+    operations : frozenset of Operation
+    modes : frozenset of Mode
+        Modes the backend runs (an operation may still refuse one for its own reasons:
+        polygons need exact mode everywhere).
+    precision : Precision
+        The floating-point precision of its kernels (FLOAT64 or FLOAT32).
+    devices : tuple of str
+        Where it runs: ``("cpu",)``, or the OpenCL device's ``"platform:device"`` id.
+    """
+
+    backend: Backend
+    operations: frozenset[Operation] = field(default_factory=lambda: frozenset(Operation))
+    modes: frozenset[Mode] = field(default_factory=lambda: frozenset(Mode))
+    precision: Precision = Precision.FLOAT64
+    devices: tuple[str, ...] = ("cpu",)
+
+    def supports(self, operation: Operation | str, mode: Mode | str = Mode.EXACT) -> bool:
+        """Return whether `operation` runs here in `mode`."""
+        return Operation(operation) in self.operations and Mode(mode) in self.modes
+
+    def require(self, operation: Operation | str, mode: Mode | str = Mode.EXACT) -> None:
+        """Raise `BackendUnavailableError` naming what is missing, unless `supports`."""
+        operation, mode = Operation(operation), Mode(mode)
+        if operation not in self.operations:
+            runs = ", ".join(sorted(o.value for o in self.operations))
+            raise BackendUnavailableError(
+                f"backend {self.backend.value!r} does not clip {operation.value} "
+                f"(it runs: {runs})")
+        if mode not in self.modes:
+            raise BackendUnavailableError(
+                f"backend {self.backend.value!r} does not run mode={mode.value!r}")
+
+    def to_dict(self) -> dict[str, Any]:
+        """Return the capabilities as JSON-ready values (sorted lists of names)."""
+        return {"backend": self.backend.value,
+                "operations": sorted(o.value for o in self.operations),
+                "modes": sorted(m.value for m in self.modes),
+                "precision": self.precision.value,
+                "devices": list(self.devices)}
+
+
+@dataclass(frozen=True, slots=True)
+class SegmentPieces:
+    """The visible pieces of segments: at most one per segment, in input order.
+
+    Attributes
+    ----------
+    pieces : ndarray of float64, shape (m, 4)
+    source : ndarray of int64, shape (m,)
+        The segment each piece came from (strictly increasing).
+    t : ndarray of float64, shape (m, 2)
+        Each piece's parameter interval on its segment.
+    stats : ClipStats
+    """
+
+    pieces: np.ndarray
+    source: np.ndarray
+    t: np.ndarray
+    stats: ClipStats
+
+
+@dataclass(frozen=True, slots=True)
+class GeometryPieces:
+    """Clipped lines or polygons, grouped by input geometry, in the GeoArrow layout.
+
+    Attributes
+    ----------
+    xy : ndarray of float64, shape (v, 2)
+    z : ndarray of float64, shape (v,) or (0,)
+        Interpolated Z, empty for 2D input.
+    offsets : tuple of ndarray of int64
+        Innermost level first, as ``shapely.from_ragged_array`` takes them. Lines:
+        vertex offsets of the chains (connected visible parts), then chain offsets of
+        the input geometries. Polygons: vertex offsets of the rings (closed; shells CCW,
+        holes CW), ring offsets of the output polygons (shell first), then polygon
+        offsets of the input geometries. Geometry ``i``'s outputs are
+        ``offsets[-1][i]:offsets[-1][i + 1]`` (none: nothing is left of it).
+    counters : ndarray of int64, shape (rows, counters.WIDTH)
+    device : DeviceStats or None
+    """
+
+    xy: np.ndarray
+    z: np.ndarray
+    offsets: tuple
+    counters: np.ndarray
+    device: DeviceStats | None = None
+
+
+@dataclass(frozen=True, slots=True)
+class PathPieces:
+    """Clipped paths: output path ``i`` is the clip of input path ``i``.
+
+    Attributes
+    ----------
+    paths : PathArrays
+        One path per input path (empty where nothing is left).
+    segments_in : int
+        Segments the clip took in (with the closing edges of filled subpaths).
+    counters : ndarray of int64, shape (rows, counters.WIDTH)
+    device : DeviceStats or None
+    """
+
+    paths: PathArrays
+    segments_in: int
+    counters: np.ndarray
+    device: DeviceStats | None = None
+
+
+class Polylines(NamedTuple):
+    """Paths turned into polylines: one per subpath that has a segment (a named tuple).
+
+    Attributes
+    ----------
+    coords : ndarray of float64, shape (v, 2)
+    line_offsets : ndarray of int64, shape (k + 1,)
+    line_path : ndarray of int64, shape (k,)
+        The path of each polyline.
+    """
+
+    coords: np.ndarray
+    line_offsets: np.ndarray
+    line_path: np.ndarray
+
+
 class ClipBackend(Protocol):
-    """A place where the clipping kernels run; every backend gives the same pieces."""
+    """A place where the clipping kernels run; every backend gives the same outputs."""
 
     kind: Backend
 
-    def clip_segments(
-        self, segments: np.ndarray, window: Window, options: SegmentOptions
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, ClipStats]:
-        """Return ``(pieces (m, 4), source (m,), t (m, 2), stats)`` for validated segments.
+    @property
+    def capabilities(self) -> Capabilities:
+        """Return what this backend runs here."""
+        ...
+
+    def clip_segments(self, segments: np.ndarray, window: Window,
+                      options: SegmentOptions) -> SegmentPieces:
+        """Return the visible piece of each segment.
 
         `segments` is float64 (n, 4), C-contiguous, finite, with finite differences.
-        Pieces come in input order, at most one per segment, all inside the window.
         """
+        ...
+
+    def clip_lines(self, lines: Ragged, windows: WindowTable, options: SegmentOptions,
+                   drop_edge_runs: bool) -> GeometryPieces:
+        """Return the chains of each line geometry inside its window.
+
+        `lines` is a LINESTRING or MULTILINESTRING `Ragged` (coordinates not yet checked
+        for finiteness: the backend raises `InvalidGeometryError` naming the first bad
+        one). `drop_edge_runs` drops parts that only run along the window's edge
+        (``boundary="interior"``).
+        """
+        ...
+
+    def clip_polygons(self, polygons: Ragged, windows: WindowTable,
+                      options: SegmentOptions) -> GeometryPieces:
+        """Return the valid polygons each POLYGON or MULTIPOLYGON gives inside its window."""
+        ...
+
+    def clip_paths(self, paths: PathArrays, window: Window, options: PathOptions) -> PathPieces:
+        """Return the paths clipped to the window (curves kept or flattened, strokes or fills)."""
+        ...
+
+    def flatten_paths(self, paths: PathArrays, tolerance: float, close: bool) -> Polylines:
+        """Return the paths as polylines within `tolerance` (`close`: every subpath closed)."""
+        ...
+
+    def warm_up(self) -> None:
+        """Compile (or load from the caches) every kernel, so the first real call is fast."""
         ...

@@ -4,17 +4,25 @@ from __future__ import annotations
 
 import numpy as np
 
-from rnsca.arrays import exclusive_sum
-from rnsca.backends.base import METHOD_ID
-from rnsca.clip_svg import clip_paths, flatten_paths
-from rnsca.io.svgpath import parse_paths, write_paths
+from rnsca.arrays import GeometryKind, PathArrays, Ragged, exclusive_sum, group_offsets
+from rnsca.backends.base import (
+    METHOD_ID,
+    Capabilities,
+    GeometryPieces,
+    PathPieces,
+    Polylines,
+    SegmentPieces,
+)
+from rnsca.kernels import bezier as BZ
 from rnsca.kernels import counters as C
 from rnsca.kernels import polygons as PG
 from rnsca.kernels import polylines as PL
+from rnsca.kernels import records as R
 from rnsca.kernels import segments as K
-from rnsca.options import Backend, Method, Mode, SegmentOptions
+from rnsca.kernels.validate import all_finite
+from rnsca.options import Backend, Curves, Method, Mode, PathOptions, SegmentOptions
 from rnsca.stats import ClipStats
-from rnsca.window import Window
+from rnsca.window import Window, WindowTable
 
 __all__ = ["NumbaBackend"]
 
@@ -23,6 +31,17 @@ __all__ = ["NumbaBackend"]
 BLOCK_SIZE = 2048
 # Inputs of at most this many blocks run on the calling thread (see the serial driver).
 SERIAL_BLOCKS = 4
+_CAPABILITIES = Capabilities(Backend.NUMBA)
+_NO_INDEX = np.empty(0, dtype=np.int64)
+# Subpaths per block of the parallel path kernel: enough work per block to pay for its
+# scratch arrays, enough blocks to balance the threads (at most _PATH_BLOCK subpaths, and
+# at least _PATH_MIN_BLOCKS blocks when there are that many subpaths: a few long paths,
+# such as the 200 curves of 500 cubics of the benchmark, are still shared out evenly).
+_PATH_BLOCK = 64
+_PATH_MIN_BLOCKS = 32
+# The path kernel decides every segment itself: no run decisions, no device, no classes.
+_UNDECIDED_PATHS = (None, None, (False, np.empty(0, np.uint8), np.empty(0, dtype=np.int64),
+                                 np.empty((0, 2))))
 
 
 class NumbaBackend:
@@ -30,58 +49,97 @@ class NumbaBackend:
 
     kind = Backend.NUMBA
 
-    def clip_segments(self, segments: np.ndarray, window: Window, options: SegmentOptions):
-        """Return ``(pieces, source, t, stats)``; see `ClipBackend.clip_segments`."""
+    @property
+    def capabilities(self) -> Capabilities:
+        """Return what this backend runs: every operation, both modes, in float64."""
+        return _CAPABILITIES
+
+    def clip_segments(self, segments: np.ndarray, window: Window,
+                      options: SegmentOptions) -> SegmentPieces:
+        """Return the visible piece of each segment; see `ClipBackend.clip_segments`."""
         n = segments.shape[0]
         n_blocks = max(1, -(-n // BLOCK_SIZE))
-        args = (segments, window.xmin, window.ymin, window.xmax, window.ymax,
-                METHOD_ID[options.method], options.n, options.max_depth, options.tolerance,
-                options.auto_piece, options.mode is Mode.EXACT, BLOCK_SIZE)
+        bounds = R.Window(window.xmin, window.ymin, window.xmax, window.ymax)
+        settings = core_options(options)
         driver = K.clip_segment_blocks_serial if n_blocks <= SERIAL_BLOCKS \
             else K.clip_segment_blocks
-        block_count = np.zeros(n_blocks, dtype=np.int64)
-        counters = np.zeros((n_blocks, C.WIDTH), dtype=np.int64)
-        no_pieces = (np.empty((0, 4)), np.empty(0, dtype=np.int64), np.empty((0, 2)))
-        driver(*args, False, np.zeros(n_blocks, dtype=np.int64), *no_pieces,
-                              block_count, counters)
+        counted = K.SegmentOutput(
+            np.empty((0, 4)), np.empty(0, dtype=np.int64), np.empty((0, 2)),
+            np.zeros(n_blocks, dtype=np.int64), np.zeros(n_blocks, dtype=np.int64),
+            np.zeros((n_blocks, C.WIDTH), dtype=np.int64))
+        driver(segments, bounds, settings, BLOCK_SIZE, False, counted)
         block_start = np.zeros(n_blocks, dtype=np.int64)
-        np.cumsum(block_count[:-1], out=block_start[1:])
-        m = int(block_count.sum())
-        pieces = np.empty((m, 4), dtype=np.float64)
-        source = np.empty(m, dtype=np.int64)
-        t = np.empty((m, 2), dtype=np.float64)
-        driver(*args, True, block_start, pieces, source, t,
-                              np.empty(n_blocks, dtype=np.int64), np.zeros_like(counters))
-        return pieces, source, t, ClipStats.from_counters(counters, n, m)
+        np.cumsum(counted.block_count[:-1], out=block_start[1:])
+        m = int(counted.block_count.sum())
+        written = K.SegmentOutput(
+            np.empty((m, 4), dtype=np.float64), np.empty(m, dtype=np.int64),
+            np.empty((m, 2), dtype=np.float64), block_start,
+            np.empty(n_blocks, dtype=np.int64), np.zeros_like(counted.counters))
+        driver(segments, bounds, settings, BLOCK_SIZE, True, written)
+        return SegmentPieces(written.pieces, written.source, written.t,
+                             ClipStats.from_counters(counted.counters, n, m))
 
-    def clip_lines(self, xy, z, part_offsets, geometry_parts, geometry_window, windows,
-                   options: SegmentOptions, drop_edge_runs: bool):
-        """Return ``(xy, z, chain_offsets, geometry_chains, counters, bad_part)``.
+    def clip_lines(self, lines: Ragged, windows: WindowTable, options: SegmentOptions,
+                   drop_edge_runs: bool) -> GeometryPieces:
+        """Return the chains of each line geometry; see `ClipBackend.clip_lines`.
 
-        Geometry g owns parts ``geometry_parts[g]..geometry_parts[g+1]-1`` and is clipped
-        against ``windows[geometry_window[g]]`` (`geometry_window` empty: row 0 for
-        all). `bad_part` is -1, or the first part with a non-finite coordinate (nothing
-        is clipped then). Count, prefix sum and write run in one kernel call
-        (`polylines.clip_lines`).
+        Count, prefix sum and write run in one kernel call (`polylines.clip_lines`), which
+        also checks the coordinates (their first pass) and reports the first part with a
+        non-finite one (nothing is clipped then; the error names it).
         """
-        return PL.clip_lines(xy, z, part_offsets, geometry_parts, geometry_window, windows,
-                             METHOD_ID[options.method], options.n, options.max_depth,
-                             options.tolerance, options.auto_piece, options.mode is Mode.EXACT,
-                             drop_edge_runs)
+        xy, z = lines.split_z()
+        if lines.has_z and not all_finite(z):
+            lines.check_finite()  # raises, naming the first bad coordinate
+        part_offsets, geometry_parts = lines.item_offsets()
+        # One window for all: the kernel takes row 0 of the table for every geometry.
+        geometry_window = _NO_INDEX if windows.is_single else windows.index
+        out_xy, out_z, chain_offsets, geometry_chains, counters, bad_part = PL.clip_lines(
+            xy, z, part_offsets, geometry_parts, geometry_window, windows.bounds,
+            METHOD_ID[options.method], options.n, options.max_depth, options.tolerance,
+            options.auto_piece, options.mode is Mode.EXACT, drop_edge_runs)
+        if bad_part >= 0:
+            lines.check_finite()  # raises, naming the first bad coordinate
+            raise AssertionError(f"the line kernel found a non-finite coordinate in part "
+                                 f"{bad_part} that the full check did not")
+        return GeometryPieces(out_xy, out_z, (chain_offsets, geometry_chains), counters)
 
-    def clip_polygons(self, xy, z, ring_offsets, polygon_offsets, polygon_window, windows,
-                      options: SegmentOptions):
-        """Return ``(xy, z, ring_offsets, rings_per_output, outputs_per_polygon, counters)``.
+    def clip_polygons(self, polygons: Ragged, windows: WindowTable,
+                      options: SegmentOptions) -> GeometryPieces:
+        """Return the output polygons of each geometry; see `ClipBackend.clip_polygons`.
 
-        See `ClipBackend.clip_polygons`; count, prefix sum, write.
+        Count, prefix sum, write (`polygon_passes`).
         """
+        xy, z = polygons.split_z()
+        polygon_offsets, geometry_polygons = polygons.item_offsets()
         n_polygons = polygon_offsets.shape[0] - 1
+        polygon_window = windows.of_items(polygon_geometry(geometry_polygons))
         nothing_i = np.empty(0, dtype=np.int64)
         # Runs and segments are clipped here, not decided elsewhere: no decision tables.
         undecided = (False, nothing_i, np.empty(0, dtype=np.uint8), nothing_i,
                      np.empty(0, dtype=np.bool_), np.empty((0, 6)))
-        return polygon_passes(xy, z, ring_offsets, polygon_offsets, polygon_window, windows,
-                              options, np.empty(n_polygons, dtype=np.int8), undecided)
+        out_xy, out_z, out_rings, rings_per_output, outputs_per_polygon, counters = \
+            polygon_passes(xy, z, polygons.offsets[0], polygon_offsets, polygon_window,
+                           windows.bounds, options, np.empty(n_polygons, dtype=np.int8),
+                           undecided)
+        return GeometryPieces(out_xy, out_z, (
+            out_rings, exclusive_sum(rings_per_output),
+            group_offsets(outputs_per_polygon, geometry_polygons)), counters)
+
+    def clip_paths(self, paths: PathArrays, window: Window,
+                   options: PathOptions) -> PathPieces:
+        """Return the paths clipped to the window; see `ClipBackend.clip_paths`."""
+        return path_passes(paths, window, options, _UNDECIDED_PATHS)
+
+    def flatten_paths(self, paths: PathArrays, tolerance: float, close: bool) -> Polylines:
+        """Return the paths as polylines within `tolerance`; see `ClipBackend.flatten_paths`."""
+        steps = BZ.flatten_steps(paths.controls, paths.degree, float(tolerance))
+        segment_points = exclusive_sum(steps)
+        lines, closes, line_offsets = polyline_layout(paths, segment_points, close)
+        coords = np.empty((int(line_offsets[-1]), 2))
+        BZ.flatten_into(paths.controls, paths.degree, float(tolerance), paths.subpath_offsets,
+                        paths.start, lines, closes, steps, segment_points, line_offsets, coords)
+        line_path = np.repeat(np.arange(len(paths), dtype=np.int64), np.diff(paths.path_offsets))
+        return Polylines(coords, line_offsets, line_path[lines])
 
     def warm_up(self) -> None:
         """Compile (or load from the cache) the kernels, so the first real call is fast."""
@@ -90,30 +148,144 @@ class NumbaBackend:
             segments = np.tile([[-1.0, 0.5, 2.0, 0.5]], (n, 1))
             for method in Method:
                 self.clip_segments(segments, window, SegmentOptions.resolve(window, method=method))
-        # Lines and polygons: one square ring crossing the window, 2D and 3D.
-        ring = np.array([[-1.0, 0.25], [2.0, 0.25], [2.0, 0.75], [-1.0, 0.75], [-1.0, 0.25]])
-        offsets = np.array([0, 5], dtype=np.int64)
-        windows = np.array([[0.0, 0.0, 1.0, 1.0]])
-        index = np.zeros(1, dtype=np.int64)
-        options = SegmentOptions.resolve(window)
-        for z in (np.empty(0), np.zeros(5)):
-            for drop in (False, True):
-                self.clip_lines(ring, z, offsets, np.array([0, 1], dtype=np.int64), index,
-                                windows, options, drop)
-            self.clip_polygons(ring, z, offsets, np.array([0, 1], dtype=np.int64), index,
-                               windows, options)
-        _warm_up_curves()
+        warm_up_geometry(self)
+        warm_up_paths(self)
 
 
-def _warm_up_curves() -> None:
-    """Compile the Bézier path kernels: parse, clip (each curve handling, fill), write."""
-    paths = parse_paths(["M-1 .5C0 2 1-1 2 .5Q.5 3-1 .5Z", "M-1 .25H2V.75Z", "M.2 .2L.8 .8"])
+def warm_up_paths(backend) -> None:
+    """Clip and flatten Bézier paths on `backend` in each curve handling, fill and mode.
+
+    Three subpaths: lines, quadratic and cubic curves crossing the window, and a closed
+    one (``M-1 .5 C0 2 1-1 2 .5 Q.5 3-1 .5Z``, ``M-1 .25 H2 V.75Z``, ``M.2 .2 L.8 .8``).
+    """
+    cubic = [[-1.0, 0.5], [0.0, 2.0], [1.0, -1.0], [2.0, 0.5]]
+    quadratic = [[2.0, 0.5], [0.5, 3.0], [-1.0, 0.5], [-1.0, 0.5]]
+    square = [[[-1.0, 0.25], [2.0, 0.25]], [[2.0, 0.25], [2.0, 0.75]]]
+    paths = PathArrays(
+        controls=np.array([cubic, quadratic]
+                          + [[a, b, b, b] for a, b in square] + [[[0.2, 0.2], [0.8, 0.8],
+                                                                    [0.8, 0.8], [0.8, 0.8]]]),
+        degree=np.array([3, 2, 1, 1, 1], dtype=np.int8),
+        subpath_offsets=np.array([0, 2, 4, 5], dtype=np.int64),
+        closed=np.array([True, True, False]), start=np.array([[-1.0, 0.5], [-1.0, 0.25],
+                                                              [0.2, 0.2]]),
+        path_offsets=np.array([0, 1, 2, 3], dtype=np.int64))
+    window = Window(0.0, 0.0, 1.0, 1.0)
     for curves, fill, mode in (("preserve", None, "exact"), ("preserve", "nonzero", "exact"),
                                ("flatten", None, "exact"), ("preserve", None, "approx")):
-        result = clip_paths(paths, (0.0, 0.0, 1.0, 1.0), curves=curves, fill=fill, mode=mode)
-        write_paths(result.paths, precision=None)
-        write_paths(result.paths, precision=6)
-    flatten_paths(paths, 1e-3, close=True)
+        backend.clip_paths(paths, window, PathOptions.resolve(window, curves=curves,
+                                                              fill=fill, mode=mode))
+    backend.flatten_paths(paths, 1e-3, True)
+
+
+def path_passes(paths: PathArrays, window: Window, options: PathOptions,
+                decisions) -> PathPieces:
+    """Run the path kernel's count pass, prefix sums and write pass.
+
+    Shared by the Numba backend (`decisions` says nothing is decided) and the OpenCL
+    backend (`decisions` carries the device's classes and flattened points: ``(True,
+    segment_class, point_start, points)``, and its run decisions and `DeviceStats`).
+    """
+    run_decisions, device_stats, (given, segment_class, point_start, points) = decisions
+    n_subpaths = paths.closed.shape[0]
+    subpath_source = np.repeat(np.arange(len(paths), dtype=np.int64),
+                               np.diff(paths.path_offsets))
+    block = max(1, min(_PATH_BLOCK, n_subpaths // _PATH_MIN_BLOCKS))
+    n_blocks = max(1, -(-n_subpaths // block))
+    counters = np.zeros((n_blocks, C.WIDTH), dtype=np.int64)
+    n_segments = np.zeros(n_subpaths, dtype=np.int64)
+    n_out = np.zeros(n_subpaths, dtype=np.int64)
+    if run_decisions is None:
+        run_decisions = np.empty(paths.degree.shape[0], dtype=np.int8)
+    kernel_input = (
+        BZ.PathInput(paths.controls, paths.degree, paths.subpath_offsets, paths.closed,
+                     paths.start, subpath_source),
+        R.Window(window.xmin, window.ymin, window.xmax, window.ymax),
+        BZ.Options(fill=options.fill is not None, flatten=options.curves is Curves.FLATTEN,
+                   exact=options.mode is Mode.EXACT, n_split=int(options.n_split),
+                   leaf_depth=int(options.leaf_depth), tolerance=float(options.tolerance)),
+        BZ.Decisions(given, run_decisions, segment_class, point_start, points))
+    nothing = np.empty(0, dtype=np.int64)
+    BZ.clip_path_blocks(*kernel_input, BZ.Layout(n_segments, n_out, nothing, nothing),
+                        BZ.Output(False, np.empty((0, 4, 2)), np.empty(0, np.int8), nothing,
+                                  np.empty((0, 2)), np.empty(0, bool), nothing),
+                        counters, block)
+    segment_start = exclusive_sum(n_segments)
+    subpath_start = exclusive_sum(n_out)
+    m = int(segment_start[-1])
+    k = int(subpath_start[-1])
+    out_ctrl = np.empty((m, 4, 2))
+    out_deg = np.empty(m, dtype=np.int8)
+    out_first = np.empty(k + 1, dtype=np.int64)
+    out_first[k] = m
+    out_start = np.empty((k, 2))
+    out_closed = np.empty(k, dtype=bool)
+    out_from = np.empty(k, dtype=np.int64)
+    BZ.clip_path_blocks(*kernel_input, BZ.Layout(n_segments, n_out, segment_start, subpath_start),
+                        BZ.Output(True, out_ctrl, out_deg, out_first, out_start, out_closed,
+                                  out_from),
+                        np.zeros((n_blocks, C.WIDTH), dtype=np.int64), block)
+    kept = out_from >= 0
+    if not kept.all():  # entries freed by joining the two ends of a closed stroke
+        out_first = np.append(out_first[:-1][kept], m)
+        out_start, out_closed, out_from = out_start[kept], out_closed[kept], out_from[kept]
+    path_offsets = exclusive_sum(np.bincount(out_from, minlength=len(paths)))
+    clipped = PathArrays.from_kernel(controls=out_ctrl, degree=out_deg,
+                                     subpath_offsets=out_first, closed=out_closed,
+                                     start=out_start, path_offsets=path_offsets)
+    segments_in = paths.degree.shape[0] + BZ.closing_edges(
+        paths.controls, paths.subpath_offsets, paths.closed, paths.start, options.fill is not None)
+    return PathPieces(clipped, int(segments_in), counters, device_stats)
+
+
+def polyline_layout(paths: PathArrays, segment_points: np.ndarray, close: bool):
+    """Return where each subpath's polyline goes when paths are flattened.
+
+    `segment_points` are the offsets of each segment's flattened points (after the
+    subpath's start). Returns ``(lines, closes, line_offsets)``: the subpaths that have
+    a segment (one polyline each), whether each subpath's polyline returns to its start,
+    and the point offsets of the polylines.
+    """
+    sub = paths.subpath_offsets
+    has_line = np.diff(sub) > 0
+    closes = has_line & (paths.closed | close)
+    ends = paths.start.copy()
+    ends[has_line] = paths.controls[sub[1:][has_line] - 1, 3]
+    closes &= (ends != paths.start).any(axis=1)
+    points_per_line = segment_points[sub[1:]] - segment_points[sub[:-1]] + has_line + closes
+    return np.flatnonzero(has_line), closes, exclusive_sum(points_per_line[has_line])
+
+
+def polygon_geometry(geometry_polygons: np.ndarray) -> np.ndarray:
+    """Return the geometry of each polygon, given the polygon offsets of the geometries."""
+    return np.repeat(np.arange(geometry_polygons.shape[0] - 1, dtype=np.int64),
+                     np.diff(geometry_polygons))
+
+
+def warm_up_geometry(backend) -> None:
+    """Clip lines and polygons on `backend`: one square ring across the window, 2D and 3D.
+
+    Every kernel specialisation a geometry clip uses is compiled (or loaded) by it.
+    """
+    ring = [[-1.0, 0.25], [2.0, 0.25], [2.0, 0.75], [-1.0, 0.75], [-1.0, 0.25]]
+    offsets = np.array([0, 5], dtype=np.int64)
+    one = np.array([0, 1], dtype=np.int64)
+    windows = WindowTable.of(Window(0.0, 0.0, 1.0, 1.0), 1)
+    options = SegmentOptions.resolve(Window(0.0, 0.0, 1.0, 1.0))
+    for coords in (np.array(ring), np.array([[x, y, 0.0] for x, y in ring])):
+        for kind, levels in ((GeometryKind.LINESTRING, (offsets,)),
+                             (GeometryKind.MULTILINESTRING, (offsets, one))):
+            for drop in (False, True):
+                backend.clip_lines(Ragged.of(kind, coords, levels), windows, options, drop)
+        backend.clip_polygons(Ragged.of(GeometryKind.POLYGON, coords, (offsets, one)),
+                              windows, options)
+
+
+def core_options(options: SegmentOptions) -> R.CoreOptions:
+    """Return the kernels' record of the segment core's options (one type per field)."""
+    return R.CoreOptions(METHOD_ID[options.method], int(options.n), int(options.max_depth),
+                         float(options.tolerance), float(options.auto_piece),
+                         options.mode is Mode.EXACT)
 
 
 def polygon_passes(xy, z, ring_offsets, polygon_offsets, polygon_window, windows,

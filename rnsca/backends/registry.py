@@ -11,6 +11,9 @@ else the first device, in float64 where the device has it.
 from __future__ import annotations
 
 import threading
+from dataclasses import dataclass
+from types import ModuleType
+from typing import Any
 
 from rnsca.backends.base import ClipBackend
 from rnsca.errors import BackendUnavailableError
@@ -20,7 +23,17 @@ __all__ = ["get_backend", "available_backends", "configure_opencl", "opencl_repo
 
 _BUILT: dict[Backend, ClipBackend] = {}
 _LOCK = threading.RLock()
-_OPENCL = {"device": None, "precision": Precision.AUTO}
+
+
+@dataclass
+class _OpenCLSettings:
+    """What `configure_opencl` last set: the device asked for (None: the default one)."""
+
+    device: str | None = None
+    precision: Precision = Precision.AUTO
+
+
+_OPENCL = _OpenCLSettings()
 _OPENCL_FAILURE: list[str] = []  # why the configured OpenCL backend could not be built
 
 
@@ -45,7 +58,7 @@ def _build(kind: Backend) -> ClipBackend:
 
         return NumbaBackend()
     opencl = _opencl_module()
-    return opencl.OpenCLBackend(_OPENCL["device"], _OPENCL["precision"])
+    return opencl.OpenCLBackend(_OPENCL.device, _OPENCL.precision)
 
 
 def configure_opencl(device: str | None = None, precision: Precision | str = "auto") -> None:
@@ -64,13 +77,13 @@ def configure_opencl(device: str | None = None, precision: Precision | str = "au
     """
     precision = Precision(precision)
     with _LOCK:
-        _OPENCL["device"] = device
-        _OPENCL["precision"] = precision
+        _OPENCL.device = device
+        _OPENCL.precision = precision
         _BUILT.pop(Backend.OPENCL, None)
         _OPENCL_FAILURE.clear()
 
 
-def _opencl_module():
+def _opencl_module() -> ModuleType:
     """Return ``rnsca.backends.opencl``, or raise BackendUnavailableError naming why not."""
     try:
         import pyopencl  # noqa: F401
@@ -102,7 +115,7 @@ def _opencl_reason() -> str | None:
         return None
 
 
-def opencl_report() -> dict:
+def opencl_report() -> dict[str, Any]:
     """Return what OpenCL offers here, for listings (CLI, ``/v1/capabilities``).
 
     Keys: ``available`` (the configured device can run the kernels), ``reason`` (if
@@ -111,7 +124,7 @@ def opencl_report() -> dict:
     id, or None) and ``precision`` (the one in use, or the one asked for).
     """
     reason = _opencl_reason()
-    report = {"available": reason is None}
+    report: dict[str, Any] = {"available": reason is None}
     if reason is not None:
         report["reason"] = reason
     try:
@@ -120,12 +133,14 @@ def opencl_report() -> dict:
     except BackendUnavailableError:
         report["devices"] = []
     if reason is None:
-        engine = get_backend(Backend.OPENCL)
-        report["selected"] = engine.device["id"]
-        report["precision"] = engine.precision.value
+        # The backend's capabilities name its one device and the precision it resolved
+        # ("auto" becomes float64 or float32).
+        capabilities = get_backend(Backend.OPENCL).capabilities
+        report["selected"] = capabilities.devices[0]
+        report["precision"] = capabilities.precision.value
     else:
         report["selected"] = None
-        report["precision"] = _OPENCL["precision"].value
+        report["precision"] = _OPENCL.precision.value
     return report
 
 

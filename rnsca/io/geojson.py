@@ -35,11 +35,11 @@ Rules (where RFC 7946 leaves a choice, the choice is stated):
 
 from __future__ import annotations
 
-import gc
 import math
-from contextlib import contextmanager
+from collections.abc import Sequence
 from dataclasses import dataclass
 from itertools import chain
+from typing import Any, NoReturn
 
 import numpy as np
 import orjson
@@ -63,6 +63,7 @@ __all__ = [
     "from_geojson",
     "loads",
     "to_geojson",
+    "write_geojson",
 ]
 
 #: The GeoJSON geometry type names, as RFC 7946 spells them (case-sensitive).
@@ -143,7 +144,7 @@ class GeoJSONLayout:
         return getattr(self, kind)[2][-1].shape[0] - 1
 
 
-def loads(data) -> object:
+def loads(data: str | bytes | bytearray | memoryview) -> Any:
     """Return the JSON value `data` (str, bytes, bytearray or memoryview) holds.
 
     Raises
@@ -169,7 +170,7 @@ def loads(data) -> object:
         raise error from None
 
 
-def dumps(obj, *, indent: bool = False) -> bytes:
+def dumps(obj: object, *, indent: bool = False) -> bytes:
     """Return `obj` (for example `to_geojson` output) as UTF-8 JSON bytes, via orjson.
 
     NumPy arrays (the ``arrays=True`` output of `to_geojson`) are written as JSON arrays.
@@ -183,7 +184,8 @@ def dumps(obj, *, indent: bool = False) -> bytes:
     return orjson.dumps(obj, option=option)
 
 
-def from_geojson(obj, *, max_vertices: int | None = None) -> GeoJSONLayout:
+def from_geojson(obj: dict | str | bytes | bytearray | memoryview, *,
+                 max_vertices: int | None = None) -> GeoJSONLayout:
     """Return the ragged arrays of a GeoJSON Geometry, Feature or FeatureCollection.
 
     Parameters
@@ -241,7 +243,8 @@ def from_geojson(obj, *, max_vertices: int | None = None) -> GeoJSONLayout:
             from None
 
 
-def to_geojson(layout: GeoJSONLayout, points=None, lines=None, polygons=None, *,
+def to_geojson(layout: GeoJSONLayout, points: tuple | None = None, lines: tuple | None = None,
+               polygons: tuple | None = None, *,
                keep_empty: bool = False, arrays: bool = False) -> dict:
     """Return the document of `layout` with its geometries taken from ragged arrays.
 
@@ -295,9 +298,9 @@ def to_geojson(layout: GeoJSONLayout, points=None, lines=None, polygons=None, *,
     per geometry). Allocating them beside a large parsed document triggers full runs of
     Python's cyclic garbage collector, each traversing the whole heap: on a 68 MB
     FeatureCollection (1.6 M positions) writing took 1.9 s with the collector running and
-    0.37 s with it paused (``arrays=True``: 0.18 s). So the collector is paused while
-    writing and resumed after if it was running; reference counting still frees
-    everything, and nothing written here can form a cycle.
+    0.37 s with it paused (``arrays=True``: 0.18 s). The collector is process-wide, so
+    this function leaves it alone: an application that owns its process may pause it
+    around the call (`rnsca.runtime.collector_paused`), or ask for ``arrays=True``.
 
     Examples
     --------
@@ -306,20 +309,50 @@ def to_geojson(layout: GeoJSONLayout, points=None, lines=None, polygons=None, *,
     >>> to_geojson(from_geojson(doc)) == doc
     True
     """
+    return write_geojson(layout, points, lines, polygons, keep_empty=keep_empty,
+                         arrays=arrays)[0]
+
+
+def write_geojson(layout: GeoJSONLayout, points: tuple | None = None,
+                  lines: tuple | None = None, polygons: tuple | None = None, *,
+                  keep_empty: bool = False, arrays: bool = False) -> tuple[dict, np.ndarray]:
+    """Return `to_geojson`'s document and, for each Feature written, its input Feature.
+
+    Parameters are those of `to_geojson`.
+
+    Returns
+    -------
+    document : dict
+    feature_source : ndarray of int64
+        For a FeatureCollection, the index in the input's ``features`` of each feature of
+        the output's (the ones left empty are dropped unless `keep_empty`); for a Feature
+        or a Geometry, ``[0]``.
+
+    Examples
+    --------
+    >>> doc = {"type": "FeatureCollection", "features": [
+    ...     {"type": "Feature", "properties": {}, "geometry": None},
+    ...     {"type": "Feature", "properties": {}, "geometry": {"type": "Point",
+    ...                                                        "coordinates": [1, 2]}}]}
+    >>> written, source = write_geojson(from_geojson(doc))
+    >>> len(written["features"]), source.tolist()
+    (1, [1])
+    """
     given = (points, lines, polygons)
-    with _collector_paused():
-        ragged, reuse = [], []
-        for kind in (_POINTS, _LINES, _POLYGONS):
-            own = getattr(layout, _KIND_NAME[kind])
-            coords, offsets = _checked_ragged(
-                kind, own if given[kind] is None else given[kind], own[2][-1].shape[0] - 1)
-            ragged.append((coords, offsets))
-            sources = None if arrays or layout.sources is None else layout.sources[kind]
-            reuse.append(None if sources is None else _unchanged(
-                own, None if given[kind] is None else (coords, offsets), sources))
-        writer = _Writer(ragged, reuse, layout.sources, 3 if layout.has_z else 2,
-                         bool(keep_empty), bool(arrays))
-        return writer.document(layout.document)
+    ragged, reuse = [], []
+    for kind in (_POINTS, _LINES, _POLYGONS):
+        own = getattr(layout, _KIND_NAME[kind])
+        array = given[kind]
+        coords, offsets = _checked_ragged(
+            kind, own if array is None else array, own[2][-1].shape[0] - 1)
+        ragged.append((coords, offsets))
+        sources = None if arrays or layout.sources is None else layout.sources[kind]
+        reuse.append(None if sources is None else _unchanged(
+            own, None if array is None else (coords, offsets), sources))
+    writer = _Writer(ragged, reuse, layout.sources, 3 if layout.has_z else 2,
+                     bool(keep_empty), bool(arrays))
+    document = writer.document(layout.document)
+    return document, np.asarray(writer.feature_source, dtype=np.int64)
 
 
 def _unchanged(own: tuple, given: tuple | None, sources: list) -> np.ndarray | None:
@@ -339,18 +372,6 @@ def _unchanged(own: tuple, given: tuple | None, sources: list) -> np.ndarray | N
     return reuse if reuse.any() else None
 
 
-@contextmanager
-def _collector_paused():
-    """Pause the cyclic garbage collector, resuming it after only if it was running."""
-    running = gc.isenabled()
-    gc.disable()
-    try:
-        yield
-    finally:
-        if running:
-            gc.enable()
-
-
 # --------------------------------------------------------------------------- reading
 
 class _Fallback(Exception):
@@ -365,16 +386,17 @@ class _Reader:
     """
 
     def __init__(self) -> None:
-        self.point_arrays = []    # one array of positions per point-like geometry
-        self.line_parts = []      # each non-empty line part
-        self.line_counts = []     # parts per line-like geometry
-        self.rings = []           # each ring
-        self.ring_counts = []     # rings per non-empty polygon
-        self.polygon_counts = []  # non-empty polygons per polygon-like geometry
+        # One array of positions per point-like geometry.
+        self.point_arrays: list[Sequence] = []
+        self.line_parts: list[Sequence] = []  # each non-empty line part
+        self.line_counts: list[int] = []      # parts per line-like geometry
+        self.rings: list[Sequence] = []       # each ring
+        self.ring_counts: list[int] = []      # rings per non-empty polygon
+        self.polygon_counts: list[int] = []   # non-empty polygons per polygon-like geometry
         # Each geometry's coordinates member, or None if it has members read as nothing.
-        self.sources = ([], [], [])
+        self.sources: tuple[list, list, list] = ([], [], [])
 
-    def document(self, doc) -> None:
+    def document(self, doc: object) -> None:
         if not isinstance(doc, dict):
             raise _Fallback
         kind = doc.get("type")
@@ -391,7 +413,7 @@ class _Reader:
         else:
             self.geometry(doc, 0)
 
-    def feature(self, feature) -> None:
+    def feature(self, feature: object) -> None:
         if not isinstance(feature, dict) or "geometry" not in feature:
             raise _Fallback
         kind = feature.get("type")
@@ -401,7 +423,7 @@ class _Reader:
         if geometry is not None:
             self.geometry(geometry, 0)
 
-    def geometry(self, geometry, depth: int) -> None:
+    def geometry(self, geometry: object, depth: int) -> None:
         if not isinstance(geometry, dict):
             raise _Fallback
         kind = geometry.get("type")
@@ -460,7 +482,7 @@ class _Reader:
         else:
             raise _Fallback
 
-    def layout(self, document, max_vertices: int | None) -> GeoJSONLayout:
+    def layout(self, document: dict, max_vertices: int | None) -> GeoJSONLayout:
         """Return the layout, checking positions and shapes in bulk."""
         if not set(map(type, self.rings)) <= _ARRAY_TYPES and not all(
                 isinstance(ring, _ARRAY) for ring in self.rings):
@@ -552,7 +574,7 @@ def _coordinates(arrays: list, sizes: np.ndarray) -> tuple | None:
     plain = np.zeros(len(arrays), dtype=bool)
     if total == 0:
         return np.empty((0, 2), dtype=np.float64), plain
-    first = next(chain.from_iterable(arrays), None)
+    first: Any = next(chain.from_iterable(arrays), None)
     if type(first) not in _ARRAY_TYPES or len(first) < 2:
         return None
     out = np.empty((total, 3 if len(first) >= 3 else 2), dtype=np.float64)
@@ -591,9 +613,9 @@ class _Validator:
     def __init__(self, max_vertices: int | None) -> None:
         self.max_vertices = max_vertices
         self.count = 0
-        self.dim = None  # of the first position met
+        self.dim: int | None = None  # of the first position met
 
-    def document(self, doc) -> None:
+    def document(self, doc: object) -> None:
         if not isinstance(doc, dict):
             _fail("", f"expected a GeoJSON object, got {_describe(doc)}")
         kind = _type_of(doc, "")
@@ -610,7 +632,7 @@ class _Validator:
             _fail("type", f"unknown GeoJSON type {kind!r}; expected Feature, "
                           f"FeatureCollection or one of {', '.join(GEOMETRY_TYPES)}")
 
-    def feature(self, feature, path: str) -> None:
+    def feature(self, feature: object, path: str) -> None:
         if not isinstance(feature, dict):
             _fail(path, f"expected a Feature object, got {_describe(feature)}")
         kind = _type_of(feature, path)
@@ -621,7 +643,7 @@ class _Validator:
         if geometry is not None:
             self.geometry(geometry, _join(path, "geometry"), 0)
 
-    def geometry(self, geometry, path: str, depth: int) -> None:
+    def geometry(self, geometry: object, path: str, depth: int) -> None:
         if not isinstance(geometry, dict):
             _fail(path, f"expected a geometry object, got {_describe(geometry)}")
         kind = _type_of(geometry, path)
@@ -660,13 +682,13 @@ class _Validator:
                 _require_array(polygon, f"{path}[{i}]")
                 self.polygon(polygon, f"{path}[{i}]")
 
-    def line(self, positions, path: str) -> None:
+    def line(self, positions: Sequence, path: str) -> None:
         if len(positions) == 1:
             _fail(path, "a LineString needs at least 2 positions, got 1")
         for i, position in enumerate(positions):
             self.position(position, f"{path}[{i}]")
 
-    def polygon(self, rings, path: str) -> None:
+    def polygon(self, rings: Sequence, path: str) -> None:
         for i, ring in enumerate(rings):
             ring_path = f"{path}[{i}]"
             _require_array(ring, ring_path)
@@ -680,7 +702,7 @@ class _Validator:
                 _fail(ring_path, f"polygon ring is not closed: its first position {first} "
                                  f"differs from its last {last}")
 
-    def position(self, position, path: str) -> None:
+    def position(self, position: object, path: str) -> None:
         if not isinstance(position, _ARRAY):
             _fail(path, f"expected a position (an array of 2 or 3 numbers), got "
                         f"{_describe(position)}")
@@ -707,7 +729,7 @@ class _Validator:
                 f"GeoJSON has more than max_vertices={self.max_vertices} positions")
 
 
-def _fail(path: str, reason: str):
+def _fail(path: str, reason: str) -> NoReturn:
     """Raise InvalidGeometryError for the problem at JSON `path`."""
     error = InvalidGeometryError(f"invalid GeoJSON at {path or '<top level>'}: {reason}")
     error.path = path
@@ -718,7 +740,7 @@ def _join(path: str, member: str) -> str:
     return f"{path}.{member}" if path else member
 
 
-def _type_of(obj: dict, path: str):
+def _type_of(obj: dict, path: str) -> str:
     if "type" not in obj:
         _fail(path, "missing member \"type\"")
     kind = obj["type"]
@@ -727,18 +749,18 @@ def _type_of(obj: dict, path: str):
     return kind
 
 
-def _member(obj: dict, name: str, path: str, kind: str, hint: str = ""):
+def _member(obj: dict, name: str, path: str, kind: str, hint: str = "") -> Any:
     if name not in obj:
         _fail(path, f"{kind} has no \"{name}\" member{hint}")
     return obj[name]
 
 
-def _require_array(value, path: str) -> None:
+def _require_array(value: object, path: str) -> None:
     if not isinstance(value, _ARRAY):
         _fail(path, f"expected an array, got {_describe(value)}")
 
 
-def _describe(value) -> str:
+def _describe(value: object) -> str:
     """Name a JSON value's type for a message, with the value when it is short."""
     if value is None:
         return "null"
@@ -758,7 +780,7 @@ def _describe(value) -> str:
 
 # --------------------------------------------------------------------------- writing
 
-def _checked_ragged(kind: int, ragged, count: int) -> tuple:
+def _checked_ragged(kind: int, ragged: tuple, count: int) -> tuple:
     """Return ``(coords, offsets as lists)`` of a ragged triple, checked against the layout."""
     try:
         geometry_type, coords, offsets = ragged
@@ -799,11 +821,13 @@ class _Writer:
             offsets for _, offsets in ragged)
         # The positions of geometry i are bounds[i]:bounds[i + 1] in its array.
         bounds = [points, parts[lines], rings[polygons[shapes]]]
-        self.sources = sources
+        # Indexed only where `reuse` flags a geometry, which has a source then.
+        self.sources: tuple = sources if sources is not None else ((), (), ())
         self.reuse = [None if flags is None else flags.tolist() for flags in reuse]
         # The positions of geometries written back from their source are not converted:
         # `values` holds the others, and `starts` the innermost offsets into it.
-        self.values, starts = [], []
+        self.values: list = []
+        starts: list[np.ndarray] = []
         for (coords, (innermost, *_)), flags, rows in zip(ragged, reuse, bounds, strict=True):
             if flags is None:
                 self.values.append(coords if arrays else coords.tolist())
@@ -819,29 +843,35 @@ class _Writer:
         # Every line part and polygon written once, up front: a slice per part, ring and
         # polygon in three comprehensions costs less than nested ones per geometry.
         self.parts = _split(self.values[_LINES], self.starts[_LINES])
-        self.polygons = _split(_split(self.values[_POLYGONS], self.starts[_POLYGONS]),
-                               self.offsets[_POLYGONS][1])
+        self.polygon_rings = _split(_split(self.values[_POLYGONS], self.starts[_POLYGONS]),
+                                    self.offsets[_POLYGONS][1])
         self.bounds = [level.tolist() for level in bounds]
         self.next = [0, 0, 0]
         self.keep_empty = keep_empty
         self.dim = dim
+        # The input feature of each feature written (a single Feature or Geometry: [0]).
+        self.feature_source = [0]
 
     def document(self, doc: dict) -> dict:
         kind = doc["type"]
-        if kind == "Feature":
-            return self.feature(doc, True, False)[0]
         if kind != "FeatureCollection":
-            return self.geometry(doc, True, False)[0]
+            top = self.feature(doc, True, False)[0] if kind == "Feature" \
+                else self.geometry(doc, True, False)[0]
+            assert top is not None  # kept: the top-level object is never dropped
+            return top
         want = "bbox" in doc
         features, box = [], None
-        for feature in doc["features"]:
+        self.feature_source = []
+        for index, feature in enumerate(doc["features"]):
             out, feature_box = self.feature(feature, self.keep_empty, want)
             if out is not None:
                 features.append(out)
+                self.feature_source.append(index)
                 box = _union(box, feature_box)
         return self.replace(doc, "features", features, box)
 
-    def feature(self, feature: dict, keep: bool, want: bool):
+    def feature(self, feature: dict, keep: bool,
+                want: bool) -> tuple[dict | None, tuple | None]:
         """Return the written feature (None if dropped) and its bbox (None if empty or unwanted)."""
         want = want or "bbox" in feature
         geometry = feature["geometry"]
@@ -855,7 +885,8 @@ class _Writer:
                 return None, None
         return self.replace(feature, "geometry", out, box), box
 
-    def geometry(self, geometry: dict, keep: bool, want: bool):
+    def geometry(self, geometry: dict, keep: bool,
+                 want: bool) -> tuple[dict | None, tuple | None, bool]:
         """Return the written geometry (None if dropped), its bbox and whether it is empty."""
         want = want or "bbox" in geometry
         kind = geometry["type"]
@@ -898,27 +929,27 @@ class _Writer:
 
     # The type and coordinates of non-empty geometry i of each array, given its input type.
 
-    def points(self, kind: str, i: int):
+    def points(self, kind: str, i: int) -> tuple[str, list]:
         starts = self.starts[_POINTS]
         lo, hi = starts[i], starts[i + 1]
         values = self.values[_POINTS]
         return kind, (values[lo] if kind == "Point" else values[lo:hi])
 
-    def lines(self, kind: str, i: int):
+    def lines(self, kind: str, i: int) -> tuple[str, list]:
         _, geometries = self.offsets[_LINES]
         first, last = geometries[i], geometries[i + 1]
         if kind == "LineString" and last - first == 1:
             return kind, self.parts[first]
         return "MultiLineString", self.parts[first:last]
 
-    def polygons(self, kind: str, i: int):
+    def polygons(self, kind: str, i: int) -> tuple[str, list]:
         _, _, geometries = self.offsets[_POLYGONS]
         first, last = geometries[i], geometries[i + 1]
         if kind == "Polygon" and last - first == 1:
-            return kind, self.polygons[first]
-        return "MultiPolygon", self.polygons[first:last]
+            return kind, self.polygon_rings[first]
+        return "MultiPolygon", self.polygon_rings[first:last]
 
-    def replace(self, obj: dict, name: str, value, box) -> dict:
+    def replace(self, obj: dict, name: str, value: object, box: tuple | None) -> dict:
         """Return a copy of `obj` with member `name` set and its bbox recomputed."""
         out = dict(obj)  # members keep their order when set again
         out[name] = value
@@ -926,14 +957,14 @@ class _Writer:
             self.set_bbox(out, box)
         return out
 
-    def set_bbox(self, out: dict, box) -> None:
+    def set_bbox(self, out: dict, box: tuple | None) -> None:
         """Recompute the ``bbox`` member of `out` from `box`, or drop it if `box` is None."""
         if box is None:
             del out["bbox"]
         else:
             out["bbox"] = self.bbox(box, out["bbox"])
 
-    def bbox(self, box, old) -> list:
+    def bbox(self, box: tuple, old: object) -> list:
         """Return ``[min..., max...]``, 3D only if the document and the old bbox are."""
         dim = 3 if self.dim == 3 and isinstance(old, _ARRAY) and len(old) == 6 else 2
         return box[0][:dim].tolist() + box[1][:dim].tolist()
@@ -942,7 +973,7 @@ class _Writer:
 _WRITE = (_Writer.points, _Writer.lines, _Writer.polygons)
 
 
-def _split(items, offsets: list) -> list:
+def _split(items: Sequence, offsets: list) -> list:
     """Return ``[items[offsets[k]:offsets[k + 1]] for each k]``."""
     return [items[lo:hi] for lo, hi in zip(offsets[:-1], offsets[1:], strict=True)]
 

@@ -22,7 +22,9 @@ import functools
 import math
 import re
 import xml.etree.ElementTree as ET
+from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import NoReturn
 from xml.parsers import expat
 
 import numpy as np
@@ -93,7 +95,8 @@ class Shape:
     fill_rule: str              # its computed fill-rule: "nonzero" or "evenodd"
 
 
-def parse_shapes(doc, shapes: list[Shape], tolerance) -> PathArrays:
+def parse_shapes(doc: SvgDocument, shapes: list[Shape],
+                 tolerance: float | None) -> PathArrays:
     """Return the path data of `shapes` parsed at once; errors name the element."""
     try:
         return parse_paths([shape.d for shape in shapes], tolerance=tolerance)
@@ -110,7 +113,8 @@ def parse_shapes(doc, shapes: list[Shape], tolerance) -> PathArrays:
         raise raised from None
 
 
-def map_shapes(doc, shapes: list[Shape], paths: PathArrays, matrices: np.ndarray) -> PathArrays:
+def map_shapes(doc: SvgDocument, shapes: list[Shape], paths: PathArrays,
+               matrices: np.ndarray) -> PathArrays:
     """Return `paths` with path ``i`` mapped by ``matrices[i]``; errors name the element."""
     return _named(doc, shapes, _map_paths, paths, matrices)
 
@@ -178,7 +182,7 @@ def set_path_data(shape: Shape, d: str) -> None:
         element.set("d", d)
         return
     geometry = _GEOMETRY[shape.local]
-    attributes = {}
+    attributes: dict[str, str] = {}
     for name, value in element.attrib.items():
         if name in geometry:
             attributes.setdefault("d", d)  # where the first geometry attribute was
@@ -202,9 +206,9 @@ def remove_children(parent: ET.Element, removed: set[int]) -> None:
         if id(child) not in removed:
             kept.append(child)
             continue
-        before = kept[-1].tail if kept else parent.text
+        before = (kept[-1].tail if kept else parent.text) or ""
         after = child.tail
-        text = after if not (before or "").strip() else before + (after or "")
+        text = after if not before.strip() else before + (after or "")
         if kept:
             kept[-1].tail = text
         else:
@@ -224,7 +228,7 @@ class _Context:
     namespaces: dict
 
 
-def find_shapes(doc) -> list[Shape]:
+def find_shapes(doc: SvgDocument) -> list[Shape]:
     """Return the drawn shapes of the document, in document order, with their paint.
 
     Descends only into containers; shapes that do not render, and shapes under a
@@ -237,7 +241,7 @@ def find_shapes(doc) -> list[Shape]:
         raise ParseError(f"not an SVG document: the root element is <{root.tag}>, not "
                          f"<svg> (in the SVG namespace {SVG_NAMESPACE} or none)")
     context = _paint(root, _Context(IDENTITY, True, "nonzero", namespaces))
-    shapes = []
+    shapes: list[Shape] = []
     stack = [(child, root, context) for child in reversed(root)]
     while stack:
         element, parent, context = stack.pop()
@@ -320,7 +324,7 @@ def _declarations(style: str | None) -> dict[str, str]:
 
 # --------------------------------------------------------------------------- transforms
 
-def _transform(doc, element: ET.Element) -> tuple[float, ...]:
+def _transform(doc: SvgDocument, element: ET.Element) -> tuple[float, ...]:
     """Return the map of the element's ``transform`` attribute (identity if none).
 
     Raises ParseError naming the element and the character position for a malformed
@@ -329,7 +333,7 @@ def _transform(doc, element: ET.Element) -> tuple[float, ...]:
     text = element.get("transform")
     if text is None or not text.strip() or text.strip() == "none":
         return IDENTITY
-    matrix = IDENTITY
+    matrix: tuple[float, ...] = IDENTITY
     position = 0
     while position < len(text):
         match = _TRANSFORM.match(text, position)
@@ -412,7 +416,7 @@ def _numbers(text: str) -> list[float] | None:
 
 # --------------------------------------------------------------------------- basic shapes
 
-def _outline(doc, element: ET.Element, local: str) -> str | None:
+def _outline(doc: SvgDocument, element: ET.Element, local: str) -> str | None:
     """Return the shape's outline as path data (SVG 2's equivalent path).
 
     None if the shape does not render (zero size, no ``d``, fewer than 2 points).
@@ -420,17 +424,23 @@ def _outline(doc, element: ET.Element, local: str) -> str | None:
     if local == "path":
         return element.get("d")
 
-    def length(name: str, axis: str, default: float | None = 0.0) -> float | None:
-        return _length(doc, element, name, axis, default)
+    def length(name: str, axis: str) -> float:
+        value = _length(doc, element, name, axis)
+        return 0.0 if value is None else value
+
+    def optional_length(name: str, axis: str) -> float | None:
+        return _length(doc, element, name, axis)
 
     if local == "rect":
-        return _rect_outline(length)
+        return _rect_outline(length, optional_length)
     if local in ("circle", "ellipse"):
         cx, cy = length("cx", "x"), length("cy", "y")
+        rx: float | None
+        ry: float | None
         if local == "circle":
             rx = ry = length("r", "xy")
         else:
-            rx, ry = length("rx", "x", None), length("ry", "y", None)
+            rx, ry = optional_length("rx", "x"), optional_length("ry", "y")
             rx, ry = (rx if rx is not None else ry), (ry if ry is not None else rx)
         if rx is None or ry is None or not (rx > 0 and ry > 0):
             return None
@@ -453,13 +463,17 @@ def _outline(doc, element: ET.Element, local: str) -> str | None:
     return f"M{pairs}" + ("Z" if local == "polygon" else "")
 
 
-def _rect_outline(length) -> str | None:
-    """Return a rectangle's outline; rounded corners as arcs, radii as SVG 2 sets them."""
+def _rect_outline(length: Callable[[str, str], float],
+                  optional_length: Callable[[str, str], float | None]) -> str | None:
+    """Return a rectangle's outline; rounded corners as arcs, radii as SVG 2 sets them.
+
+    `length` reads a length attribute (0 when absent), `optional_length` too (None).
+    """
     x, y = length("x", "x"), length("y", "y")
-    w, h = length("width", "x", None), length("height", "y", None)
+    w, h = optional_length("width", "x"), optional_length("height", "y")
     if w is None or h is None or not (w > 0 and h > 0):
         return None
-    rx, ry = length("rx", "x", None), length("ry", "y", None)
+    rx, ry = optional_length("rx", "x"), optional_length("ry", "y")
     rx = None if rx is not None and rx < 0 else rx   # negative: invalid, i.e. auto
     ry = None if ry is not None and ry < 0 else ry
     rx, ry = (rx if rx is not None else ry), (ry if ry is not None else rx)
@@ -472,15 +486,15 @@ def _rect_outline(length) -> str | None:
             f"V{y + ry!r}{arc} {x + rx!r} {y!r}Z")
 
 
-def _length(doc, element: ET.Element, name: str, axis: str, default):
-    """Return a length attribute in user units (`default` when absent).
+def _length(doc: SvgDocument, element: ET.Element, name: str, axis: str) -> float | None:
+    """Return a length attribute in user units (None when absent or ``auto``).
 
     Absolute units convert at 96 per inch; a percentage is of the root viewport's
     width (``axis`` "x"), height ("y") or normalized diagonal ("xy").
     """
     text = element.get(name)
     if text is None:
-        return default
+        return None
     try:   # the common case: a plain number ("1_0", "inf" and "nan" go on below)
         value = float(text)
     except ValueError:
@@ -489,7 +503,7 @@ def _length(doc, element: ET.Element, name: str, axis: str, default):
         if math.isfinite(value) and "_" not in text:
             return value
     if text.strip() == "auto":
-        return default
+        return None
     match = _LENGTH.fullmatch(text)
     if match is None:
         raise _element_error(doc, element, f"{name}: expected a length, found {text!r}")
@@ -509,7 +523,7 @@ def _length(doc, element: ET.Element, name: str, axis: str, default):
     return value / 100.0 * reference
 
 
-def _describe(doc, element: ET.Element) -> str:
+def _describe(doc: SvgDocument, element: ET.Element) -> str:
     """Return ``<tag id="...">`` (or ``<tag>``) and its line, to name it in errors."""
     ident = element.get("id")
     name = f'<{element.tag} id="{ident}">' if ident is not None else f"<{element.tag}>"
@@ -517,7 +531,7 @@ def _describe(doc, element: ET.Element) -> str:
     return name if line is None else f"{name} on line {line}"
 
 
-def _element_error(doc, element: ET.Element, message: str) -> ParseError:
+def _element_error(doc: SvgDocument, element: ET.Element, message: str) -> ParseError:
     error = ParseError(f"{_describe(doc, element)}: {message}")
     error.line = doc.lines.get(element)
     return error
@@ -529,7 +543,7 @@ def _element_error(doc, element: ET.Element, message: str) -> ParseError:
 class SvgDocument:
     """A parsed document: the root element and what surrounds it."""
 
-    root: ET.Element | None = None
+    root: ET.Element
     declaration: str | None = None
     prolog: list[str] = field(default_factory=list)    # doctype, comments, PIs
     epilog: list[str] = field(default_factory=list)
@@ -543,12 +557,12 @@ class SvgDocument:
         size = []
         for name in ("width", "height"):
             match = _LENGTH.fullmatch(self.root.get(name, ""))
-            unit = match.group(2).lower() if match else None
-            if unit not in _UNITS or not float(match.group(1)) > 0:
+            if match is None or match.group(2).lower() not in _UNITS \
+                    or not float(match.group(1)) > 0:
                 raise UnsupportedGeometryError(
                     f"{who}: a percentage needs the root's viewBox (or its width and "
                     f"height in absolute units) to resolve against")
-            size.append(float(match.group(1)) * _UNITS[unit])
+            size.append(float(match.group(1)) * _UNITS[match.group(2).lower()])
         return size[0], size[1]
 
 
@@ -561,66 +575,71 @@ class _Reader:
         parser.ordered_attributes = True
         parser.specified_attributes = True              # no defaults from a DTD
         self.builder = ET.TreeBuilder(insert_comments=True, insert_pis=True)
-        self.doc = SvgDocument()
+        # What the document will hold besides its root.
+        self.declaration: str | None = None
+        self.prolog: list[str] = []
+        self.epilog: list[str] = []
+        self.lines: dict[ET.Element, int] = {}
         self.depth = 0
         parser.StartElementHandler = self.start
         parser.EndElementHandler = self.end
         parser.CharacterDataHandler = self.data
         parser.CommentHandler = self.comment
         parser.ProcessingInstructionHandler = self.pi
-        parser.XmlDeclHandler = self.declaration
+        parser.XmlDeclHandler = self.xml_declaration
         parser.StartDoctypeDeclHandler = self.doctype
         parser.EntityDeclHandler = self.entity
         parser.UnparsedEntityDeclHandler = self.entity
         parser.SkippedEntityHandler = self.skipped_entity
         parser.ExternalEntityRefHandler = self.skipped_entity
 
-    def read(self, data) -> SvgDocument:
+    def read(self, data: str | bytes) -> SvgDocument:
         try:
             self.parser.Parse(data, True)
         except expat.ExpatError as error:
             raise _xml_error(error.lineno, error.offset,
                              expat.ErrorString(error.code)) from None
-        self.doc.root = self.builder.close()
-        return self.doc
+        return SvgDocument(self.builder.close(), self.declaration, self.prolog, self.epilog,
+                           self.lines)
 
     def fail(self, message: str) -> ParseError:
         return _xml_error(self.parser.CurrentLineNumber,
                           self.parser.CurrentColumnNumber, message)
 
-    def start(self, name, attributes) -> None:
+    def start(self, name: str, attributes: list[str]) -> None:
         self.depth += 1
         if self.depth > MAX_NESTING:
             raise self.fail(f"elements nested more than {MAX_NESTING} deep")
         element = self.builder.start(name, dict(zip(attributes[::2], attributes[1::2],
                                                     strict=True)))
-        self.doc.lines[element] = self.parser.CurrentLineNumber
+        self.lines[element] = self.parser.CurrentLineNumber
 
-    def end(self, name) -> None:
+    def end(self, name: str) -> None:
         self.depth -= 1
         self.builder.end(name)
 
-    def data(self, text) -> None:
+    def data(self, text: str) -> None:
         if self.depth:
             self.builder.data(text)
 
-    def comment(self, text) -> None:
+    def comment(self, text: str) -> None:
         if self.depth:
             self.builder.comment(text)
         else:
             self._outside(f"<!--{text}-->")
 
-    def pi(self, target, text) -> None:
+    def pi(self, target: str, text: str) -> None:
         if self.depth:
             self.builder.pi(target, text)
         else:
             self._outside(f"<?{target} {text}?>" if text else f"<?{target}?>")
 
-    def declaration(self, version, encoding, standalone) -> None:
+    def xml_declaration(self, version: str, encoding: str | None, standalone: int) -> None:
         alone = {1: ' standalone="yes"', 0: ' standalone="no"'}.get(standalone, "")
-        self.doc.declaration = f'<?xml version="{version}" encoding="UTF-8"{alone}?>'
+        self.declaration = f'<?xml version="{version}" encoding="UTF-8"{alone}?>'
 
-    def doctype(self, name, system_id, public_id, has_internal_subset) -> None:
+    def doctype(self, name: str, system_id: str | None, public_id: str | None,
+                has_internal_subset: bool) -> None:
         def quoted(text):
             return f"'{text}'" if '"' in text else f'"{text}"'
         if public_id:
@@ -629,18 +648,18 @@ class _Reader:
             ids = f" SYSTEM {quoted(system_id)}" if system_id else ""
         self._outside(f"<!DOCTYPE {name}{ids}>")
 
-    def entity(self, name, *_) -> None:
+    def entity(self, name: str, *_: object) -> NoReturn:
         raise self.fail(f"entity declarations are not accepted (found {name!r}): "
                         f"entities could expand without bound or read external files")
 
-    def skipped_entity(self, name, *_) -> None:
+    def skipped_entity(self, name: str, *_: object) -> NoReturn:
         raise self.fail(f"reference to an undeclared entity {name!r}")
 
     def _outside(self, text: str) -> None:
-        (self.doc.epilog if self.doc.lines else self.doc.prolog).append(text)
+        (self.epilog if self.lines else self.prolog).append(text)
 
 
-def read_document(document) -> SvgDocument:
+def read_document(document: str | bytes | bytearray | memoryview) -> SvgDocument:
     """Return the parsed document; ParseError with the line and column if malformed."""
     if isinstance(document, (bytearray, memoryview)):
         document = bytes(document)

@@ -42,8 +42,6 @@ __all__ = [
     "count_segments",
     "write_segments",
     "arc_error",
-    "LAYOUT_MESSAGES",
-    "check_layout",
 ]
 
 # Error codes of the tokenizer (0: no error); `ERROR_MESSAGES` says what was expected.
@@ -743,63 +741,3 @@ def write_segments(nums, num_offsets, cmds, cmd_offsets, tol_abs, tol_rel, seg_o
         _build(nums, num_offsets[p], cmds, cmd_offsets[p], cmd_offsets[p + 1], tolerance,
                True, segments, seg_offsets[p], sub_offsets[p])
     return controls, degree, start, closed, subpath_offsets
-
-
-# --------------------------------------------------------------------------- layout
-
-# Codes of `check_layout` (0: valid), and what each says is wrong.
-_NOT_FINITE = 1
-_UNUSED_ROW = 2
-_DISCONTINUOUS = 3
-LAYOUT_MESSAGES = {
-    _NOT_FINITE: "coordinates must be finite",
-    _UNUSED_ROW: "unused control points must repeat the end point",
-    _DISCONTINUOUS: ("segments must start where the previous one ends (the first at the "
-                     "subpath's start)"),
-}
-
-
-@scalar
-def _segment_problem(controls, degree, i, x, y):
-    """Return the problem code of segment i that should start at (x, y), or 0."""
-    for r in range(4):
-        if not (math.isfinite(controls[i, r, 0]) and math.isfinite(controls[i, r, 1])):
-            return _NOT_FINITE
-    for r in range(degree[i], 3):
-        if controls[i, r, 0] != controls[i, 3, 0] or controls[i, r, 1] != controls[i, 3, 1]:
-            return _UNUSED_ROW
-    if controls[i, 0, 0] != x or controls[i, 0, 1] != y:
-        return _DISCONTINUOUS
-    return 0
-
-
-@parallel
-def check_layout(controls, degree, subpath_offsets, start):
-    """Return ``(subpath, segment, code)`` of the first broken rule, or (-1, -1, 0).
-
-    Rules of `rnsca.io.svgpath.PathArrays`: finite coordinates, unused control
-    rows equal to the end point, each segment starting at the previous one's end (the
-    first at its subpath's start). The caller has checked shapes, degrees and offsets.
-    One parallel pass over the subpaths, no temporaries.
-    """
-    k = start.shape[0]
-    problem = np.zeros(k, dtype=np.int64)
-    at = np.full(k, -1, dtype=np.int64)
-    for s in prange(k):
-        x = start[s, 0]
-        y = start[s, 1]
-        if not (math.isfinite(x) and math.isfinite(y)):
-            problem[s] = _NOT_FINITE
-            continue
-        for i in range(subpath_offsets[s], subpath_offsets[s + 1]):
-            code = _segment_problem(controls, degree, i, x, y)
-            if code != 0:
-                problem[s] = code
-                at[s] = i
-                break
-            x = controls[i, 3, 0]
-            y = controls[i, 3, 1]
-    for s in range(k):
-        if problem[s] != 0:
-            return s, at[s], problem[s]
-    return -1, -1, 0

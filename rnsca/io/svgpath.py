@@ -38,12 +38,12 @@ from __future__ import annotations
 import math
 import re
 from collections.abc import Sequence
-from dataclasses import dataclass
 from itertools import pairwise
 
 import numpy as np
 
-from rnsca.errors import InvalidGeometryError, InvalidOptionError, ParseError
+from rnsca.arrays import PathArrays
+from rnsca.errors import InvalidOptionError, ParseError
 from rnsca.io import svgparse, svgwrite
 
 __all__ = [
@@ -52,6 +52,7 @@ __all__ = [
     "PathArrays",
     "parse_path",
     "parse_paths",
+    "warm_up_readers",
     "write_path",
     "write_paths",
 ]
@@ -70,173 +71,6 @@ _VECTOR_NUMBER_BYTES = 32
 
 # A number of the path grammar, to quote one in an error message.
 _NUMBER = re.compile(r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")
-
-
-@dataclass(frozen=True, eq=False, kw_only=True)
-class PathArrays:
-    """Many SVG paths as columnar arrays of Bézier segments.
-
-    Path ``i`` is subpaths ``path_offsets[i]:path_offsets[i + 1]``; subpath ``s`` is
-    segments ``subpath_offsets[s]:subpath_offsets[s + 1]``, each starting where the
-    previous one ends, the first at ``start[s]``.
-
-    Attributes
-    ----------
-    controls : ndarray of float64, shape (m, 4, 2)
-        Control points of each segment from its start point: degree 1 uses rows 0-1,
-        degree 2 rows 0-2, degree 3 rows 0-3. Unused rows repeat the end point, so row
-        3 is always the end point and a bounding box may take all four rows.
-    degree : ndarray of int8, shape (m,)
-        1 (line), 2 (quadratic) or 3 (cubic).
-    subpath_offsets : ndarray of int64, shape (k + 1,)
-        Segment offsets of the subpaths.
-    closed : ndarray of bool, shape (k,)
-        Whether the subpath ended with Z: its closing edge, from the end of its last
-        segment back to `start`, is implicit (never a segment).
-    start : ndarray of float64, shape (k, 2)
-        Each subpath's start point (a subpath may have no segments: ``"M1 2"``).
-    path_offsets : ndarray of int64, shape (n + 1,)
-        Subpath offsets of the paths.
-
-    Raises
-    ------
-    InvalidGeometryError
-        On construction, if a shape, an offset array (must start at 0, never decrease
-        and end at the length of what it indexes), a degree, the continuity of segments
-        or the repetition of unused control rows is wrong, or a coordinate is not
-        finite. The message and the ``path_index`` attribute name the path when one is
-        at fault.
-
-    Notes
-    -----
-    Arrays are converted to the dtypes above and made C-contiguous (a copy only when
-    needed). ``==`` compares every array exactly.
-    """
-
-    controls: np.ndarray
-    degree: np.ndarray
-    subpath_offsets: np.ndarray
-    closed: np.ndarray
-    start: np.ndarray
-    path_offsets: np.ndarray
-
-    def __post_init__(self) -> None:
-        controls = _as_array(self.controls, np.float64, "controls")
-        m = controls.shape[0] if controls.ndim == 3 else -1
-        if controls.shape[1:] != (4, 2):
-            raise InvalidGeometryError(f"controls must have shape (m, 4, 2), "
-                                       f"not {controls.shape}")
-        degree = _small_ints(self.degree, np.int8, "degree", (1, 2, 3))
-        if degree.shape != (m,):
-            raise InvalidGeometryError(f"degree must have shape ({m},) like controls, "
-                                       f"not {degree.shape}")
-        subpath_offsets = _offsets(self.subpath_offsets, "subpath_offsets", m, "segments")
-        k = subpath_offsets.shape[0] - 1
-        closed = _small_ints(self.closed, np.bool_, "closed", (0, 1))
-        if closed.shape != (k,):
-            raise InvalidGeometryError(f"closed must have shape ({k},), one per subpath, "
-                                       f"not {closed.shape}")
-        start = _as_array(self.start, np.float64, "start")
-        if start.shape != (k, 2):
-            raise InvalidGeometryError(f"start must have shape ({k}, 2), one per subpath, "
-                                       f"not {start.shape}")
-        path_offsets = _offsets(self.path_offsets, "path_offsets", k, "subpaths")
-        for name, value in (("controls", controls), ("degree", degree),
-                            ("subpath_offsets", subpath_offsets), ("closed", closed),
-                            ("start", start), ("path_offsets", path_offsets)):
-            object.__setattr__(self, name, value)
-        self._check_geometry()
-
-    def _check_geometry(self) -> None:
-        sub, seg, code = svgparse.check_layout(self.controls, self.degree,
-                                               self.subpath_offsets, self.start)
-        if code != 0:
-            path = int(np.searchsorted(self.path_offsets, sub, side="right") - 1)
-            where = f" (segment {seg})" if seg >= 0 else " (subpath start)"
-            error = InvalidGeometryError(
-                f"path {path}: {svgparse.LAYOUT_MESSAGES[int(code)]}{where}")
-            error.path_index = path
-            raise error
-
-    @classmethod
-    def from_kernel(cls, *, controls, degree, subpath_offsets, closed, start,
-                    path_offsets) -> PathArrays:
-        """Return the arrays a kernel built to this layout as they are, unchecked.
-
-        For library code whose kernel writes the layout by construction (the clip's
-        output): the checks of the constructor would cost a third of a clip. The arrays
-        must already have the dtypes, shapes and contents the class describes.
-        """
-        paths = object.__new__(cls)
-        for name, value in (("controls", controls), ("degree", degree),
-                            ("subpath_offsets", subpath_offsets), ("closed", closed),
-                            ("start", start), ("path_offsets", path_offsets)):
-            object.__setattr__(paths, name, value)
-        return paths
-
-    @classmethod
-    def empty(cls) -> PathArrays:
-        """Return a `PathArrays` of no paths."""
-        return cls(controls=np.empty((0, 4, 2)), degree=np.empty(0, np.int8),
-                   subpath_offsets=np.zeros(1, np.int64), closed=np.empty(0, bool),
-                   start=np.empty((0, 2)), path_offsets=np.zeros(1, np.int64))
-
-    def __len__(self) -> int:
-        """Return the number of paths."""
-        return self.path_offsets.shape[0] - 1
-
-    def __eq__(self, other: object) -> bool:
-        if not isinstance(other, PathArrays):
-            return NotImplemented
-        return all(np.array_equal(getattr(self, name), getattr(other, name))
-                   for name in ("controls", "degree", "subpath_offsets", "closed", "start",
-                                "path_offsets"))
-
-    __hash__ = None
-
-    def path(self, index: int) -> PathArrays:
-        """Return path `index` (negative counts from the end) as a `PathArrays` of one."""
-        n = len(self)
-        if not -n <= index < n:
-            raise IndexError(f"path index {index} out of range for {n} paths")
-        index %= n
-        s0, s1 = int(self.path_offsets[index]), int(self.path_offsets[index + 1])
-        g0, g1 = int(self.subpath_offsets[s0]), int(self.subpath_offsets[s1])
-        return PathArrays(controls=self.controls[g0:g1], degree=self.degree[g0:g1],
-                          subpath_offsets=self.subpath_offsets[s0:s1 + 1] - g0,
-                          closed=self.closed[s0:s1], start=self.start[s0:s1],
-                          path_offsets=np.array([0, s1 - s0], dtype=np.int64))
-
-
-def _as_array(value, dtype, name: str) -> np.ndarray:
-    try:
-        return np.ascontiguousarray(value, dtype=dtype)
-    except (TypeError, ValueError) as exc:
-        raise InvalidGeometryError(f"{name} must be convertible to {np.dtype(dtype)}: "
-                                   f"{exc}") from None
-
-
-def _small_ints(value, dtype, name: str, allowed: tuple[int, ...]) -> np.ndarray:
-    """Return `value` as `dtype` after checking its values (a cast must not wrap)."""
-    array = np.asarray(value)
-    if array.dtype != dtype:
-        if array.dtype.kind not in "biu" or not np.isin(array, allowed).all():
-            raise InvalidGeometryError(f"{name} values must be in {allowed}")
-    elif array.dtype != np.bool_ and not np.isin(array, allowed).all():
-        raise InvalidGeometryError(f"{name} values must be in {allowed}")
-    return np.ascontiguousarray(array, dtype=dtype)
-
-
-def _offsets(value, name: str, total: int, of: str) -> np.ndarray:
-    array = np.asarray(value)
-    if array.ndim != 1 or array.shape[0] < 1 or (array.size and array.dtype.kind not in "iu"):
-        raise InvalidGeometryError(f"{name} must be a 1-d integer array of at least one "
-                                   f"offset")
-    array = np.ascontiguousarray(array, dtype=np.int64)
-    if array[0] != 0 or array[-1] != total or (np.diff(array) < 0).any():
-        raise InvalidGeometryError(f"{name} must start at 0, never decrease and end at "
-                                   f"{total} (the number of {of})")
-    return array
 
 
 # --------------------------------------------------------------------------- reading
@@ -579,3 +413,16 @@ def _compact(text: str) -> str:
         positional = "." + "0" * (-q - n) + digits
     scientific = f"{digits}e{q}"
     return sign + (positional if len(positional) <= len(scientific) else scientific)
+
+
+def warm_up_readers() -> None:
+    """Compile (or load from Numba's cache) the path reader's and writer's kernels.
+
+    Reads a path of every command (arcs too) and writes it back, exactly and rounded,
+    with enough paths to take the parallel drivers as well.
+    """
+    sample = "M-1 .5C0 2 1-1 2 .5Q.5 3-1 .5S3 3 4 4T5 5A1 2 30 0 1 6 6H7V8L9 9Zm1 1h1v1z"
+    for count in (1, 256):
+        paths = parse_paths([sample] * count)
+        write_paths(paths, precision=None)
+        write_paths(paths, precision=6)

@@ -28,11 +28,11 @@ Two passes (count, write) over one body per block of subpaths, `prange` over the
 the write pass takes each run's decision from the count pass instead of testing it again.
 
 State that travels together is one record (a named tuple, which Numba passes as its
-fields: free once inlined): the window (`Box`), the options (`Options`), the input paths
+fields: free once inlined): the window (`Window`), the options (`Options`), the input paths
 (`PathInput`), decisions taken elsewhere (`Decisions`), the output's layout (`Layout`)
 and arrays (`Output`), the state of the subpath being clipped (`State`), a block's
 counters and scratch (`Work`), and a segment or piece (`Curve`). Helpers take them in
-the order ``out, state, work, opts, box, curve``.
+the order ``out, state, work, opts, window, curve``.
 """
 
 from typing import NamedTuple
@@ -40,6 +40,18 @@ from typing import NamedTuple
 import numpy as np
 from numba import prange
 
+# The device's segment classes, the run decisions (kept by the count pass for the write
+# pass) and the stack's size are defined in rnsca.constants (shared with clip.cl);
+# importable from here as before.
+from rnsca.constants import CURVE_RUN_ACCEPTED as _RUN_ACCEPTED
+from rnsca.constants import CURVE_RUN_REJECTED as _RUN_REJECTED
+from rnsca.constants import CURVE_RUN_SEGMENTED as _RUN_SEGMENTED
+from rnsca.constants import (
+    CURVE_STACK_CAPACITY,
+    SEGMENT_ACCEPTED,
+    SEGMENT_AMBIGUOUS,
+    SEGMENT_REJECTED,
+)
 from rnsca.kernels import counters as C
 from rnsca.kernels.jit import borrowing, inlined, parallel, scalar
 from rnsca.kernels.outcode import BOTTOM, LEFT, RIGHT, TOP, clamp, outcode
@@ -60,7 +72,6 @@ __all__ = [
     "SEGMENT_ACCEPTED",
     "SEGMENT_AMBIGUOUS",
     "SEGMENT_REJECTED",
-    "Box",
     "Curve",
     "Decisions",
     "Layout",
@@ -95,13 +106,6 @@ BREAK_CAPACITY = 16
 # before any segment is (run-level RNSCA, as for polylines): a path that lies mostly
 # inside or outside is copied or skipped a run at a time.
 RUN_SEGMENTS = 16
-# Classes of a segment decided elsewhere (the OpenCL backend's ``classify_bezier``) by
-# the outcodes of its control points: all beyond one edge, all inside, or neither.
-SEGMENT_REJECTED = 0
-SEGMENT_ACCEPTED = 1
-SEGMENT_AMBIGUOUS = 2
-# Depth-first stack: at most N - 1 pending siblings per level, 33 levels, N <= 64.
-CURVE_STACK_CAPACITY = 64 * 34
 
 # Float state of the subpath being clipped (see `_emit_piece`, `_clamp_to`).
 _CUR_X = 0        # current point: the end of the output so far
@@ -131,19 +135,6 @@ _V0 = 11          # the subpath's first output segment and first output subpath
 _S0 = 12
 _SOURCE = 13      # the input path its output subpaths come from
 _INT_STATE_WIDTH = 14
-# Decisions of a run of segments, kept by the count pass for the write pass.
-_RUN_ACCEPTED = 0
-_RUN_REJECTED = 1
-_RUN_SEGMENTED = 2
-
-
-class Box(NamedTuple):
-    """The closed clip window."""
-
-    xmin: float
-    ymin: float
-    xmax: float
-    ymax: float
 
 
 class Options(NamedTuple):
@@ -312,24 +303,24 @@ def _point(c, t):
 
 
 @scalar
-def _code(x, y, box):
+def _code(x, y, window):
     """Return the outcode of (x, y) for the window."""
-    return outcode(x, y, box.xmin, box.ymin, box.xmax, box.ymax)
+    return outcode(x, y, window.xmin, window.ymin, window.xmax, window.ymax)
 
 
 @scalar
-def _hull_codes(c, box):
+def _hull_codes(c, window):
     """Return (OR, AND) of the outcodes of the curve's control points."""
-    c0 = _code(c.x[0], c.y[0], box)
-    c1 = _code(c.x[1], c.y[1], box)
+    c0 = _code(c.x[0], c.y[0], window)
+    c1 = _code(c.x[1], c.y[1], window)
     c_or = c0 | c1
     c_and = c0 & c1
     if c.degree >= 2:
-        c2 = _code(c.x[2], c.y[2], box)
+        c2 = _code(c.x[2], c.y[2], window)
         c_or |= c2
         c_and &= c2
     if c.degree == 3:
-        c3 = _code(c.x[3], c.y[3], box)
+        c3 = _code(c.x[3], c.y[3], window)
         c_or |= c3
         c_and &= c3
     return c_or, c_and
@@ -483,11 +474,11 @@ def _line_roots(degree, a, s, level, edge_bit, lo, hi, brk_t, brk_e, n, counters
 
 
 @borrowing
-def edge_breaks(curve, lo, hi, box, brk_t, brk_e, counters):
+def edge_breaks(curve, lo, hi, window, brk_t, brk_e, counters):
     """Fill the break table of the piece [lo, hi] of `curve`; return its length.
 
     ``brk_t[0] = lo < ... < brk_t[n-1] = hi`` with ``brk_e[k]`` the bits (LEFT, RIGHT,
-    BOTTOM, TOP) of the edge lines of `box` the curve crosses or touches at
+    BOTTOM, TOP) of the edge lines of `window` the curve crosses or touches at
     ``brk_t[k]``. Between two breaks the piece lies in one of the nine regions the edge
     lines make. Each root solved counts in ``counters[INTERSECTIONS]``.
     """
@@ -499,10 +490,10 @@ def edge_breaks(curve, lo, hi, box, brk_t, brk_e, counters):
     else:
         piece = _piece(curve, lo, hi)
     d = curve.degree
-    n = _line_roots(d, curve.x, piece.x, box.xmin, LEFT, lo, hi, brk_t, brk_e, n, counters)
-    n = _line_roots(d, curve.x, piece.x, box.xmax, RIGHT, lo, hi, brk_t, brk_e, n, counters)
-    n = _line_roots(d, curve.y, piece.y, box.ymin, BOTTOM, lo, hi, brk_t, brk_e, n, counters)
-    n = _line_roots(d, curve.y, piece.y, box.ymax, TOP, lo, hi, brk_t, brk_e, n, counters)
+    n = _line_roots(d, curve.x, piece.x, window.xmin, LEFT, lo, hi, brk_t, brk_e, n, counters)
+    n = _line_roots(d, curve.x, piece.x, window.xmax, RIGHT, lo, hi, brk_t, brk_e, n, counters)
+    n = _line_roots(d, curve.y, piece.y, window.ymin, BOTTOM, lo, hi, brk_t, brk_e, n, counters)
+    n = _line_roots(d, curve.y, piece.y, window.ymax, TOP, lo, hi, brk_t, brk_e, n, counters)
     n = _add_break(brk_t, brk_e, n, hi, 0)
     # Insertion sort (at most BREAK_CAPACITY entries), then merge equal parameters.
     for i in range(1, n):
@@ -528,16 +519,16 @@ def edge_breaks(curve, lo, hi, box, brk_t, brk_e, counters):
 
 
 @scalar
-def _snap(x, y, edges, box):
+def _snap(x, y, edges, window):
     """Return the point moved exactly onto the edge lines it was found on."""
     if edges & LEFT:
-        x = box.xmin
+        x = window.xmin
     elif edges & RIGHT:
-        x = box.xmax
+        x = window.xmax
     if edges & BOTTOM:
-        y = box.ymin
+        y = window.ymin
     elif edges & TOP:
-        y = box.ymax
+        y = window.ymax
     return x, y
 
 
@@ -662,20 +653,20 @@ def _emit_piece(out, state, opts, c):
 
 
 @borrowing
-def _clamp_to(out, state, box, x, y):
+def _clamp_to(out, state, window, x, y):
     """Fill: continue the output along the boundary to the clamp of (x, y)."""
     si = state.ints
     sf = state.floats
-    cx = clamp(x, box.xmin, box.xmax)
-    cy = clamp(y, box.ymin, box.ymax)
+    cx = clamp(x, window.xmin, window.xmax)
+    cy = clamp(y, window.ymin, window.ymax)
     ux = sf[_CUR_X]
     uy = sf[_CUR_Y]
     if cx == ux and cy == uy:
         return
     rx = sf[_RUN_X]
     ry = sf[_RUN_Y]
-    same_edge = ((rx == ux) & (ux == cx) & ((cx == box.xmin) | (cx == box.xmax))) | \
-        ((ry == uy) & (uy == cy) & ((cy == box.ymin) | (cy == box.ymax)))
+    same_edge = ((rx == ux) & (ux == cx) & ((cx == window.xmin) | (cx == window.xmax))) | \
+        ((ry == uy) & (uy == cy) & ((cy == window.ymin) | (cy == window.ymax)))
     if si[_LAST_RUN] == 1 and same_edge:
         # Extend the last boundary line instead of adding one along the same edge.
         sf[_AREA] += (rx * cy - cx * ry) - (rx * uy - ux * ry)
@@ -698,17 +689,17 @@ def _clamp_to(out, state, box, x, y):
 
 
 @borrowing
-def _outside(out, state, opts, box, x, y):
+def _outside(out, state, opts, window, x, y):
     """Mark the part ending at (x, y) not visible: clamp to it (fill), or end the chain."""
     state.ints[_BROKEN] = 1
     if opts.fill:
-        _clamp_to(out, state, box, x, y)
+        _clamp_to(out, state, window, x, y)
     else:
         state.ints[_OPEN] = 0
 
 
 @inlined
-def _flush(out, state, opts, box, c):
+def _flush(out, state, opts, window, c):
     """Output the pending visible interval of the segment `c`, if any."""
     si = state.ints
     if si[_PEND] == 0:
@@ -717,17 +708,17 @@ def _flush(out, state, opts, box, c):
     a = state.floats[_PEND_A]
     b = state.floats[_PEND_B]
     if not opts.flatten or c.degree == 1:
-        _emit_stretch(out, state, opts, box, c, a, b, si[_PEND_EA], si[_PEND_EB])
+        _emit_stretch(out, state, opts, window, c, a, b, si[_PEND_EA], si[_PEND_EB])
     else:
-        _emit_flat_stretch(out, state, opts, box, c, a, b, si[_PEND_EA], si[_PEND_EB])
+        _emit_flat_stretch(out, state, opts, window, c, a, b, si[_PEND_EA], si[_PEND_EB])
 
 
 @borrowing
-def _emit_flat_stretch(out, state, opts, box, c, a, b, edges_a, edges_b):
+def _emit_flat_stretch(out, state, opts, window, c, a, b, edges_a, edges_b):
     """Output the visible stretch [a, b] of a curve as lines within the tolerance."""
     q = _piece(c, a, b)
-    sx, sy = _snap(q.x[0], q.y[0], edges_a, box)
-    ex, ey = _snap(q.x[3], q.y[3], edges_b, box)
+    sx, sy = _snap(q.x[0], q.y[0], edges_a, window)
+    ex, ey = _snap(q.x[3], q.y[3], edges_b, window)
     steps = flatten_count(q.degree, *q.x, *q.y, opts.tolerance)
     prev_x = sx
     prev_y = sy
@@ -743,12 +734,12 @@ def _emit_flat_stretch(out, state, opts, box, c, a, b, edges_a, edges_b):
 
 
 @borrowing
-def _emit_stretch(out, state, opts, box, c, a, b, edges_a, edges_b):
+def _emit_stretch(out, state, opts, window, c, a, b, edges_a, edges_b):
     """Output the visible stretch [a, b] of a segment as a piece of its degree."""
     q = _piece(c, a, b)
-    sx, sy = _snap(q.x[0], q.y[0], edges_a, box)
+    sx, sy = _snap(q.x[0], q.y[0], edges_a, window)
     # piece_values repeats the end in the unused slots: q.x[3], q.y[3] is the end.
-    ex, ey = _snap(q.x[3], q.y[3], edges_b, box)
+    ex, ey = _snap(q.x[3], q.y[3], edges_b, window)
     d = c.degree
     _emit_piece(out, state, opts,
                 Curve(d, (sx, ex if d == 1 else q.x[1], q.x[2] if d == 3 else ex, ex),
@@ -756,7 +747,7 @@ def _emit_stretch(out, state, opts, box, c, a, b, edges_a, edges_b):
 
 
 @inlined
-def _emit_exact(out, state, work, opts, box, c):
+def _emit_exact(out, state, work, opts, window, c):
     """Clip a whole ambiguous segment at its edge crossings (exact mode, level 0).
 
     The lean form of `_leaf` for the default depth: no pending interval to merge with,
@@ -765,23 +756,23 @@ def _emit_exact(out, state, work, opts, box, c):
     brk_t = work.break_t
     brk_e = work.break_edges
     work.counters[C.CLIPPED] += 1
-    n = edge_breaks(c, 0.0, 1.0, box, brk_t, brk_e, work.counters)
+    n = edge_breaks(c, 0.0, 1.0, window, brk_t, brk_e, work.counters)
     open_k = -1  # first break of the visible stretch being extended
     for k in range(n - 1):
         mx, my = _point(c, 0.5 * (brk_t[k] + brk_t[k + 1]))
-        if _code(mx, my, box) == 0:
+        if _code(mx, my, window) == 0:
             if open_k < 0:
                 open_k = k
             continue
         if open_k >= 0:
-            _emit_stretch(out, state, opts, box, c, brk_t[open_k], brk_t[k], brk_e[open_k],
+            _emit_stretch(out, state, opts, window, c, brk_t[open_k], brk_t[k], brk_e[open_k],
                           brk_e[k])
             open_k = -1
         px, py = _point(c, brk_t[k + 1])
-        ex, ey = _snap(px, py, brk_e[k + 1], box)
-        _outside(out, state, opts, box, ex, ey)
+        ex, ey = _snap(px, py, brk_e[k + 1], window)
+        _outside(out, state, opts, window, ex, ey)
     if open_k >= 0:
-        _emit_stretch(out, state, opts, box, c, brk_t[open_k], brk_t[n - 1], brk_e[open_k],
+        _emit_stretch(out, state, opts, window, c, brk_t[open_k], brk_t[n - 1], brk_e[open_k],
                       brk_e[n - 1])
 
 
@@ -796,14 +787,14 @@ def _pend(state, a, b, edges_a, edges_b):
 
 
 @inlined
-def _visible(out, state, opts, box, c, a, b, edges_a, edges_b):
+def _visible(out, state, opts, window, c, a, b, edges_a, edges_b):
     """Make [a, b] (ends cut at edges `edges_a`, `edges_b`) of `c` the pending interval.
 
     It extends the pending one if it continues it; otherwise that one is output first.
     """
     if _pend(state, a, b, edges_a, edges_b):
         return
-    _flush(out, state, opts, box, c)
+    _flush(out, state, opts, window, c)
     si = state.ints
     si[_PEND] = 1
     state.floats[_PEND_A] = a
@@ -813,44 +804,44 @@ def _visible(out, state, opts, box, c, a, b, edges_a, edges_b):
 
 
 @borrowing
-def _leaf(out, state, work, opts, box, c, a, b):
+def _leaf(out, state, work, opts, window, c, a, b):
     """Clip the piece [a, b] of `c` exactly at its crossings with the edge lines."""
     brk_t = work.break_t
     brk_e = work.break_edges
     work.counters[C.CLIPPED] += 1
-    n = edge_breaks(c, a, b, box, brk_t, brk_e, work.counters)
+    n = edge_breaks(c, a, b, window, brk_t, brk_e, work.counters)
     for k in range(n - 1):
         t0 = brk_t[k]
         t1 = brk_t[k + 1]
         mx, my = _point(c, 0.5 * (t0 + t1))
-        if _code(mx, my, box) == 0:
-            _visible(out, state, opts, box, c, t0, t1, brk_e[k], brk_e[k + 1])
+        if _code(mx, my, window) == 0:
+            _visible(out, state, opts, window, c, t0, t1, brk_e[k], brk_e[k + 1])
         else:
-            _flush(out, state, opts, box, c)
+            _flush(out, state, opts, window, c)
             px, py = _point(c, t1)
-            ex, ey = _snap(px, py, brk_e[k + 1], box)
-            _outside(out, state, opts, box, ex, ey)
+            ex, ey = _snap(px, py, brk_e[k + 1], window)
+            _outside(out, state, opts, window, ex, ey)
 
 
 @borrowing
-def clip_segment(out, state, work, opts, box, c):
+def clip_segment(out, state, work, opts, window, c):
     """Clip one segment `c` into the output: RNSCA on its pieces, with a stack."""
     st = work.counters
     stack = work.stack
     st[C.EVALUATED] += 1
-    c_or, c_and = _hull_codes(c, box)
+    c_or, c_and = _hull_codes(c, window)
     if c_or == 0:
         st[C.ACCEPTED] += 1
         st[C.LEVELS] += 1
-        _visible(out, state, opts, box, c, 0.0, 1.0, 0, 0)
-        _flush(out, state, opts, box, c)
+        _visible(out, state, opts, window, c, 0.0, 1.0, 0, 0)
+        _flush(out, state, opts, window, c)
         return
     if c_and != 0:
         st[C.REJECTED] += 1
         st[C.LEVELS] += 1
         end_x = c.x[3] if c.degree == 3 else (c.x[2] if c.degree == 2 else c.x[1])
         end_y = c.y[3] if c.degree == 3 else (c.y[2] if c.degree == 2 else c.y[1])
-        _outside(out, state, opts, box, end_x, end_y)
+        _outside(out, state, opts, window, end_x, end_y)
         return
     st[C.EVALUATED] -= 1  # counted again when popped
     stack[0, 0] = 0.0
@@ -867,17 +858,17 @@ def clip_segment(out, state, work, opts, box, c):
             st[C.DEEPEST] = level
         st[C.EVALUATED] += 1
         q = _piece(c, a, b)
-        c_or, c_and = _hull_codes(q, box)
+        c_or, c_and = _hull_codes(q, window)
         if c_or == 0:
             st[C.ACCEPTED] += 1
             st[C.LEVELS + slot] += 1
-            _visible(out, state, opts, box, c, a, b, 0, 0)
+            _visible(out, state, opts, window, c, a, b, 0, 0)
             continue
         if c_and != 0:
             st[C.REJECTED] += 1
             st[C.LEVELS + slot] += 1
-            _flush(out, state, opts, box, c)
-            _outside(out, state, opts, box, q.x[3], q.y[3])
+            _flush(out, state, opts, window, c)
+            _outside(out, state, opts, window, q.x[3], q.y[3])
             continue
         # Ambiguous. A leaf when deep enough, or (flatten) flat enough, or (approx)
         # smaller than the tolerance.
@@ -904,16 +895,16 @@ def clip_segment(out, state, work, opts, box, c):
         if opts.flatten:
             # The piece is flat: clip its chord as a line (a line is never flattened).
             chord = _line(q.x[0], q.y[0], q.x[3], q.y[3])
-            _flush(out, state, opts, box, c)
-            _leaf(out, state, work, opts, box, chord, 0.0, 1.0)
-            _flush(out, state, opts, box, chord)
+            _flush(out, state, opts, window, c)
+            _leaf(out, state, work, opts, window, chord, 0.0, 1.0)
+            _flush(out, state, opts, window, chord)
         elif opts.exact:
-            _leaf(out, state, work, opts, box, c, a, b)
+            _leaf(out, state, work, opts, window, c, a, b)
         else:
             st[C.DROPPED] += 1
-            _flush(out, state, opts, box, c)
-            _outside(out, state, opts, box, q.x[3], q.y[3])
-    _flush(out, state, opts, box, c)
+            _flush(out, state, opts, window, c)
+            _outside(out, state, opts, window, q.x[3], q.y[3])
+    _flush(out, state, opts, window, c)
 
 
 @borrowing
@@ -954,7 +945,7 @@ def _rotate_last_chain(out, s0, s_end, v0, v_end):
 
 
 @inlined
-def _end_subpath(out, state, opts, box, closed, end_x, end_y):
+def _end_subpath(out, state, opts, window, closed, end_x, end_y):
     """Finish the output of an input subpath whose segments have been clipped.
 
     `closed` is the input subpath's flag, (end_x, end_y) its last segment's end.
@@ -969,11 +960,12 @@ def _end_subpath(out, state, opts, box, closed, end_x, end_y):
     v0 = si[_V0]
     s0 = si[_S0]
     if opts.fill:
-        cx = clamp(sx, box.xmin, box.xmax)
-        cy = clamp(sy, box.ymin, box.ymax)
+        cx = clamp(sx, window.xmin, window.xmax)
+        cy = clamp(sy, window.ymin, window.ymax)
         if sf[_CUR_X] != cx or sf[_CUR_Y] != cy:
             _put_line(out, state, cx, cy)
-        if si[_VISIBLE] == 0 and abs(sf[_AREA]) < (box.xmax - box.xmin) * (box.ymax - box.ymin):
+        area = (window.xmax - window.xmin) * (window.ymax - window.ymin)
+        if si[_VISIBLE] == 0 and abs(sf[_AREA]) < area:
             # Only boundary lines, winding around no point of the window: nothing.
             si[_V] = v0
             si[_S] = s0
@@ -1038,18 +1030,18 @@ def _begin_input_subpath(state, k, paths, v0, v_end, s0):
 
 
 @inlined
-def _decide_run(paths, box, opts, i, j):
+def _decide_run(paths, window, opts, i, j):
     """Return the decision (``_RUN_*``) of the run of segments i..j-1 by its box."""
     lo_x, lo_y, hi_x, hi_y = _run_box(paths.controls, i, j)
-    c_lo = _code(lo_x, lo_y, box)
-    c_hi = _code(hi_x, hi_y, box)
+    c_lo = _code(lo_x, lo_y, window)
+    c_hi = _code(hi_x, hi_y, window)
     if (c_lo | c_hi) == 0 and not opts.flatten:
         return _RUN_ACCEPTED
     return _RUN_REJECTED if (c_lo & c_hi) != 0 else _RUN_SEGMENTED
 
 
 @borrowing
-def _clip_subpaths(paths, box, opts, decisions, layout, out, state, work, k0, k1):
+def _clip_subpaths(paths, window, opts, decisions, layout, out, state, work, k0, k1):
     """Count or write the clipped output of subpaths k0..k1-1 (one block).
 
     Subpath k, segments ``first..last-1`` starting at (sx, sy), gives as strokes its
@@ -1085,7 +1077,7 @@ def _clip_subpaths(paths, box, opts, decisions, layout, out, state, work, k0, k1
         _begin_input_subpath(state, k, paths, v0, v_end, s0)
         if first == last:
             # A lone moveto: nothing to fill; as a stroke, a dot (caps) if in the window.
-            if not fill and _code(sx, sy, box) == 0:
+            if not fill and _code(sx, sy, window) == 0:
                 _begin_subpath(out, state, sx, sy)
                 if out.write:
                     out.closed[s0] = closed
@@ -1094,8 +1086,8 @@ def _clip_subpaths(paths, box, opts, decisions, layout, out, state, work, k0, k1
                 layout.n_subpaths[k] = si[_S]
             continue
         if fill:
-            _begin_subpath(out, state, clamp(sx, box.xmin, box.xmax),
-                           clamp(sy, box.ymin, box.ymax))
+            _begin_subpath(out, state, clamp(sx, window.xmin, window.xmax),
+                           clamp(sy, window.ymin, window.ymax))
         end = last + 1 if (fill or closed) else last  # index `last`: the closing line
         i = first
         while i < end:
@@ -1107,7 +1099,7 @@ def _clip_subpaths(paths, box, opts, decisions, layout, out, state, work, k0, k1
                     # The count pass's (or the device's): the same box, the same test.
                     decision = decisions.runs[i]
                 else:
-                    decision = _decide_run(paths, box, opts, i, j)
+                    decision = _decide_run(paths, window, opts, i, j)
                     decisions.runs[i] = decision
                 st[C.RUNS_EVALUATED] += 1
                 if decision == _RUN_ACCEPTED:
@@ -1124,7 +1116,7 @@ def _clip_subpaths(paths, box, opts, decisions, layout, out, state, work, k0, k1
                     st[C.SEGMENT_LEVELS] += j - i
                     si[_BROKEN] = 1
                     if fill:
-                        _clamp_to(out, state, box, controls[j - 1, 3, 0], controls[j - 1, 3, 1])
+                        _clamp_to(out, state, window, controls[j - 1, 3, 0], controls[j - 1, 3, 1])
                     else:
                         si[_OPEN] = 0
                     i = j
@@ -1148,7 +1140,7 @@ def _clip_subpaths(paths, box, opts, decisions, layout, out, state, work, k0, k1
                     accepted = decisions.segment_class[g] == SEGMENT_ACCEPTED
                     rejected = decisions.segment_class[g] == SEGMENT_REJECTED
                 else:
-                    c_or, c_and = _hull_codes(c, box)
+                    c_or, c_and = _hull_codes(c, window)
                     accepted = c_or == 0
                     rejected = c_and != 0
                 if accepted and not (opts.flatten and c.degree > 1):
@@ -1167,22 +1159,22 @@ def _clip_subpaths(paths, box, opts, decisions, layout, out, state, work, k0, k1
                     st[C.LEVELS] += 1
                     si[_BROKEN] = 1
                     if fill:
-                        _clamp_to(out, state, box, x3, y3)
+                        _clamp_to(out, state, window, x3, y3)
                     else:
                         si[_OPEN] = 0
                     continue
                 if opts.exact and opts.leaf_depth == 0 and not opts.flatten:
                     st[C.EVALUATED] += 1
                     st[C.LEVELS] += 1
-                    _emit_exact(out, state, work, opts, box, c)
+                    _emit_exact(out, state, work, opts, window, c)
                     continue
-                clip_segment(out, state, work, opts, box, c)
+                clip_segment(out, state, work, opts, window, c)
             i = j
         if out.write:
             for s in range(s0, si[_S]):
                 out.closed[s] = False
         if fill or (closed and si[_S] != s0):
-            _end_subpath(out, state, opts, box, closed, controls[last - 1, 3, 0],
+            _end_subpath(out, state, opts, window, closed, controls[last - 1, 3, 0],
                          controls[last - 1, 3, 1])
         if not out.write:
             layout.n_segments[k] = si[_V]
@@ -1190,10 +1182,10 @@ def _clip_subpaths(paths, box, opts, decisions, layout, out, state, work, k0, k1
 
 
 @parallel
-def clip_path_blocks(paths, box, opts, decisions, layout, out, counters, block_size):
+def clip_path_blocks(paths, window, opts, decisions, layout, out, counters, block_size):
     """Count (``out.write`` False) or write the clipped subpaths of a path array.
 
-    Subpath k of `paths` (`PathInput`) is cut to `box` as `opts` says, block by block
+    Subpath k of `paths` (`PathInput`) is cut to `window` as `opts` says, block by block
     (`block_size` subpaths each). The count pass stores each subpath's output size in
     ``layout.n_segments``, ``layout.n_subpaths`` (and the stats, one row of `counters`
     per block) and each run's decision in ``decisions.runs``, unless given; the write
@@ -1212,7 +1204,7 @@ def clip_path_blocks(paths, box, opts, decisions, layout, out, counters, block_s
                     np.empty(BREAK_CAPACITY, dtype=np.float64),
                     np.empty(BREAK_CAPACITY, dtype=np.int64),
                     np.empty((CURVE_STACK_CAPACITY, 3), dtype=np.float64))
-        _clip_subpaths(paths, box, opts, decisions, layout, out, state, work,
+        _clip_subpaths(paths, window, opts, decisions, layout, out, state, work,
                        blk * block_size, min(n, (blk + 1) * block_size))
 
 

@@ -8,6 +8,8 @@ than from the already-moved ends, so errors do not accumulate and the parameter
 interval of the piece is known.
 """
 
+# The loop's bound: rnsca.constants says why 32 steps always decide a segment.
+from rnsca.constants import CS_MAX_MOVES as _MAX_MOVES
 from rnsca.kernels import counters as C
 from rnsca.kernels.jit import scalar
 from rnsca.kernels.outcode import (
@@ -24,30 +26,26 @@ from rnsca.kernels.outcode import (
     outcode,
 )
 
-# In exact arithmetic each end moves at most twice (to an edge, then across a corner),
-# so four moves decide every segment. Rounding near a corner can make an end moved onto
-# one edge test a hair outside the other edge, whose crossing lies at or before that end
-# (t no further on): that bit is rounding noise and is cleared without moving the end.
-# Every step either moves an end to a later edge crossing (at most 4 per end) or clears
-# one of the at most 2 bits an outcode has, so 32 steps always decide the segment.
-_MAX_MOVES = 32
-
 
 @scalar
-def _edge_parameter(code, x0, y0, dx, dy, xmin, ymin, xmax, ymax):
+def _edge_parameter(code, x0, y0, dx, dy, window):
     """Return (t, edge, bit) where the segment's line crosses the edge named by `code`."""
     if code & TOP:
-        return (ymax - y0) / dy, EDGE_TOP, TOP
+        return (window.ymax - y0) / dy, EDGE_TOP, TOP
     if code & BOTTOM:
-        return (ymin - y0) / dy, EDGE_BOTTOM, BOTTOM
+        return (window.ymin - y0) / dy, EDGE_BOTTOM, BOTTOM
     if code & RIGHT:
-        return (xmax - x0) / dx, EDGE_RIGHT, RIGHT
-    return (xmin - x0) / dx, EDGE_LEFT, LEFT
+        return (window.xmax - x0) / dx, EDGE_RIGHT, RIGHT
+    return (window.xmin - x0) / dx, EDGE_LEFT, LEFT
 
 
 @scalar
-def cohen_sutherland_segment(x0, y0, x1, y1, xmin, ymin, xmax, ymax, st):
-    """Clip one segment with Cohen–Sutherland; return (keep, t0, t1, ax, ay, bx, by)."""
+def cohen_sutherland_segment(x0, y0, x1, y1, window, st):
+    """Clip one segment with Cohen–Sutherland; return (keep, t0, t1, ax, ay, bx, by).
+
+    `window` is a `rnsca.kernels.records.Window`; `st` the block's counter row.
+    """
+    xmin, ymin, xmax, ymax = window
     dx = x1 - x0
     dy = y1 - y0
     t0 = 0.0
@@ -67,19 +65,19 @@ def cohen_sutherland_segment(x0, y0, x1, y1, xmin, ymin, xmax, ymax, st):
         st[C.CLIPPED] += 1
         st[C.INTERSECTIONS] += 1
         if ca != 0:
-            t, edge, bit = _edge_parameter(ca, x0, y0, dx, dy, xmin, ymin, xmax, ymax)
+            t, edge, bit = _edge_parameter(ca, x0, y0, dx, dy, window)
             if t > t0:
                 t0 = t
                 # The moved end is not clamped: the next outcode test must see it, and
                 # sees the true point, not its rounding (see `edge_point_code`).
-                ax, ay, ca = edge_point_code(x0, y0, x1, y1, edge, xmin, ymin, xmax, ymax)
+                ax, ay, ca = edge_point_code(x0, y0, x1, y1, edge, window)
             else:
                 ca &= ~bit  # the end is already past this edge's crossing
         else:
-            t, edge, bit = _edge_parameter(cb, x0, y0, dx, dy, xmin, ymin, xmax, ymax)
+            t, edge, bit = _edge_parameter(cb, x0, y0, dx, dy, window)
             if t < t1:
                 t1 = t
-                bx, by, cb = edge_point_code(x0, y0, x1, y1, edge, xmin, ymin, xmax, ymax)
+                bx, by, cb = edge_point_code(x0, y0, x1, y1, edge, window)
             else:
                 cb &= ~bit
         if t0 > t1:

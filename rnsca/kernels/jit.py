@@ -22,17 +22,16 @@ refuses to compile it if it tries), nor keep a view of an argument beyond the ca
 
 ``inlined`` helpers are inlined by Numba into each caller before compiling; inside a
 ``borrowing`` caller they count no references either.
+
+``_nrt=False`` is a private option of ``numba.njit``, used here and nowhere else;
+``tests/unit/kernels/test_jit.py`` fails if a Numba release stops honouring it (then
+``borrowing`` functions would count references again, silently slower).
+
+Nothing here changes the process: how idle OpenMP threads wait is the application's
+choice (`rnsca.runtime.prefer_passive_openmp_wait`).
 """
 
-import os
-
-# Numba's OpenMP layer spins its idle threads by default; on a loaded machine (the
-# service beside other work, CI) that made parallel calls 5x slower than one thread
-# (measured: 23.8 ms vs 4.8 ms, see benchmarks/README.md). Passive waiting costs nothing
-# measurable on an idle machine. A value the user set is kept. Must precede OpenMP's start.
-os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
-
-import numba  # noqa: E402
+import numba
 
 __all__ = ["scalar", "parallel", "borrowing", "inlined"]
 

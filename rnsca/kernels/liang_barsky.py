@@ -8,7 +8,7 @@ lower end of the interval, leaving ones lower the upper end.
 
 Subdivision methods (RNSCA, midpoint) clip their exact-mode leaves with
 `liang_barsky_leaf`: the same test restricted to the leaf's interval and to the
-half-planes its end outcodes flag. A half-plane that holds at both ends of a leaf holds
+half-planes its end codes flag. A half-plane that holds at both ends of a leaf holds
 on all of it (it is convex), so skipping it changes nothing and saves the division.
 """
 
@@ -24,6 +24,7 @@ from rnsca.kernels.outcode import (
     NO_EDGE,
     RIGHT,
     TOP,
+    UNSURE_BITS,
     end_point,
     is_piece,
 )
@@ -53,11 +54,12 @@ def _clipt(p, q, edge, u0, e0, u1, e1, st):
 
 
 @scalar
-def liang_barsky_interval(x0, y0, dx, dy, ta, tb, xmin, ymin, xmax, ymax, st):
-    """Return (ok, u0, e0, u1, e1): the part of [ta, tb] inside the window.
+def liang_barsky_interval(x0, y0, dx, dy, ta, tb, window, st):
+    """Return (ok, u0, e0, u1, e1): the part of [ta, tb] inside `window` (a `Window`).
 
     `e0`, `e1` name the edge that cut each end (``NO_EDGE`` if it was not cut).
     """
+    xmin, ymin, xmax, ymax = window
     u0 = ta
     u1 = tb
     e0 = NO_EDGE
@@ -76,14 +78,16 @@ def liang_barsky_interval(x0, y0, dx, dy, ta, tb, xmin, ymin, xmax, ymax, st):
 
 
 @scalar
-def liang_barsky_segment(x0, y0, x1, y1, xmin, ymin, xmax, ymax, st):
-    """Clip one segment with Liang–Barsky; return (keep, t0, t1, ax, ay, bx, by)."""
+def liang_barsky_segment(x0, y0, x1, y1, window, st):
+    """Clip one segment with Liang–Barsky; return (keep, t0, t1, ax, ay, bx, by).
+
+    `window` is a `rnsca.kernels.records.Window`; `st` the block's counter row.
+    """
     dx = x1 - x0
     dy = y1 - y0
     st[C.EVALUATED] += 1
     st[C.LEVELS] += 1
-    ok, u0, e0, u1, e1 = liang_barsky_interval(x0, y0, dx, dy, 0.0, 1.0,
-                                               xmin, ymin, xmax, ymax, st)
+    ok, u0, e0, u1, e1 = liang_barsky_interval(x0, y0, dx, dy, 0.0, 1.0, window, st)
     if not ok:
         st[C.REJECTED] += 1
         return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
@@ -91,32 +95,32 @@ def liang_barsky_segment(x0, y0, x1, y1, xmin, ymin, xmax, ymax, st):
         st[C.ACCEPTED] += 1
     else:
         st[C.CLIPPED] += 1
-    ax, ay = end_point(x0, y0, x1, y1, e0, x0, y0, xmin, ymin, xmax, ymax)
-    bx, by = end_point(x0, y0, x1, y1, e1, x1, y1, xmin, ymin, xmax, ymax)
+    ax, ay = end_point(x0, y0, x1, y1, e0, x0, y0, window)
+    bx, by = end_point(x0, y0, x1, y1, e1, x1, y1, window)
     keep = is_piece(dx == 0.0 and dy == 0.0, u0, u1, ax, ay, bx, by)
     return keep, u0, u1, ax, ay, bx, by
 
 
 @scalar
-def half_plane(bit, x0, y0, dx, dy, xmin, ymin, xmax, ymax):
+def half_plane(bit, x0, y0, dx, dy, window):
     """Return (p, q, edge) of the half-plane ``p t <= q`` of the edge with outcode `bit`."""
     if bit == LEFT:
-        return -dx, x0 - xmin, EDGE_LEFT
+        return -dx, x0 - window.xmin, EDGE_LEFT
     if bit == RIGHT:
-        return dx, xmax - x0, EDGE_RIGHT
+        return dx, window.xmax - x0, EDGE_RIGHT
     if bit == BOTTOM:
-        return -dy, y0 - ymin, EDGE_BOTTOM
-    return dy, ymax - y0, EDGE_TOP
+        return -dy, y0 - window.ymin, EDGE_BOTTOM
+    return dy, window.ymax - y0, EDGE_TOP
 
 
 @scalar
-def leaf_cut(bit, flags, u0, e0, u1, e1, x0, y0, x1, y1, xmin, ymin, xmax, ymax):
+def leaf_cut(bit, flags, u0, e0, u1, e1, x0, y0, x1, y1, window):
     """Apply the half-plane of edge `bit` to a leaf's [u0, u1] when `flags` has that bit.
 
     Only parameters and the edge ids of the cut ends change, with selects instead of
     branches (the hot loops vectorize); `end_point` then computes each end once.
     """
-    p, q, edge = half_plane(bit, x0, y0, x1 - x0, y1 - y0, xmin, ymin, xmax, ymax)
+    p, q, edge = half_plane(bit, x0, y0, x1 - x0, y1 - y0, window)
     on = (flags & bit) != 0
     # Off (or parallel, which an ambiguous leaf never is on a flagged edge): divide by 1
     # so no infinity or NaN is formed; the result is not used.
@@ -137,18 +141,18 @@ def count_divisions(flags):
 
 
 @scalar
-def liang_barsky_leaf(x0, y0, x1, y1, ta, tb, xa, ya, xb, yb, flags, xmin, ymin, xmax, ymax):
-    """Return (ok, u0, ax, ay, u1, bx, by, divisions) for the leaf [ta, tb] of a segment.
+def liang_barsky_leaf(x0, y0, x1, y1, leaf, window):
+    """Return (ok, u0, ax, ay, u1, bx, by, divisions) for a leaf of a segment.
 
-    (xa, ya), (xb, yb) are the leaf's ends, kept where no edge cuts them. `flags` is the
-    OR of the leaf's end outcodes; only those half-planes are tested, one division each
-    (`divisions`). A cut end takes the edge's coordinate exactly and the other one
-    interpolated and clamped into the window. Branch-free, for the hot loop.
+    `leaf` is a `rnsca.kernels.records.Fragment`: its ends are kept where no edge cuts
+    them. The half-planes that its ends' codes flag as unsure are tested, one division
+    each (`divisions`). A cut end takes the edge's coordinate exactly and the other one
+    interpolated and clamped into `window` (a `Window`). Branch-free, for the hot loop.
     """
-    u0, e0, u1, e1 = ta, NO_EDGE, tb, NO_EDGE
+    flags = (leaf.ca | leaf.cb) & UNSURE_BITS
+    u0, e0, u1, e1 = leaf.ta, NO_EDGE, leaf.tb, NO_EDGE
     for bit in (LEFT, RIGHT, BOTTOM, TOP):
-        u0, e0, u1, e1 = leaf_cut(bit, flags, u0, e0, u1, e1, x0, y0, x1, y1,
-                                  xmin, ymin, xmax, ymax)
-    ax, ay = end_point(x0, y0, x1, y1, e0, xa, ya, xmin, ymin, xmax, ymax)
-    bx, by = end_point(x0, y0, x1, y1, e1, xb, yb, xmin, ymin, xmax, ymax)
+        u0, e0, u1, e1 = leaf_cut(bit, flags, u0, e0, u1, e1, x0, y0, x1, y1, window)
+    ax, ay = end_point(x0, y0, x1, y1, e0, leaf.xa, leaf.ya, window)
+    bx, by = end_point(x0, y0, x1, y1, e1, leaf.xb, leaf.yb, window)
     return u0 <= u1, u0, ax, ay, u1, bx, by, count_divisions(flags)

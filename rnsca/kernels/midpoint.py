@@ -28,16 +28,17 @@ from rnsca.kernels.outcode import (
     wide,
     wide_outcode,
 )
+from rnsca.kernels.records import Fragment
 
 
 @scalar
-def _search(x0, y0, dx, dy, x1, y1, c0, c1, length, toward_end, max_depth, tol, exact,
-            xmin, ymin, xmax, ymax, st):
-    """Return the final bracket (a, xa, ya, ca, b, xb, yb, cb, level) of one search.
+def _search(x0, y0, x1, y1, c0, c1, length, toward_end, window, options, st):
+    """Return (bracket, level): the final bracket of one search, a `Fragment`, and its depth.
 
     ``toward_end=True`` brackets the exit (the farthest visible point from P0), else
-    the entry (the farthest visible point from P1). Codes are wide codes
-    (``rnsca.kernels.outcode``): bisection points are rounded.
+    the entry (the farthest visible point from P1). `c0`, `c1` are the wide codes of
+    P0 and P1, and the bracket's too (``rnsca.kernels.outcode``): bisection points are
+    rounded. `window` is a `Window`, `options` the `CoreOptions` (max_depth, tol, exact).
 
     The bracket's far end is surely past the searched end. Its near end, in exact mode,
     is the last point the search found surely inside (or the search's start point), so
@@ -46,6 +47,11 @@ def _search(x0, y0, dx, dy, x1, y1, c0, c1, length, toward_end, max_depth, tol, 
     surely inside point, else that last surely inside point: a segment lying an ulp
     outside an edge never yields a piece.
     """
+    max_depth = options.max_depth
+    tol = options.tol
+    exact = options.exact
+    dx = x1 - x0
+    dy = y1 - y0
     _, dx_err = direction_error(x1, x0)
     _, dy_err = direction_error(y1, y0)
     a = 0.0
@@ -62,7 +68,7 @@ def _search(x0, y0, dx, dy, x1, y1, c0, c1, length, toward_end, max_depth, tol, 
     while level < max_depth and (b - a) * length > tol:
         m = a + (b - a) * 1 / 2
         xm, ym, cx, mx, cy, my = interpolated_point(x0, y0, dx, dx_err, dy, dy_err, m)
-        cm = wide_outcode(xm, ym, cx, mx, cy, my, xmin, ymin, xmax, ymax)
+        cm = wide_outcode(xm, ym, cx, mx, cy, my, window)
         xm += cx  # the corrected position, for output
         ym += cy
         level += 1
@@ -96,28 +102,29 @@ def _search(x0, y0, dx, dy, x1, y1, c0, c1, length, toward_end, max_depth, tol, 
         hi = max(near_t, st_t)
         h = lo + (hi - lo) * 1 / 2
         hx, hy, cx, mx, cy, my = interpolated_point(x0, y0, dx, dx_err, dy, dy_err, h)
-        found = (wide_outcode(hx, hy, cx, mx, cy, my, xmin, ymin, xmax, ymax)
-                 & UNSURE_BITS) == 0
+        found = (wide_outcode(hx, hy, cx, mx, cy, my, window) & UNSURE_BITS) == 0
     # In approx mode a near end within rounding of the boundary counts as visible (0).
     if toward_end:
         if exact or not (found and (ca >> SURE_SHIFT) == 0):
             a, xa, ya, ca = st_t, st_x, st_y, st_c
         else:
             ca = 0
-        return a, xa, ya, ca, b, xb, yb, cb, level
+        return Fragment(a, xa, ya, ca, b, xb, yb, cb), level
     if exact or not (found and (cb >> SURE_SHIFT) == 0):
         b, xb, yb, cb = st_t, st_x, st_y, st_c
     else:
         cb = 0
-    return a, xa, ya, ca, b, xb, yb, cb, level
+    return Fragment(a, xa, ya, ca, b, xb, yb, cb), level
 
 
 @scalar
-def _leaf(x0, y0, x1, y1, a, xa, ya, ca, b, xb, yb, cb, level, exact, xmin, ymin, xmax, ymax, st):
+def _leaf(x0, y0, x1, y1, bracket, level, window, exact, st):
     """Decide a final bracket; return (ok, u0, ax, ay, u1, bx, by) of its visible part.
 
-    In approx mode the visible part is the bracket's visible end alone (u0 == u1).
+    `bracket` is a `Fragment` found at depth `level`. In approx mode the visible part is
+    the bracket's visible end alone (u0 == u1).
     """
+    a, xa, ya, ca, b, xb, yb, cb = bracket
     st[C.EVALUATED] += 1
     st[C.LEVELS + level] += 1
     if (ca & cb) >> SURE_SHIFT:
@@ -134,8 +141,7 @@ def _leaf(x0, y0, x1, y1, a, xa, ya, ca, b, xb, yb, cb, level, exact, xmin, ymin
             return True, b, xb, yb, b, xb, yb
         return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
     st[C.CLIPPED] += 1
-    ok, u0, px, py, u1, qx, qy, divisions = liang_barsky_leaf(
-        x0, y0, x1, y1, a, b, xa, ya, xb, yb, (ca | cb) & UNSURE_BITS, xmin, ymin, xmax, ymax)
+    ok, u0, px, py, u1, qx, qy, divisions = liang_barsky_leaf(x0, y0, x1, y1, bracket, window)
     st[C.INTERSECTIONS] += divisions
     if not ok:
         # Rounding: when the window's corner or edge is ulp-close to a bracket end that
@@ -149,17 +155,22 @@ def _leaf(x0, y0, x1, y1, a, xa, ya, ca, b, xb, yb, cb, level, exact, xmin, ymin
 
 
 @scalar
-def midpoint_segment(x0, y0, x1, y1, xmin, ymin, xmax, ymax, max_depth, tol, exact, st):
-    """Clip one segment by midpoint subdivision; return (keep, t0, t1, ax, ay, bx, by)."""
+def midpoint_segment(x0, y0, x1, y1, window, options, st):
+    """Clip one segment by midpoint subdivision; return (keep, t0, t1, ax, ay, bx, by).
+
+    `window` is a `rnsca.kernels.records.Window`, `options` the `CoreOptions` (max_depth,
+    tol, exact are read); `st` the block's counter row.
+    """
+    exact = options.exact
     dx = x1 - x0
     dy = y1 - y0
     length = math.hypot(dx, dy)
-    c0 = outcode(x0, y0, xmin, ymin, xmax, ymax)
-    c1 = outcode(x1, y1, xmin, ymin, xmax, ymax)
-    if (c0 | c1) == 0 or c0 & c1 or max_depth == 0 or length <= tol:
+    c0 = outcode(x0, y0, window.xmin, window.ymin, window.xmax, window.ymax)
+    c1 = outcode(x1, y1, window.xmin, window.ymin, window.xmax, window.ymax)
+    if (c0 | c1) == 0 or c0 & c1 or options.max_depth == 0 or length <= options.tol:
         # Decided at level 0 (accepted, rejected, or the whole segment is the leaf).
-        ok, t0, ax, ay, t1, bx, by = _leaf(x0, y0, x1, y1, 0.0, x0, y0, wide(c0), 1.0, x1, y1,
-                                           wide(c1), 0, exact, xmin, ymin, xmax, ymax, st)
+        whole = Fragment(0.0, x0, y0, wide(c0), 1.0, x1, y1, wide(c1))
+        ok, t0, ax, ay, t1, bx, by = _leaf(x0, y0, x1, y1, whole, 0, window, exact, st)
         # A dropped approx leaf leaves one point. (In exact mode t0 == t1 can be a real piece:
         # a window far smaller than the segment lies within one rounding step of t.)
         if not ok or not exact and t0 == t1 and (c0 | c1) != 0:
@@ -171,21 +182,17 @@ def midpoint_segment(x0, y0, x1, y1, xmin, ymin, xmax, ymax, max_depth, tol, exa
     if c1 == 0:
         t1, bx, by = 1.0, x1, y1
     else:
-        a, xa, ya, ca, b, xb, yb, cb, level = _search(
-            x0, y0, dx, dy, x1, y1, wide(c0), wide(c1), length, True, max_depth, tol, exact,
-            xmin, ymin, xmax, ymax, st)
-        ok, _, _, _, t1, bx, by = _leaf(x0, y0, x1, y1, a, xa, ya, ca, b, xb, yb, cb, level,
-                                        exact, xmin, ymin, xmax, ymax, st)
+        bracket, level = _search(x0, y0, x1, y1, wide(c0), wide(c1), length, True,
+                                 window, options, st)
+        ok, _, _, _, t1, bx, by = _leaf(x0, y0, x1, y1, bracket, level, window, exact, st)
         if not ok:
             return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
     if c0 == 0:
         t0, ax, ay = 0.0, x0, y0
     else:
-        a, xa, ya, ca, b, xb, yb, cb, level = _search(
-            x0, y0, dx, dy, x1, y1, wide(c0), wide(c1), length, False, max_depth, tol, exact,
-            xmin, ymin, xmax, ymax, st)
-        ok, t0, ax, ay, _, _, _ = _leaf(x0, y0, x1, y1, a, xa, ya, ca, b, xb, yb, cb, level,
-                                        exact, xmin, ymin, xmax, ymax, st)
+        bracket, level = _search(x0, y0, x1, y1, wide(c0), wide(c1), length, False,
+                                 window, options, st)
+        ok, t0, ax, ay, _, _, _ = _leaf(x0, y0, x1, y1, bracket, level, window, exact, st)
         if not ok:
             return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
     return is_piece(False, t0, t1, ax, ay, bx, by), t0, t1, ax, ay, bx, by

@@ -33,6 +33,7 @@ from rnsca.kernels.outcode import (
     is_piece,
     outcode,
 )
+from rnsca.kernels.records import Window
 
 # Products of numbers within these magnitudes neither overflow nor lose to underflow.
 _BIG = 2.0 ** 500
@@ -83,26 +84,29 @@ def _single_edge(code):
 
 
 @scalar
-def _parameter(edge, px, py, ex, ey, left, bottom, right, top, st):
-    """Return the parameter where P + t E meets the line of `edge` (one intersection)."""
+def _parameter(edge, px, py, ex, ey, frame, st):
+    """Return the parameter where P + t E meets the line of `edge` (one intersection).
+
+    `frame` is the window in the canonical frame (a `Window`), as for every helper here.
+    """
     st[C.INTERSECTIONS] += 1
     if edge == EDGE_LEFT:
-        return (left - px) / ex
+        return (frame.xmin - px) / ex
     if edge == EDGE_RIGHT:
-        return (right - px) / ex
+        return (frame.xmax - px) / ex
     if edge == EDGE_BOTTOM:
-        return (bottom - py) / ey
-    return (top - py) / ey
+        return (frame.ymin - py) / ey
+    return (frame.ymax - py) / ey
 
 
 @scalar
-def _exit_from_inside(c1, px, py, ex, ey, left, bottom, right, top):
+def _exit_from_inside(c1, px, py, ex, ey, frame):
     """Return the exit edge of a segment from an inside P to an outside Q with code c1."""
     if c1 == LEFT or c1 == RIGHT or c1 == BOTTOM or c1 == TOP:
         return _single_edge(c1)
     # Q in a corner region: the ray to that corner splits the two candidate edges.
-    cx = right if c1 & RIGHT else left
-    cy = top if c1 & TOP else bottom
+    cx = frame.xmax if c1 & RIGHT else frame.xmin
+    cy = frame.ymax if c1 & TOP else frame.ymin
     ccw = _turn(cx - px, cy - py, ex, ey) > 0
     if c1 == RIGHT | TOP:
         return EDGE_TOP if ccw else EDGE_RIGHT
@@ -114,8 +118,9 @@ def _exit_from_inside(c1, px, py, ex, ey, left, bottom, right, top):
 
 
 @scalar
-def _exit_from_left(px, py, ex, ey, bottom, right, top):
+def _exit_from_left(px, py, ex, ey, frame):
     """Return the exit edge for a direction already known to cross the window from the left."""
+    _, bottom, right, top = frame
     if _turn(right - px, top - py, ex, ey) > 0:
         return EDGE_TOP
     if _turn(right - px, bottom - py, ex, ey) < 0:
@@ -124,11 +129,13 @@ def _exit_from_left(px, py, ex, ey, bottom, right, top):
 
 
 @scalar
-def _canonical_clip(px, py, qx, qy, left, bottom, right, top, st):
+def _canonical_clip(px, py, qx, qy, frame, st):
     """Clip P->Q in the canonical frame, P inside, left, or below-left of the window.
 
-    Returns (ok, u0, e0, u1, e1), edges in the canonical frame.
+    `frame` is the window in that frame (a `Window`). Returns (ok, u0, e0, u1, e1),
+    edges in the canonical frame.
     """
+    left, bottom, right, top = frame
     ex = qx - px
     ey = qy - py
     c0 = outcode(px, py, left, bottom, right, top)
@@ -136,9 +143,9 @@ def _canonical_clip(px, py, qx, qy, left, bottom, right, top, st):
     if c0 == 0:
         if c1 == 0:
             return True, 0.0, NO_EDGE, 1.0, NO_EDGE
-        e1 = _exit_from_inside(c1, px, py, ex, ey, left, bottom, right, top)
+        e1 = _exit_from_inside(c1, px, py, ex, ey, frame)
         # Q is outside, so the exit comes before it: a parameter past 1 is rounding.
-        u1 = min(_parameter(e1, px, py, ex, ey, left, bottom, right, top, st), 1.0)
+        u1 = min(_parameter(e1, px, py, ex, ey, frame, st), 1.0)
         return True, 0.0, NO_EDGE, u1, e1
     if c1 & c0:
         return False, 0.0, NO_EDGE, 0.0, NO_EDGE
@@ -155,11 +162,11 @@ def _canonical_clip(px, py, qx, qy, left, bottom, right, top, st):
             return False, 0.0, NO_EDGE, 0.0, NO_EDGE
         # Steeper than the ray to the bottom-left corner: enters through the left edge.
         e0 = EDGE_LEFT if _turn(left - px, bottom - py, ex, ey) >= 0 else EDGE_BOTTOM
-    u0 = _parameter(e0, px, py, ex, ey, left, bottom, right, top, st)
+    u0 = _parameter(e0, px, py, ex, ey, frame, st)
     if c1 == 0:
         return True, max(u0, 0.0), e0, 1.0, NO_EDGE
-    e1 = _exit_from_left(px, py, ex, ey, bottom, right, top)
-    u1 = min(_parameter(e1, px, py, ex, ey, left, bottom, right, top, st), 1.0)
+    e1 = _exit_from_left(px, py, ex, ey, frame)
+    u1 = min(_parameter(e1, px, py, ex, ey, frame, st), 1.0)
     return u0 <= u1, max(u0, 0.0), e0, u1, e1
 
 
@@ -178,8 +185,12 @@ def _original_edge(edge, flip_x, flip_y, swap):
 
 
 @scalar
-def nicholl_lee_nicholl_segment(x0, y0, x1, y1, xmin, ymin, xmax, ymax, st):
-    """Clip one segment with Nicholl–Lee–Nicholl; return (keep, t0, t1, ax, ay, bx, by)."""
+def nicholl_lee_nicholl_segment(x0, y0, x1, y1, window, st):
+    """Clip one segment with Nicholl–Lee–Nicholl; return (keep, t0, t1, ax, ay, bx, by).
+
+    `window` is a `rnsca.kernels.records.Window`; `st` the block's counter row.
+    """
+    xmin, ymin, xmax, ymax = window
     dx = x1 - x0
     dy = y1 - y0
     st[C.EVALUATED] += 1
@@ -205,7 +216,7 @@ def nicholl_lee_nicholl_segment(x0, y0, x1, y1, xmin, ymin, xmax, ymax, st):
     if swap:
         px, py, qx, qy = py, px, qy, qx
         left, bottom, right, top = bottom, left, top, right
-    ok, u0, e0, u1, e1 = _canonical_clip(px, py, qx, qy, left, bottom, right, top, st)
+    ok, u0, e0, u1, e1 = _canonical_clip(px, py, qx, qy, Window(left, bottom, right, top), st)
     if not ok:
         st[C.REJECTED] += 1
         return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
@@ -215,6 +226,6 @@ def nicholl_lee_nicholl_segment(x0, y0, x1, y1, xmin, ymin, xmax, ymax, st):
         st[C.CLIPPED] += 1
     e0 = _original_edge(e0, flip_x, flip_y, swap)
     e1 = _original_edge(e1, flip_x, flip_y, swap)
-    ax, ay = end_point(x0, y0, x1, y1, e0, x0, y0, xmin, ymin, xmax, ymax)
-    bx, by = end_point(x0, y0, x1, y1, e1, x1, y1, xmin, ymin, xmax, ymax)
+    ax, ay = end_point(x0, y0, x1, y1, e0, x0, y0, window)
+    bx, by = end_point(x0, y0, x1, y1, e1, x1, y1, window)
     return is_piece(False, u0, u1, ax, ay, bx, by), u0, u1, ax, ay, bx, by

@@ -15,19 +15,22 @@ outcodes share a bit lies wholly beyond that edge; anything else is ambiguous.
 
 import math
 
+# The bits, the edge ids (NO_EDGE: the end was not cut) and the wide-code layout are
+# defined in rnsca.constants, shared with clip.cl; importable from here as before.
+from rnsca.constants import (
+    BOTTOM,
+    EDGE_BOTTOM,
+    EDGE_LEFT,
+    EDGE_RIGHT,
+    LEFT,
+    NO_EDGE,
+    RIGHT,
+    SURE_SHIFT,
+    TOP,
+    UNSURE_BITS,
+)
+from rnsca.constants import EDGE_TOP as EDGE_TOP  # re-exported (not used here)
 from rnsca.kernels.jit import scalar
-
-LEFT = 1
-RIGHT = 2
-BOTTOM = 4
-TOP = 8
-
-# Edge identifiers for the end of a clipped piece; NO_EDGE: the end was not cut.
-NO_EDGE = -1
-EDGE_LEFT = 0
-EDGE_RIGHT = 1
-EDGE_BOTTOM = 2
-EDGE_TOP = 3
 
 
 @scalar
@@ -46,8 +49,6 @@ def outcode(x, y, xmin, ymin, xmax, ymax):
 # inside (wide codes OR to 0), rejected only if both are surely beyond one edge (AND of
 # the high bits), and otherwise stays ambiguous, so it is refined, clipped exactly, or
 # (approx mode) dropped. An exact point (an input end point) has ``wide(c)``.
-SURE_SHIFT = 4
-UNSURE_BITS = 15
 
 
 @scalar
@@ -113,17 +114,18 @@ def interpolated_point(x0, y0, dx, dx_err, dy, dy_err, t):
 
 
 @scalar
-def wide_outcode(x, y, cx, mx, cy, my, xmin, ymin, xmax, ymax):
+def wide_outcode(x, y, cx, mx, cy, my, window):
     """Return the wide code of the true point (x + cx, y + cy), known to within mx, my.
 
-    Distances to the edges are formed from the rounded point (exact near an edge, where
-    it matters) plus the correction, and compared with the margins: so a point is
-    unsure only when it lies within its own tiny residual error of an edge.
+    Distances to the edges of `window` (a `rnsca.kernels.records.Window`) are formed
+    from the rounded point (exact near an edge, where it matters) plus the correction,
+    and compared with the margins: so a point is unsure only when it lies within its
+    own tiny residual error of an edge.
     """
-    dl = (x - xmin) + cx
-    dr = (xmax - x) - cx
-    db = (y - ymin) + cy
-    dt = (ymax - y) - cy
+    dl = (x - window.xmin) + cx
+    dr = (window.xmax - x) - cx
+    db = (y - window.ymin) + cy
+    dt = (window.ymax - y) - cy
     unsure = (dl < mx) * LEFT | (dr < mx) * RIGHT | (db < my) * BOTTOM | (dt < my) * TOP
     sure = (-dl > mx) * LEFT | (-dr > mx) * RIGHT | (-db > my) * BOTTOM | (-dt > my) * TOP
     return unsure | (sure << SURE_SHIFT)
@@ -136,7 +138,7 @@ def clamp(v, low, high):
 
 
 # Veltkamp's splitter for Dekker's exact product (2**27 + 1): no fused multiply-add is
-# needed, so the kernels, plain Python and the NumPy reference round identically.
+# needed, so the compiled kernels, plain Python and OpenCL round identically.
 _SPLITTER = 134217729.0
 
 
@@ -235,39 +237,39 @@ def line_coordinate(e, a0, b0, a1, b1):
 
 
 @scalar
-def edge_point_code(x0, y0, x1, y1, edge, xmin, ymin, xmax, ymax):
+def edge_point_code(x0, y0, x1, y1, edge, window):
     """Return (x, y, code): `edge_point` and the outcode of the true point it rounds.
 
     A rounded cut point can land inside the window while the true one lies a fraction
     of an ulp outside (a segment nearly parallel to an edge); its residual decides.
     """
     if edge == EDGE_LEFT or edge == EDGE_RIGHT:
-        x = xmin if edge == EDGE_LEFT else xmax
+        x = window.xmin if edge == EDGE_LEFT else window.xmax
         y, r = line_coordinate_residual(x, x0, y0, x1, y1)
-        return x, y, wide_outcode(x, y, 0.0, 0.0, r, 0.0, xmin, ymin, xmax, ymax) & UNSURE_BITS
-    y = ymin if edge == EDGE_BOTTOM else ymax
+        return x, y, wide_outcode(x, y, 0.0, 0.0, r, 0.0, window) & UNSURE_BITS
+    y = window.ymin if edge == EDGE_BOTTOM else window.ymax
     x, r = line_coordinate_residual(y, y0, x0, y1, x1)
-    return x, y, wide_outcode(x, y, r, 0.0, 0.0, 0.0, xmin, ymin, xmax, ymax) & UNSURE_BITS
+    return x, y, wide_outcode(x, y, r, 0.0, 0.0, 0.0, window) & UNSURE_BITS
 
 
 @scalar
-def edge_point(x0, y0, x1, y1, edge, xmin, ymin, xmax, ymax):
+def edge_point(x0, y0, x1, y1, edge, window):
     """Return the point where the segment's line meets the line of `edge`.
 
     The coordinate across the edge is the edge's own value exactly (the intersection
     lies on the edge line by definition); the other is `line_coordinate`, not clamped.
     """
     if edge == EDGE_LEFT:
-        return xmin, line_coordinate(xmin, x0, y0, x1, y1)
+        return window.xmin, line_coordinate(window.xmin, x0, y0, x1, y1)
     if edge == EDGE_RIGHT:
-        return xmax, line_coordinate(xmax, x0, y0, x1, y1)
+        return window.xmax, line_coordinate(window.xmax, x0, y0, x1, y1)
     if edge == EDGE_BOTTOM:
-        return line_coordinate(ymin, y0, x0, y1, x1), ymin
-    return line_coordinate(ymax, y0, x0, y1, x1), ymax
+        return line_coordinate(window.ymin, y0, x0, y1, x1), window.ymin
+    return line_coordinate(window.ymax, y0, x0, y1, x1), window.ymax
 
 
 @scalar
-def snap_into_window(x, y, x0, y0, x1, y1, xmin, ymin, xmax, ymax):
+def snap_into_window(x, y, x0, y0, x1, y1, window):
     """Return a piece end on the segment's line, moved along the line into the window.
 
     A cut end is chosen by comparing parameters t, which cannot tell two edges apart
@@ -277,6 +279,7 @@ def snap_into_window(x, y, x0, y0, x1, y1, xmin, ymin, xmax, ymax):
     on the true boundary. Every coordinate is then clamped (the last-ulp overshoot).
     Rarely taken branches, outside the vectorized loops.
     """
+    xmin, ymin, xmax, ymax = window
     if y > ymax or y < ymin:
         edge = ymax if y > ymax else ymin
         x = line_coordinate(edge, y0, x0, y1, x1)
@@ -289,7 +292,7 @@ def snap_into_window(x, y, x0, y0, x1, y1, xmin, ymin, xmax, ymax):
 
 
 @scalar
-def end_point(x0, y0, x1, y1, edge, px, py, xmin, ymin, xmax, ymax):
+def end_point(x0, y0, x1, y1, edge, px, py, window):
     """Return the coordinates of a piece end, inside the window.
 
     An end not cut by an edge (``edge == NO_EDGE``) is the known point (px, py); an end
@@ -298,8 +301,8 @@ def end_point(x0, y0, x1, y1, edge, px, py, xmin, ymin, xmax, ymax):
     """
     x, y = px, py
     if edge != NO_EDGE:
-        x, y = edge_point(x0, y0, x1, y1, edge, xmin, ymin, xmax, ymax)
-    return snap_into_window(x, y, x0, y0, x1, y1, xmin, ymin, xmax, ymax)
+        x, y = edge_point(x0, y0, x1, y1, edge, window)
+    return snap_into_window(x, y, x0, y0, x1, y1, window)
 
 
 @scalar

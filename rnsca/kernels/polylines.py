@@ -32,12 +32,23 @@ Stacks are explicit (no recursion), so the logic ports to OpenCL.
 import numpy as np
 from numba import prange
 
+# The chunk length, the run stack's size and the device's chunk decisions are defined in
+# rnsca.constants (shared with clip.cl); importable from here as before.
+from rnsca.constants import (
+    CHUNK_ACCEPTED,
+    CHUNK_REJECTED,
+    CHUNK_SEGMENTED,
+    RUN_LEAF_SEGMENTS,
+    RUN_STACK_CAPACITY,
+)
 from rnsca.kernels import counters as C
 from rnsca.kernels.jit import borrowing, inlined, parallel, scalar
 from rnsca.kernels.outcode import outcode
+from rnsca.kernels.records import CoreOptions, Window
 from rnsca.kernels.segments import (
     RNSCA,
     STACK_CAPACITY,
+    SegmentStack,
     clip_one,
     rnsca_segment,
 )
@@ -63,15 +74,9 @@ __all__ = [
     "vertex_code",
 ]
 
-# Runs of at most this many segments are clipped segment by segment: below it, a
-# bounding box costs about as much as the segments' own outcode tests.
-RUN_LEAF_SEGMENTS = 16
 # ``n="auto"`` for runs: a bounding box pass costs the same whatever N is, so a larger
 # N decides more of the run per pass; 16 keeps the stack and the per-child overhead small.
 RUN_N_AUTO = 16
-# Depth-first: at most N - 1 pending siblings per level, and a run of 2**63 vertices
-# split in two (the smallest N) is down to a leaf within 63 levels.
-RUN_STACK_CAPACITY = 64 * 64
 
 # Bits of a vertex code (`vertex_code`): the outcode, then two flags.
 OUTSIDE = 15                # the Cohen–Sutherland outcode (LEFT | RIGHT | BOTTOM | TOP)
@@ -205,8 +210,8 @@ def _clip_segments(xy, z, has_z, write, a, b, xmin, ymin, xmax, ymax, method, n_
     if method != RNSCA:
         for i in range(a, b):
             keep, t0, t1, ax, ay, bx, by = clip_one(
-                method, xy[i, 0], xy[i, 1], xy[i + 1, 0], xy[i + 1, 1], xmin, ymin, xmax,
-                ymax, max_depth, tol, exact, st)
+                xy[i, 0], xy[i, 1], xy[i + 1, 0], xy[i + 1, 1], Window(xmin, ymin, xmax, ymax),
+                CoreOptions(method, n_fixed, max_depth, tol, auto_piece, exact), st)
             v, c, last_v = _emit_visible(xy, z, has_z, write, i, keep, t0, t1, ax, ay, bx,
                                          by, xmin, ymin, xmax, ymax, drop_edge_runs,
                                          break_at_boundary, out_xy, out_z, out_starts, v, c,
@@ -248,8 +253,9 @@ def _clip_segments(xy, z, has_z, write, a, b, xmin, ymin, xmax, ymax, method, n_
             rejected += 1
             continue
         keep, t0, t1, ax, ay, bx, by = rnsca_segment(
-            xy[i, 0], xy[i, 1], xy[i + 1, 0], xy[i + 1, 1], xmin, ymin, xmax, ymax, n_fixed,
-            max_depth, tol, auto_piece, exact, st, stack_f, stack_i)
+            xy[i, 0], xy[i, 1], xy[i + 1, 0], xy[i + 1, 1], Window(xmin, ymin, xmax, ymax),
+            CoreOptions(method, n_fixed, max_depth, tol, auto_piece, exact), st,
+            SegmentStack(stack_f, stack_i))
         v, c, last_v = _emit_visible(xy, z, has_z, write, i, keep, t0, t1, ax, ay, bx, by,
                                      xmin, ymin, xmax, ymax, drop_edge_runs, break_at_boundary,
                                      out_xy, out_z, out_starts, v, c, last_v)
@@ -770,13 +776,6 @@ def clip_lines(xy, z, part_offsets, geometry_parts, geometry_window, windows, me
     for g in range(n_geometries):
         geometry_chains[g + 1] = chain_start[geometry_parts[g + 1]]
     return out_xy, out_z, chain_offsets, geometry_chains, counters, -1
-
-
-# Decisions of chunks made on a device (the OpenCL backend's `classify_runs`): skipped,
-# copied whole, or clipped segment by segment.
-CHUNK_REJECTED = 0
-CHUNK_ACCEPTED = 1
-CHUNK_SEGMENTED = 2
 
 
 @scalar

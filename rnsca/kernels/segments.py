@@ -12,10 +12,23 @@ one interval; the kernel merges them and returns at most one piece per segment.
 """
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numba import prange
 
+# Method ids, N's bounds and the stack size are defined in rnsca.constants (shared with
+# clip.cl and the service); importable from here as before.
+from rnsca.constants import (
+    AUTO_N_MIN,
+    COHEN_SUTHERLAND,
+    LIANG_BARSKY,
+    N_MAX,
+    NICHOLL_LEE_NICHOLL,
+    RNSCA,
+    STACK_CAPACITY,
+)
+from rnsca.constants import MIDPOINT as MIDPOINT  # re-exported (the driver's default case)
 from rnsca.kernels import counters as C
 from rnsca.kernels.cohen_sutherland import cohen_sutherland_segment
 from rnsca.kernels.jit import borrowing, parallel, scalar
@@ -34,7 +47,6 @@ from rnsca.kernels.outcode import (
     RIGHT,
     SURE_SHIFT,
     TOP,
-    UNSURE_BITS,
     clamp,
     direction_error,
     end_point,
@@ -44,30 +56,11 @@ from rnsca.kernels.outcode import (
     wide,
     wide_outcode,
 )
+from rnsca.kernels.records import Fragment
 
-# Method ids as the driver knows them (rnsca.backends.numba_cpu maps the enum).
-RNSCA = 0
-COHEN_SUTHERLAND = 1
-LIANG_BARSKY = 2
-NICHOLL_LEE_NICHOLL = 3
-MIDPOINT = 4
-
-N_MAX = 64
-# A child is split further only if its two wide codes differ, that is, if it crosses one
-# of the eight lines that bound the edges' rounding bands (edge +- margin). A segment
-# crosses each line at most once and computed points are monotone in t, so at most
-# eight children of a piece are split, and the depth-first stack holds at most seven
-# pending siblings per level plus the current one.
-STACK_CAPACITY = 8 * (C.N_LEVELS + 1)
 # Stack rows: floats (ta, tb, xa, ya, xb, yb); ints (ca, cb, level).
 _TA, _TB, _XA, _YA, _XB, _YB = 0, 1, 2, 3, 4, 5
 _CA, _CB, _LEVEL = 0, 1, 2
-
-
-# `auto_n` never splits into fewer pieces than this: measured on uniform segments in
-# approx mode, N = 8 beats 2, 3, 4 and 16 (fewer levels and stack operations for a few
-# more outcode tests; see benchmarks/README.md).
-AUTO_N_MIN = 8
 
 
 @scalar
@@ -84,27 +77,98 @@ def auto_n(piece_length, auto_piece):
     return N_MAX if k > N_MAX else int(math.ceil(k))
 
 
+class SegmentStack(NamedTuple):
+    """RNSCA's depth-first stack of pending pieces, scratch space owned by one block.
+
+    Row ``i`` is one piece: ``floats[i]`` holds (ta, tb, xa, ya, xb, yb) and
+    ``ints[i]`` (ca, cb, level), both `STACK_CAPACITY` rows (see `segment_stack`).
+    """
+
+    floats: np.ndarray
+    ints: np.ndarray
+
+
+class SegmentOutput(NamedTuple):
+    """What the segment drivers fill: the pieces, and per block their count and counters.
+
+    Attributes
+    ----------
+    pieces, source, t : float64 (m, 4), int64 (m,), float64 (m, 2)
+        The pieces (ends clamped into the window), the input row of each, and its
+        parameter interval; written by the write pass, empty in the count pass.
+    block_start : int64 (n_blocks,)
+        Block ``k`` writes its pieces from row ``block_start[k]`` on (write pass): the
+        exclusive prefix sum of the count pass's `block_count`.
+    block_count : int64 (n_blocks,)
+        Pieces per block.
+    counters : int64 (n_blocks, counters.WIDTH)
+        One counter row per block (``rnsca.kernels.counters``).
+    """
+
+    pieces: np.ndarray
+    source: np.ndarray
+    t: np.ndarray
+    block_start: np.ndarray
+    block_count: np.ndarray
+    counters: np.ndarray
+
+
+@scalar
+def segment_stack():
+    """Return a new, empty `SegmentStack` for `rnsca_segment`."""
+    return SegmentStack(np.empty((STACK_CAPACITY, 6), dtype=np.float64),
+                        np.empty((STACK_CAPACITY, 3), dtype=np.int64))
+
+
 @borrowing
-def _clip_leaf(x0, y0, x1, y1, ta, tb, xa, ya, xb, yb, flags, xmin, ymin, xmax, ymax, st):
-    """Clip the leaf [ta, tb] (ends (xa, ya), (xb, yb)); return (ok, u0, ax, ay, u1, bx, by)."""
-    ok, u0, ax, ay, u1, bx, by, divisions = liang_barsky_leaf(
-        x0, y0, x1, y1, ta, tb, xa, ya, xb, yb, flags, xmin, ymin, xmax, ymax)
+def _push(stack, sp, fragment, level):
+    """Write `fragment` (a `Fragment`) at level `level` into row `sp` of `stack`."""
+    stack.floats[sp, _TA] = fragment.ta
+    stack.floats[sp, _TB] = fragment.tb
+    stack.floats[sp, _XA] = fragment.xa
+    stack.floats[sp, _YA] = fragment.ya
+    stack.floats[sp, _XB] = fragment.xb
+    stack.floats[sp, _YB] = fragment.yb
+    stack.ints[sp, _CA] = fragment.ca
+    stack.ints[sp, _CB] = fragment.cb
+    stack.ints[sp, _LEVEL] = level
+
+
+@borrowing
+def _pop(stack, sp):
+    """Return (fragment, level): the `Fragment` in row `sp` of `stack` and its level."""
+    fragment = Fragment(stack.floats[sp, _TA], stack.floats[sp, _XA], stack.floats[sp, _YA],
+                  stack.ints[sp, _CA], stack.floats[sp, _TB], stack.floats[sp, _XB],
+                  stack.floats[sp, _YB], stack.ints[sp, _CB])
+    return fragment, stack.ints[sp, _LEVEL]
+
+
+@borrowing
+def _clip_leaf(x0, y0, x1, y1, leaf, window, st):
+    """Clip the `leaf` (a `Fragment`) of a segment; return (ok, u0, ax, ay, u1, bx, by)."""
+    ok, u0, ax, ay, u1, bx, by, divisions = liang_barsky_leaf(x0, y0, x1, y1, leaf, window)
     st[C.INTERSECTIONS] += divisions
     return ok and is_piece(False, u0, u1, ax, ay, bx, by), u0, ax, ay, u1, bx, by
 
 
 @borrowing
-def rnsca_segment(x0, y0, x1, y1, xmin, ymin, xmax, ymax, n_fixed, max_depth, tol, auto_piece,
-                  exact, st, stack_f, stack_i):
+def rnsca_segment(x0, y0, x1, y1, window, options, st, stack):
     """Clip one segment with RNSCA; return (keep, t0, t1, ax, ay, bx, by).
 
-    `n_fixed` is N, or 0 for auto (see `auto_n`); `stack_f` (STACK_CAPACITY, 6) and
-    `stack_i` (STACK_CAPACITY, 3) are scratch space owned by the caller's block.
+    Parameters
+    ----------
+    x0, y0, x1, y1 : float
+        The segment, finite, with finite differences.
+    window : Window
+    options : CoreOptions
+        Its subdivision fields are read: `n` is N, or 0 for auto (see `auto_n`).
+    st : int64 (counters.WIDTH,)
+        The block's counter row.
+    stack : SegmentStack
+        Scratch space owned by the caller's block.
     """
-    dx = x1 - x0
-    dy = y1 - y0
-    c0 = outcode(x0, y0, xmin, ymin, xmax, ymax)
-    c1 = outcode(x1, y1, xmin, ymin, xmax, ymax)
+    c0 = outcode(x0, y0, window.xmin, window.ymin, window.xmax, window.ymax)
+    c1 = outcode(x1, y1, window.xmin, window.ymin, window.xmax, window.ymax)
     st[C.EVALUATED] += 1
     if (c0 | c1) == 0:
         st[C.ACCEPTED] += 1
@@ -114,60 +178,66 @@ def rnsca_segment(x0, y0, x1, y1, xmin, ymin, xmax, ymax, n_fixed, max_depth, to
         st[C.REJECTED] += 1
         st[C.LEVELS] += 1
         return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
-    length = math.hypot(dx, dy)
+    length = math.hypot(x1 - x0, y1 - y0)
+    # Children's ends are interpolated: classify them, and the ends, with wide codes
+    # (see outcode.py).
+    whole = Fragment(0.0, x0, y0, wide(c0), 1.0, x1, y1, wide(c1))
+    if options.max_depth == 0 or length <= options.tol:
+        # The whole segment is the leaf.
+        st[C.LEVELS] += 1
+        if not options.exact:
+            st[C.DROPPED] += 1
+            return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+        st[C.CLIPPED] += 1
+        ok, u0, ax, ay, u1, bx, by = _clip_leaf(x0, y0, x1, y1, whole, window, st)
+        return ok, u0, u1, ax, ay, bx, by
+    st[C.SUBDIVIDED] += 1
+    return _subdivide(x0, y0, x1, y1, whole, length, window, options, st, stack)
+
+
+@borrowing
+def _subdivide(x0, y0, x1, y1, whole, length, window, options, st, stack):
+    """Split an ambiguous segment depth-first; return (keep, t0, t1, ax, ay, bx, by).
+
+    `whole` is the segment as a `Fragment`, `length` its length; the other parameters are
+    those of `rnsca_segment`. The accepted children and clipped leaves are merged into
+    one interval as they come.
+    """
+    n_fixed = options.n_fixed
+    max_depth = options.max_depth
+    tol = options.tol
+    exact = options.exact
+    dx = x1 - x0
+    dy = y1 - y0
+    _, dx_err = direction_error(x1, x0)
+    _, dy_err = direction_error(y1, y0)
     # The merged interval and its end points.
     lo_t = math.inf
     lo_x = lo_y = 0.0
     hi_t = -math.inf
     hi_x = hi_y = 0.0
-    if max_depth == 0 or length <= tol:
-        # The whole segment is the leaf.
-        st[C.LEVELS] += 1
-        if not exact:
-            st[C.DROPPED] += 1
-            return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
-        st[C.CLIPPED] += 1
-        ok, u0, ax, ay, u1, bx, by = _clip_leaf(x0, y0, x1, y1, 0.0, 1.0, x0, y0, x1, y1,
-                                                c0 | c1, xmin, ymin, xmax, ymax, st)
-        return ok, u0, u1, ax, ay, bx, by
-    st[C.SUBDIVIDED] += 1
-    stack_f[0, _TA] = 0.0
-    stack_f[0, _TB] = 1.0
-    stack_f[0, _XA] = x0
-    stack_f[0, _YA] = y0
-    stack_f[0, _XB] = x1
-    stack_f[0, _YB] = y1
-    # Children's ends are interpolated: classify them with wide codes (see outcode.py).
-    _, dx_err = direction_error(x1, x0)
-    _, dy_err = direction_error(y1, y0)
-    stack_i[0, _CA] = wide(c0)
-    stack_i[0, _CB] = wide(c1)
-    stack_i[0, _LEVEL] = 0
+    _push(stack, 0, whole, 0)
     sp = 1
     while sp > 0:
         sp -= 1
-        ta = stack_f[sp, _TA]
-        tb = stack_f[sp, _TB]
-        xb = stack_f[sp, _XB]
-        yb = stack_f[sp, _YB]
-        cb = stack_i[sp, _CB]
-        level = stack_i[sp, _LEVEL] + 1
-        step = tb - ta
-        n = n_fixed if n_fixed > 0 else auto_n(step * length, auto_piece)
+        fragment, level = _pop(stack, sp)
+        level += 1
+        step = fragment.tb - fragment.ta
+        n = n_fixed if n_fixed > 0 else auto_n(step * length, options.auto_piece)
         # Walk the n children left to right; (pt, px, py, pc) is the current child's start.
-        pt = ta
-        px = stack_f[sp, _XA]
-        py = stack_f[sp, _YA]
-        pc = stack_i[sp, _CA]
+        pt = fragment.ta
+        px = fragment.xa
+        py = fragment.ya
+        pc = fragment.ca
         if level > st[C.DEEPEST]:
             st[C.DEEPEST] = level
         for j in range(1, n + 1):
             if j == n:
-                t, x, y, c = tb, xb, yb, cb
+                t, x, y, c = fragment.tb, fragment.xb, fragment.yb, fragment.cb
             else:
-                t = ta + step * j / n
+                t = fragment.ta + step * j / n
                 x, y, cx, mx, cy, my = interpolated_point(x0, y0, dx, dx_err, dy, dy_err, t)
-                c = wide_outcode(x, y, cx, mx, cy, my, xmin, ymin, xmax, ymax)
+                c = wide_outcode(x, y, cx, mx, cy, my, window)
                 # Ends of accepted pieces are output: give them the corrected position.
                 x += cx
                 y += cy
@@ -192,9 +262,8 @@ def rnsca_segment(x0, y0, x1, y1, xmin, ymin, xmax, ymax, n_fixed, max_depth, to
                 st[C.LEVELS + level] += 1
                 if exact:
                     st[C.CLIPPED] += 1
-                    ok, u0, ax, ay, u1, bx, by = _clip_leaf(x0, y0, x1, y1, pt, t, px, py, x, y,
-                                                            (pc | c) & UNSURE_BITS,
-                                                            xmin, ymin, xmax, ymax, st)
+                    ok, u0, ax, ay, u1, bx, by = _clip_leaf(
+                        x0, y0, x1, y1, Fragment(pt, px, py, pc, t, x, y, c), window, st)
                     if ok:
                         if u0 < lo_t:
                             lo_t, lo_x, lo_y = u0, ax, ay
@@ -204,15 +273,7 @@ def rnsca_segment(x0, y0, x1, y1, xmin, ymin, xmax, ymax, n_fixed, max_depth, to
                     st[C.DROPPED] += 1
             else:
                 st[C.SUBDIVIDED] += 1
-                stack_f[sp, _TA] = pt
-                stack_f[sp, _TB] = t
-                stack_f[sp, _XA] = px
-                stack_f[sp, _YA] = py
-                stack_f[sp, _XB] = x
-                stack_f[sp, _YB] = y
-                stack_i[sp, _CA] = pc
-                stack_i[sp, _CB] = c
-                stack_i[sp, _LEVEL] = level
+                _push(stack, sp, Fragment(pt, px, py, pc, t, x, y, c), level)
                 sp += 1
             pt, px, py, pc = t, x, y, c
     if not lo_t <= hi_t:
@@ -221,44 +282,49 @@ def rnsca_segment(x0, y0, x1, y1, xmin, ymin, xmax, ymax, n_fixed, max_depth, to
 
 
 @scalar
-def clip_one(method, x0, y0, x1, y1, xmin, ymin, xmax, ymax, max_depth, tol, exact, st):
-    """Clip one segment with the baseline of id `method`; return (keep, t0, t1, ax, ay, bx, by).
+def clip_one(x0, y0, x1, y1, window, options, st):
+    """Clip one segment with the baseline ``options.method``; return (keep, t0, t1, ax, ay, bx, by).
 
-    RNSCA is not here: it runs block-wise (`_rnsca_block`).
+    `window` is a `Window`, `options` a `CoreOptions`, `st` the block's counter row. RNSCA
+    is not here: it runs block-wise (`_rnsca_block`).
     """
+    method = options.method
     if method == COHEN_SUTHERLAND:
-        return cohen_sutherland_segment(x0, y0, x1, y1, xmin, ymin, xmax, ymax, st)
+        return cohen_sutherland_segment(x0, y0, x1, y1, window, st)
     if method == LIANG_BARSKY:
-        return liang_barsky_segment(x0, y0, x1, y1, xmin, ymin, xmax, ymax, st)
+        return liang_barsky_segment(x0, y0, x1, y1, window, st)
     if method == NICHOLL_LEE_NICHOLL:
-        return nicholl_lee_nicholl_segment(x0, y0, x1, y1, xmin, ymin, xmax, ymax, st)
-    return midpoint_segment(x0, y0, x1, y1, xmin, ymin, xmax, ymax, max_depth, tol, exact, st)
+        return nicholl_lee_nicholl_segment(x0, y0, x1, y1, window, st)
+    return midpoint_segment(x0, y0, x1, y1, window, options, st)
+
+
+@borrowing
+def _write_piece(out, k, i, t0, t1, ax, ay, bx, by, window):
+    """Write piece `k` of `out`: segment `i`'s interval [t0, t1], ends clamped into `window`."""
+    out.pieces[k, 0] = clamp(ax, window.xmin, window.xmax)
+    out.pieces[k, 1] = clamp(ay, window.ymin, window.ymax)
+    out.pieces[k, 2] = clamp(bx, window.xmin, window.xmax)
+    out.pieces[k, 3] = clamp(by, window.ymin, window.ymax)
+    out.source[k] = i
+    out.t[k, 0] = t0
+    out.t[k, 1] = t1
 
 
 @scalar
-def _write_piece(out_segments, out_source, out_t, k, i, t0, t1, ax, ay, bx, by,
-                 xmin, ymin, xmax, ymax):
-    """Write piece `k`: segment `i`'s interval [t0, t1], ends clamped into the window."""
-    out_segments[k, 0] = clamp(ax, xmin, xmax)
-    out_segments[k, 1] = clamp(ay, ymin, ymax)
-    out_segments[k, 2] = clamp(bx, xmin, xmax)
-    out_segments[k, 3] = clamp(by, ymin, ymax)
-    out_source[k] = i
-    out_t[k, 0] = t0
-    out_t[k, 1] = t1
-
-
-@scalar
-def _rnsca_block(segments, first, last, xmin, ymin, xmax, ymax, n_fixed, max_depth, tol,
-                 auto_piece, exact, st, write, k, out_segments, out_source, out_t):
+def _rnsca_block(segments, first, last, window, options, st, write, k, out):
     """Clip segments ``first:last`` with RNSCA; return the next output row.
 
     Most segments are decided at level 0: accepted, rejected, or (short enough) a
     leaf. That case runs as a few simple branch-free loops over the block, one per
     step, on block-sized scratch columns that stay in cache: loops LLVM vectorizes.
     Segments that need splitting are marked and go through the depth-first
-    `rnsca_segment`. Results are then counted or written in input order.
+    `rnsca_segment`. Results are then counted or written (into `out`, from row `k`)
+    in input order.
     """
+    xmin, ymin, xmax, ymax = window
+    max_depth = options.max_depth
+    tol = options.tol
+    exact = options.exact
     size = last - first
     x0 = np.empty(size)
     y0 = np.empty(size)
@@ -317,27 +383,22 @@ def _rnsca_block(segments, first, last, xmin, ymin, xmax, ymax, n_fixed, max_dep
     for bit in (LEFT, RIGHT, BOTTOM, TOP):
         for j in range(size):
             u0[j], e0[j], u1[j], e1[j] = leaf_cut(
-                bit, flags[j], u0[j], e0[j], u1[j], e1[j],
-                x0[j], y0[j], x1[j], y1[j], xmin, ymin, xmax, ymax)
+                bit, flags[j], u0[j], e0[j], u1[j], e1[j], x0[j], y0[j], x1[j], y1[j], window)
     keep = np.empty(size, dtype=np.bool_)
     for j in range(size):
         # Each end once: a cut end is computed in double-double here, not per edge.
-        ax[j], ay[j] = end_point(x0[j], y0[j], x1[j], y1[j], e0[j], x0[j], y0[j],
-                                 xmin, ymin, xmax, ymax)
-        bx[j], by[j] = end_point(x0[j], y0[j], x1[j], y1[j], e1[j], x1[j], y1[j],
-                                 xmin, ymin, xmax, ymax)
+        ax[j], ay[j] = end_point(x0[j], y0[j], x1[j], y1[j], e0[j], x0[j], y0[j], window)
+        bx[j], by[j] = end_point(x0[j], y0[j], x1[j], y1[j], e1[j], x1[j], y1[j], window)
         keep[j] = (u0[j] <= u1[j]) & (not rejected[j]) & (exact | (not ambiguous[j])) & is_piece(
             (x0[j] == x1[j]) & (y0[j] == y1[j]), u0[j], u1[j], ax[j], ay[j], bx[j], by[j])
     # Deeper levels, for the few segments that need them.
-    stack_f = np.empty((STACK_CAPACITY, 6), dtype=np.float64)
-    stack_i = np.empty((STACK_CAPACITY, 3), dtype=np.int64)
+    stack = segment_stack()
     for j in range(size):
         if split[j]:
             i = first + j
             keep[j], u0[j], u1[j], ax[j], ay[j], bx[j], by[j] = rnsca_segment(
                 segments[i, 0], segments[i, 1], segments[i, 2], segments[i, 3],
-                xmin, ymin, xmax, ymax, n_fixed, max_depth, tol, auto_piece, exact,
-                st, stack_f, stack_i)
+                window, options, st, stack)
     # Compact the kept rows' indices without branches (the slot past the last kept row
     # is always inside the scratch), then copy those rows out.
     kept = np.empty(size, dtype=np.int64)
@@ -348,71 +409,63 @@ def _rnsca_block(segments, first, last, xmin, ymin, xmax, ymax, n_fixed, max_dep
     if write:
         for r in range(count):
             j = kept[r]
-            _write_piece(out_segments, out_source, out_t, k + r, first + j, u0[j], u1[j],
-                         ax[j], ay[j], bx[j], by[j], xmin, ymin, xmax, ymax)
+            _write_piece(out, k + r, first + j, u0[j], u1[j], ax[j], ay[j], bx[j], by[j],
+                         window)
     return k + count
 
 
 @scalar
-def _clip_block(blk, segments, xmin, ymin, xmax, ymax, method, n_fixed, max_depth, tol,
-                auto_piece, exact, block_size, write, block_start,
-                out_segments, out_source, out_t, block_count, counters):
-    """Count or write block `blk`'s pieces: the one body both drivers run."""
-    st = counters[blk]
+def _clip_block(blk, segments, window, options, block_size, write, out):
+    """Count or write block `blk`'s pieces into `out`: the one body both drivers run."""
+    st = out.counters[blk]
     first = blk * block_size
     last = min(first + block_size, segments.shape[0])
-    k = block_start[blk]
-    if method == RNSCA:
-        k = _rnsca_block(segments, first, last, xmin, ymin, xmax, ymax, n_fixed,
-                         max_depth, tol, auto_piece, exact, st, write, k,
-                         out_segments, out_source, out_t)
+    k = out.block_start[blk]
+    if options.method == RNSCA:
+        k = _rnsca_block(segments, first, last, window, options, st, write, k, out)
     else:
         for i in range(first, last):
             keep, t0, t1, ax, ay, bx, by = clip_one(
-                method, segments[i, 0], segments[i, 1], segments[i, 2], segments[i, 3],
-                xmin, ymin, xmax, ymax, max_depth, tol, exact, st)
+                segments[i, 0], segments[i, 1], segments[i, 2], segments[i, 3],
+                window, options, st)
             if keep:
                 if write:
-                    _write_piece(out_segments, out_source, out_t, k, i, t0, t1,
-                                 ax, ay, bx, by, xmin, ymin, xmax, ymax)
+                    _write_piece(out, k, i, t0, t1, ax, ay, bx, by, window)
                 k += 1
-    block_count[blk] = k - block_start[blk]
+    out.block_count[blk] = k - out.block_start[blk]
 
 
 @parallel
-def clip_segment_blocks(segments, xmin, ymin, xmax, ymax, method, n_fixed, max_depth, tol,
-                        auto_piece, exact, block_size, write, block_start,
-                        out_segments, out_source, out_t, block_count, counters):
+def clip_segment_blocks(segments, window, options, block_size, write, out):
     """Clip every segment, one prange iteration per block of `block_size` segments.
 
-    Run twice over one body: with ``write=False`` it fills `block_count` (pieces per
-    block) and `counters` (one row per block); with ``write=True`` it writes block
-    ``k``'s pieces from ``block_start[k]`` on. Each iteration writes only its own block's
-    slots, so the passes are race-free and always agree.
+    Run twice over one body: with ``write=False`` it fills ``out.block_count`` (pieces
+    per block) and ``out.counters`` (one row per block); with ``write=True`` it writes
+    block ``k``'s pieces from ``out.block_start[k]`` on. Each iteration writes only its
+    own block's slots, so the passes are race-free and always agree.
 
     Parameters
     ----------
-    segments : float64 (n, 4), C-contiguous, finite, with finite differences.
-    block_start : int64 (n_blocks,), exclusive prefix sum of the counts (write pass).
-    out_segments, out_source, out_t : float64 (m, 4), int64 (m,), float64 (m, 2).
-    block_count : int64 (n_blocks,); counters : int64 (n_blocks, counters.WIDTH).
+    segments : float64 (n, 4)
+        C-contiguous, finite, with finite differences.
+    window : Window
+    options : CoreOptions
+    block_size : int
+        Segments per block; ``out.block_count`` has one slot per block.
+    write : bool
+        The write pass (else the count pass).
+    out : SegmentOutput
     """
-    for blk in prange(block_count.shape[0]):
-        _clip_block(blk, segments, xmin, ymin, xmax, ymax, method, n_fixed, max_depth, tol,
-                    auto_piece, exact, block_size, write, block_start,
-                    out_segments, out_source, out_t, block_count, counters)
+    for blk in prange(out.block_count.shape[0]):
+        _clip_block(blk, segments, window, options, block_size, write, out)
 
 
 @scalar
-def clip_segment_blocks_serial(segments, xmin, ymin, xmax, ymax, method, n_fixed, max_depth,
-                               tol, auto_piece, exact, block_size, write, block_start,
-                               out_segments, out_source, out_t, block_count, counters):
+def clip_segment_blocks_serial(segments, window, options, block_size, write, out):
     """Do what `clip_segment_blocks` does on the calling thread (for small inputs).
 
     Waking the worker threads costs more than clipping a few thousand segments, and
     far more when the machine is busy.
     """
-    for blk in range(block_count.shape[0]):
-        _clip_block(blk, segments, xmin, ymin, xmax, ymax, method, n_fixed, max_depth, tol,
-                    auto_piece, exact, block_size, write, block_start,
-                    out_segments, out_source, out_t, block_count, counters)
+    for blk in range(out.block_count.shape[0]):
+        _clip_block(blk, segments, window, options, block_size, write, out)

@@ -1,5 +1,7 @@
 """Input checks that must be fast on 10^7 rows: one parallel pass, no temporaries."""
 
+import math
+
 import numba
 import numpy as np
 from numba import prange
@@ -113,3 +115,63 @@ def first_open_ring(coords, ring_offsets):
         if first_bad[blk] >= 0:
             return first_bad[blk]
     return -1
+
+
+# --- Bézier path layout -------------------------------------------------------------
+
+# Codes of `check_layout` (0: valid), and what each says is wrong.
+_NOT_FINITE = 1
+_UNUSED_ROW = 2
+_DISCONTINUOUS = 3
+LAYOUT_MESSAGES = {
+    _NOT_FINITE: "coordinates must be finite",
+    _UNUSED_ROW: "unused control points must repeat the end point",
+    _DISCONTINUOUS: ("segments must start where the previous one ends (the first at the "
+                     "subpath's start)"),
+}
+
+
+@scalar
+def _segment_problem(controls, degree, i, x, y):
+    """Return the problem code of segment i that should start at (x, y), or 0."""
+    for r in range(4):
+        if not (math.isfinite(controls[i, r, 0]) and math.isfinite(controls[i, r, 1])):
+            return _NOT_FINITE
+    for r in range(degree[i], 3):
+        if controls[i, r, 0] != controls[i, 3, 0] or controls[i, r, 1] != controls[i, 3, 1]:
+            return _UNUSED_ROW
+    if controls[i, 0, 0] != x or controls[i, 0, 1] != y:
+        return _DISCONTINUOUS
+    return 0
+
+
+@parallel
+def check_layout(controls, degree, subpath_offsets, start):
+    """Return ``(subpath, segment, code)`` of the first broken rule, or (-1, -1, 0).
+
+    Rules of `rnsca.arrays.PathArrays`: finite coordinates, unused control
+    rows equal to the end point, each segment starting at the previous one's end (the
+    first at its subpath's start). The caller has checked shapes, degrees and offsets.
+    One parallel pass over the subpaths, no temporaries.
+    """
+    k = start.shape[0]
+    problem = np.zeros(k, dtype=np.int64)
+    at = np.full(k, -1, dtype=np.int64)
+    for s in prange(k):
+        x = start[s, 0]
+        y = start[s, 1]
+        if not (math.isfinite(x) and math.isfinite(y)):
+            problem[s] = _NOT_FINITE
+            continue
+        for i in range(subpath_offsets[s], subpath_offsets[s + 1]):
+            code = _segment_problem(controls, degree, i, x, y)
+            if code != 0:
+                problem[s] = code
+                at[s] = i
+                break
+            x = controls[i, 3, 0]
+            y = controls[i, 3, 1]
+    for s in range(k):
+        if problem[s] != 0:
+            return s, at[s], problem[s]
+    return -1, -1, 0

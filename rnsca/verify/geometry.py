@@ -11,15 +11,19 @@ touches the window (where Shapely returns a point) is expected to give nothing.
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable
 from dataclasses import asdict, dataclass, replace
 from functools import cached_property
+from typing import Any, TypeAlias, cast
 
 import numpy as np
+import numpy.typing as npt
 import shapely
 from shapely.geometry import shape
 
-from rnsca.arrays import Ragged
+from rnsca.arrays import PathArrays, Ragged
 from rnsca.clip import SegmentClipResult, as_segments
+from rnsca.clip_geojson import GeoJSONClipResult
 from rnsca.clip_svg import CURVE_RELATIVE_TOLERANCE, Fill, PathClipResult
 from rnsca.errors import (
     InvalidGeometryError,
@@ -27,11 +31,11 @@ from rnsca.errors import (
     ParseError,
     UnsupportedGeometryError,
 )
-from rnsca.io.svgpath import PathArrays, parse_paths
+from rnsca.io.svgpath import parse_paths
 from rnsca.options import Boundary, Method, Mode
-from rnsca.ragged import RaggedClipResult, window_table
+from rnsca.ragged import RaggedClipResult, to_shapely
 from rnsca.verify.paths import paths_to_shapely
-from rnsca.window import Window
+from rnsca.window import Window, WindowTable
 
 __all__ = ["Verification", "verify", "approx_leaf_bound"]
 
@@ -46,6 +50,8 @@ _POINT, _LINESTRING, _LINEARRING, _POLYGON = (
     int(shapely.GeometryType.LINEARRING), int(shapely.GeometryType.POLYGON))
 _DIMENSION_OF_TYPE = {_POINT: 0, _LINESTRING: 1, _LINEARRING: 1, _POLYGON: 2}
 _COLLECT = {0: shapely.multipoints, 1: shapely.multilinestrings, 2: shapely.multipolygons}
+#: One window, or (geometries only) one per input.
+_Windows: TypeAlias = "Window | Iterable[float] | Iterable[Iterable[float]]"
 
 
 @dataclass(frozen=True, slots=True)
@@ -100,7 +106,7 @@ class Verification:
     valid: bool = True
     invalid_inputs: int = 0
 
-    def to_dict(self) -> dict:
+    def to_dict(self) -> dict[str, Any]:
         """Return the verification as plain JSON-ready values."""
         return asdict(self)
 
@@ -112,15 +118,19 @@ def approx_leaf_bound(lengths: np.ndarray, result: SegmentClipResult) -> np.ndar
     ``L / 2**d`` long (``L / N**d`` for a fixed N); a piece becomes a leaf at
     ``max_depth`` or once it is no longer than `tolerance`. Each end of an approx piece
     is therefore within one leaf of the true end, and a visible part shorter than two
-    leaves may vanish, so a segment's deviation is at most twice this bound.
+    leaves may vanish, so a segment's deviation is at most twice this bound. No leaf is
+    shorter than the parameter's resolution, ``eps * L`` (README, "Limits": a segment
+    ~1e15 windows long cannot be cut finer than about a tenth of the window).
     """
     options = result.options
     base = 2 if options.n == 0 else options.n
-    return np.maximum(options.tolerance, lengths / float(base) ** options.max_depth)
+    leaf = np.maximum(options.tolerance, lengths / float(base) ** options.max_depth)
+    return np.maximum(leaf, lengths * np.finfo(np.float64).eps)
 
 
-def verify(original, clipped, window, *, mode=None, approx_bound=None,
-           boundary="closed", fill=None, tolerance=None) -> Verification:
+def verify(original: Any, clipped: Any, window: _Windows, *, mode: Mode | str | None = None,
+           approx_bound: float | None = None, boundary: Boundary | str = "closed",
+           fill: Fill | str | None = None, tolerance: float | None = None) -> Verification:
     """Return how `clipped` compares with Shapely's intersection of `original` and `window`.
 
     Parameters
@@ -134,16 +144,20 @@ def verify(original, clipped, window, *, mode=None, approx_bound=None,
           nothing is left);
         - the ``(geometry_type, coords, offsets)`` triple (or a `Ragged`, or a Shapely
           array) for a `RaggedClipResult`, whose ``source`` aligns the two;
-        - a GeoJSON dict (Geometry, Feature or FeatureCollection) for a GeoJSON dict.
-          Feature collections are aligned feature by feature when `clipped` has as many
-          features, or has one for each input feature whose clip is not empty (features
-          left empty were dropped); otherwise the two collections are compared whole.
+        - for a `GeoJSONClipResult` (what `rnsca.clip_geojson` returns), the document
+          that was clipped, or None: the result holds the arrays read from it and their
+          clips, one output per input, so nothing is read again or matched by guess;
+        - a GeoJSON dict (Geometry, Feature or FeatureCollection) for a GeoJSON dict
+          made elsewhere. Feature collections are aligned feature by feature when
+          `clipped` has as many features; otherwise the two collections are compared
+          whole (pass the `GeoJSONClipResult` to compare feature by feature).
         - SVG path data (a str or a list of them) or a `PathArrays`, for a
           `PathClipResult` or path data. Both sides are flattened within `tolerance`
           and compared as lines (strokes) or as the regions their fill rule paints.
     clipped
         The clip: a `SegmentClipResult`, Shapely geometry or array, `RaggedClipResult`,
-        GeoJSON dict, `PathClipResult` or SVG path data. Z values are ignored.
+        `GeoJSONClipResult`, GeoJSON dict, `PathClipResult` or SVG path data. Z values
+        are ignored.
     window : Window, sequence of 4 floats, or array_like (G, 4)
         ``(xmin, ymin, xmax, ymax)``; for geometries also one window per input.
     mode : {"exact", "approx"}, optional
@@ -208,20 +222,23 @@ def verify(original, clipped, window, *, mode=None, approx_bound=None,
         approx_bound = _bound(approx_bound)
     if isinstance(clipped, PathClipResult) or (_is_path_data(clipped)
                                                 and _is_path_data(original)):
-        return _verify_paths(original, clipped, window, mode, approx_bound, fill, tolerance)
+        # Paths and segments are clipped to one window (`Window.of` refuses a table).
+        return _verify_paths(original, clipped, cast("Window | Iterable[float]", window), mode,
+                             approx_bound, fill, tolerance)
     if isinstance(clipped, SegmentClipResult):
         if boundary is not Boundary.CLOSED:
             raise InvalidOptionError("segments are always clipped with boundary='closed'")
-        return _verify_segments(original, clipped, window,
+        return _verify_segments(original, clipped, cast("Window | Iterable[float]", window),
                                 clipped.mode if mode is None else Mode(mode), approx_bound)
     mode = Mode.EXACT if mode is None else Mode(mode)
     if mode is Mode.APPROX and approx_bound is None:
         raise InvalidOptionError(
             "verify in approx mode needs approx_bound (the largest deviation to accept) "
             "for geometries")
-    if isinstance(clipped, dict):
-        originals, delivered, source, window = _geojson_pair(original, clipped, window,
-                                                             boundary)
+    if isinstance(clipped, GeoJSONClipResult):
+        originals, delivered, source = _geojson_result_pairs(clipped)
+    elif isinstance(clipped, dict):
+        originals, delivered, source, window = _geojson_pair(original, clipped, window)
     elif isinstance(clipped, RaggedClipResult):
         originals = _ragged_originals(original)
         delivered, source = _ragged_outputs(clipped, originals.shape[0])
@@ -230,20 +247,21 @@ def verify(original, clipped, window, *, mode=None, approx_bound=None,
         source = np.arange(delivered.shape[0])
     else:
         raise UnsupportedGeometryError(
-            "verify compares a SegmentClipResult, a RaggedClipResult, Shapely geometries or "
+            "verify compares a SegmentClipResult, a RaggedClipResult, a GeoJSONClipResult, "
+            "Shapely geometries or "
             f"a GeoJSON dict, got {type(clipped).__name__}")
     bounds = _window_bounds(window, originals.shape[0])
     return _verify_geometries(originals, delivered, source, bounds, mode, approx_bound,
                               boundary)
 
 
-def _is_path_data(value) -> bool:
+def _is_path_data(value: object) -> bool:
     return isinstance(value, (str, PathArrays)) or (
         isinstance(value, (list, tuple)) and len(value) > 0
         and all(isinstance(v, str) for v in value))
 
 
-def _as_paths(value, name: str) -> PathArrays:
+def _as_paths(value: object, name: str) -> PathArrays:
     if isinstance(value, PathArrays):
         return value
     if isinstance(value, str):
@@ -255,8 +273,9 @@ def _as_paths(value, name: str) -> PathArrays:
         f"with clipped paths, got {type(value).__name__}")
 
 
-def _verify_paths(original, clipped, window, mode, approx_bound, fill,
-                  tolerance) -> Verification:
+def _verify_paths(original: object, clipped: object, window: Window | Iterable[float],
+                  mode: Mode | str | None, approx_bound: float | None,
+                  fill: Fill | str | None, tolerance: float | None) -> Verification:
     """Return the verification of clipped paths (see `verify`)."""
     window = Window.of(window)
     flattened_by = 0.0  # a flatten-mode clip's lines are within its tolerance of the curves
@@ -278,11 +297,13 @@ def _verify_paths(original, clipped, window, mode, approx_bound, fill,
     flat = window.size * CURVE_RELATIVE_TOLERANCE if tolerance is None else _bound(tolerance)
     if not flat > 0:
         raise InvalidOptionError(f"tolerance must be > 0, got {tolerance!r}")
-    if mode is Mode.APPROX and approx_bound is None:
-        raise InvalidOptionError(
-            "verify in approx mode needs approx_bound (the largest deviation to accept)")
-    allowed = (approx_bound if mode is Mode.APPROX else
-               EXACT_RELATIVE_TOLERANCE * window.size) + 2.0 * flat + flattened_by
+    if mode is Mode.APPROX:
+        if approx_bound is None:
+            raise InvalidOptionError(
+                "verify in approx mode needs approx_bound (the largest deviation to accept)")
+        allowed = approx_bound + 2.0 * flat + flattened_by
+    else:
+        allowed = EXACT_RELATIVE_TOLERANCE * window.size + 2.0 * flat + flattened_by
     # The original is flattened 100 times finer: where a curve crosses an edge at a
     # shallow angle theta, its flattened crossing moves along the edge by up to
     # tolerance / sin(theta), which the allowance (2 * tolerance) would not cover.
@@ -294,7 +315,7 @@ def _verify_paths(original, clipped, window, mode, approx_bound, fill,
     return replace(result, mode=mode.value)
 
 
-def _bound(value) -> float:
+def _bound(value: float) -> float:
     try:
         bound = float(value)
     except (TypeError, ValueError):
@@ -324,7 +345,8 @@ def _unit_scale(window: Window, segments: np.ndarray) -> float:
     return math.ldexp(1.0, -exponent)
 
 
-def _verify_segments(original, clipped: SegmentClipResult, window, mode: Mode,
+def _verify_segments(original: npt.ArrayLike, clipped: SegmentClipResult,
+                     window: Window | Iterable[float], mode: Mode,
                      approx_bound: float | None) -> Verification:
     window = Window.of(window)
     segments = as_segments(original)
@@ -353,7 +375,9 @@ def _verify_segments(original, clipped: SegmentClipResult, window, mode: Mode,
     expected = shapely.intersection(lines, box)
     # Keep the input's dimension: a point where a segment touches the window is no piece.
     is_line = shapely.get_type_id(expected) == shapely.GeometryType.LINESTRING
-    expected = np.where(is_line & ~shapely.is_empty(expected), expected, None)
+    # (NumPy's stubs read a None `y` as the one-argument `where`, which returns indices.)
+    expected = cast(np.ndarray,
+                    np.where(is_line & ~shapely.is_empty(expected), expected, None))
     # Shapely returns nothing for a zero-length segment; inside the window it is kept.
     zero = (segments[:, 0] == segments[:, 2]) & (segments[:, 1] == segments[:, 3])
     inside_point = ((segments[:, 0] >= window.xmin) & (segments[:, 0] <= window.xmax)
@@ -408,7 +432,7 @@ def _verify_segments(original, clipped: SegmentClipResult, window, mode: Mode,
 
 # --- inputs of every form: original geometries, delivered output, input index of each ---------
 
-def _is_geometry_like(value) -> bool:
+def _is_geometry_like(value: object) -> bool:
     if isinstance(value, shapely.Geometry):
         return True
     if isinstance(value, (list, tuple)):
@@ -419,7 +443,7 @@ def _is_geometry_like(value) -> bool:
     return False
 
 
-def _geometry_array(value, name: str) -> np.ndarray:
+def _geometry_array(value: object, name: str) -> np.ndarray:
     """Return `value` (a geometry or a sequence of them) as a 1-d object array."""
     if isinstance(value, shapely.Geometry):
         return np.array([value], dtype=object)
@@ -433,7 +457,7 @@ def _geometry_array(value, name: str) -> np.ndarray:
     return array
 
 
-def _aligned_geometries(original, clipped) -> tuple[np.ndarray, np.ndarray]:
+def _aligned_geometries(original: object, clipped: object) -> tuple[np.ndarray, np.ndarray]:
     originals = _geometry_array(original, "original")
     outputs = _geometry_array([None] if clipped is None else clipped, "clipped")
     if originals.shape != outputs.shape:
@@ -443,7 +467,7 @@ def _aligned_geometries(original, clipped) -> tuple[np.ndarray, np.ndarray]:
     return originals, outputs
 
 
-def _ragged_originals(original) -> np.ndarray:
+def _ragged_originals(original: object) -> np.ndarray:
     if isinstance(original, Ragged):
         return original.to_shapely()
     if _is_geometry_like(original):
@@ -455,7 +479,7 @@ def _ragged_originals(original) -> np.ndarray:
         f"that was clipped, a Ragged or Shapely geometries, got {type(original).__name__}")
 
 
-def _ragged_outputs(result, count: int) -> tuple[np.ndarray, np.ndarray]:
+def _ragged_outputs(result: RaggedClipResult, count: int) -> tuple[np.ndarray, np.ndarray]:
     """Return the output geometries of a ragged result and the input index of each."""
     stats_count = getattr(result.stats, "geometries_in", count)
     source = np.asarray(result.source, dtype=np.int64)
@@ -466,7 +490,7 @@ def _ragged_outputs(result, count: int) -> tuple[np.ndarray, np.ndarray]:
     return geometries, source
 
 
-def _geojson_geometries(obj, name: str) -> tuple[np.ndarray, bool]:
+def _geojson_geometries(obj: object, name: str) -> tuple[np.ndarray, bool]:
     """Return the geometries of a GeoJSON dict and whether it is a FeatureCollection."""
     if not isinstance(obj, dict):
         raise UnsupportedGeometryError(
@@ -488,13 +512,13 @@ def _geojson_geometries(obj, name: str) -> tuple[np.ndarray, bool]:
     return array, kind == "FeatureCollection"
 
 
-def _feature_geometry(feature, path: str):
+def _feature_geometry(feature: object, path: str) -> shapely.Geometry | None:
     if not isinstance(feature, dict) or "geometry" not in feature:
         raise ParseError(f"{path} must be a Feature with a geometry member")
     return _shape(feature["geometry"], f"{path}.geometry")
 
 
-def _shape(geometry, path: str):
+def _shape(geometry: object, path: str) -> shapely.Geometry | None:
     if geometry is None:
         return None
     try:
@@ -504,24 +528,36 @@ def _shape(geometry, path: str):
         raise ParseError(f"{path} is not a GeoJSON geometry: {exc}") from None
 
 
-def _geojson_pair(original, clipped, window, boundary: Boundary):
+def _geojson_result_pairs(
+        result: GeoJSONClipResult) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Return the inputs and outputs a GeoJSON clip holds, kind after kind, and the sources.
+
+    Output ``i`` of each kind is the clip of input ``i`` (`GeoJSONClipResult.outputs`).
+    """
+    originals, delivered = [], []
+    for kind, clipped in result.outputs.items():
+        geometry_type, coords, offsets = result.inputs[kind]
+        originals.append(to_shapely(geometry_type, coords, offsets))
+        delivered.append(clipped.to_shapely())
+    if not originals:
+        nothing = np.empty(0, dtype=object)
+        return nothing, nothing, np.empty(0, dtype=np.int64)
+    originals_array = np.concatenate(originals)
+    return originals_array, np.concatenate(delivered), np.arange(originals_array.shape[0])
+
+
+def _geojson_pair(original: object, clipped: dict, window: _Windows,
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, _Windows]:
     """Return original and clipped geometries of two GeoJSON dicts, aligned, and the window.
 
-    Features are matched one to one when there are as many on both sides, else with the
-    originals whose clip is not empty (what ``keep_empty=False`` keeps); failing both,
-    the collections are compared whole, as one input in one window.
+    Features are matched one to one when there are as many on both sides; otherwise the
+    collections are compared whole, as one input in one window.
     """
-    originals, is_collection = _geojson_geometries(original, "original")
+    originals, _ = _geojson_geometries(original, "original")
     outputs, _ = _geojson_geometries(clipped, "clipped")
     if outputs.shape == originals.shape:
         return originals, outputs, np.arange(outputs.shape[0]), window
-    if is_collection:
-        kept = np.flatnonzero(
-            _clip_is_not_empty(originals, _window_bounds(window, originals.shape[0]),
-                               boundary))
-        if kept.shape == outputs.shape:
-            return originals, outputs, kept, window
-    if not isinstance(window, Window) and np.ndim(window) == 2:
+    if not isinstance(window, Window) and np.ndim(cast("npt.ArrayLike", window)) == 2:
         raise InvalidGeometryError(
             f"verify cannot match {outputs.shape[0]} clipped features with "
             f"{originals.shape[0]} originals, and one window per feature needs them matched")
@@ -530,15 +566,16 @@ def _geojson_pair(original, clipped, window, boundary: Boundary):
     return whole, outputs, np.zeros(outputs.shape[0], dtype=np.int64), window
 
 
-def _window_bounds(window, count: int) -> np.ndarray:
+def _window_bounds(window: _Windows, count: int) -> np.ndarray:
     """Return (count, 4) validated window bounds, one row per input."""
-    windows, index = window_table(window, count)
+    windows, index = WindowTable.of(window, count)
     return windows[index]
 
 
 # --- the comparison ---------------------------------------------------------------------------
 
-def _verify_geometries(originals, delivered, source, bounds, mode: Mode, approx_bound,
+def _verify_geometries(originals: np.ndarray, delivered: np.ndarray, source: np.ndarray,
+                       bounds: np.ndarray, mode: Mode, approx_bound: float | None,
                        boundary: Boundary) -> Verification:
     """Return the verification of `delivered` geometries, each the clip of input `source`."""
     originals = shapely.force_2d(originals)
@@ -582,6 +619,7 @@ def _verify_geometries(originals, delivered, source, bounds, mode: Mode, approx_
     ratio = _ratio(measures.get(int(dims.max())) if dims.size else None, scales,
                    int(dims.max()) if dims.size else 0)
     if mode is Mode.APPROX:
+        assert approx_bound is not None  # callers refuse approx mode without a bound
         allowed_deviation = approx_bound
         within = bool((deviation <= approx_bound)[input_valid].all())
     else:
@@ -606,7 +644,8 @@ def _check_finite(geometries: np.ndarray) -> None:
             f"{coords[row].tolist()}")
 
 
-def _unit_scales(bounds: np.ndarray, originals, delivered, source) -> np.ndarray:
+def _unit_scales(bounds: np.ndarray, originals: np.ndarray, delivered: np.ndarray,
+                 source: np.ndarray) -> np.ndarray:
     """Return, per input, the power of two by which Shapely should see it.
 
     The rule of `_unit_scale`: windows from 1 to 2**300 are left alone, smaller and
@@ -672,8 +711,8 @@ def _dimensions(parts: np.ndarray) -> np.ndarray:
     return dims
 
 
-def _expected_parts(parts, index, bounds: np.ndarray, dim: int, boundary: Boundary,
-                    valid: np.ndarray):
+def _expected_parts(parts: np.ndarray, index: np.ndarray, bounds: np.ndarray, dim: int,
+                    boundary: Boundary, valid: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Return Shapely's clip of input parts of one dimension, keeping that dimension.
 
     `valid` says per input whether its polygons are valid (`_polygons_valid`).
@@ -707,7 +746,7 @@ def _expected_parts(parts, index, bounds: np.ndarray, dim: int, boundary: Bounda
     return _grouped(pieces[keep], index[piece_index[keep]])
 
 
-def _collect(parts, index, count: int, dim: int) -> np.ndarray:
+def _collect(parts: np.ndarray, index: np.ndarray, count: int, dim: int) -> np.ndarray:
     """Return one multi-geometry per input (None where it has no part); `index` sorted."""
     out = np.full(count, None, dtype=object)
     if parts.size:
@@ -715,7 +754,7 @@ def _collect(parts, index, count: int, dim: int) -> np.ndarray:
     return out
 
 
-def _measure(parts, index, dim: int, count: int) -> np.ndarray:
+def _measure(parts: np.ndarray, index: np.ndarray, dim: int, count: int) -> np.ndarray:
     """Return per input the count (points), length (lines) or area (polygons) of its parts."""
     if dim == 0:
         weights = np.ones(parts.shape[0])
@@ -827,7 +866,7 @@ def _keys(group: np.ndarray, first: np.ndarray, second: np.ndarray) -> np.ndarra
     return rows.view("V24")
 
 
-def _interval_keys(group, one, other) -> np.ndarray:
+def _interval_keys(group: np.ndarray, one: np.ndarray, other: np.ndarray) -> np.ndarray:
     return _keys(group, np.minimum(one, other), np.maximum(one, other))
 
 
@@ -872,7 +911,8 @@ class _Linework:
         """Return a spatial index of the segments (built when a point is not a vertex)."""
         return shapely.STRtree(shapely.linestrings(np.stack([self.start, self.end], 1)))
 
-    def nearest(self, points: np.ndarray, owner: np.ndarray, radius: np.ndarray):
+    def nearest(self, points: np.ndarray, owner: np.ndarray,
+                radius: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Return, per point, the distance to its owner's segments, the nearest and where.
 
         Returns ``(distance, segment, along)``: the nearest point to ``points[i]`` lies on
@@ -946,7 +986,8 @@ class _Linework:
         return self.start[segment] + t * (self.end[segment] - self.start[segment])
 
 
-def _point_segment(points, start, end) -> tuple[np.ndarray, np.ndarray]:
+def _point_segment(points: np.ndarray, start: np.ndarray,
+                   end: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Return the distance from each point to its segment, and the nearest point's t."""
     direction = end - start
     squared = (direction ** 2).sum(axis=1)
@@ -957,7 +998,8 @@ def _point_segment(points, start, end) -> tuple[np.ndarray, np.ndarray]:
     return np.hypot(*(points - nearest).T), t
 
 
-def _count_outside(parts_and_piece, source: np.ndarray, bounds: np.ndarray,
+def _count_outside(parts_and_piece: tuple[np.ndarray, np.ndarray], source: np.ndarray,
+                   bounds: np.ndarray,
                    margins: np.ndarray) -> int:
     """Return how many output vertices lie outside their window by more than the margin."""
     parts, piece = parts_and_piece
@@ -981,7 +1023,8 @@ def _count_outside(parts_and_piece, source: np.ndarray, bounds: np.ndarray,
     return int((~inside).sum())
 
 
-def _ratio(measures, scales: np.ndarray, dim: int) -> float:
+def _ratio(measures: tuple[np.ndarray, np.ndarray] | None, scales: np.ndarray,
+           dim: int) -> float:
     """Return the total of our measure over Shapely's, in common units."""
     if measures is None:
         return 1.0
@@ -993,21 +1036,3 @@ def _ratio(measures, scales: np.ndarray, dim: int) -> float:
     if total_expected == 0.0:
         return 1.0 if total_ours == 0.0 else float("inf")
     return total_ours / total_expected
-
-
-def _clip_is_not_empty(originals, bounds: np.ndarray, boundary: Boundary) -> np.ndarray:
-    """Return, per input, whether Shapely's clip keeps something of the input's dimension."""
-    originals = shapely.force_2d(originals)
-    _check_finite(originals)
-    count = originals.shape[0]
-    scales = _unit_scales(bounds, originals, np.empty(0, dtype=object),
-                          np.empty(0, dtype=np.int64))
-    parts, index = _atomic_parts(_scaled(originals, scales))
-    dims = _dimensions(parts)
-    valid = _polygons_valid(parts, index, count)
-    kept = np.zeros(count, dtype=bool)
-    for dim in (0, 1, 2):
-        _, expected_index = _expected_parts(parts[dims == dim], index[dims == dim],
-                                            bounds * scales[:, None], dim, boundary, valid)
-        kept[expected_index] = True
-    return kept

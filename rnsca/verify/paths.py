@@ -11,8 +11,8 @@ from __future__ import annotations
 import numpy as np
 import shapely
 
+from rnsca.arrays import PathArrays
 from rnsca.clip_svg import Fill, flatten_paths
-from rnsca.io.svgpath import PathArrays
 
 __all__ = ["paths_to_shapely", "filled_region", "winding_numbers"]
 
@@ -47,7 +47,7 @@ def paths_to_shapely(paths: PathArrays, tolerance: float, fill: Fill | None) -> 
     return out
 
 
-def filled_region(rings: list[np.ndarray], fill: Fill):
+def filled_region(rings: list[np.ndarray], fill: Fill) -> shapely.MultiPolygon:
     """Return the region that closed polylines `rings` paint under the fill rule.
 
     The outlines are noded and polygonized; each face is kept when the winding number

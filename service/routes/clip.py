@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import Annotated
+from typing import Annotated, Any
 
 from fastapi import APIRouter, Query, Request
 from pydantic import BaseModel, ConfigDict, Field, FiniteFloat
@@ -13,6 +13,7 @@ from rnsca.window import Window
 from service import convert
 from service.deps import MetricsDep, RunnerDep, SettingsDep
 from service.errors import UnsupportedMediaTypeError
+from service.metrics import Metrics
 from service.schemas import (
     BackendName,
     ClipGeoJSONRequest,
@@ -29,14 +30,14 @@ __all__ = ["router"]
 
 router = APIRouter(prefix="/v1/clip", tags=["clip"])
 
-_PROBLEM = {"model": Problem, "content": {"application/problem+json": {}}}
-_ERRORS = {400: {**_PROBLEM, "description": "Malformed JSON"},
-           413: {**_PROBLEM, "description": "Body or vertex count over the limit"},
-           415: {**_PROBLEM, "description": "Unsupported Content-Type"},
-           422: {**_PROBLEM, "description": "Invalid window, options, geometry or "
-                                            "coordinates; work over budget; backend not "
-                                            "available"},
-           503: {**_PROBLEM, "description": "Request time limit exceeded (server busy)"}}
+_PROBLEM: dict[str, Any] = {"model": Problem, "content": {"application/problem+json": {}}}
+_ERRORS: dict[int | str, dict[str, Any]] = {
+    400: {**_PROBLEM, "description": "Malformed JSON"},
+    413: {**_PROBLEM, "description": "Body or vertex count over the limit"},
+    415: {**_PROBLEM, "description": "Unsupported Content-Type"},
+    422: {**_PROBLEM, "description": "Invalid window, options, geometry or coordinates; work "
+                                     "over budget; backend not available"},
+    503: {**_PROBLEM, "description": "Request time limit exceeded (server busy)"}}
 
 
 def _json_body(model: type[BaseModel], binary: bool = False) -> dict:
@@ -62,7 +63,7 @@ async def _read_json(request: Request) -> bytes:
     return await request.body()
 
 
-def _respond(outcome: convert.Outcome, metrics) -> Response:
+def _respond(outcome: convert.Outcome, metrics: Metrics) -> Response:
     if outcome.stats is not None:
         metrics.observe_clip(outcome.stats)
     return Response(outcome.content, media_type=outcome.media_type, headers=outcome.headers)
@@ -146,7 +147,8 @@ async def clip_segments(request: Request, query: Annotated[SegmentQuery, Query()
 
 def _query_window(query: SegmentQuery) -> Window:
     bounds = (query.xmin, query.ymin, query.xmax, query.ymax)
-    if any(b is None for b in bounds):
+    given = [b for b in bounds if b is not None]
+    if len(given) < len(bounds):
         from fastapi.exceptions import RequestValidationError
 
         missing = [name for name, b in zip(("xmin", "ymin", "xmax", "ymax"), bounds,
@@ -154,4 +156,4 @@ def _query_window(query: SegmentQuery) -> Window:
         raise RequestValidationError([{
             "loc": ("query", name), "msg": "Field required (the window of a binary request)",
             "type": "missing"} for name in missing])
-    return Window(*bounds)
+    return Window(*given)

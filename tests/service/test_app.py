@@ -140,3 +140,27 @@ def test_runner_serializes_calls_unless_the_layer_is_thread_safe(monkeypatch, la
     assert runner.serialized  # until the layer is known
     runner.settle()
     assert runner.serialized is serialized and runner.threading_layer == layer
+
+
+def test_svg_path_text_is_read_once_and_verified_from_the_arrays(monkeypatch):
+    # Tokenising is the first pass over the text (`svgparse.count_tokens`): a request
+    # that clips, writes and verifies runs it once, and verification parses nothing.
+    from rnsca.io import svgparse
+
+    calls = []
+    count_tokens = svgparse.count_tokens
+
+    def counting(*args):
+        calls.append(1)
+        return count_tokens(*args)
+
+    monkeypatch.setattr(svgparse, "count_tokens", counting)
+    with make_client(warm_up=False) as client:
+        r = client.post("/v1/clip/svg", json={
+            "window": [0, 0, 10, 10], "verify": True,
+            "paths": ["M -5 5 C 0 15 10 -5 15 5", "M -5 -5 H 5 V 5 H -5 Z"],
+            "options": {"fill": "nonzero"}})
+    assert r.status_code == 200, r.text
+    body = r.json()
+    assert body["verification"]["passed"] is True and len(body["paths"]) == 2
+    assert len(calls) == 1

@@ -291,9 +291,10 @@ def test_clip_exits_1_when_verification_fails(runner, source, monkeypatch):
     clip_geojson = rnsca.clip_geojson
 
     def overshooting(document, window, **options):
-        clipped, stats = clip_geojson(document, window, **options)
-        clipped["features"][0]["geometry"]["coordinates"][0][0] = [-1.0, 1.0]
-        return clipped, stats
+        result = clip_geojson(document, window, **options)
+        # The arrays verification reads; the CLI's document (arrays=True) holds views.
+        result.outputs["lines"].coords[0, :2] = [-1.0, 1.0]
+        return result
 
     monkeypatch.setattr(rnsca, "clip_geojson", overshooting)
     result = run(runner, str(source), *WINDOW, "--verify")
@@ -311,7 +312,10 @@ def test_no_arguments_lists_the_clip_command(runner):
 
 
 # --- a real process --------------------------------------------------------------------------
+# End to end through a new interpreter (seconds each, mostly importing and loading the
+# kernels): slow, so `make check` leaves them to `make test`.
 
+@pytest.mark.slow
 def test_clip_as_a_process_pipes_stdin_to_stdout():
     done = subprocess.run(
         [sys.executable, "-m", "rnsca.cli", "clip", "--window", "0,0,10,10"],
@@ -321,6 +325,7 @@ def test_clip_as_a_process_pipes_stdin_to_stdout():
     assert json.loads(done.stderr)["stats"]["geometries_out"] == 2
 
 
+@pytest.mark.slow
 def test_clip_as_a_process_fails_in_one_line_without_a_traceback():
     done = subprocess.run(
         [sys.executable, "-m", "rnsca.cli", "clip", "--window", "0,0,10,10"],

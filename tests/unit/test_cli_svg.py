@@ -182,7 +182,9 @@ def test_clip_refuses_entity_declarations_and_exits_1(runner):
 
 
 # --- a real process --------------------------------------------------------------------------
+# End to end through a new interpreter: slow, so `make check` leaves it to `make test`.
 
+@pytest.mark.slow
 def test_clip_as_a_process_pipes_svg_from_stdin_to_stdout():
     done = subprocess.run(
         [sys.executable, "-m", "rnsca.cli", "clip", "--window", "0,0,10,10",

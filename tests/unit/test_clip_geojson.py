@@ -366,3 +366,50 @@ def test_bad_options_are_refused_even_for_an_empty_document():
     with pytest.raises(InvalidOptionError):
         clip_geojson({"type": "Polygon", "coordinates": [[[0, 0], [1, 0], [1, 1], [0, 0]]]},
                      (0, 0, 1, 1), mode="approx")
+
+
+# --- where each output came from -------------------------------------------------------------
+
+def test_result_unpacks_as_document_and_stats_and_names_each_features_source():
+    far = {"type": "Point", "coordinates": [0.0, 0.0]}
+    inside = {"type": "Point", "coordinates": [50.0, 50.0]}
+    doc = collection(feature(far, id="a"), feature(None, id="b"), feature(inside, id="c"),
+                     feature(far, id="d"), feature(inside, id="e"))
+    result = clip_geojson(doc, WINDOW)
+    out, stats = result
+    assert out is result.document and stats is result.stats and result[0] is out
+    assert [f["id"] for f in out["features"]] == ["c", "e"]
+    assert result.feature_source.tolist() == [2, 4]
+    kept = clip_geojson(doc, WINDOW, keep_empty=True)
+    assert kept.feature_source.tolist() == [0, 1, 2, 3, 4]
+    assert clip_geojson(feature(far), WINDOW).feature_source.tolist() == [0]
+
+
+def test_result_holds_each_kinds_inputs_and_their_clips_one_for_one():
+    doc = collection(feature({"type": "LineString", "coordinates": [[0, 50], [100, 50]]}),
+                     feature({"type": "Point", "coordinates": [0.0, 0.0]}),
+                     feature({"type": "LineString", "coordinates": [[0, 0], [1, 1]]}))
+    result = clip_geojson(doc, WINDOW)
+    assert set(result.inputs) == set(result.outputs) == {"points", "lines"}
+    lines = result.outputs["lines"]
+    assert lines.source.tolist() == [0, 1]  # one output per input, empty ones kept
+    expected = shapely.intersection(shapely.from_ragged_array(*result.inputs["lines"]), BOX)
+    got = lines.to_shapely()
+    assert shapely.equals(got[0], expected[0]) and got[1].is_empty
+
+
+def test_verify_reads_the_results_arrays_not_the_documents():
+    import rnsca
+
+    doc = collection(*(feature({"type": "LineString", "coordinates": [[0, y], [100, y]]})
+                       for y in (0.0, 40.0, 50.0)))
+    result = clip_geojson(doc, WINDOW)
+    assert len(result.document["features"]) == 2  # the first is outside, dropped
+    assert rnsca.verify(None, result, WINDOW).passed
+    # A wrong document changes nothing: verification never reads it ...
+    result.document["features"][0]["geometry"] = None
+    assert rnsca.verify(doc, result, WINDOW).passed
+    # ... and wrong arrays are caught, in the geometry they belong to.
+    result.outputs["lines"].coords[0] = [0.0, 40.0]
+    v = rnsca.verify(None, result, WINDOW)
+    assert not v.passed and v.false_positives == 1

@@ -30,8 +30,11 @@ float64, so the output is the float64 output exactly (only the device's share di
 
 Devices and programs: the device is picked once per backend (`select_device`); each
 device gets one context and one profiling queue per process, and ``clip.cl`` is built
-once per (context, precision) and kept (`_Device.program`). pyopencl and the OpenCL
-driver also cache built binaries on disk, so a second process builds fast.
+once per (context, build options) and kept (`_Device.program`). The build options give
+it the precision, the work-group size and every constant it shares with the Numba
+kernels (`constant_options`: ``rnsca.constants``, which ``clip.cl`` never defines
+itself). pyopencl and the OpenCL driver also cache built binaries on disk (keyed on
+the source and the options), so a second process builds fast.
 
 Precision: float64 where the device has ``cl_khr_fp64``, else float32 (or float32 when
 asked for, on any device). The float32 path clips the input rounded to float32; see
@@ -43,8 +46,6 @@ it, and turns a failure into `BackendUnavailableError`.
 
 from __future__ import annotations
 
-import os
-import sys
 import threading
 import warnings
 from dataclasses import dataclass, field
@@ -54,29 +55,36 @@ import numpy as np
 import pyopencl as cl
 import pyopencl.array as cl_array
 
-from rnsca.arrays import exclusive_sum
-from rnsca.backends.base import METHOD_ID
-from rnsca.backends.numba_cpu import polygon_passes
+from rnsca import constants
+from rnsca.arrays import PathArrays, Ragged, exclusive_sum, group_offsets
+from rnsca.backends.base import (
+    METHOD_ID,
+    Capabilities,
+    GeometryPieces,
+    PathPieces,
+    Polylines,
+    SegmentPieces,
+)
+from rnsca.backends.numba_cpu import (
+    path_passes,
+    polygon_geometry,
+    polygon_passes,
+    polyline_layout,
+    warm_up_geometry,
+    warm_up_paths,
+)
 from rnsca.errors import BackendUnavailableError, InvalidGeometryError, InvalidWindowError
 from rnsca.kernels import bezier as BZ
 from rnsca.kernels import counters as C
 from rnsca.kernels import polygons as PG
 from rnsca.kernels import polylines as PL
 from rnsca.kernels.outcode import BOTTOM, LEFT, RIGHT, TOP
-from rnsca.options import Backend, Method, Mode, Precision, SegmentOptions
+from rnsca.options import Backend, Curves, Method, Mode, PathOptions, Precision, SegmentOptions
 from rnsca.stats import ClipStats, DeviceStats
-from rnsca.window import Window
+from rnsca.window import Window, WindowTable
 
-# OpenCL drivers that the development install registered in this environment (the
-# Makefile writes .venv/opencl-vendors: Intel's CPU runtime, for CPUs PoCL cannot build
-# for). The ICD loader reads OCL_ICD_VENDORS at its first platform query, not at import;
-# a value the user set is kept.
-_VENDORS = os.path.join(sys.prefix, "opencl-vendors")
-if os.path.isdir(_VENDORS):
-    os.environ.setdefault("OCL_ICD_VENDORS", _VENDORS)
-
-__all__ = ["OpenCLBackend", "list_devices", "select_device", "FLOAT32_RELATIVE_BOUND",
-           "LOCAL_SIZE"]
+__all__ = ["OpenCLBackend", "list_devices", "select_device", "constant_options",
+           "FLOAT32_RELATIVE_BOUND", "LOCAL_SIZE"]
 
 #: Work-items per group: the stats are summed per group in local memory.
 LOCAL_SIZE = 64
@@ -86,10 +94,45 @@ LOCAL_SIZE = 64
 FLOAT32_RELATIVE_BOUND = 16 * 2.0 ** -24
 
 # Counters the segment kernel fills: the head of the row (rnsca.kernels.counters).
-_SEGMENT_COUNTERS = C.LEVELS + C.N_LEVELS
+_SEGMENT_COUNTERS = constants.SEGMENT_COUNTERS
 _F32 = np.finfo(np.float32)
 # `classify_curves`'s `flatten` as clip.cl numbers it (FLATTEN_*).
-_FLATTEN = {"none": 0, "accepted": 1, "all": 2}
+_FLATTEN = {"none": constants.FLATTEN_NONE, "accepted": constants.FLATTEN_ACCEPTED_CURVES,
+            "all": constants.FLATTEN_ALL}
+
+
+def constant_options() -> list[str]:
+    """Return the build options that give ``clip.cl`` the constants it shares with Numba.
+
+    One ``-DNAME=value`` per name in `rnsca.constants.__all__`, in that order; a
+    negative value is parenthesized, as a ``#define`` would write it.
+
+    Raises
+    ------
+    TypeError
+        If one of them is not an int (``clip.cl`` takes only ints from there: a float
+        literal would be a double, which a float32 device may not have).
+    """
+    options = []
+    for name in constants.__all__:
+        value = getattr(constants, name)
+        if type(value) is not int:
+            raise TypeError(f"rnsca.constants.{name} = {value!r} is not an int")
+        options.append(f"-D{name}={value}" if value >= 0 else f"-D{name}=({value})")
+    return options
+
+
+def _build_options(double: bool) -> tuple[str, ...]:
+    """Return the options ``clip.cl`` is built with for float64 (`double`) or float32."""
+    options = (f"-DREAL_IS_DOUBLE={int(double)}", f"-DLOCAL_SIZE={LOCAL_SIZE}",
+               *constant_options())
+    if not double:  # OpenCL's float32 division may be 2.5 ulp otherwise
+        options += ("-cl-fp32-correctly-rounded-divide-sqrt",)
+    return options
+
+
+# Per precision, made once: `_Device.program` looks them up on every call.
+_BUILD_OPTIONS = {double: _build_options(double) for double in (False, True)}
 
 
 def list_devices() -> list[dict]:
@@ -179,22 +222,23 @@ class _Device:
     # device: one call at a time sets and enqueues them.
     call_lock: threading.Lock = field(default_factory=threading.Lock)
 
-    def program(self, double: bool) -> cl.Program:
-        """Return ``clip.cl`` built for float64 (`double`) or float32, built once."""
+    def program(self, double: bool) -> _Kernels:
+        """Return the kernels of ``clip.cl`` built for float64 (`double`) or float32.
+
+        Built once per set of build options (`_build_options`), the key they are kept by.
+        """
+        options = _BUILD_OPTIONS[double]
         with self.lock:
-            if double not in self.programs:
+            if options not in self.programs:
                 source = resources.files(__package__).joinpath("clip.cl").read_text()
-                options = [f"-DREAL_IS_DOUBLE={int(double)}", f"-DLOCAL_SIZE={LOCAL_SIZE}"]
-                if not double:  # OpenCL's float32 division may be 2.5 ulp otherwise
-                    options.append("-cl-fp32-correctly-rounded-divide-sqrt")
-                program = _build_program(self.context, self.name, source, options)
+                program = _build_program(self.context, self.name, source, list(options))
                 # Kernel objects hold their arguments: one per program, used under `call_lock`.
-                self.programs[double] = _Kernels(
+                self.programs[options] = _Kernels(
                     program.clip_segments, program.write_pieces, program.chunk_boxes,
                     program.classify_runs, program.clip_chunk_segments,
                     program.classify_bezier, program.flatten_bezier,
                     program.classify_bezier_runs)
-            return self.programs[double]
+            return self.programs[options]
 
 
 def _build_program(context: cl.Context, name: str, source: str, options: list) -> cl.Program:
@@ -325,12 +369,19 @@ class OpenCLBackend:
         self._device.program(self.precision is Precision.FLOAT64)  # a build error shows now
 
     @property
+    def capabilities(self) -> Capabilities:
+        """Return what this backend runs: every operation, both modes, on its device."""
+        return Capabilities(Backend.OPENCL, precision=self.precision,
+                            devices=(self.device["id"],))
+
+    @property
     def real(self) -> type:
         """Return the NumPy dtype of device coordinates."""
         return np.float64 if self.precision is Precision.FLOAT64 else np.float32
 
-    def clip_segments(self, segments: np.ndarray, window: Window, options: SegmentOptions):
-        """Return ``(pieces, source, t, stats)``; see `ClipBackend.clip_segments`.
+    def clip_segments(self, segments: np.ndarray, window: Window,
+                      options: SegmentOptions) -> SegmentPieces:
+        """Return the visible piece of each segment; see `ClipBackend.clip_segments`.
 
         ``stats.device`` holds the device, the precision, and the transfers and times.
 
@@ -392,14 +443,13 @@ class OpenCLBackend:
         full = np.zeros((groups, C.WIDTH), dtype=np.int64)
         full[:, :_SEGMENT_COUNTERS] = rows
         stats = ClipStats.from_counters(full, n, m, device=device_stats)
-        return out_pieces, out_source, out_t.astype(np.float64), stats
+        return SegmentPieces(out_pieces, out_source, out_t.astype(np.float64), stats)
 
-    def clip_lines(self, xy, z, part_offsets, part_window, windows, options: SegmentOptions,
-                   drop_edge_runs: bool):
-        """Return ``(xy, z, chain_offsets, chains_per_part, counters, device_stats)``.
+    def clip_lines(self, lines: Ragged, windows: WindowTable, options: SegmentOptions,
+                   drop_edge_runs: bool) -> GeometryPieces:
+        """Return the chains of each line geometry; see `ClipBackend.clip_lines`.
 
-        See `rnsca.backends.numba_cpu.NumbaBackend.clip_lines` (the same arrays, and the
-        `DeviceStats` too). On the device (`_prune`): the chunk boxes, RNSCA over runs of
+        On the device (`_prune`): the chunk boxes, RNSCA over runs of
         chunks (one work-item per part) and the clip of the segments of undecided chunks
         (one work-item per chunk); on the host, with the Numba kernel that does it for
         the Numba backend, the chains: accepted chunks copied, clipped pieces joined.
@@ -409,23 +459,36 @@ class OpenCLBackend:
         InvalidGeometryError, InvalidWindowError
             In float32, for coordinates beyond its range or a window that collapses.
         """
-        tables, counters, device_stats = self._prune(xy, part_offsets, part_window, windows,
-                                                     options, drop_edge_runs, None)
-        out = _assemble_lines(xy, z, part_offsets, part_window, windows, drop_edge_runs,
-                              *tables)
-        return (*out, counters, device_stats)
+        lines.check_finite()  # the device kernels take finite coordinates
+        xy, z = lines.split_z()
+        part_offsets, geometry_parts = lines.item_offsets()
+        part_geometry = np.repeat(np.arange(lines.count, dtype=np.int64),
+                                  np.diff(geometry_parts))
+        part_window = windows.of_items(part_geometry)
+        tables, counters, device_stats = self._prune(xy, part_offsets, part_window,
+                                                     windows.bounds, options, drop_edge_runs,
+                                                     None)
+        out_xy, out_z, chain_offsets, chains_per_part = _assemble_lines(
+            xy, z, part_offsets, part_window, windows.bounds, drop_edge_runs, *tables)
+        return GeometryPieces(out_xy, out_z, (
+            chain_offsets, group_offsets(chains_per_part, geometry_parts)), counters,
+            device_stats)
 
-    def clip_polygons(self, xy, z, ring_offsets, polygon_offsets, polygon_window, windows,
-                      options: SegmentOptions):
-        """Return the Numba backend's `clip_polygons` arrays and counters, and `DeviceStats`.
+    def clip_polygons(self, polygons: Ragged, windows: WindowTable,
+                      options: SegmentOptions) -> GeometryPieces:
+        """Return the output polygons of each geometry; see `ClipBackend.clip_polygons`.
 
-        ``(xy, z, ring_offsets, rings_per_output, outputs_per_polygon, counters,
-        device_stats)``. The shells' boxes classify the polygons on the host
+        The shells' boxes classify the polygons on the host
         (`polygons.classify_polygons`); the rings of the ambiguous ones are pruned and
         their undecided segments clipped on the device (`_prune`, rings broken along the
         window's edges); the rings are closed along the window on the host by the Numba
         polygon kernel, from the device's decisions and pieces.
         """
+        xy, z = polygons.split_z()
+        ring_offsets = polygons.offsets[0]
+        polygon_offsets, geometry_polygons = polygons.item_offsets()
+        polygon_window = windows.of_items(polygon_geometry(geometry_polygons))
+        windows = windows.bounds
         n_polygons = polygon_offsets.shape[0] - 1
         polygon_class = np.empty(n_polygons, dtype=np.int8)
         PG.classify_polygons(xy, ring_offsets, polygon_offsets, polygon_window, windows,
@@ -436,10 +499,13 @@ class OpenCLBackend:
         active = (polygon_class[ring_polygon] == PG.AMBIGUOUS).astype(np.uint8)
         tables, device_counters, device_stats = self._prune(
             xy, ring_offsets, ring_window, windows, options, True, active)
-        *clipped, counters = polygon_passes(xy, z, ring_offsets, polygon_offsets,
-                                            polygon_window, windows, options, polygon_class,
-                                            (True, *tables))
-        return (*clipped, np.concatenate([counters, device_counters]), device_stats)
+        out_xy, out_z, out_rings, rings_per_output, outputs_per_polygon, counters = \
+            polygon_passes(xy, z, ring_offsets, polygon_offsets, polygon_window, windows,
+                           options, polygon_class, (True, *tables))
+        return GeometryPieces(out_xy, out_z, (
+            out_rings, exclusive_sum(rings_per_output),
+            group_offsets(outputs_per_polygon, geometry_polygons)),
+            np.concatenate([counters, device_counters]), device_stats)
 
     def _prune(self, xy, part_offsets, part_window, windows, options: SegmentOptions,
                drop_edge_runs: bool, active):
@@ -530,6 +596,48 @@ class OpenCLBackend:
                                 segmented_rows)
         tables = (chunk_start[:-1].copy(), chunk_decision, piece_start, kept, pieces)
         return tables, counters, device_stats
+
+    def clip_paths(self, paths: PathArrays, window: Window,
+                   options: PathOptions) -> PathPieces:
+        """Return the paths clipped to the window; see `ClipBackend.clip_paths`.
+
+        The device classifies every segment by its control points, and runs of segments
+        by their box, and flattens the curves accepted whole (flatten mode); the
+        ambiguous segments and the output are done on the host by the Numba kernel, from
+        those decisions: the output is the Numba backend's.
+        """
+        segment_class, run_decisions, point_start, points, device_stats = \
+            self.classify_curves(paths.controls, paths.degree, window, options.tolerance,
+                                 "accepted" if options.curves is Curves.FLATTEN else "none",
+                                 paths.subpath_offsets)
+        return path_passes(paths, window, options, (run_decisions, device_stats, (
+            True, segment_class, point_start, points)))
+
+    def flatten_paths(self, paths: PathArrays, tolerance: float, close: bool) -> Polylines:
+        """Return the paths as polylines within `tolerance`; see `ClipBackend.flatten_paths`.
+
+        The device computes every segment's points (a float32 device: the host computes
+        them in float64, the same points); the host puts them after each subpath's start.
+        """
+        sub = paths.subpath_offsets
+        _, _, segment_points, points, _ = self.classify_curves(
+            paths.controls, paths.degree, None, float(tolerance), "all")
+        steps = np.diff(segment_points)
+        lines, closes, line_offsets = polyline_layout(paths, segment_points, close)
+        coords = np.empty((int(line_offsets[-1]), 2))
+        # The device's points are the segments' in order; each line adds its start
+        # point before them (and its start again after them where it closes).
+        has_line = np.diff(sub) > 0
+        segment_subpath = np.repeat(np.arange(sub.shape[0] - 1), np.diff(sub))
+        line_of_subpath = np.cumsum(has_line) - 1
+        shift = (line_offsets[:-1][line_of_subpath[segment_subpath]] + 1
+                 - segment_points[sub[:-1]][segment_subpath])
+        coords[np.repeat(shift, steps) + np.arange(points.shape[0])] = points
+        coords[line_offsets[:-1]] = paths.start[lines]
+        closing = closes[lines]
+        coords[line_offsets[1:][closing] - 1] = paths.start[lines[closing]]
+        line_path = np.repeat(np.arange(len(paths), dtype=np.int64), np.diff(paths.path_offsets))
+        return Polylines(coords, line_offsets, line_path[lines])
 
     def classify_curves(self, controls: np.ndarray, degree: np.ndarray, window: Window | None,
                         tolerance: float, flatten: str, subpath_offsets: np.ndarray | None = None):
@@ -665,28 +773,10 @@ class OpenCLBackend:
         segments = np.array([[-1.0, 0.5, 2.0, 0.5], [0.2, 0.2, 0.8, 0.8]])
         for method in Method:
             self.clip_segments(segments, window, SegmentOptions.resolve(window, method=method))
-        ring = np.array([[-1.0, 0.25], [2.0, 0.25], [2.0, 0.75], [-1.0, 0.75], [-1.0, 0.25]])
-        offsets = np.array([0, 5], dtype=np.int64)
-        windows = np.array([[0.0, 0.0, 1.0, 1.0]])
-        index = np.zeros(1, dtype=np.int64)
-        options = SegmentOptions.resolve(window)
-        for z in (np.empty(0), np.zeros(5)):
-            for drop in (False, True):
-                self.clip_lines(ring, z, offsets, index, windows, options, drop)
-            self.clip_polygons(ring, z, offsets, np.array([0, 1], dtype=np.int64), index,
-                               windows, options)
-        from rnsca.clip_svg import clip_svg
-        from rnsca.io.svgpath import parse_paths
-
-        d = "M-1 0.5 C0 2 1 2 2 0.5 L 0.5 0.5 Z"
-        paths = parse_paths([d])
-        for flatten in ("none", "accepted", "all"):
-            self.classify_curves(paths.controls, paths.degree, window, 0.01, flatten,
-                                 paths.subpath_offsets)
-        # The host kernel reading the device's decisions is the Numba backend's
-        # (the same types): compiled or loaded here.
-        for curves in ("preserve", "flatten"):
-            clip_svg(d, window.bounds, curves=curves, backend="numba")
+        warm_up_geometry(self)
+        # Curves: every flatten choice of the device, and the host kernel that reads
+        # the device's decisions (compiled or loaded here).
+        warm_up_paths(self)
 
 
 def _data(array):

@@ -4,6 +4,11 @@
  * One source for every device and precision, parameterised by build options:
  *   -DREAL_IS_DOUBLE=1   float64 (needs cl_khr_fp64); 0: float32
  *   -DLOCAL_SIZE=64      work-items per group (the stats are reduced per group)
+ *   -DLEFT=1 ...         every constant this file shares with the Numba kernels (outcode
+ *                        bits, edge and method ids, the counter row, N's bounds, stack
+ *                        sizes, decision codes): defined once, in rnsca/constants.py, and
+ *                        passed by rnsca.backends.opencl.constant_options. This file
+ *                        defines none of them (tests/unit/test_constants.py checks).
  * Each function is a line-by-line port of the Numba kernel of the same name
  * (rnsca/kernels/outcode.py, segments.py, rnsca/baselines/*.py): the same formulas in
  * the same order, so in float64 the pieces agree with the Numba backend's to rounding
@@ -50,43 +55,12 @@ typedef float REAL;
 
 #define INF_REAL ((REAL)INFINITY)
 
-/* Outcode bits and edge ids (rnsca/kernels/outcode.py). */
-#define LEFT 1
-#define RIGHT 2
-#define BOTTOM 4
-#define TOP 8
-#define NO_EDGE (-1)
-#define EDGE_LEFT 0
-#define EDGE_RIGHT 1
-#define EDGE_BOTTOM 2
-#define EDGE_TOP 3
-#define SURE_SHIFT 4
-#define UNSURE_BITS 15
-
-/* Method ids (rnsca/kernels/segments.py). */
-#define RNSCA 0
-#define COHEN_SUTHERLAND 1
-#define LIANG_BARSKY 2
-#define NICHOLL_LEE_NICHOLL 3
-#define MIDPOINT 4
-
-/* Counter slots (rnsca/kernels/counters.py), the segment part of the row. */
-#define EVALUATED 0
-#define ACCEPTED 1
-#define REJECTED 2
-#define SUBDIVIDED 3
-#define CLIPPED 4
-#define DROPPED 5
-#define INTERSECTIONS 6
-#define DEEPEST 7
-#define LEVELS 8
-#define N_LEVELS 33
-#define SEGMENT_COUNTERS (LEVELS + N_LEVELS)
-
-#define N_MAX 64
-#define AUTO_N_MIN 8
-#define STACK_CAPACITY (8 * (N_LEVELS + 1))
-#define CS_MAX_MOVES 32
+/* The shared constants (outcode bits, method ids, counter slots, ...) are build options
+ * (see the top of this file); a build without them fails here rather than at their
+ * first use. */
+#ifndef COUNTERS_WIDTH
+#error "build with the options of rnsca.backends.opencl.constant_options (rnsca/constants.py)"
+#endif
 
 /* Stats are summed in local memory per work-group (32-bit atomics are core OpenCL;
  * one segment adds at most a few thousand to any counter) and the group's row is
@@ -1042,28 +1016,10 @@ __kernel void write_pieces(__global const REAL *result, __global const long *kee
  * part: `clip_chains`' run stack) and stores each chunk's decision, and how many of its
  * segments must be clipped one by one; `clip_chunk_segments` clips those (one work-item
  * per chunk: `_clip_segments`). The chains are assembled on the host from the decisions
- * and the pieces (rnsca.kernels.polylines.assemble_line_blocks). */
-
-#define RUN_LEAF_SEGMENTS 16
-/* Pending runs: at most N - 1 siblings per level plus the current one; a run of fewer than
- * 2**31 chunks is down to one chunk within 32 levels (each split at least halves it), so
- * 63 * 32 + 1 entries suffice for every N <= 64 (the Numba kernel's 4096 is never reached
- * either: both always split). */
-#define RUN_STACK_CAPACITY (64 * 34)
-#define CHUNK_REJECTED 0
-#define CHUNK_ACCEPTED 1
-#define CHUNK_SEGMENTED 2
-
-/* The rest of the counter row (rnsca/kernels/counters.py). */
-#define RUNS_EVALUATED SEGMENT_COUNTERS
-#define RUNS_ACCEPTED (RUNS_EVALUATED + 1)
-#define RUNS_REJECTED (RUNS_EVALUATED + 2)
-#define RUNS_SUBDIVIDED (RUNS_EVALUATED + 3)
-#define RUNS_SEGMENTED (RUNS_EVALUATED + 4)
-#define RUN_DEEPEST (RUNS_EVALUATED + 5)
-#define RUN_LEVELS (RUNS_EVALUATED + 7)
-#define SEGMENT_LEVELS (RUN_LEVELS + N_LEVELS)
-#define COUNTERS_WIDTH (SEGMENT_LEVELS + N_LEVELS)
+ * and the pieces (rnsca.kernels.polylines.assemble_line_blocks). The run stack's
+ * RUN_STACK_CAPACITY entries (rnsca/constants.py says why) hold the deepest stack of any
+ * part, for every N <= N_MAX; a run that would overflow it is clipped segment by
+ * segment instead, as in Numba's kernel. */
 
 long chunk_count(long first, long last) {
     return last <= first ? 0 : (last - first + RUN_LEAF_SEGMENTS - 1) / RUN_LEAF_SEGMENTS;
@@ -1268,15 +1224,9 @@ void clip_chunk_segments(__global const REAL *xy, __global const long *part_offs
 
 /* --- bezier.py: classification and flattening of Bézier segments ------------------ */
 
-/* Segment classes (rnsca/kernels/bezier.py SEGMENT_*): by the outcodes of the control
- * points, all inside, all beyond one edge, or neither. */
-#define SEGMENT_REJECTED 0
-#define SEGMENT_ACCEPTED 1
-#define SEGMENT_AMBIGUOUS 2
-/* Which segments get flattened (`classify_bezier`'s `flatten`). */
-#define FLATTEN_NONE 0
-#define FLATTEN_ACCEPTED_CURVES 1
-#define FLATTEN_ALL 2
+/* Segment classes (SEGMENT_*): by the outcodes of the control points, all inside, all
+ * beyond one edge, or neither; which segments get flattened (FLATTEN_*,
+ * `classify_bezier`'s `flatten`). */
 
 REAL bezier_lerp(REAL a, REAL b, REAL t) {
     return t < (REAL)0.5 ? a + t * (b - a) : b - ((REAL)1 - t) * (b - a);
@@ -1372,10 +1322,7 @@ __kernel void flatten_bezier(__global const REAL *controls, __global const char 
     }
 }
 
-/* Run decisions of bezier.py's run level (_RUN_*), and its run length. */
-#define RUN_ACCEPTED 0
-#define RUN_REJECTED 1
-#define RUN_SEGMENTED 2
+/* Run decisions (CURVE_RUN_*) of bezier.py's run level. */
 
 /* Run r, the segments run_first[r]..run_end[r]-1 of one subpath: the outcodes of the
  * corners of its control points' box (`bezier._run_box`) accept it whole (not when
@@ -1406,6 +1353,6 @@ __kernel void classify_bezier_runs(__global const REAL *controls,
                   | outcode(hi_x, hi_y, a_xmin, a_ymin, a_xmax, a_ymax)) == 0;
     int beyond = (outcode(lo_x, lo_y, r_xmin, r_ymin, r_xmax, r_ymax)
                   & outcode(hi_x, hi_y, r_xmin, r_ymin, r_xmax, r_ymax)) != 0;
-    run_decision[r] = (inside && !flatten) ? RUN_ACCEPTED
-                      : (beyond ? RUN_REJECTED : RUN_SEGMENTED);
+    run_decision[r] = (inside && !flatten) ? CURVE_RUN_ACCEPTED
+                      : (beyond ? CURVE_RUN_REJECTED : CURVE_RUN_SEGMENTED);
 }

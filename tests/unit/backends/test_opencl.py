@@ -15,10 +15,11 @@ import numpy as np
 import pytest
 
 import rnsca
-from rnsca import Window, clip_segments
+from rnsca import Window, clip_segments, constants
 from rnsca.backends import registry
 from rnsca.errors import BackendUnavailableError, InvalidGeometryError, InvalidWindowError
 from rnsca.options import Method, Mode, Precision, SegmentOptions
+from tests.unit.test_constants import clip_cl_macros
 
 pytestmark = pytest.mark.opencl
 
@@ -132,6 +133,58 @@ def test_programs_are_built_once_per_device_and_precision(opencl, opencl_module)
     assert again._device is opencl._device
     double = opencl.precision is Precision.FLOAT64
     assert again._device.program(double) is opencl._device.program(double)
+
+
+def test_programs_are_kept_by_their_build_options(opencl, opencl_module):
+    double = opencl.precision is Precision.FLOAT64
+    options = opencl_module._build_options(double)
+    assert opencl._device.programs[options] is opencl._device.program(double)
+
+
+# --- shared constants: rnsca.constants reaches clip.cl as build options ---------------------
+
+
+def defined_by_options(options) -> dict[str, str]:
+    return dict(option[2:].split("=", 1) for option in options if option.startswith("-D"))
+
+
+@pytest.mark.parametrize("double", [False, True], ids=["float32", "float64"])
+def test_the_build_options_give_clip_cl_every_shared_constant(opencl_module, double):
+    given = defined_by_options(opencl_module._build_options(double))
+    assert {name: int(given[name].strip("()")) for name in constants.__all__} == {
+        name: getattr(constants, name) for name in constants.__all__}
+    assert given["REAL_IS_DOUBLE"] == str(int(double))
+
+
+def test_clip_cl_defines_no_name_it_is_given_as_a_build_option(opencl_module):
+    given = set()
+    for double in (False, True):
+        given |= set(defined_by_options(opencl_module._build_options(double)))
+    assert {"REAL_IS_DOUBLE", "LOCAL_SIZE", "LEFT", "COUNTERS_WIDTH"} <= given
+    assert sorted(given & clip_cl_macros()) == []
+
+
+def test_a_program_built_with_the_options_sees_the_shared_values(opencl, opencl_module):
+    import pyopencl as cl
+
+    names = constants.__all__
+    body = "\n".join(f"    out[{k}] = {name};" for k, name in enumerate(names))
+    source = f"__kernel void shared(__global long *out) {{\n{body}\n}}"
+    context, queue = opencl._device.context, opencl._device.queue
+    program = opencl_module._build_program(context, "test", source,
+                                           opencl_module.constant_options())
+    out = np.empty(len(names), dtype=np.int64)
+    buffer = cl.Buffer(context, cl.mem_flags.WRITE_ONLY, out.nbytes)
+    program.shared(queue, (1,), None, buffer)
+    cl.enqueue_copy(queue, out, buffer)
+    assert dict(zip(names, out.tolist(), strict=True)) == {
+        name: getattr(constants, name) for name in names}
+
+
+def test_only_ints_become_build_options(opencl_module, monkeypatch):
+    monkeypatch.setattr(constants, "LEFT", 1.0)
+    with pytest.raises(TypeError, match=r"rnsca.constants.LEFT = 1.0 is not an int"):
+        opencl_module.constant_options()
 
 
 # --- OpenCL missing: a clear error, never another backend ----------------------------------
@@ -254,9 +307,9 @@ def test_two_backends_on_one_device_can_be_called_at_once(opencl, opencl_module,
         t.start()
     for t in threads:
         t.join()
-    for pieces, source, _, _ in results:
-        np.testing.assert_array_equal(source, expected.source)
-        np.testing.assert_allclose(pieces, expected.segments, rtol=1e-12, atol=1e-12)
+    for out in results:
+        np.testing.assert_array_equal(out.source, expected.source)
+        np.testing.assert_allclose(out.pieces, expected.segments, rtol=1e-12, atol=1e-12)
 
 
 # --- float32 -------------------------------------------------------------------------------
@@ -285,10 +338,10 @@ def test_float32_pieces_are_within_the_documented_bound(float32, method, mode, r
         rng.integers(-2, 5, size=(300, 4)) * 0.5,  # on edges and corners
     ]) * scale + offset
     options = SegmentOptions.resolve(window, method=method, mode=mode)
-    pieces, source, t, stats = float32.clip_segments(segs, window, options)
+    out = float32.clip_segments(segs, window, options)
+    pieces, source, stats = out.pieces, out.source, out.stats
     assert stats.device.precision == "float32"
-    # The reference: the same input rounded to float32, clipped in float64 (by the NumPy
-    # reference, fast also when the kernels run uncompiled).
+    # The reference: the same input rounded to float32, clipped in float64 by Numba.
     ref = clip_segments(_rounded(segs), _rounded(window.bounds), method=method, mode=mode,
                         backend="numba")
     size = np.maximum(np.abs(segs).max(axis=1), np.abs(window.bounds).max())
@@ -335,7 +388,8 @@ def test_float32_gives_the_same_decisions_on_exact_inputs(float32):
     for method in Method:
         for mode in Mode:
             options = SegmentOptions.resolve(W, method=method, mode=mode)
-            pieces, source, t, stats = float32.clip_segments(segs, W, options)
+            out = float32.clip_segments(segs, W, options)
+            pieces, source, stats = out.pieces, out.source, out.stats
             ref = clip_segments(segs, W, method=method, mode=mode, backend="numba")
             np.testing.assert_array_equal(source, ref.source)
             np.testing.assert_allclose(pieces, ref.segments, rtol=0, atol=2.0 ** -22 * 20)

@@ -16,6 +16,14 @@ result is the window, with the holes inside it) or outside it.
 
 Boundary positions are compared exactly, as (edge, coordinate along the edge): every
 cut point has its edge coordinate exactly on the edge line (see `outcode.end_point`).
+
+The kernels take records (named tuples): the rings and polygons with their windows
+(`Polygons`), where the output goes (`PolygonsOut`) and how much of it there is
+(`PolygonCounts`), what the count pass decided per polygon (`PolygonPlan`), and one
+block's scratch (`PolygonScratch`: chains, logical chains, boundary events, ring states,
+the walk, the closed rings). `clip_polygon` reads as its steps, each a function inlined
+into it; it borrows the scratch (no reference counts per polygon), and only the helpers
+that must allocate (`_split_loops`, the ring-by-ring fallback) are ``allocating``.
 """
 
 import math

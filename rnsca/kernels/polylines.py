@@ -27,6 +27,14 @@ of chunks then costs one step per chunk at every level of the recursion, and acc
 runs are copied whole.
 
 Stacks are explicit (no recursion), so the logic ports to OpenCL.
+
+What travels together is one record (named tuples; see `rnsca.kernels.records`): the
+vertices (`Vertices`), the parts and their windows (`Lines`), where a line is cut
+(`Cut`), where its chains go (`ChainsOut`), a block's counters and scratch
+(`BlockState`), the chunk codes and plans (`Chunks`, one part's: `PartPlan`), decisions
+made on a device (`Decisions`). The flags that choose a pass (`write`,
+`break_at_boundary`) stay arguments, passed as constants, so that each pass compiles
+without the other's branches.
 """
 
 from typing import NamedTuple

@@ -9,8 +9,10 @@ from rnsca.runtime import collector_paused, numba_threads_started
 
 
 def _run(code: str, **env) -> str:
+    # The child runs compiled even in the NUMBA_DISABLE_JIT pass: these tests are about
+    # what compiled Numba does to the process (its thread pool, its environment).
     environment = {k: v for k, v in os.environ.items()
-                   if k not in ("OMP_WAIT_POLICY", "OCL_ICD_VENDORS")}
+                   if k not in ("OMP_WAIT_POLICY", "OCL_ICD_VENDORS", "NUMBA_DISABLE_JIT")}
     environment.update(env)
     return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                           check=True, env=environment).stdout.strip()

@@ -94,9 +94,9 @@ class NumbaBackend:
         # One window for all: the kernel takes row 0 of the table for every geometry.
         geometry_window = _NO_INDEX if windows.is_single else windows.index
         out_xy, out_z, chain_offsets, geometry_chains, counters, bad_part = PL.clip_lines(
-            xy, z, part_offsets, geometry_parts, geometry_window, windows.bounds,
-            METHOD_ID[options.method], options.n, options.max_depth, options.tolerance,
-            options.auto_piece, options.mode is Mode.EXACT, drop_edge_runs)
+            R.vertices(xy, z), PL.Lines(part_offsets, geometry_parts, windows.bounds,
+                                        geometry_window),
+            core_options(options), drop_edge_runs)
         if bad_part >= 0:
             lines.check_finite()  # raises, naming the first bad coordinate
             raise AssertionError(f"the line kernel found a non-finite coordinate in part "
@@ -115,8 +115,8 @@ class NumbaBackend:
         polygon_window = windows.of_items(polygon_geometry(geometry_polygons))
         nothing_i = np.empty(0, dtype=np.int64)
         # Runs and segments are clipped here, not decided elsewhere: no decision tables.
-        undecided = (False, nothing_i, np.empty(0, dtype=np.uint8), nothing_i,
-                     np.empty(0, dtype=np.bool_), np.empty((0, 6)))
+        undecided = PL.Decisions(False, nothing_i, np.empty(0, dtype=np.uint8), nothing_i,
+                                 np.empty(0, dtype=np.bool_), np.empty((0, 6)))
         out_xy, out_z, out_rings, rings_per_output, outputs_per_polygon, counters = \
             polygon_passes(xy, z, polygons.offsets[0], polygon_offsets, polygon_window,
                            windows.bounds, options, np.empty(n_polygons, dtype=np.int8),
@@ -186,7 +186,7 @@ def path_passes(paths: PathArrays, window: Window, options: PathOptions,
     backend (`decisions` carries the device's classes and flattened points: ``(True,
     segment_class, point_start, points)``, and its run decisions and `DeviceStats`).
     """
-    run_decisions, device_stats, decisions = decisions
+    run_decisions, device_stats, (given, segment_class, point_start, points) = decisions
     n_subpaths = paths.closed.shape[0]
     subpath_source = np.repeat(np.arange(len(paths), dtype=np.int64),
                                np.diff(paths.path_offsets))
@@ -195,16 +195,21 @@ def path_passes(paths: PathArrays, window: Window, options: PathOptions,
     counters = np.zeros((n_blocks, C.WIDTH), dtype=np.int64)
     n_segments = np.zeros(n_subpaths, dtype=np.int64)
     n_out = np.zeros(n_subpaths, dtype=np.int64)
-    args = (paths.controls, paths.degree, paths.subpath_offsets, paths.closed, paths.start,
-            subpath_source, *window.bounds, options.fill is not None,
-            options.curves is Curves.FLATTEN, options.mode is Mode.EXACT, options.n_split,
-            options.leaf_depth, options.tolerance, block)
-    nothing = np.empty(0, dtype=np.int64)
     if run_decisions is None:
         run_decisions = np.empty(paths.degree.shape[0], dtype=np.int8)
-    BZ.clip_path_blocks(*args, False, nothing, nothing, np.empty((0, 4, 2)),
-                        np.empty(0, np.int8), nothing, np.empty((0, 2)), np.empty(0, bool),
-                        nothing, n_segments, n_out, run_decisions, counters, *decisions)
+    kernel_input = (
+        BZ.PathInput(paths.controls, paths.degree, paths.subpath_offsets, paths.closed,
+                     paths.start, subpath_source),
+        R.Window(window.xmin, window.ymin, window.xmax, window.ymax),
+        BZ.Options(fill=options.fill is not None, flatten=options.curves is Curves.FLATTEN,
+                   exact=options.mode is Mode.EXACT, n_split=int(options.n_split),
+                   leaf_depth=int(options.leaf_depth), tolerance=float(options.tolerance)),
+        BZ.Decisions(given, run_decisions, segment_class, point_start, points))
+    nothing = np.empty(0, dtype=np.int64)
+    BZ.clip_path_blocks(*kernel_input, BZ.Layout(n_segments, n_out, nothing, nothing),
+                        BZ.Output(False, np.empty((0, 4, 2)), np.empty(0, np.int8), nothing,
+                                  np.empty((0, 2)), np.empty(0, bool), nothing),
+                        counters, block)
     segment_start = exclusive_sum(n_segments)
     subpath_start = exclusive_sum(n_out)
     m = int(segment_start[-1])
@@ -216,10 +221,10 @@ def path_passes(paths: PathArrays, window: Window, options: PathOptions,
     out_start = np.empty((k, 2))
     out_closed = np.empty(k, dtype=bool)
     out_from = np.empty(k, dtype=np.int64)
-    BZ.clip_path_blocks(*args, True, segment_start, subpath_start, out_ctrl, out_deg,
-                        out_first, out_start, out_closed, out_from, n_segments, n_out,
-                        run_decisions, np.zeros((n_blocks, C.WIDTH), dtype=np.int64),
-                        *decisions)
+    BZ.clip_path_blocks(*kernel_input, BZ.Layout(n_segments, n_out, segment_start, subpath_start),
+                        BZ.Output(True, out_ctrl, out_deg, out_first, out_start, out_closed,
+                                  out_from),
+                        np.zeros((n_blocks, C.WIDTH), dtype=np.int64), block)
     kept = out_from >= 0
     if not kept.all():  # entries freed by joining the two ends of a closed stroke
         out_first = np.append(out_first[:-1][kept], m)
@@ -284,12 +289,11 @@ def core_options(options: SegmentOptions) -> R.CoreOptions:
 
 
 def polygon_passes(xy, z, ring_offsets, polygon_offsets, polygon_window, windows,
-                   options: SegmentOptions, polygon_class, decisions):
+                   options: SegmentOptions, polygon_class, decisions: PL.Decisions):
     """Run the polygon kernel's count pass, prefix sums and write pass.
 
     Shared by the Numba backend (`decisions` says nothing is decided) and the OpenCL
-    backend (`decisions` carries the device's run decisions and pieces: ``(True,
-    chunk_start, decision, piece_start, keep, pieces)``).
+    backend (`decisions` carries the device's run decisions and pieces).
 
     Returns
     -------
@@ -301,30 +305,34 @@ def polygon_passes(xy, z, ring_offsets, polygon_offsets, polygon_window, windows
     block = _block_size(n_polygons)
     n_blocks = max(1, -(-n_polygons // block))
     counters = np.zeros((n_blocks, C.WIDTH), dtype=np.int64)
-    scratch_v = np.zeros(n_polygons, dtype=np.int64)
-    scratch_c = np.zeros(n_polygons, dtype=np.int64)
-    n_vertices = np.empty(n_polygons, dtype=np.int64)
-    n_rings = np.empty(n_polygons, dtype=np.int64)
-    n_polys = np.empty(n_polygons, dtype=np.int64)
-    args = (xy, z, has_z, ring_offsets, polygon_offsets, polygon_window, windows,
-            METHOD_ID[options.method], options.n, options.max_depth, options.tolerance,
-            options.auto_piece, True, block)
+    vertices = R.vertices(xy, z)
+    polygons = PG.Polygons(ring_offsets, polygon_offsets, windows, polygon_window)
+    plan = PG.PolygonPlan(polygon_class, np.zeros(n_polygons, dtype=np.int64),
+                          np.zeros(n_polygons, dtype=np.int64))
     nothing_i = np.empty(0, dtype=np.int64)
-    PG.clip_polygon_blocks(*args, False, polygon_class, scratch_v, scratch_c, nothing_i,
-                           nothing_i, nothing_i, np.empty((0, 2)), np.empty(0), nothing_i,
-                           nothing_i, n_vertices, n_rings, n_polys, counters, *decisions)
-    vertex_start = exclusive_sum(n_vertices)
-    ring_start = exclusive_sum(n_rings)
-    poly_start = exclusive_sum(n_polys)
+    counts = PG.PolygonCounts(np.empty(n_polygons, dtype=np.int64),
+                              np.empty(n_polygons, dtype=np.int64),
+                              np.empty(n_polygons, dtype=np.int64), nothing_i, nothing_i,
+                              nothing_i)
+    nowhere = PG.PolygonsOut(False, np.empty((0, 2)), np.empty(0), nothing_i, nothing_i)
+    # Polygons are always clipped exactly: valid output needs exact cut points.
+    kernel_options = core_options(options)._replace(exact=True)
+    PG.clip_polygon_blocks(vertices, polygons, kernel_options, block, plan, counts, nowhere,
+                           counters, decisions)
+    vertex_start = exclusive_sum(counts.n_vertices)
+    ring_start = exclusive_sum(counts.n_rings)
+    poly_start = exclusive_sum(counts.n_polys)
     out_xy = np.empty((int(vertex_start[-1]), 2))
     out_z = np.empty(int(vertex_start[-1]) if has_z else 0)
     out_rings = np.empty(int(ring_start[-1]) + 1, dtype=np.int64)
     out_rings[-1] = out_xy.shape[0]
     out_poly_rings = np.empty(int(poly_start[-1]), dtype=np.int64)
-    PG.clip_polygon_blocks(*args, True, polygon_class, scratch_v, scratch_c, vertex_start,
-                           ring_start, poly_start, out_xy, out_z, out_rings, out_poly_rings,
-                           n_vertices, n_rings, n_polys, counters, *decisions)
-    return out_xy, out_z, out_rings, out_poly_rings, n_polys, counters
+    counts = counts._replace(vertex_start=vertex_start, ring_start=ring_start,
+                             poly_start=poly_start)
+    out = PG.PolygonsOut(True, out_xy, out_z, out_rings, out_poly_rings)
+    PG.clip_polygon_blocks(vertices, polygons, kernel_options, block, plan, counts, out,
+                           counters, decisions)
+    return out_xy, out_z, out_rings, out_poly_rings, counts.n_polys, counters
 
 
 def _block_size(n_items: int) -> int:

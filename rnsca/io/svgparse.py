@@ -27,11 +27,12 @@ every grammar error.
 """
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numba import prange
 
-from rnsca.kernels.jit import parallel, scalar
+from rnsca.kernels.jit import borrowing, parallel, scalar
 
 __all__ = [
     "ERROR_MESSAGES",
@@ -344,6 +345,13 @@ def write_tokens(buf, path_bytes, num_offsets, cmd_offsets, fallback_offsets):
 
 # --------------------------------------------------------------------------- arcs
 
+class ArcTolerance(NamedTuple):
+    """How closely an arc's cubics follow it."""
+
+    absolute: float     # > 0: in user units
+    relative: float     # otherwise: this times the arc's larger radius
+
+
 @scalar
 def arc_error(angle):
     """Return the largest radial distance from a unit-circle arc to its cubic.
@@ -435,14 +443,14 @@ def _arc_setup(x0, y0, rx, ry, angle, large, sweep, x, y):
 
 
 @scalar
-def _arc_pieces(rx, ry, delta, tol_abs, tol_rel):
-    """Return how many cubic pieces keep the arc within tolerance (each <= 90 degrees).
+def _arc_pieces(rx, ry, delta, tolerance):
+    """Return how many cubic pieces keep the arc within `tolerance` (each <= 90 degrees).
 
     The cubics approximate the unit circle within `arc_error` of the piece angle; the
     affine map to the ellipse stretches distances by at most max(rx, ry).
     """
     radius = max(rx, ry)
-    tol = tol_abs if tol_abs > 0.0 else tol_rel * radius
+    tol = tolerance.absolute if tolerance.absolute > 0.0 else tolerance.relative * radius
     tol = max(tol, _MIN_RELATIVE_TOLERANCE * radius)
     sweep = abs(delta)
     n = max(1, int(math.ceil(sweep / _QUARTER)))
@@ -469,19 +477,24 @@ def _put(controls, degree, at, deg, x0, y0, x1, y1, x2, y2, x3, y3):
     degree[at] = deg
 
 
-@scalar
-def _arc(x0, y0, rx, ry, angle, large, sweep, x, y, tol_abs, tol_rel, write, controls,
-         degree, at):
-    """Return the number of segments of one SVG arc; with `write`, write them at `at`."""
+@borrowing
+def _arc(start, rx, ry, angle, large, sweep, end, tolerance, write, out, at):
+    """Return the number of segments of one SVG arc; with `write`, write them at `at`.
+
+    The arc goes from the point `start` to the point `end`, (x, y) tuples, with the
+    radii, rotation and flags given; `out` is a `Segments` record.
+    """
+    x0, y0 = start
+    x, y = end
     kind, cx, cy, rx, ry, cos_phi, sin_phi, theta, delta = _arc_setup(
         x0, y0, rx, ry, angle, large, sweep, x, y)
     if kind == 0:
         return 0
     if kind == 1:
         if write:
-            _put(controls, degree, at, 1, x0, y0, x, y, x, y, x, y)
+            _put(out.controls, out.degree, at, 1, x0, y0, x, y, x, y, x, y)
         return 1
-    n = _arc_pieces(rx, ry, delta, tol_abs, tol_rel)
+    n = _arc_pieces(rx, ry, delta, tolerance)
     if not write:
         return n
     step = delta / n
@@ -506,8 +519,8 @@ def _arc(x0, y0, rx, ry, angle, large, sweep, x, y, tol_abs, tol_rel, write, con
         day = k * (-sin_phi * (rx * s) + cos_phi * (ry * c))
         dbx = k * (-cos_phi * (rx * s1) - sin_phi * (ry * c1))
         dby = k * (-sin_phi * (rx * s1) + cos_phi * (ry * c1))
-        _put(controls, degree, at + j, 3, ax, ay, ax + dax, ay + day, bx - dbx, by - dby,
-             bx, by)
+        _put(out.controls, out.degree, at + j, 3, ax, ay, ax + dax, ay + day, bx - dbx,
+             by - dby, bx, by)
         ax = bx
         ay = by
         c = c1
@@ -517,16 +530,36 @@ def _arc(x0, y0, rx, ry, angle, large, sweep, x, y, tol_abs, tol_rel, write, con
 
 # --------------------------------------------------------------------------- segments
 
-@scalar
-def _build(nums, num_at, cmds, cmd_first, cmd_last, tol_abs, tol_rel, write, controls,
-           degree, seg_at, start, closed, sub_offsets, sub_at):
+class Segments(NamedTuple):
+    """The arrays `_build` writes, in the layout of `rnsca.io.svgpath.PathArrays`.
+
+    The count pass gives empty ones, untouched.
+    """
+
+    controls: np.ndarray         # float64 (m, 4, 2)
+    degree: np.ndarray           # int8 (m,)
+    start: np.ndarray            # float64 (k, 2)
+    closed: np.ndarray           # bool (k,)
+    subpath_offsets: np.ndarray  # int64 (k + 1,) each subpath's first segment
+
+
+@borrowing
+def _build(nums, num_at, cmds, cmd_first, cmd_last, tolerance, write, out, seg_at, sub_at):
     """Interpret one path's groups as segments and subpaths (SVG 2, section 9.3).
 
-    Returns ``(n_segments, n_subpaths)``. With `write`, segment rows go to
-    ``controls[seg_at:]`` and ``degree[seg_at:]``, subpath rows to ``start[sub_at:]``,
-    ``closed[sub_at:]`` and ``sub_offsets[sub_at:]`` (the global index of each
-    subpath's first segment). The first group is a moveto (checked by the tokenizer).
+    The groups are ``cmds[cmd_first:cmd_last]``, their numbers ``nums[num_at:]``; arcs
+    become cubics within `tolerance` (`ArcTolerance`). Returns ``(n_segments,
+    n_subpaths)``. With `write` (a literal, so the count pass compiles without the
+    writes), segment rows go to ``out.controls[seg_at:]`` and ``out.degree[seg_at:]``,
+    subpath rows to ``out.start[sub_at:]``, ``out.closed[sub_at:]`` and
+    ``out.subpath_offsets[sub_at:]`` (the global index of each subpath's first
+    segment). The first group is a moveto (checked by the tokenizer).
     """
+    controls = out.controls
+    degree = out.degree
+    start = out.start
+    closed = out.closed
+    sub_offsets = out.subpath_offsets
     q = num_at
     n_seg = 0
     n_sub = 0
@@ -655,9 +688,8 @@ def _build(nums, num_at, cmds, cmd_first, cmd_last, tol_abs, tol_rel, write, con
         else:                                 # A
             x = nums[q + 5] + ox
             y = nums[q + 6] + oy
-            n_seg += _arc(cx, cy, nums[q], nums[q + 1], nums[q + 2], nums[q + 3] != 0.0,
-                          nums[q + 4] != 0.0, x, y, tol_abs, tol_rel, write, controls,
-                          degree, at)
+            n_seg += _arc((cx, cy), nums[q], nums[q + 1], nums[q + 2], nums[q + 3] != 0.0,
+                          nums[q + 4] != 0.0, (x, y), tolerance, write, out, at)
             q += 7
             cx = x
             cy = y
@@ -674,15 +706,13 @@ def count_segments(nums, num_offsets, cmds, cmd_offsets, tol_abs, tol_rel):
     """
     n = num_offsets.shape[0] - 1
     out = np.zeros((n, 2), dtype=np.int64)
-    no_controls = np.empty((0, 4, 2), dtype=np.float64)
-    no_degree = np.empty(0, dtype=np.int8)
-    no_start = np.empty((0, 2), dtype=np.float64)
-    no_closed = np.empty(0, dtype=np.bool_)
-    no_offsets = np.empty(0, dtype=np.int64)
+    tolerance = ArcTolerance(tol_abs, tol_rel)
+    nothing = Segments(np.empty((0, 4, 2), dtype=np.float64), np.empty(0, dtype=np.int8),
+                       np.empty((0, 2), dtype=np.float64), np.empty(0, dtype=np.bool_),
+                       np.empty(0, dtype=np.int64))
     for p in prange(n):
         n_seg, n_sub = _build(nums, num_offsets[p], cmds, cmd_offsets[p], cmd_offsets[p + 1],
-                              tol_abs, tol_rel, False, no_controls, no_degree, 0, no_start,
-                              no_closed, no_offsets, 0)
+                              tolerance, False, nothing, 0, 0)
         out[p, 0] = n_seg
         out[p, 1] = n_sub
     return out
@@ -705,8 +735,9 @@ def write_segments(nums, num_offsets, cmds, cmd_offsets, tol_abs, tol_rel, seg_o
     closed = np.empty(k, dtype=np.bool_)
     subpath_offsets = np.empty(k + 1, dtype=np.int64)
     subpath_offsets[k] = m
+    tolerance = ArcTolerance(tol_abs, tol_rel)
+    segments = Segments(controls, degree, start, closed, subpath_offsets)
     for p in prange(n):
-        _build(nums, num_offsets[p], cmds, cmd_offsets[p], cmd_offsets[p + 1], tol_abs,
-               tol_rel, True, controls, degree, seg_offsets[p], start, closed,
-               subpath_offsets, sub_offsets[p])
+        _build(nums, num_offsets[p], cmds, cmd_offsets[p], cmd_offsets[p + 1], tolerance,
+               True, segments, seg_offsets[p], sub_offsets[p])
     return controls, degree, start, closed, subpath_offsets

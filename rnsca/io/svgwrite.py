@@ -23,6 +23,7 @@ Magnitudes outside 1e-280..1e280 are left to Python too.
 
 import math
 from fractions import Fraction
+from typing import NamedTuple
 
 import numpy as np
 from numba import prange
@@ -470,10 +471,32 @@ def _ends_in_fraction(text, length, r):
     return dot
 
 
+class _Layout(NamedTuple):
+    """What `write` lays out: the commands of every path and the text of their numbers."""
+
+    kind: np.ndarray                 # int8 (m,) each segment's command (`classify`)
+    with_moveto: np.ndarray          # bool (k,) whether each subpath writes its moveto
+    subpath_offsets: np.ndarray      # int64 (k + 1,)
+    closed: np.ndarray               # bool (k,)
+    path_offsets: np.ndarray         # int64 (n + 1,)
+    seg_value_offsets: np.ndarray    # int64 (m + 1,) each segment's rows of text
+    start_value_offsets: np.ndarray  # int64 (k + 1,) each moveto's rows of text
+    text: np.ndarray                 # uint8 (rows, TEXT_WIDTH) (`format_values`)
+    length: np.ndarray               # int8 (rows,)
+
+
 @scalar
-def _write_path(p, write, out, at, kind, with_moveto, subpath_offsets, closed, path_offsets,
-                seg_value_offsets, start_value_offsets, text, length):
+def _write_path(p, write, out, at, layout):
     """Return the byte length of path p's data; with `write`, write it at ``out[at:]``."""
+    kind = layout.kind
+    with_moveto = layout.with_moveto
+    subpath_offsets = layout.subpath_offsets
+    closed = layout.closed
+    path_offsets = layout.path_offsets
+    seg_value_offsets = layout.seg_value_offsets
+    start_value_offsets = layout.start_value_offsets
+    text = layout.text
+    length = layout.length
     n = at
     letter = 0                # the command a number without a letter would continue
     after_number = False
@@ -519,15 +542,14 @@ def write(kind, with_moveto, subpath_offsets, closed, path_offsets, seg_value_of
     filled in).
     """
     n = path_offsets.shape[0] - 1
+    layout = _Layout(kind, with_moveto, subpath_offsets, closed, path_offsets,
+                     seg_value_offsets, start_value_offsets, text, length)
     no_out = np.empty(0, dtype=np.uint8)
     sizes = np.zeros(n + 1, dtype=np.int64)
     for p in prange(n):
-        sizes[p + 1] = _write_path(p, False, no_out, 0, kind, with_moveto, subpath_offsets,
-                                   closed, path_offsets, seg_value_offsets,
-                                   start_value_offsets, text, length)
+        sizes[p + 1] = _write_path(p, False, no_out, 0, layout)
     bounds = np.cumsum(sizes)
     out = np.empty(bounds[n], dtype=np.uint8)
     for p in prange(n):
-        _write_path(p, True, out, bounds[p], kind, with_moveto, subpath_offsets, closed,
-                    path_offsets, seg_value_offsets, start_value_offsets, text, length)
+        _write_path(p, True, out, bounds[p], layout)
     return out, bounds

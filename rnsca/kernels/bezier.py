@@ -26,7 +26,16 @@ ends, and consecutive such lines along one edge are merged.
 
 Two passes (count, write) over one body per block of subpaths, `prange` over the blocks;
 the write pass takes each run's decision from the count pass instead of testing it again.
+
+State that travels together is one record (a named tuple, which Numba passes as its
+fields: free once inlined): the window (`Window`), the options (`Options`), the input paths
+(`PathInput`), decisions taken elsewhere (`Decisions`), the output's layout (`Layout`)
+and arrays (`Output`), the state of the subpath being clipped (`State`), a block's
+counters and scratch (`Work`), and a segment or piece (`Curve`). Helpers take them in
+the order ``out, state, work, opts, window, curve``.
 """
+
+from typing import NamedTuple
 
 import numpy as np
 from numba import prange
@@ -44,12 +53,16 @@ from rnsca.constants import (
     SEGMENT_REJECTED,
 )
 from rnsca.kernels import counters as C
-from rnsca.kernels.jit import borrowing, parallel, scalar
+from rnsca.kernels.jit import borrowing, inlined, parallel, scalar
 from rnsca.kernels.outcode import BOTTOM, LEFT, RIGHT, TOP, clamp, outcode
 
 # Helpers that take arrays are `borrowing` (no reference counting of their arrays): a
 # call then costs no more than passing the arrays' fields, and LLVM inlines the small
-# ones (measured: Numba's own inlining of them, which this module used, gains nothing).
+# ones. A helper LLVM does not inline is passed every field of every record it takes
+# (7 to 11 per array), so the larger helpers called from one place (`_put_run`,
+# `_emit_exact`, `_end_subpath`, ...) and the small ones on the hot path that call
+# others (`_flush`, `_visible`) are `inlined` by Numba instead (measured on the glyph
+# page, 1 thread: 1.12 ms with all of them `borrowing`, 0.88 ms inlined).
 
 __all__ = [
     "BREAK_CAPACITY",
@@ -59,6 +72,14 @@ __all__ = [
     "SEGMENT_ACCEPTED",
     "SEGMENT_AMBIGUOUS",
     "SEGMENT_REJECTED",
+    "Curve",
+    "Decisions",
+    "Layout",
+    "Options",
+    "Output",
+    "PathInput",
+    "State",
+    "Work",
     "clip_path_blocks",
     "closing_edges",
     "edge_breaks",
@@ -94,8 +115,8 @@ _RUN_Y = 3
 _AREA = 4         # twice the signed area swept by the boundary lines (fill)
 _PEND_A = 5       # pending visible parameter interval of the current segment
 _PEND_B = 6
-_START_X = 7      # the input subpath's start point
-_START_Y = 8
+_START_X = 7      # the input subpath's start point (strokes end a closed one there;
+_START_Y = 8      # fill returns to its clamp)
 _FLOAT_STATE_WIDTH = 9
 # Integer state.
 _V = 0            # next output segment
@@ -110,7 +131,104 @@ _PEND_EB = 8
 _FIRST_AT_START = 9  # the subpath's first chain starts at its start point (strokes)
 _V_END = 10       # end of the subpath's counted output: a closing line dropped later
                   # (a whole closed stroke: Z draws it) is not written past it
-_INT_STATE_WIDTH = 11
+_V0 = 11          # the subpath's first output segment and first output subpath
+_S0 = 12
+_SOURCE = 13      # the input path its output subpaths come from
+_INT_STATE_WIDTH = 14
+
+
+class Options(NamedTuple):
+    """How a clip treats its pieces: the same for every segment of a call."""
+
+    fill: bool          # closed subpaths whose fill is kept (False: strokes)
+    flatten: bool       # curves="flatten": curves become lines within `tolerance`
+    exact: bool         # mode="exact": undecided leaves are cut at their crossings
+    n_split: int        # N: pieces per split
+    leaf_depth: int     # deepest split level
+    tolerance: float    # flatness of lines (flatten); smallest piece (approx)
+
+
+class Curve(NamedTuple):
+    """A segment or piece: its degree (1..3) and 4 control values per axis.
+
+    The slots a degree does not use repeat the end, so ``x[3], y[3]`` is always the end.
+    """
+
+    degree: int         # int64 (Numba types a record per field type: never int8)
+    x: tuple            # (x0, x1, x2, x3)
+    y: tuple            # (y0, y1, y2, y3)
+
+
+class PathInput(NamedTuple):
+    """The paths to clip, in the layout of `rnsca.io.svgpath.PathArrays`."""
+
+    controls: np.ndarray         # float64 (m, 4, 2) control points per segment
+    degree: np.ndarray           # int8 (m,)
+    subpath_offsets: np.ndarray  # int64 (k + 1,) segments of each subpath
+    closed: np.ndarray           # bool (k,)
+    start: np.ndarray            # float64 (k, 2) each subpath's start point
+    source: np.ndarray           # int64 (k,) the path each subpath belongs to
+
+
+class Decisions(NamedTuple):
+    """Decisions of runs and segments: the count pass's, or given (the OpenCL backend).
+
+    Without `given`, `runs` is filled by the count pass (each run's ``_RUN_*`` at its
+    first segment) and read by the write pass; the other arrays are empty and unused.
+    With it, `runs` and, per input segment g, ``segment_class[g]`` (`SEGMENT_*`) and
+    the points ending an accepted curve's lines in flatten mode,
+    ``points[point_start[g]:point_start[g + 1]]`` (`flatten_into`'s), are given.
+    """
+
+    given: bool
+    runs: np.ndarray             # int8 (m,)
+    segment_class: np.ndarray    # uint8 (m,)
+    point_start: np.ndarray      # int64 (m + 1,)
+    points: np.ndarray           # float64 (p, 2)
+
+
+class Layout(NamedTuple):
+    """Each input subpath's output: its size (count pass) and its place (write pass)."""
+
+    n_segments: np.ndarray       # int64 (k,) output segments
+    n_subpaths: np.ndarray       # int64 (k,) output subpaths
+    segment_start: np.ndarray    # int64 (k,) first output segment (write pass)
+    subpath_start: np.ndarray    # int64 (k,) first output subpath (write pass)
+
+
+class Output(NamedTuple):
+    """The clipped paths; without `write` (the count pass), empty and untouched."""
+
+    write: bool
+    controls: np.ndarray         # float64 (M, 4, 2)
+    degree: np.ndarray           # int8 (M,)
+    first: np.ndarray            # int64 (K + 1,) each output subpath's first segment
+    start: np.ndarray            # float64 (K, 2)
+    closed: np.ndarray           # bool (K,)
+    source: np.ndarray           # int64 (K,) input path; -1: an entry freed by a join
+
+
+class State(NamedTuple):
+    """The state of the subpath being clipped: output cursors, current point, pending.
+
+    Small arrays indexed by the constants above: a helper updates them in place.
+    """
+
+    ints: np.ndarray             # int64 (_INT_STATE_WIDTH,), indexed by _V, _S, ...
+    floats: np.ndarray           # float64 (_FLOAT_STATE_WIDTH,), by _CUR_X, ...
+
+
+class Work(NamedTuple):
+    """A block's counters and scratch arrays.
+
+    Apart from `State`: most helpers need only that, and a helper that is not inlined
+    is passed every field of every record it takes.
+    """
+
+    counters: np.ndarray         # int64 (counters.WIDTH,) the block's counter row
+    break_t: np.ndarray          # float64 (BREAK_CAPACITY,) a leaf's break table
+    break_edges: np.ndarray      # int64 (BREAK_CAPACITY,)
+    stack: np.ndarray            # float64 (CURVE_STACK_CAPACITY, 3) pieces (a, b, level)
 
 
 @scalar
@@ -158,18 +276,51 @@ def piece_values(degree, a0, a1, a2, a3, s, t):
 
 
 @scalar
-def _hull_codes(degree, x0, x1, x2, x3, y0, y1, y2, y3, xmin, ymin, xmax, ymax):
-    """Return (OR, AND) of the outcodes of the control points."""
-    c0 = outcode(x0, y0, xmin, ymin, xmax, ymax)
-    c1 = outcode(x1, y1, xmin, ymin, xmax, ymax)
+def _line(x0, y0, x1, y1):
+    """Return the line from (x0, y0) to (x1, y1) as a `Curve`."""
+    return Curve(1, (x0, x1, x1, x1), (y0, y1, y1, y1))
+
+
+@borrowing
+def _segment(controls, degree, g):
+    """Return input segment g as a `Curve`."""
+    return Curve(np.int64(degree[g]),
+                 (controls[g, 0, 0], controls[g, 1, 0], controls[g, 2, 0], controls[g, 3, 0]),
+                 (controls[g, 0, 1], controls[g, 1, 1], controls[g, 2, 1], controls[g, 3, 1]))
+
+
+@scalar
+def _piece(c, a, b):
+    """Return the piece [a, b] of the curve (`piece_values` on each axis)."""
+    return Curve(c.degree, piece_values(c.degree, *c.x, a, b),
+                 piece_values(c.degree, *c.y, a, b))
+
+
+@scalar
+def _point(c, t):
+    """Return the curve's point (x, y) at parameter t."""
+    return point_value(c.degree, *c.x, t), point_value(c.degree, *c.y, t)
+
+
+@scalar
+def _code(x, y, window):
+    """Return the outcode of (x, y) for the window."""
+    return outcode(x, y, window.xmin, window.ymin, window.xmax, window.ymax)
+
+
+@scalar
+def _hull_codes(c, window):
+    """Return (OR, AND) of the outcodes of the curve's control points."""
+    c0 = _code(c.x[0], c.y[0], window)
+    c1 = _code(c.x[1], c.y[1], window)
     c_or = c0 | c1
     c_and = c0 & c1
-    if degree >= 2:
-        c2 = outcode(x2, y2, xmin, ymin, xmax, ymax)
+    if c.degree >= 2:
+        c2 = _code(c.x[2], c.y[2], window)
         c_or |= c2
         c_and &= c2
-    if degree == 3:
-        c3 = outcode(x3, y3, xmin, ymin, xmax, ymax)
+    if c.degree == 3:
+        c3 = _code(c.x[3], c.y[3], window)
         c_or |= c3
         c_and &= c3
     return c_or, c_and
@@ -238,22 +389,23 @@ def _critical_points(degree, a0, a1, a2, a3):
 
 
 @borrowing
-def _solve_monotone(degree, a0, a1, a2, a3, level, u, v, gu, gv, st):
+def _solve_monotone(degree, a, level, u, v, gu, gv, counters):
     """Return the root of ``B(t) = level`` in [u, v], B monotone there.
 
+    B is the 1-D Bézier of `degree` with control values ``a = (a0, a1, a2, a3)``;
     ``gu = B(u) - level`` and ``gv = B(v) - level`` have opposite signs.
 
     Illinois regula falsi, safeguarded by bisection, to adjacent floats.
     """
     side = 0
-    st[C.INTERSECTIONS] += 1
+    counters[C.INTERSECTIONS] += 1
     for _ in range(200):
         t = (u * gv - v * gu) / (gv - gu)
         if not (u < t < v):
             t = 0.5 * (u + v)
             if not (u < t < v):
                 break
-        g = point_value(degree, a0, a1, a2, a3, t) - level
+        g = point_value(degree, *a, t) - level
         if g == 0.0:
             return t
         if (g < 0.0) == (gu < 0.0):
@@ -268,8 +420,8 @@ def _solve_monotone(degree, a0, a1, a2, a3, level, u, v, gu, gv, st):
             if side == 1:
                 gu *= 0.5
             side = 1
-    return u if abs(point_value(degree, a0, a1, a2, a3, u) - level) <= \
-        abs(point_value(degree, a0, a1, a2, a3, v) - level) else v
+    return u if abs(point_value(degree, *a, u) - level) <= \
+        abs(point_value(degree, *a, v) - level) else v
 
 
 @borrowing
@@ -282,20 +434,21 @@ def _add_break(brk_t, brk_e, n, t, edge_bit):
 
 
 @borrowing
-def _line_roots(degree, a0, a1, a2, a3, s0, s1, s2, s3, level, edge_bit, lo, hi, brk_t,
-                brk_e, n, st):
+def _line_roots(degree, a, s, level, edge_bit, lo, hi, brk_t, brk_e, n, counters):
     """Add to the break table the parameters in [lo, hi] where B(t) crosses `level`.
 
-    s0..s3 are the control values of the piece [lo, hi] (shared by the two edge lines
-    of an axis).
+    B is the 1-D Bézier of `degree` with control values ``a = (a0, a1, a2, a3)``;
+    ``s = (s0, s1, s2, s3)`` are those of its piece [lo, hi] (shared by the two edge
+    lines of an axis).
     """
+    s0, s1, s2, s3 = s
     below = (s0 < level) | (s1 < level) | (s2 < level) | (s3 < level)
     above = (s0 > level) | (s1 > level) | (s2 > level) | (s3 > level)
     if not (below and above) and not (s0 == level or s3 == level):
         return n  # the piece stays on one side (or lies on the line): no crossing
-    c0, c1 = _critical_points(degree, a0, a1, a2, a3)
+    c0, c1 = _critical_points(degree, *a)
     u = lo
-    gu = point_value(degree, a0, a1, a2, a3, u) - level
+    gu = point_value(degree, *a, u) - level
     if gu == 0.0:
         n = _add_break(brk_t, brk_e, n, u, edge_bit)
     for k in range(3):
@@ -306,12 +459,12 @@ def _line_roots(degree, a0, a1, a2, a3, s0, s1, s2, s3, level, edge_bit, lo, hi,
             v = c1
         if v <= u:
             continue
-        gv = point_value(degree, a0, a1, a2, a3, v) - level
+        gv = point_value(degree, *a, v) - level
         if gv == 0.0:
             n = _add_break(brk_t, brk_e, n, v, edge_bit)
         elif (gu < 0.0) != (gv < 0.0) and gu != 0.0:
             n = _add_break(brk_t, brk_e, n,
-                           _solve_monotone(degree, a0, a1, a2, a3, level, u, v, gu, gv, st),
+                           _solve_monotone(degree, a, level, u, v, gu, gv, counters),
                            edge_bit)
         u = v
         gu = gv
@@ -321,31 +474,26 @@ def _line_roots(degree, a0, a1, a2, a3, s0, s1, s2, s3, level, edge_bit, lo, hi,
 
 
 @borrowing
-def edge_breaks(degree, x0, x1, x2, x3, y0, y1, y2, y3, lo, hi, xmin, ymin, xmax, ymax,
-                brk_t, brk_e, st):
-    """Fill the break table of the piece [lo, hi]; return its length.
+def edge_breaks(curve, lo, hi, window, brk_t, brk_e, counters):
+    """Fill the break table of the piece [lo, hi] of `curve`; return its length.
 
     ``brk_t[0] = lo < ... < brk_t[n-1] = hi`` with ``brk_e[k]`` the bits (LEFT, RIGHT,
-    BOTTOM, TOP) of the edge lines the curve crosses or touches at ``brk_t[k]``. Between
-    two breaks the piece lies in one of the nine regions the edge lines make.
+    BOTTOM, TOP) of the edge lines of `window` the curve crosses or touches at
+    ``brk_t[k]``. Between two breaks the piece lies in one of the nine regions the edge
+    lines make. Each root solved counts in ``counters[INTERSECTIONS]``.
     """
     n = _add_break(brk_t, brk_e, 0, lo, 0)
     if lo == 0.0 and hi == 1.0:
         # The whole segment: its control values are the piece's (unused rows repeat
         # the end, as piece_values does), no blossoms needed.
-        sx0, sx1, sx2, sx3 = x0, x1, x2, x3
-        sy0, sy1, sy2, sy3 = y0, y1, y2, y3
+        piece = curve
     else:
-        sx0, sx1, sx2, sx3 = piece_values(degree, x0, x1, x2, x3, lo, hi)
-        sy0, sy1, sy2, sy3 = piece_values(degree, y0, y1, y2, y3, lo, hi)
-    n = _line_roots(degree, x0, x1, x2, x3, sx0, sx1, sx2, sx3, xmin, LEFT, lo, hi, brk_t,
-                    brk_e, n, st)
-    n = _line_roots(degree, x0, x1, x2, x3, sx0, sx1, sx2, sx3, xmax, RIGHT, lo, hi, brk_t,
-                    brk_e, n, st)
-    n = _line_roots(degree, y0, y1, y2, y3, sy0, sy1, sy2, sy3, ymin, BOTTOM, lo, hi, brk_t,
-                    brk_e, n, st)
-    n = _line_roots(degree, y0, y1, y2, y3, sy0, sy1, sy2, sy3, ymax, TOP, lo, hi, brk_t,
-                    brk_e, n, st)
+        piece = _piece(curve, lo, hi)
+    d = curve.degree
+    n = _line_roots(d, curve.x, piece.x, window.xmin, LEFT, lo, hi, brk_t, brk_e, n, counters)
+    n = _line_roots(d, curve.x, piece.x, window.xmax, RIGHT, lo, hi, brk_t, brk_e, n, counters)
+    n = _line_roots(d, curve.y, piece.y, window.ymin, BOTTOM, lo, hi, brk_t, brk_e, n, counters)
+    n = _line_roots(d, curve.y, piece.y, window.ymax, TOP, lo, hi, brk_t, brk_e, n, counters)
     n = _add_break(brk_t, brk_e, n, hi, 0)
     # Insertion sort (at most BREAK_CAPACITY entries), then merge equal parameters.
     for i in range(1, n):
@@ -371,44 +519,45 @@ def edge_breaks(degree, x0, x1, x2, x3, y0, y1, y2, y3, lo, hi, xmin, ymin, xmax
 
 
 @scalar
-def _snap(x, y, edges, xmin, ymin, xmax, ymax):
+def _snap(x, y, edges, window):
     """Return the point moved exactly onto the edge lines it was found on."""
     if edges & LEFT:
-        x = xmin
+        x = window.xmin
     elif edges & RIGHT:
-        x = xmax
+        x = window.xmax
     if edges & BOTTOM:
-        y = ymin
+        y = window.ymin
     elif edges & TOP:
-        y = ymax
+        y = window.ymax
     return x, y
 
 
 @borrowing
-def _advance(n, x, y, si, sf):
+def _advance(state, n, x, y):
     """Count `n` visible segments appended to the output, ending at (x, y)."""
+    si = state.ints
     si[_V] += n
     si[_LAST_RUN] = 0
     si[_VISIBLE] = 1
-    sf[_CUR_X] = x
-    sf[_CUR_Y] = y
+    state.floats[_CUR_X] = x
+    state.floats[_CUR_Y] = y
 
 
 @borrowing
-def _put_segment(write, degree, x0, x1, x2, x3, y0, y1, y2, y3, out_ctrl, out_deg, si, sf):
+def _put_segment(out, state, c):
     """Append a visible segment (unused control slots repeat its end)."""
-    v = si[_V]
-    if write and v < si[_V_END]:
-        out_ctrl[v, 0, 0] = x0
-        out_ctrl[v, 1, 0] = x1
-        out_ctrl[v, 2, 0] = x2
-        out_ctrl[v, 3, 0] = x3
-        out_ctrl[v, 0, 1] = y0
-        out_ctrl[v, 1, 1] = y1
-        out_ctrl[v, 2, 1] = y2
-        out_ctrl[v, 3, 1] = y3
-        out_deg[v] = degree
-    _advance(1, x3, y3, si, sf)
+    v = state.ints[_V]
+    if out.write and v < state.ints[_V_END]:
+        out.controls[v, 0, 0] = c.x[0]
+        out.controls[v, 1, 0] = c.x[1]
+        out.controls[v, 2, 0] = c.x[2]
+        out.controls[v, 3, 0] = c.x[3]
+        out.controls[v, 0, 1] = c.y[0]
+        out.controls[v, 1, 1] = c.y[1]
+        out.controls[v, 2, 1] = c.y[2]
+        out.controls[v, 3, 1] = c.y[3]
+        out.degree[v] = c.degree
+    _advance(state, 1, c.x[3], c.y[3])
 
 
 @borrowing
@@ -429,140 +578,148 @@ def _run_box(controls, a, b):
     return lo_x, lo_y, hi_x, hi_y
 
 
-@borrowing
-def _put_run(write, controls, degree, a, b, out_ctrl, out_deg, si, sf):
+@inlined
+def _put_run(out, state, paths, a, b):
     """Append the input segments a..b-1, accepted whole (a continuous run)."""
-    v = si[_V]
+    v = state.ints[_V]
     n = b - a
-    if write:
+    if out.write:
         # One loop over the rows without a test per row: LLVM vectorizes the copy.
-        n_copy = min(n, si[_V_END] - v)
+        n_copy = min(n, state.ints[_V_END] - v)
         for i in range(n_copy):
             for k in range(4):
-                out_ctrl[v + i, k, 0] = controls[a + i, k, 0]
-                out_ctrl[v + i, k, 1] = controls[a + i, k, 1]
+                out.controls[v + i, k, 0] = paths.controls[a + i, k, 0]
+                out.controls[v + i, k, 1] = paths.controls[a + i, k, 1]
         for i in range(n_copy):
-            out_deg[v + i] = degree[a + i]
-    _advance(n, controls[b - 1, 3, 0], controls[b - 1, 3, 1], si, sf)
+            out.degree[v + i] = paths.degree[a + i]
+    _advance(state, n, paths.controls[b - 1, 3, 0], paths.controls[b - 1, 3, 1])
 
 
 @borrowing
-def _put_line(write, x, y, out_ctrl, out_deg, si, sf):
+def _put_line(out, state, x, y):
     """Append a line from the current point to (x, y)."""
+    si = state.ints
+    sf = state.floats
     v = si[_V]
-    if write and v < si[_V_END]:
-        out_ctrl[v, 0, 0] = sf[_CUR_X]
-        out_ctrl[v, 0, 1] = sf[_CUR_Y]
+    if out.write and v < si[_V_END]:
+        out.controls[v, 0, 0] = sf[_CUR_X]
+        out.controls[v, 0, 1] = sf[_CUR_Y]
         for k in range(1, 4):
-            out_ctrl[v, k, 0] = x
-            out_ctrl[v, k, 1] = y
-        out_deg[v] = 1
+            out.controls[v, k, 0] = x
+            out.controls[v, k, 1] = y
+        out.degree[v] = 1
     si[_V] = v + 1
     sf[_CUR_X] = x
     sf[_CUR_Y] = y
 
 
 @borrowing
-def _begin_subpath(write, x, y, source, out_first, out_start, out_from, si, sf):
+def _begin_subpath(out, state, x, y):
+    """Start an output subpath at (x, y)."""
+    si = state.ints
     s = si[_S]
-    if write:
-        out_first[s] = si[_V]
-        out_start[s, 0] = x
-        out_start[s, 1] = y
-        out_from[s] = source
+    if out.write:
+        out.first[s] = si[_V]
+        out.start[s, 0] = x
+        out.start[s, 1] = y
+        out.source[s] = si[_SOURCE]
     si[_S] = s + 1
     si[_OPEN] = 1
     si[_LAST_RUN] = 0
-    sf[_CUR_X] = x
-    sf[_CUR_Y] = y
+    state.floats[_CUR_X] = x
+    state.floats[_CUR_Y] = y
 
 
 @borrowing
-def _arrive_at(write, fill, x0, y0, source, out_ctrl, out_deg, out_first, out_start, out_from,
-               si, sf):
+def _arrive_at(out, state, opts, x0, y0):
     """Make (x0, y0) the current point before visible output that starts there."""
-    if fill:
+    si = state.ints
+    sf = state.floats
+    if opts.fill:
         if x0 != sf[_CUR_X] or y0 != sf[_CUR_Y]:
             # Rounding left a gap between the clamped path and the piece: bridge it.
-            _put_line(write, x0, y0, out_ctrl, out_deg, si, sf)
+            _put_line(out, state, x0, y0)
     elif si[_OPEN] == 0 or x0 != sf[_CUR_X] or y0 != sf[_CUR_Y]:
         if si[_VISIBLE] == 0 and si[_BROKEN] == 0:
             si[_FIRST_AT_START] = 1  # nothing before it: it starts at t = 0
-        _begin_subpath(write, x0, y0, source, out_first, out_start, out_from, si, sf)
+        _begin_subpath(out, state, x0, y0)
 
 
 @borrowing
-def _emit_piece(write, fill, degree, x0, x1, x2, x3, y0, y1, y2, y3, source, out_ctrl,
-                out_deg, out_first, out_start, out_from, si, sf):
-    """Add a visible piece (control points x0..x3, y0..y3) to the output."""
-    _arrive_at(write, fill, x0, y0, source, out_ctrl, out_deg, out_first, out_start, out_from,
-               si, sf)
-    _put_segment(write, degree, x0, x1, x2, x3, y0, y1, y2, y3, out_ctrl, out_deg, si, sf)
+def _emit_piece(out, state, opts, c):
+    """Add a visible piece `c` to the output."""
+    _arrive_at(out, state, opts, c.x[0], c.y[0])
+    _put_segment(out, state, c)
 
 
 @borrowing
-def _clamp_to(write, x, y, xmin, ymin, xmax, ymax, out_ctrl, out_deg, si, sf):
+def _clamp_to(out, state, window, x, y):
     """Fill: continue the output along the boundary to the clamp of (x, y)."""
-    cx = clamp(x, xmin, xmax)
-    cy = clamp(y, ymin, ymax)
+    si = state.ints
+    sf = state.floats
+    cx = clamp(x, window.xmin, window.xmax)
+    cy = clamp(y, window.ymin, window.ymax)
     ux = sf[_CUR_X]
     uy = sf[_CUR_Y]
     if cx == ux and cy == uy:
         return
     rx = sf[_RUN_X]
     ry = sf[_RUN_Y]
-    same_edge = ((rx == ux) & (ux == cx) & ((cx == xmin) | (cx == xmax))) | \
-        ((ry == uy) & (uy == cy) & ((cy == ymin) | (cy == ymax)))
+    same_edge = ((rx == ux) & (ux == cx) & ((cx == window.xmin) | (cx == window.xmax))) | \
+        ((ry == uy) & (uy == cy) & ((cy == window.ymin) | (cy == window.ymax)))
     if si[_LAST_RUN] == 1 and same_edge:
         # Extend the last boundary line instead of adding one along the same edge.
         sf[_AREA] += (rx * cy - cx * ry) - (rx * uy - ux * ry)
         if cx == rx and cy == ry:
             si[_V] -= 1  # back where the line began: drop it
             si[_LAST_RUN] = 0
-        elif write and si[_V] - 1 < si[_V_END]:
+        elif out.write and si[_V] - 1 < si[_V_END]:
             v = si[_V] - 1
             for k in range(1, 4):
-                out_ctrl[v, k, 0] = cx
-                out_ctrl[v, k, 1] = cy
+                out.controls[v, k, 0] = cx
+                out.controls[v, k, 1] = cy
         sf[_CUR_X] = cx
         sf[_CUR_Y] = cy
         return
     sf[_AREA] += ux * cy - cx * uy
     sf[_RUN_X] = ux
     sf[_RUN_Y] = uy
-    _put_line(write, cx, cy, out_ctrl, out_deg, si, sf)
+    _put_line(out, state, cx, cy)
     si[_LAST_RUN] = 1
 
 
 @borrowing
-def _outside(write, fill, x, y, xmin, ymin, xmax, ymax, out_ctrl, out_deg, si, sf):
+def _outside(out, state, opts, window, x, y):
     """Mark the part ending at (x, y) not visible: clamp to it (fill), or end the chain."""
-    si[_BROKEN] = 1
-    if fill:
-        _clamp_to(write, x, y, xmin, ymin, xmax, ymax, out_ctrl, out_deg, si, sf)
+    state.ints[_BROKEN] = 1
+    if opts.fill:
+        _clamp_to(out, state, window, x, y)
     else:
-        si[_OPEN] = 0
+        state.ints[_OPEN] = 0
 
 
-@borrowing
-def _flush(write, fill, flatten, degree, x0, x1, x2, x3, y0, y1, y2, y3, xmin, ymin, xmax,
-           ymax, tol, source, out_ctrl, out_deg, out_first, out_start, out_from, si, sf):
-    """Output the pending visible interval of the segment, if any."""
+@inlined
+def _flush(out, state, opts, window, c):
+    """Output the pending visible interval of the segment `c`, if any."""
+    si = state.ints
     if si[_PEND] == 0:
         return
     si[_PEND] = 0
-    a = sf[_PEND_A]
-    b = sf[_PEND_B]
-    if not flatten or degree == 1:
-        _emit_stretch(write, fill, degree, x0, x1, x2, x3, y0, y1, y2, y3, a, b, si[_PEND_EA],
-                      si[_PEND_EB], xmin, ymin, xmax, ymax, source, out_ctrl, out_deg,
-                      out_first, out_start, out_from, si, sf)
-        return
-    qx0, qx1, qx2, qx3 = piece_values(degree, x0, x1, x2, x3, a, b)
-    qy0, qy1, qy2, qy3 = piece_values(degree, y0, y1, y2, y3, a, b)
-    sx, sy = _snap(qx0, qy0, si[_PEND_EA], xmin, ymin, xmax, ymax)
-    ex, ey = _snap(qx3, qy3, si[_PEND_EB], xmin, ymin, xmax, ymax)
-    steps = flatten_count(degree, qx0, qx1, qx2, qx3, qy0, qy1, qy2, qy3, tol)
+    a = state.floats[_PEND_A]
+    b = state.floats[_PEND_B]
+    if not opts.flatten or c.degree == 1:
+        _emit_stretch(out, state, opts, window, c, a, b, si[_PEND_EA], si[_PEND_EB])
+    else:
+        _emit_flat_stretch(out, state, opts, window, c, a, b, si[_PEND_EA], si[_PEND_EB])
+
+
+@borrowing
+def _emit_flat_stretch(out, state, opts, window, c, a, b, edges_a, edges_b):
+    """Output the visible stretch [a, b] of a curve as lines within the tolerance."""
+    q = _piece(c, a, b)
+    sx, sy = _snap(q.x[0], q.y[0], edges_a, window)
+    ex, ey = _snap(q.x[3], q.y[3], edges_b, window)
+    steps = flatten_count(q.degree, *q.x, *q.y, opts.tolerance)
     prev_x = sx
     prev_y = sy
     for k in range(1, steps + 1):
@@ -570,146 +727,121 @@ def _flush(write, fill, flatten, degree, x0, x1, x2, x3, y0, y1, y2, y3, xmin, y
             nx = ex
             ny = ey
         else:
-            t = a + (b - a) * k / steps
-            nx = point_value(degree, x0, x1, x2, x3, t)
-            ny = point_value(degree, y0, y1, y2, y3, t)
-        _emit_piece(write, fill, 1, prev_x, nx, nx, nx, prev_y, ny, ny, ny, source, out_ctrl,
-                    out_deg, out_first, out_start, out_from, si, sf)
+            nx, ny = _point(c, a + (b - a) * k / steps)
+        _emit_piece(out, state, opts, _line(prev_x, prev_y, nx, ny))
         prev_x = nx
         prev_y = ny
 
 
 @borrowing
-def _emit_stretch(write, fill, degree, x0, x1, x2, x3, y0, y1, y2, y3, a, b, edges_a, edges_b,
-                  xmin, ymin, xmax, ymax, source, out_ctrl, out_deg, out_first,
-                  out_start, out_from, si, sf):
+def _emit_stretch(out, state, opts, window, c, a, b, edges_a, edges_b):
     """Output the visible stretch [a, b] of a segment as a piece of its degree."""
-    qx0, qx1, qx2, qx3 = piece_values(degree, x0, x1, x2, x3, a, b)
-    qy0, qy1, qy2, qy3 = piece_values(degree, y0, y1, y2, y3, a, b)
-    sx, sy = _snap(qx0, qy0, edges_a, xmin, ymin, xmax, ymax)
-    # piece_values repeats the end in the unused slots: qx3, qy3 is the end.
-    ex, ey = _snap(qx3, qy3, edges_b, xmin, ymin, xmax, ymax)
-    _emit_piece(write, fill, degree, sx, ex if degree == 1 else qx1,
-                qx2 if degree == 3 else ex, ex, sy, ey if degree == 1 else qy1,
-                qy2 if degree == 3 else ey, ey, source, out_ctrl, out_deg, out_first, out_start,
-                out_from, si, sf)
+    q = _piece(c, a, b)
+    sx, sy = _snap(q.x[0], q.y[0], edges_a, window)
+    # piece_values repeats the end in the unused slots: q.x[3], q.y[3] is the end.
+    ex, ey = _snap(q.x[3], q.y[3], edges_b, window)
+    d = c.degree
+    _emit_piece(out, state, opts,
+                Curve(d, (sx, ex if d == 1 else q.x[1], q.x[2] if d == 3 else ex, ex),
+                      (sy, ey if d == 1 else q.y[1], q.y[2] if d == 3 else ey, ey)))
 
 
-@borrowing
-def _emit_exact(write, fill, degree, x0, x1, x2, x3, y0, y1, y2, y3, xmin, ymin, xmax, ymax,
-                source, brk_t, brk_e, out_ctrl, out_deg, out_first, out_start,
-                out_from, si, sf, st):
+@inlined
+def _emit_exact(out, state, work, opts, window, c):
     """Clip a whole ambiguous segment at its edge crossings (exact mode, level 0).
 
     The lean form of `_leaf` for the default depth: no pending interval to merge with,
     so stretches are emitted straight from the break table, neighbours merged.
     """
-    st[C.CLIPPED] += 1
-    n = edge_breaks(degree, x0, x1, x2, x3, y0, y1, y2, y3, 0.0, 1.0, xmin, ymin, xmax, ymax,
-                    brk_t, brk_e, st)
+    brk_t = work.break_t
+    brk_e = work.break_edges
+    work.counters[C.CLIPPED] += 1
+    n = edge_breaks(c, 0.0, 1.0, window, brk_t, brk_e, work.counters)
     open_k = -1  # first break of the visible stretch being extended
     for k in range(n - 1):
-        tm = 0.5 * (brk_t[k] + brk_t[k + 1])
-        inside = outcode(point_value(degree, x0, x1, x2, x3, tm),
-                         point_value(degree, y0, y1, y2, y3, tm), xmin, ymin, xmax, ymax) == 0
-        if inside:
+        mx, my = _point(c, 0.5 * (brk_t[k] + brk_t[k + 1]))
+        if _code(mx, my, window) == 0:
             if open_k < 0:
                 open_k = k
             continue
         if open_k >= 0:
-            _emit_stretch(write, fill, degree, x0, x1, x2, x3, y0, y1, y2, y3, brk_t[open_k],
-                          brk_t[k], brk_e[open_k], brk_e[k], xmin, ymin, xmax, ymax, source,
-                          out_ctrl, out_deg, out_first, out_start, out_from, si, sf)
+            _emit_stretch(out, state, opts, window, c, brk_t[open_k], brk_t[k], brk_e[open_k],
+                          brk_e[k])
             open_k = -1
-        ex, ey = _snap(point_value(degree, x0, x1, x2, x3, brk_t[k + 1]),
-                       point_value(degree, y0, y1, y2, y3, brk_t[k + 1]), brk_e[k + 1], xmin,
-                       ymin, xmax, ymax)
-        _outside(write, fill, ex, ey, xmin, ymin, xmax, ymax, out_ctrl, out_deg, si, sf)
+        px, py = _point(c, brk_t[k + 1])
+        ex, ey = _snap(px, py, brk_e[k + 1], window)
+        _outside(out, state, opts, window, ex, ey)
     if open_k >= 0:
-        _emit_stretch(write, fill, degree, x0, x1, x2, x3, y0, y1, y2, y3, brk_t[open_k],
-                      brk_t[n - 1], brk_e[open_k], brk_e[n - 1], xmin, ymin, xmax, ymax,
-                      source, out_ctrl, out_deg, out_first, out_start, out_from, si,
-                      sf)
+        _emit_stretch(out, state, opts, window, c, brk_t[open_k], brk_t[n - 1], brk_e[open_k],
+                      brk_e[n - 1])
 
 
 @borrowing
-def _pend(a, b, edges_a, edges_b, si, sf):
+def _pend(state, a, b, edges_a, edges_b):
     """Mark [a, b] visible; return whether it continues the pending interval."""
-    if si[_PEND] == 1 and sf[_PEND_B] == a:
-        sf[_PEND_B] = b
-        si[_PEND_EB] = edges_b
+    if state.ints[_PEND] == 1 and state.floats[_PEND_B] == a:
+        state.floats[_PEND_B] = b
+        state.ints[_PEND_EB] = edges_b
         return True
     return False
 
 
-@borrowing
-def _visible(write, fill, flatten, degree, x0, x1, x2, x3, y0, y1, y2, y3, a, b, edges_a,
-             edges_b, xmin, ymin, xmax, ymax, tol, source, out_ctrl, out_deg,
-             out_first, out_start, out_from, si, sf):
-    if _pend(a, b, edges_a, edges_b, si, sf):
+@inlined
+def _visible(out, state, opts, window, c, a, b, edges_a, edges_b):
+    """Make [a, b] (ends cut at edges `edges_a`, `edges_b`) of `c` the pending interval.
+
+    It extends the pending one if it continues it; otherwise that one is output first.
+    """
+    if _pend(state, a, b, edges_a, edges_b):
         return
-    _flush(write, fill, flatten, degree, x0, x1, x2, x3, y0, y1, y2, y3, xmin, ymin, xmax,
-           ymax, tol, source, out_ctrl, out_deg, out_first, out_start, out_from, si, sf)
+    _flush(out, state, opts, window, c)
+    si = state.ints
     si[_PEND] = 1
-    sf[_PEND_A] = a
-    sf[_PEND_B] = b
+    state.floats[_PEND_A] = a
+    state.floats[_PEND_B] = b
     si[_PEND_EA] = edges_a
     si[_PEND_EB] = edges_b
 
 
 @borrowing
-def _leaf(write, fill, flatten, degree, x0, x1, x2, x3, y0, y1, y2, y3, a, b, xmin, ymin,
-          xmax, ymax, tol, source, brk_t, brk_e, out_ctrl, out_deg, out_first,
-          out_start, out_from, si, sf, st):
-    """Clip the piece [a, b] exactly at its crossings with the edge lines."""
-    st[C.CLIPPED] += 1
-    n = edge_breaks(degree, x0, x1, x2, x3, y0, y1, y2, y3, a, b, xmin, ymin, xmax, ymax,
-                    brk_t, brk_e, st)
+def _leaf(out, state, work, opts, window, c, a, b):
+    """Clip the piece [a, b] of `c` exactly at its crossings with the edge lines."""
+    brk_t = work.break_t
+    brk_e = work.break_edges
+    work.counters[C.CLIPPED] += 1
+    n = edge_breaks(c, a, b, window, brk_t, brk_e, work.counters)
     for k in range(n - 1):
         t0 = brk_t[k]
         t1 = brk_t[k + 1]
-        tm = 0.5 * (t0 + t1)
-        code = outcode(point_value(degree, x0, x1, x2, x3, tm),
-                       point_value(degree, y0, y1, y2, y3, tm), xmin, ymin, xmax, ymax)
-        if code == 0:
-            _visible(write, fill, flatten, degree, x0, x1, x2, x3, y0, y1, y2, y3, t0, t1,
-                     brk_e[k], brk_e[k + 1], xmin, ymin, xmax, ymax, tol, source,
-                     out_ctrl, out_deg, out_first, out_start, out_from, si, sf)
+        mx, my = _point(c, 0.5 * (t0 + t1))
+        if _code(mx, my, window) == 0:
+            _visible(out, state, opts, window, c, t0, t1, brk_e[k], brk_e[k + 1])
         else:
-            _flush(write, fill, flatten, degree, x0, x1, x2, x3, y0, y1, y2, y3, xmin, ymin,
-                   xmax, ymax, tol, source, out_ctrl, out_deg, out_first, out_start,
-                   out_from, si, sf)
-            ex, ey = _snap(point_value(degree, x0, x1, x2, x3, t1),
-                           point_value(degree, y0, y1, y2, y3, t1), brk_e[k + 1], xmin, ymin,
-                           xmax, ymax)
-            _outside(write, fill, ex, ey, xmin, ymin, xmax, ymax, out_ctrl, out_deg,
-                     si, sf)
+            _flush(out, state, opts, window, c)
+            px, py = _point(c, t1)
+            ex, ey = _snap(px, py, brk_e[k + 1], window)
+            _outside(out, state, opts, window, ex, ey)
 
 
 @borrowing
-def clip_segment(write, fill, flatten, exact, degree, x0, x1, x2, x3, y0, y1, y2, y3, xmin,
-                 ymin, xmax, ymax, n_split, leaf_depth, tol, source, brk_t, brk_e,
-                 stack, out_ctrl, out_deg, out_first, out_start, out_from, si, sf, st):
-    """Clip one segment (degree 1..3, control points x0..x3, y0..y3) into the output."""
+def clip_segment(out, state, work, opts, window, c):
+    """Clip one segment `c` into the output: RNSCA on its pieces, with a stack."""
+    st = work.counters
+    stack = work.stack
     st[C.EVALUATED] += 1
-    c_or, c_and = _hull_codes(degree, x0, x1, x2, x3, y0, y1, y2, y3, xmin, ymin, xmax, ymax)
+    c_or, c_and = _hull_codes(c, window)
     if c_or == 0:
         st[C.ACCEPTED] += 1
         st[C.LEVELS] += 1
-        _visible(write, fill, flatten, degree, x0, x1, x2, x3, y0, y1, y2, y3, 0.0, 1.0, 0, 0,
-                 xmin, ymin, xmax, ymax, tol, source, out_ctrl, out_deg, out_first,
-                 out_start, out_from, si, sf)
-        _flush(write, fill, flatten, degree, x0, x1, x2, x3, y0, y1, y2, y3, xmin, ymin, xmax,
-               ymax, tol, source, out_ctrl, out_deg, out_first, out_start, out_from,
-               si, sf)
+        _visible(out, state, opts, window, c, 0.0, 1.0, 0, 0)
+        _flush(out, state, opts, window, c)
         return
     if c_and != 0:
         st[C.REJECTED] += 1
         st[C.LEVELS] += 1
-        end_x = x3 if degree == 3 else (x2 if degree == 2 else x1)
-        end_y = y3 if degree == 3 else (y2 if degree == 2 else y1)
-        _outside(write, fill, end_x, end_y, xmin, ymin, xmax, ymax, out_ctrl, out_deg,
-                 si, sf)
+        end_x = c.x[3] if c.degree == 3 else (c.x[2] if c.degree == 2 else c.x[1])
+        end_y = c.y[3] if c.degree == 3 else (c.y[2] if c.degree == 2 else c.y[1])
+        _outside(out, state, opts, window, end_x, end_y)
         return
     st[C.EVALUATED] -= 1  # counted again when popped
     stack[0, 0] = 0.0
@@ -725,38 +857,32 @@ def clip_segment(write, fill, flatten, exact, degree, x0, x1, x2, x3, y0, y1, y2
         if level > st[C.DEEPEST]:
             st[C.DEEPEST] = level
         st[C.EVALUATED] += 1
-        qx0, qx1, qx2, qx3 = piece_values(degree, x0, x1, x2, x3, a, b)
-        qy0, qy1, qy2, qy3 = piece_values(degree, y0, y1, y2, y3, a, b)
-        c_or, c_and = _hull_codes(degree, qx0, qx1, qx2, qx3, qy0, qy1, qy2, qy3, xmin, ymin,
-                                  xmax, ymax)
+        q = _piece(c, a, b)
+        c_or, c_and = _hull_codes(q, window)
         if c_or == 0:
             st[C.ACCEPTED] += 1
             st[C.LEVELS + slot] += 1
-            _visible(write, fill, flatten, degree, x0, x1, x2, x3, y0, y1, y2, y3, a, b, 0, 0,
-                     xmin, ymin, xmax, ymax, tol, source, out_ctrl, out_deg,
-                     out_first, out_start, out_from, si, sf)
+            _visible(out, state, opts, window, c, a, b, 0, 0)
             continue
         if c_and != 0:
             st[C.REJECTED] += 1
             st[C.LEVELS + slot] += 1
-            _flush(write, fill, flatten, degree, x0, x1, x2, x3, y0, y1, y2, y3, xmin, ymin,
-                   xmax, ymax, tol, source, out_ctrl, out_deg, out_first, out_start,
-                   out_from, si, sf)
-            _outside(write, fill, qx3, qy3, xmin, ymin, xmax, ymax, out_ctrl,
-                     out_deg, si, sf)
+            _flush(out, state, opts, window, c)
+            _outside(out, state, opts, window, q.x[3], q.y[3])
             continue
         # Ambiguous. A leaf when deep enough, or (flatten) flat enough, or (approx)
         # smaller than the tolerance.
-        if flatten:
-            is_leaf = level >= leaf_depth or flatten_count(
-                degree, qx0, qx1, qx2, qx3, qy0, qy1, qy2, qy3, tol) == 1
-        elif exact:
+        if opts.flatten:
+            is_leaf = level >= opts.leaf_depth or flatten_count(
+                q.degree, *q.x, *q.y, opts.tolerance) == 1
+        elif opts.exact:
             # A line's crossings cost no more on the whole than on a piece of it.
-            is_leaf = level >= leaf_depth or degree == 1
+            is_leaf = level >= opts.leaf_depth or c.degree == 1
         else:
-            size = max(max(qx0, qx1, qx2, qx3) - min(qx0, qx1, qx2, qx3),
-                       max(qy0, qy1, qy2, qy3) - min(qy0, qy1, qy2, qy3))
-            is_leaf = level >= leaf_depth or size <= tol
+            size = max(max(q.x[0], q.x[1], q.x[2], q.x[3]) - min(q.x[0], q.x[1], q.x[2], q.x[3]),
+                       max(q.y[0], q.y[1], q.y[2], q.y[3]) - min(q.y[0], q.y[1], q.y[2], q.y[3]))
+            is_leaf = level >= opts.leaf_depth or size <= opts.tolerance
+        n_split = opts.n_split
         if not is_leaf and sp + n_split <= stack.shape[0]:
             st[C.SUBDIVIDED] += 1
             for j in range(n_split, 0, -1):
@@ -766,119 +892,111 @@ def clip_segment(write, fill, flatten, exact, degree, x0, x1, x2, x3, y0, y1, y2
                 sp += 1
             continue
         st[C.LEVELS + slot] += 1
-        if flatten:
-            # The piece is flat: clip its chord as a line.
-            _flush(write, fill, flatten, degree, x0, x1, x2, x3, y0, y1, y2, y3, xmin, ymin,
-                   xmax, ymax, tol, source, out_ctrl, out_deg, out_first, out_start,
-                   out_from, si, sf)
-            _leaf(write, fill, False, 1, qx0, qx3, qx3, qx3, qy0, qy3, qy3, qy3, 0.0, 1.0,
-                  xmin, ymin, xmax, ymax, tol, source, brk_t, brk_e, out_ctrl, out_deg,
-                  out_first, out_start, out_from, si, sf, st)
-            _flush(write, fill, False, 1, qx0, qx3, qx3, qx3, qy0, qy3, qy3, qy3, xmin, ymin,
-                   xmax, ymax, tol, source, out_ctrl, out_deg, out_first, out_start,
-                   out_from, si, sf)
-        elif exact:
-            _leaf(write, fill, flatten, degree, x0, x1, x2, x3, y0, y1, y2, y3, a, b, xmin,
-                  ymin, xmax, ymax, tol, source, brk_t, brk_e, out_ctrl, out_deg,
-                  out_first, out_start, out_from, si, sf, st)
+        if opts.flatten:
+            # The piece is flat: clip its chord as a line (a line is never flattened).
+            chord = _line(q.x[0], q.y[0], q.x[3], q.y[3])
+            _flush(out, state, opts, window, c)
+            _leaf(out, state, work, opts, window, chord, 0.0, 1.0)
+            _flush(out, state, opts, window, chord)
+        elif opts.exact:
+            _leaf(out, state, work, opts, window, c, a, b)
         else:
             st[C.DROPPED] += 1
-            _flush(write, fill, flatten, degree, x0, x1, x2, x3, y0, y1, y2, y3, xmin, ymin,
-                   xmax, ymax, tol, source, out_ctrl, out_deg, out_first, out_start,
-                   out_from, si, sf)
-            _outside(write, fill, qx3, qy3, xmin, ymin, xmax, ymax, out_ctrl,
-                     out_deg, si, sf)
-    _flush(write, fill, flatten, degree, x0, x1, x2, x3, y0, y1, y2, y3, xmin, ymin, xmax,
-           ymax, tol, source, out_ctrl, out_deg, out_first, out_start, out_from, si, sf)
+            _flush(out, state, opts, window, c)
+            _outside(out, state, opts, window, q.x[3], q.y[3])
+    _flush(out, state, opts, window, c)
 
 
 @borrowing
-def _reverse_segments(out_ctrl, out_deg, a, b):
+def _reverse_segments(out, a, b):
     """Reverse the order of the output segments a..b-1."""
     i = a
     j = b - 1
     while i < j:
         for r in range(4):
-            for c in range(2):
-                tmp = out_ctrl[i, r, c]
-                out_ctrl[i, r, c] = out_ctrl[j, r, c]
-                out_ctrl[j, r, c] = tmp
-        d = out_deg[i]
-        out_deg[i] = out_deg[j]
-        out_deg[j] = d
+            for k in range(2):
+                tmp = out.controls[i, r, k]
+                out.controls[i, r, k] = out.controls[j, r, k]
+                out.controls[j, r, k] = tmp
+        d = out.degree[i]
+        out.degree[i] = out.degree[j]
+        out.degree[j] = d
         i += 1
         j -= 1
 
 
 @borrowing
-def _rotate_last_chain(s0, s_end, v0, v_end, out_ctrl, out_deg, out_first, out_start):
+def _rotate_last_chain(out, s0, s_end, v0, v_end):
     """Move the last chain of a closed stroke in front of its first one, joining them.
 
-    The chains of the subpath are ``out_first[s0:s_end]`` over segments v0..v_end-1;
+    The chains of the subpath are ``out.first[s0:s_end]`` over segments v0..v_end-1;
     the last chain ends where the first begins (the subpath's start point).
     """
-    last_first = out_first[s_end - 1]
+    last_first = out.first[s_end - 1]
     k = v_end - last_first
     # Rotate v0..v_end-1 right by k in place (three reversals: no scratch array).
-    _reverse_segments(out_ctrl, out_deg, v0, v_end)
-    _reverse_segments(out_ctrl, out_deg, v0, v0 + k)
-    _reverse_segments(out_ctrl, out_deg, v0 + k, v_end)
+    _reverse_segments(out, v0, v_end)
+    _reverse_segments(out, v0, v0 + k)
+    _reverse_segments(out, v0 + k, v_end)
     for s in range(s0 + 1, s_end - 1):
-        out_first[s] += k
-    out_start[s0, 0] = out_start[s_end - 1, 0]
-    out_start[s0, 1] = out_start[s_end - 1, 1]
+        out.first[s] += k
+    out.start[s0, 0] = out.start[s_end - 1, 0]
+    out.start[s0, 1] = out.start[s_end - 1, 1]
 
 
-@borrowing
-def _end_subpath(write, fill, closed, controls, last, sx, sy, xmin, ymin, xmax, ymax, v0, s0,
-                 out_ctrl, out_deg, out_first, out_start, out_closed, out_from, si, sf):
-    """Finish the output of a subpath whose segments first..last-1 have been clipped.
+@inlined
+def _end_subpath(out, state, opts, window, closed, end_x, end_y):
+    """Finish the output of an input subpath whose segments have been clipped.
 
+    `closed` is the input subpath's flag, (end_x, end_y) its last segment's end.
     Fill: return to the clamped start and keep the closed subpath, unless it is only
     boundary lines winding around no point. Strokes: a closed subpath visible whole
     stays closed; otherwise its last chain is joined to its first at the start point.
     """
-    if fill:
-        cx = clamp(sx, xmin, xmax)
-        cy = clamp(sy, ymin, ymax)
+    si = state.ints
+    sf = state.floats
+    sx = sf[_START_X]
+    sy = sf[_START_Y]
+    v0 = si[_V0]
+    s0 = si[_S0]
+    if opts.fill:
+        cx = clamp(sx, window.xmin, window.xmax)
+        cy = clamp(sy, window.ymin, window.ymax)
         if sf[_CUR_X] != cx or sf[_CUR_Y] != cy:
-            _put_line(write, cx, cy, out_ctrl, out_deg, si, sf)
-        if si[_VISIBLE] == 0 and abs(sf[_AREA]) < (xmax - xmin) * (ymax - ymin):
+            _put_line(out, state, cx, cy)
+        area = (window.xmax - window.xmin) * (window.ymax - window.ymin)
+        if si[_VISIBLE] == 0 and abs(sf[_AREA]) < area:
             # Only boundary lines, winding around no point of the window: nothing.
             si[_V] = v0
             si[_S] = s0
-        elif write:
-            out_closed[s0] = True
+        elif out.write:
+            out.closed[s0] = True
         return
     if not closed or si[_S] == s0:
         return
-    end_x = controls[last - 1, 3, 0]
-    end_y = controls[last - 1, 3, 1]
     whole = si[_BROKEN] == 0 and si[_S] == s0 + 1
     if whole:
         if end_x != sx or end_y != sy:
             si[_V] -= 1  # the explicit closing line: Z draws it
-        if write:
-            out_closed[s0] = True
+        if out.write:
+            out.closed[s0] = True
     elif (si[_FIRST_AT_START] == 1 and si[_OPEN] == 1 and si[_S] >= s0 + 2
           and sf[_CUR_X] == sx and sf[_CUR_Y] == sy):
         # The output keeps its counted size: the freed subpath entry is marked with
         # source -1 for the caller to drop (joins are rare; one pass over the table).
-        if write:
-            _rotate_last_chain(s0, si[_S], v0, si[_V], out_ctrl, out_deg, out_first,
-                               out_start)
-            out_from[si[_S] - 1] = -1
-
+        if out.write:
+            _rotate_last_chain(out, s0, si[_S], v0, si[_V])
+            out.source[si[_S] - 1] = -1
 
 
 @borrowing
-def _emit_flattened(write, fill, x0, y0, a, b, points, source, out_ctrl, out_deg, out_first,
-                    out_start, out_from, si, sf, st):
+def _emit_flattened(out, state, work, opts, x0, y0, points, a, b):
     """Output an accepted curve (flatten mode) as lines from (x0, y0) through points a..b-1.
 
     What `clip_segment` does with an accepted curve, from points computed elsewhere: the
     same counters, the same lines.
     """
+    st = work.counters
     st[C.EVALUATED] += 1
     st[C.ACCEPTED] += 1
     st[C.LEVELS] += 1
@@ -887,18 +1005,43 @@ def _emit_flattened(write, fill, x0, y0, a, b, points, source, out_ctrl, out_deg
     for p in range(a, b):
         nx = points[p, 0]
         ny = points[p, 1]
-        _emit_piece(write, fill, 1, prev_x, nx, nx, nx, prev_y, ny, ny, ny, source, out_ctrl,
-                    out_deg, out_first, out_start, out_from, si, sf)
+        _emit_piece(out, state, opts, _line(prev_x, prev_y, nx, ny))
         prev_x = nx
         prev_y = ny
 
 
+@inlined
+def _begin_input_subpath(state, k, paths, v0, v_end, s0):
+    """Reset the working state for input subpath k, whose output starts at v0 and s0."""
+    si = state.ints
+    sf = state.floats
+    for q in range(_INT_STATE_WIDTH):
+        si[q] = 0
+    for q in range(_FLOAT_STATE_WIDTH):
+        sf[q] = 0.0
+    si[_V] = v0
+    si[_V_END] = v_end
+    si[_S] = s0
+    si[_V0] = v0
+    si[_S0] = s0
+    si[_SOURCE] = paths.source[k]
+    sf[_START_X] = paths.start[k, 0]
+    sf[_START_Y] = paths.start[k, 1]
+
+
+@inlined
+def _decide_run(paths, window, opts, i, j):
+    """Return the decision (``_RUN_*``) of the run of segments i..j-1 by its box."""
+    lo_x, lo_y, hi_x, hi_y = _run_box(paths.controls, i, j)
+    c_lo = _code(lo_x, lo_y, window)
+    c_hi = _code(hi_x, hi_y, window)
+    if (c_lo | c_hi) == 0 and not opts.flatten:
+        return _RUN_ACCEPTED
+    return _RUN_REJECTED if (c_lo & c_hi) != 0 else _RUN_SEGMENTED
+
+
 @borrowing
-def _clip_subpaths(write, fill, flatten, exact, controls, degree, subpath_offsets, closed,
-                   start, subpath_source, xmin, ymin, xmax, ymax, n_split, leaf_depth, tol, k0,
-                   k1, segment_start, subpath_start, n_segments, n_subpaths, run_decisions,
-                   brk_t, brk_e, stack, out_ctrl, out_deg, out_first, out_start, out_closed,
-                   out_from, si, sf, st, decided, segment_class, point_start, points):
+def _clip_subpaths(paths, window, opts, decisions, layout, out, state, work, k0, k1):
     """Count or write the clipped output of subpaths k0..k1-1 (one block).
 
     Subpath k, segments ``first..last-1`` starting at (sx, sy), gives as strokes its
@@ -908,74 +1051,63 @@ def _clip_subpaths(write, fill, flatten, exact, controls, degree, subpath_offset
     visible and the boundary path winds around no point. One function for the whole
     block: a call per subpath passing these arrays cost more than a short subpath's clip.
 
-    With `decided`, each run's decision is already in `run_decisions`, each input
-    segment's class is ``segment_class[g]`` (`SEGMENT_*`) and, in flatten mode, an
-    accepted curve's lines end at ``points[point_start[g]:point_start[g + 1]]``
-    (`flatten_into`'s points), all computed elsewhere (the OpenCL
-    backend); the closing lines and the ambiguous segments are done here.
+    With ``decisions.given``, each run's decision, each segment's class and, in flatten
+    mode, the points of the accepted curves' lines are given (computed elsewhere: the
+    OpenCL backend); the closing lines and the ambiguous segments are done here.
     """
+    si = state.ints
+    st = work.counters
+    fill = opts.fill
+    controls = paths.controls
     for k in range(k0, k1):
         v0 = 0
         v_end = np.iinfo(np.int64).max
         s0 = 0
-        if write:
-            if n_subpaths[k] == 0:
+        if out.write:
+            if layout.n_subpaths[k] == 0:
                 continue
-            v0 = segment_start[k]
-            v_end = v0 + n_segments[k]
-            s0 = subpath_start[k]
-        first = subpath_offsets[k]
-        last = subpath_offsets[k + 1]
-        sx = start[k, 0]
-        sy = start[k, 1]
-        source = subpath_source[k]
-        for q in range(_INT_STATE_WIDTH):
-            si[q] = 0
-        for q in range(_FLOAT_STATE_WIDTH):
-            sf[q] = 0.0
-        si[_V] = v0
-        si[_V_END] = v_end
-        si[_S] = s0
-        sf[_START_X] = sx
-        sf[_START_Y] = sy
+            v0 = layout.segment_start[k]
+            v_end = v0 + layout.n_segments[k]
+            s0 = layout.subpath_start[k]
+        first = paths.subpath_offsets[k]
+        last = paths.subpath_offsets[k + 1]
+        sx = paths.start[k, 0]
+        sy = paths.start[k, 1]
+        closed = paths.closed[k]
+        _begin_input_subpath(state, k, paths, v0, v_end, s0)
         if first == last:
             # A lone moveto: nothing to fill; as a stroke, a dot (caps) if in the window.
-            if not fill and outcode(sx, sy, xmin, ymin, xmax, ymax) == 0:
-                _begin_subpath(write, sx, sy, source, out_first, out_start, out_from, si, sf)
-                if write:
-                    out_closed[s0] = closed[k]
-            if not write:
-                n_segments[k] = si[_V]
-                n_subpaths[k] = si[_S]
+            if not fill and _code(sx, sy, window) == 0:
+                _begin_subpath(out, state, sx, sy)
+                if out.write:
+                    out.closed[s0] = closed
+            if not out.write:
+                layout.n_segments[k] = si[_V]
+                layout.n_subpaths[k] = si[_S]
             continue
         if fill:
-            _begin_subpath(write, clamp(sx, xmin, xmax), clamp(sy, ymin, ymax), source,
-                           out_first, out_start, out_from, si, sf)
-        end = last + 1 if (fill or closed[k]) else last  # index `last`: the closing line
+            _begin_subpath(out, state, clamp(sx, window.xmin, window.xmax),
+                           clamp(sy, window.ymin, window.ymax))
+        end = last + 1 if (fill or closed) else last  # index `last`: the closing line
         i = first
         while i < end:
             j = min(i + RUN_SEGMENTS, last)
             if j - i >= 2:
                 # Run level: the box of the run's control points decides it whole, as a
-                # piece's hull decides a piece (copy it, or skip it: no per-segment work).
-                if write or decided:
+                # piece's hull decides a piece (copy it, or skip it: no per-segment state).
+                if out.write or decisions.given:
                     # The count pass's (or the device's): the same box, the same test.
-                    decision = run_decisions[i]
+                    decision = decisions.runs[i]
                 else:
-                    lo_x, lo_y, hi_x, hi_y = _run_box(controls, i, j)
-                    c_lo = outcode(lo_x, lo_y, xmin, ymin, xmax, ymax)
-                    c_hi = outcode(hi_x, hi_y, xmin, ymin, xmax, ymax)
-                    decision = _RUN_ACCEPTED if (c_lo | c_hi) == 0 and not flatten else (
-                        _RUN_REJECTED if (c_lo & c_hi) != 0 else _RUN_SEGMENTED)
-                    run_decisions[i] = decision
+                    decision = _decide_run(paths, window, opts, i, j)
+                    decisions.runs[i] = decision
                 st[C.RUNS_EVALUATED] += 1
                 if decision == _RUN_ACCEPTED:
                     st[C.RUNS_ACCEPTED] += 1
                     st[C.RUN_LEVELS] += 1
                     st[C.SEGMENT_LEVELS] += j - i
-                    _arrive_at(write, fill, controls[i, 0, 0], controls[i, 0, 1], source,
-                               out_ctrl, out_deg, out_first, out_start, out_from, si, sf)
-                    _put_run(write, controls, degree, i, j, out_ctrl, out_deg, si, sf)
+                    _arrive_at(out, state, opts, controls[i, 0, 0], controls[i, 0, 1])
+                    _put_run(out, state, paths, i, j)
                     i = j
                     continue
                 if decision == _RUN_REJECTED:
@@ -984,8 +1116,7 @@ def _clip_subpaths(write, fill, flatten, exact, controls, degree, subpath_offset
                     st[C.SEGMENT_LEVELS] += j - i
                     si[_BROKEN] = 1
                     if fill:
-                        _clamp_to(write, controls[j - 1, 3, 0], controls[j - 1, 3, 1], xmin, ymin,
-                                  xmax, ymax, out_ctrl, out_deg, si, sf)
+                        _clamp_to(out, state, window, controls[j - 1, 3, 0], controls[j - 1, 3, 1])
                     else:
                         si[_OPEN] = 0
                     i = j
@@ -995,49 +1126,32 @@ def _clip_subpaths(write, fill, flatten, exact, controls, degree, subpath_offset
                 j = i + 1
             for g in range(i, j):
                 if g < last:
-                    d = degree[g]
-                    x0 = controls[g, 0, 0]
-                    x1 = controls[g, 1, 0]
-                    x2 = controls[g, 2, 0]
-                    x3 = controls[g, 3, 0]
-                    y0 = controls[g, 0, 1]
-                    y1 = controls[g, 1, 1]
-                    y2 = controls[g, 2, 1]
-                    y3 = controls[g, 3, 1]
+                    c = _segment(controls, paths.degree, g)
                 else:
                     # The closing line back to the start: filled subpaths are always closed.
-                    d = 1
-                    x0 = controls[last - 1, 3, 0]
-                    y0 = controls[last - 1, 3, 1]
-                    x1 = sx
-                    y1 = sy
-                    x2 = sx
-                    y2 = sy
-                    x3 = sx
-                    y3 = sy
+                    c = _line(controls[last - 1, 3, 0], controls[last - 1, 3, 1], sx, sy)
+                x0, x1, x2, x3 = c.x
+                y0, y1, y2, y3 = c.y
                 if x0 == x1 == x2 == x3 and y0 == y1 == y2 == y3:
                     continue  # a point: nothing to draw, nothing to clamp
                 # Level 0 inline: most segments are decided here, and a call would pass every
                 # array's fields (more than the test itself costs).
-                if decided and g < last:
-                    accepted = segment_class[g] == SEGMENT_ACCEPTED
-                    rejected = segment_class[g] == SEGMENT_REJECTED
+                if decisions.given and g < last:
+                    accepted = decisions.segment_class[g] == SEGMENT_ACCEPTED
+                    rejected = decisions.segment_class[g] == SEGMENT_REJECTED
                 else:
-                    c_or, c_and = _hull_codes(d, x0, x1, x2, x3, y0, y1, y2, y3, xmin, ymin,
-                                              xmax, ymax)
+                    c_or, c_and = _hull_codes(c, window)
                     accepted = c_or == 0
                     rejected = c_and != 0
-                if accepted and not (flatten and d > 1):
+                if accepted and not (opts.flatten and c.degree > 1):
                     st[C.EVALUATED] += 1
                     st[C.ACCEPTED] += 1
                     st[C.LEVELS] += 1
-                    _emit_piece(write, fill, d, x0, x1, x2, x3, y0, y1, y2, y3, source,
-                                out_ctrl, out_deg, out_first, out_start, out_from, si, sf)
+                    _emit_piece(out, state, opts, c)
                     continue
-                if accepted and decided and g < last:
-                    _emit_flattened(write, fill, x0, y0, point_start[g], point_start[g + 1],
-                                    points, source, out_ctrl, out_deg, out_first, out_start,
-                                    out_from, si, sf, st)
+                if accepted and decisions.given and g < last:
+                    _emit_flattened(out, state, work, opts, x0, y0, decisions.points,
+                                    decisions.point_start[g], decisions.point_start[g + 1])
                     continue
                 if rejected:
                     st[C.EVALUATED] += 1
@@ -1045,71 +1159,53 @@ def _clip_subpaths(write, fill, flatten, exact, controls, degree, subpath_offset
                     st[C.LEVELS] += 1
                     si[_BROKEN] = 1
                     if fill:
-                        _clamp_to(write, x3, y3, xmin, ymin, xmax, ymax, out_ctrl, out_deg, si,
-                                  sf)
+                        _clamp_to(out, state, window, x3, y3)
                     else:
                         si[_OPEN] = 0
                     continue
-                if exact and leaf_depth == 0 and not flatten:
+                if opts.exact and opts.leaf_depth == 0 and not opts.flatten:
                     st[C.EVALUATED] += 1
                     st[C.LEVELS] += 1
-                    _emit_exact(write, fill, d, x0, x1, x2, x3, y0, y1, y2, y3, xmin, ymin, xmax,
-                                ymax, source, brk_t, brk_e, out_ctrl, out_deg, out_first,
-                                out_start, out_from, si, sf, st)
+                    _emit_exact(out, state, work, opts, window, c)
                     continue
-                clip_segment(write, fill, flatten, exact, d, x0, x1, x2, x3, y0, y1, y2, y3, xmin,
-                             ymin, xmax, ymax, n_split, leaf_depth, tol, source, brk_t,
-                             brk_e, stack, out_ctrl, out_deg, out_first, out_start, out_from, si,
-                             sf, st)
+                clip_segment(out, state, work, opts, window, c)
             i = j
-        if write:
+        if out.write:
             for s in range(s0, si[_S]):
-                out_closed[s] = False
-        if fill or (closed[k] and si[_S] != s0):
-            _end_subpath(write, fill, closed[k], controls, last, sx, sy, xmin, ymin, xmax,
-                         ymax, v0, s0, out_ctrl, out_deg, out_first, out_start,
-                         out_closed, out_from, si, sf)
-        if not write:
-            n_segments[k] = si[_V]
-            n_subpaths[k] = si[_S]
+                out.closed[s] = False
+        if fill or (closed and si[_S] != s0):
+            _end_subpath(out, state, opts, window, closed, controls[last - 1, 3, 0],
+                         controls[last - 1, 3, 1])
+        if not out.write:
+            layout.n_segments[k] = si[_V]
+            layout.n_subpaths[k] = si[_S]
 
 
 @parallel
-def clip_path_blocks(controls, degree, subpath_offsets, closed, start, subpath_source, xmin,
-                     ymin, xmax, ymax, fill, flatten, exact, n_split, leaf_depth, tol,
-                     block_size, write, segment_start, subpath_start, out_ctrl, out_deg,
-                     out_first, out_start, out_closed, out_from, n_segments, n_subpaths,
-                     run_decisions, counters, decided, segment_class, point_start, points):
-    """Count (``write=False``) or write the clipped subpaths of a path array.
+def clip_path_blocks(paths, window, opts, decisions, layout, out, counters, block_size):
+    """Count (``out.write`` False) or write the clipped subpaths of a path array.
 
-    Subpath k is the segments ``subpath_offsets[k]:subpath_offsets[k+1]`` of `controls`
-    (m, 4, 2) and `degree` (m,), starting at ``start[k]``. The count pass stores each
-    subpath's output size in `n_segments`, `n_subpaths` (and the stats, one counter row
-    per block); the write pass writes subpath k's output from ``segment_start[k]`` and
-    ``subpath_start[k]`` on: control points and degrees, and for each output subpath
-    its first segment, start point, closed flag and source (``subpath_source[k]``, or
-    -1 for an entry freed by joining the ends of a closed stroke: drop those).
-    `run_decisions` (int8, one per input segment) keeps the count pass's decision of
-    each run (at its first segment) for the write pass, which does not test runs again.
-    With `decided`, the runs' decisions, the segments' classes and the accepted curves'
-    flattened points are given (`run_decisions`, `segment_class`, `point_start`,
-    `points`; see `_clip_subpaths`); otherwise those are empty and unused.
+    Subpath k of `paths` (`PathInput`) is cut to `window` as `opts` says, block by block
+    (`block_size` subpaths each). The count pass stores each subpath's output size in
+    ``layout.n_segments``, ``layout.n_subpaths`` (and the stats, one row of `counters`
+    per block) and each run's decision in ``decisions.runs``, unless given; the write
+    pass writes subpath k's output from ``layout.segment_start[k]`` and
+    ``layout.subpath_start[k]`` on: control points and degrees, and for each output
+    subpath its first segment, start point, closed flag and source (``paths.source[k]``,
+    or -1 for an entry freed by joining the ends of a closed stroke: drop those). The
+    write pass reads the runs' decisions, it does not test runs again.
     """
-    n = subpath_offsets.shape[0] - 1
+    n = paths.subpath_offsets.shape[0] - 1
     n_blocks = counters.shape[0]
     for blk in prange(n_blocks):
-        st = np.zeros(C.WIDTH, dtype=np.int64) if write else counters[blk]
-        si = np.zeros(_INT_STATE_WIDTH, dtype=np.int64)
-        sf = np.zeros(_FLOAT_STATE_WIDTH, dtype=np.float64)
-        brk_t = np.empty(BREAK_CAPACITY, dtype=np.float64)
-        brk_e = np.empty(BREAK_CAPACITY, dtype=np.int64)
-        stack = np.empty((CURVE_STACK_CAPACITY, 3), dtype=np.float64)
-        _clip_subpaths(write, fill, flatten, exact, controls, degree, subpath_offsets, closed,
-                       start, subpath_source, xmin, ymin, xmax, ymax, n_split, leaf_depth, tol,
-                       blk * block_size, min(n, (blk + 1) * block_size), segment_start,
-                       subpath_start, n_segments, n_subpaths, run_decisions, brk_t,
-                       brk_e, stack, out_ctrl, out_deg, out_first, out_start, out_closed,
-                       out_from, si, sf, st, decided, segment_class, point_start, points)
+        state = State(np.zeros(_INT_STATE_WIDTH, dtype=np.int64),
+                      np.zeros(_FLOAT_STATE_WIDTH, dtype=np.float64))
+        work = Work(np.zeros(C.WIDTH, dtype=np.int64) if out.write else counters[blk],
+                    np.empty(BREAK_CAPACITY, dtype=np.float64),
+                    np.empty(BREAK_CAPACITY, dtype=np.int64),
+                    np.empty((CURVE_STACK_CAPACITY, 3), dtype=np.float64))
+        _clip_subpaths(paths, window, opts, decisions, layout, out, state, work,
+                       blk * block_size, min(n, (blk + 1) * block_size))
 
 
 @scalar

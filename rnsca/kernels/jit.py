@@ -23,9 +23,18 @@ refuses to compile it if it tries), nor keep a view of an argument beyond the ca
 ``inlined`` helpers are inlined by Numba into each caller before compiling; inside a
 ``borrowing`` caller they count no references either.
 
-``_nrt=False`` is a private option of ``numba.njit``, used here and nowhere else;
+``allocating`` is for helpers that allocate but are called from a ``borrowing`` one. A
+function compiled for a ``borrowing`` caller inherits its no-NRT setting unless it sets
+its own, so a ``scalar`` helper that allocates cannot be called there; ``allocating``
+sets ``_nrt=True`` and keeps Numba's runtime whoever calls it (counting references to
+the arrays it is given, once per call). The polygon clip borrows its scratch per polygon
+and calls such a helper only to split a walk's loops and for the ring-by-ring fallback
+(measured: 100,000 polygons with holes 7% faster than counting references per polygon).
+
+``_nrt`` is a private option of ``numba.njit``, used here and nowhere else;
 ``tests/unit/kernels/test_jit.py`` fails if a Numba release stops honouring it (then
-``borrowing`` functions would count references again, silently slower).
+``borrowing`` functions would count references again, silently slower, or
+``allocating`` ones fail to compile under a ``borrowing`` caller).
 
 Nothing here changes the process: how idle OpenMP threads wait is the application's
 choice (`rnsca.runtime.prefer_passive_openmp_wait`).
@@ -33,9 +42,10 @@ choice (`rnsca.runtime.prefer_passive_openmp_wait`).
 
 import numba
 
-__all__ = ["scalar", "parallel", "borrowing", "inlined"]
+__all__ = ["scalar", "parallel", "borrowing", "inlined", "allocating"]
 
 scalar = numba.njit(cache=True, nogil=True, error_model="numpy")
 parallel = numba.njit(cache=True, nogil=True, parallel=True, error_model="numpy")
 borrowing = numba.njit(cache=True, nogil=True, error_model="numpy", _nrt=False)
 inlined = numba.njit(cache=True, nogil=True, error_model="numpy", inline="always")
+allocating = numba.njit(cache=True, nogil=True, error_model="numpy", _nrt=True)

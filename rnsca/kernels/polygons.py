@@ -16,27 +16,45 @@ result is the window, with the holes inside it) or outside it.
 
 Boundary positions are compared exactly, as (edge, coordinate along the edge): every
 cut point has its edge coordinate exactly on the edge line (see `outcode.end_point`).
+
+The kernels take records (named tuples): the rings and polygons with their windows
+(`Polygons`), where the output goes (`PolygonsOut`) and how much of it there is
+(`PolygonCounts`), what the count pass decided per polygon (`PolygonPlan`), and one
+block's scratch (`PolygonScratch`: chains, logical chains, boundary events, ring states,
+the walk, the closed rings). `clip_polygon` reads as its steps, each a function inlined
+into it; it borrows the scratch (no reference counts per polygon), and only the helpers
+that must allocate (`_split_loops`, the ring-by-ring fallback) are ``allocating``.
 """
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numba import prange
 
 from rnsca.kernels import counters as C
-from rnsca.kernels.jit import borrowing, parallel, scalar
+from rnsca.kernels.jit import allocating, borrowing, inlined, parallel, scalar
 from rnsca.kernels.outcode import line_coordinate
 from rnsca.kernels.polylines import (
     RUN_STACK_CAPACITY,
+    BlockState,
+    ChainsOut,
+    Cut,
+    PartPlan,
     assemble_chains,
     bound_chains,
     clip_chains,
     run_box_codes,
 )
-from rnsca.kernels.segments import STACK_CAPACITY
+from rnsca.kernels.records import window_of
+from rnsca.kernels.segments import segment_stack
 
 __all__ = [
     "AMBIGUOUS",
+    "PolygonCounts",
+    "PolygonPlan",
+    "Polygons",
+    "PolygonsOut",
     "boundary_key",
     "classify_polygons",
     "clip_polygon_blocks",
@@ -50,6 +68,153 @@ __all__ = [
 _BOTTOM, _RIGHT, _TOP, _LEFT = 0, 1, 2, 3
 # Ring states after cutting.
 _UNTOUCHED, _FULL, _CUT = 0, 1, 2
+
+
+class Polygons(NamedTuple):
+    """The rings and polygons of a ragged polygon array, and their windows.
+
+    Polygon p has rings ``polygon_offsets[p]`` to ``polygon_offsets[p+1] - 1`` (the
+    shell first); ring r runs through vertices ``ring_offsets[r]`` to
+    ``ring_offsets[r+1] - 1`` (of a `Vertices`), closed; polygon p is clipped against
+    ``window_of(windows, polygon_window, p)``.
+    """
+
+    ring_offsets: np.ndarray
+    polygon_offsets: np.ndarray
+    windows: np.ndarray
+    polygon_window: np.ndarray
+
+
+class PolygonsOut(NamedTuple):
+    """Where clipped polygons go: vertices, ring starts, rings per output polygon.
+
+    Polygons are written from ``xy[v]`` (and ``z[v]``), their rings' starts from
+    ``ring_starts[n_rings]`` and their ring counts from ``poly_rings[n_polys]``.
+    Without `write` (the count pass) the arrays are one polygon's scratch, and a
+    polygon clipped ring by ring (`sutherland_hodgman`) is only counted.
+    """
+
+    write: bool
+    xy: np.ndarray
+    z: np.ndarray
+    ring_starts: np.ndarray
+    poly_rings: np.ndarray
+
+
+class PolygonCounts(NamedTuple):
+    """Per polygon: output vertices, rings and polygons (the count pass), and their starts.
+
+    The starts (exclusive sums of the counts) are empty in the count pass.
+    """
+
+    n_vertices: np.ndarray
+    n_rings: np.ndarray
+    n_polys: np.ndarray
+    vertex_start: np.ndarray
+    ring_start: np.ndarray
+    poly_start: np.ndarray
+
+
+class PolygonPlan(NamedTuple):
+    """Per polygon, from the count pass: its class, and the chain scratch its clip needs.
+
+    `polygon_class` is int8 (`polygon_class_of`); `scratch_vertices` and
+    `scratch_chains` bound the vertices and chains of the ambiguous polygons' rings
+    (`bound_chains`).
+    """
+
+    polygon_class: np.ndarray
+    scratch_vertices: np.ndarray
+    scratch_chains: np.ndarray
+
+
+class LogicalChains(NamedTuple):
+    """The chains the walk joins, one row each (int64, or bool for the flags).
+
+    A logical chain is range 1 (``start1..end1-1``) then range 2 (``start2..end2-1``)
+    of the chain scratch (range 2 is the first chain of a ring, continued across its
+    closing vertex), read backwards if the ring was `reversed` to orient it; `visited`
+    by the walk; `ring` is the ring (of the polygon) it comes from.
+    """
+
+    start1: np.ndarray
+    end1: np.ndarray
+    start2: np.ndarray
+    end2: np.ndarray
+    reversed: np.ndarray
+    visited: np.ndarray
+    ring: np.ndarray
+
+
+class Events(NamedTuple):
+    """Boundary events: event ``2k`` is the start of logical chain k, ``2k + 1`` its end.
+
+    Event e lies at ``(edge[e], s[e])`` (`boundary_key`) and enters or leaves at
+    ``angle[e]`` (`_event_angle`); ``order`` lists the events counter-clockwise along
+    the boundary, and ``rank[e]`` is e's position in it.
+    """
+
+    edge: np.ndarray
+    s: np.ndarray
+    angle: np.ndarray
+    order: np.ndarray
+    rank: np.ndarray
+
+
+class RingStates(NamedTuple):
+    """The rings of the polygon being clipped, by position in it (0: the shell).
+
+    `state` (`_UNTOUCHED`, `_FULL`, `_CUT`), whether the ring was `reversed` to orient
+    it, and its `first` and `last` vertex.
+    """
+
+    state: np.ndarray
+    reversed: np.ndarray
+    first: np.ndarray
+    last: np.ndarray
+
+
+class Walk(NamedTuple):
+    """The ring a walk builds (``xy``, ``z``), and `index`, a stack of its vertex indices."""
+
+    xy: np.ndarray
+    z: np.ndarray
+    index: np.ndarray
+
+
+class ClosedRings(NamedTuple):
+    """The closed rings found for a polygon, before they are grouped into pieces.
+
+    Ring j is ``xy[start[j]:start[j+1]]`` (and `z`); `sign` 1 for a shell
+    (counter-clockwise), -1 for a hole; `done` marks holes given to a shell.
+    """
+
+    xy: np.ndarray
+    z: np.ndarray
+    start: np.ndarray
+    sign: np.ndarray
+    done: np.ndarray
+
+
+class Corners(NamedTuple):
+    """The Z of each window corner lying on an input segment (`known`), by `_corner_after`."""
+
+    z: np.ndarray
+    known: np.ndarray
+
+
+class PolygonScratch(NamedTuple):
+    """One block's scratch for clipping its ambiguous polygons, sized by the largest."""
+
+    block: BlockState
+    chains: ChainsOut
+    logical: LogicalChains
+    events: Events
+    rings: RingStates
+    walk: Walk
+    closed: ClosedRings
+    corners: Corners
+    no_plan: PartPlan
 
 
 @borrowing
@@ -100,12 +265,13 @@ def point_in_ring(px, py, xy, first, last):
 
 
 @scalar
-def boundary_key(x, y, xmin, ymin, xmax, ymax):
+def boundary_key(x, y, window):
     """Return (edge, s): the position of a boundary point, counter-clockwise from (xmin, ymin).
 
     `s` increases counter-clockwise along `edge`; a corner belongs to the edge it ends.
     A point off the boundary (never produced by exact clipping) is put on the nearest edge.
     """
+    xmin, ymin, xmax, ymax = window
     if y == ymin:
         return _BOTTOM, x
     if x == xmax:
@@ -129,8 +295,9 @@ def boundary_key(x, y, xmin, ymin, xmax, ymax):
 
 
 @scalar
-def _perimeter_position(edge, s, xmin, ymin, xmax, ymax):
+def _perimeter_position(edge, s, window):
     """Return the distance along the boundary, counter-clockwise from (xmin, ymin)."""
+    xmin, ymin, xmax, ymax = window
     w = xmax - xmin
     h = ymax - ymin
     if edge == _BOTTOM:
@@ -143,8 +310,9 @@ def _perimeter_position(edge, s, xmin, ymin, xmax, ymax):
 
 
 @scalar
-def _corner_after(edge, xmin, ymin, xmax, ymax):
+def _corner_after(edge, window):
     """Return the corner where `edge` ends (counter-clockwise)."""
+    xmin, ymin, xmax, ymax = window
     if edge == _BOTTOM:
         return xmax, ymin
     if edge == _RIGHT:
@@ -155,8 +323,9 @@ def _corner_after(edge, xmin, ymin, xmax, ymax):
 
 
 @scalar
-def _corner_position(edge, xmin, ymin, xmax, ymax):
+def _corner_position(edge, window):
     """Return the boundary distance of the corner where `edge` ends (see `_corner_after`)."""
+    xmin, ymin, xmax, ymax = window
     w = xmax - xmin
     h = ymax - ymin
     if edge == _BOTTOM:
@@ -174,28 +343,25 @@ def _key_less(e1, s1, t1, e2, s2, t2):
     return e1 < e2 or (e1 == e2 and (s1 < s2 or (s1 == s2 and t1 < t2)))
 
 
-@borrowing
+@inlined
 def _chain_length(lc, k):
-    return (lc[k, 1] - lc[k, 0]) + (lc[k, 3] - lc[k, 2])
+    return (lc.end1[k] - lc.start1[k]) + (lc.end2[k] - lc.start2[k])
 
 
-@borrowing
+@inlined
 def _chain_vertex(lc, k, j):
     """Return the scratch index of vertex j of logical chain k, in its oriented order.
 
-    A logical chain is range 1 then range 2 of the chain scratch (range 2 is the first
-    chain of a ring, continued across its closing vertex), read backwards if the ring
-    was reversed to orient it. Row k of `lc`: range 1 (columns 0, 1), range 2 (2, 3),
-    reversed (4), visited by the walk (5), and the ring it comes from (6).
+    See `LogicalChains`: range 1 then range 2, backwards if the ring was reversed.
     """
-    if lc[k, 4] != 0:
+    if lc.reversed[k]:
         j = _chain_length(lc, k) - 1 - j
-    n1 = lc[k, 1] - lc[k, 0]
-    return lc[k, 0] + j if j < n1 else lc[k, 2] + (j - n1)
+    n1 = lc.end1[k] - lc.start1[k]
+    return lc.start1[k] + j if j < n1 else lc.start2[k] + (j - n1)
 
 
-@borrowing
-def _event_angle(ch_xy, lc, k, at_start, edge, xmin, ymin, xmax, ymax):
+@inlined
+def _event_angle(ch_xy, lc, k, at_start, edge, window):
     """Return the angle of chain k's direction into the window at its start or end.
 
     Measured from the boundary's counter-clockwise direction at the point (at a corner,
@@ -214,7 +380,7 @@ def _event_angle(ch_xy, lc, k, at_start, edge, xmin, ymin, xmax, ymax):
         dy = ch_xy[other, 1] - py
         if dx != 0.0 or dy != 0.0:
             break
-    cx, cy = _corner_after(edge, xmin, ymin, xmax, ymax)
+    cx, cy = _corner_after(edge, window)
     if px == cx and py == cy:
         edge = (edge + 1) % 4
     ux = 1.0 if edge == _BOTTOM else (-1.0 if edge == _TOP else 0.0)
@@ -234,14 +400,14 @@ def _put(out_xy, out_z, has_z, v, ring_start, x, y, z):
     return v + 1
 
 
-@borrowing
-def _put_chain(ch_xy, ch_z, has_z, lc, k, out_xy, out_z, v, ring_start):
-    """Append the vertices of logical chain k; return the next position."""
+@inlined
+def _put_chain(chains, has_z, lc, k, walk, m):
+    """Append the vertices of logical chain k to the walk's ring at `m`; return the end."""
     for j in range(_chain_length(lc, k)):
         i = _chain_vertex(lc, k, j)
-        v = _put(out_xy, out_z, has_z, v, ring_start, ch_xy[i, 0], ch_xy[i, 1],
-                 ch_z[i] if has_z else 0.0)
-    return v
+        m = _put(walk.xy, walk.z, has_z, m, 0, chains.xy[i, 0], chains.xy[i, 1],
+                 chains.z[i] if has_z else 0.0)
+    return m
 
 
 @borrowing
@@ -258,29 +424,29 @@ def _put_ring(xy, z, has_z, first, last, reverse, out_xy, out_z, v):
 
 
 @borrowing
-def _add_ring(rg_xy, rg_z, has_z, rg_start, rg_sign, n_rg, src_xy, src_z, idx, count, close):
+def _add_ring(closed, has_z, n_rg, src_xy, src_z, idx, count, close):
     """Store the ring of ``src[idx[0..count-1]]`` (closed with its first vertex if `close`).
 
     Returns the new ring count; a ring of fewer than three distinct vertices or no area
     is not stored. Its sign (1 shell, -1 hole) comes from its orientation.
     """
-    v = rg_start[n_rg]
+    v = closed.start[n_rg]
     start = v
     for j in range(count):
         i = idx[j]
-        v = _put(rg_xy, rg_z, has_z, v, start, src_xy[i, 0], src_xy[i, 1],
+        v = _put(closed.xy, closed.z, has_z, v, start, src_xy[i, 0], src_xy[i, 1],
                  src_z[i] if has_z else 0.0)
     if close:
         i = idx[0]
-        v = _put(rg_xy, rg_z, has_z, v, start, src_xy[i, 0], src_xy[i, 1],
+        v = _put(closed.xy, closed.z, has_z, v, start, src_xy[i, 0], src_xy[i, 1],
                  src_z[i] if has_z else 0.0)
     if v - start < 4:
         return n_rg
-    area = signed_area(rg_xy, start, v - 1)
+    area = signed_area(closed.xy, start, v - 1)
     if area == 0.0:
         return n_rg
-    rg_sign[n_rg] = 1 if area > 0.0 else -1
-    rg_start[n_rg + 1] = v
+    closed.sign[n_rg] = 1 if area > 0.0 else -1
+    closed.start[n_rg + 1] = v
     return n_rg + 1
 
 
@@ -377,9 +543,9 @@ def _node_touches(ring_xy, ring_z, has_z, m):
     return out_xy, out_z, k + 1
 
 
-@scalar
-def _split_loops(tmp_xy, tmp_z, has_z, m, node, stk, rg_xy, rg_z, rg_start, rg_sign, n_rg):
-    """Store the closed walk ring ``tmp[0..m-1]`` as simple rings; return the ring count.
+@allocating
+def _split_loops(walk, has_z, m, node, closed, n_rg):
+    """Store the closed walk ring ``walk.xy[0..m-1]`` as simple rings; return the ring count.
 
     The walk can pass a point twice (a hole or a part of the ring touching the window's
     edge, or a hole touching its shell at a vertex); a ring through one point twice is
@@ -388,6 +554,9 @@ def _split_loops(tmp_xy, tmp_z, has_z, m, node, stk, rg_xy, rg_z, rg_start, rg_s
     polygons may). With `node`, a vertex lying inside another edge of the ring (a hole
     touching its shell mid-edge) is first made a vertex of that edge too.
     """
+    tmp_xy = walk.xy
+    tmp_z = walk.z
+    stk = walk.index
     if node and m - 1 <= TOUCH_CHECK_LIMIT:
         tmp_xy, tmp_z, noded = _node_touches(tmp_xy, tmp_z, has_z, m)
         if noded != m:
@@ -419,17 +588,17 @@ def _split_loops(tmp_xy, tmp_z, has_z, m, node, stk, rg_xy, rg_z, rg_start, rg_s
                     q = t
                     break
             if q >= 0:
-                n_rg = _add_ring(rg_xy, rg_z, has_z, rg_start, rg_sign, n_rg, tmp_xy, tmp_z,
-                                 stk[q:], top - q, True)
+                n_rg = _add_ring(closed, has_z, n_rg, tmp_xy, tmp_z, stk[q:], top - q, True)
                 top = q + 1
                 continue
         stk[top] = i
         top += 1
-    return _add_ring(rg_xy, rg_z, has_z, rg_start, rg_sign, n_rg, tmp_xy, tmp_z, stk, top, True)
+    return _add_ring(closed, has_z, n_rg, tmp_xy, tmp_z, stk, top, True)
 
 
 @borrowing
-def _inside_edge(x, y, edge, xmin, ymin, xmax, ymax):
+def _inside_edge(x, y, edge, window):
+    xmin, ymin, xmax, ymax = window
     if edge == _LEFT:
         return x >= xmin
     if edge == _RIGHT:
@@ -440,8 +609,9 @@ def _inside_edge(x, y, edge, xmin, ymin, xmax, ymax):
 
 
 @borrowing
-def _cross_edge(x0, y0, z0, x1, y1, z1, edge, xmin, ymin, xmax, ymax):
+def _cross_edge(x0, y0, z0, x1, y1, z1, edge, window):
     """Return the point (x, y, z) where segment 0-1 crosses the line of `edge`."""
+    xmin, ymin, xmax, ymax = window
     if edge == _LEFT or edge == _RIGHT:
         e = xmin if edge == _LEFT else xmax
         t = (e - x0) / (x1 - x0)
@@ -452,14 +622,17 @@ def _cross_edge(x0, y0, z0, x1, y1, z1, edge, xmin, ymin, xmax, ymax):
 
 
 @scalar
-def sutherland_hodgman(xy, z, has_z, first, last, reverse, xmin, ymin, xmax, ymax):
-    """Return ``(ring (m, 3), m)``: the ring ``xy[first..last]`` clipped by Sutherland–Hodgman.
+def sutherland_hodgman(line, first, last, reverse, window):
+    """Return ``(ring (m, 3), m)``: the ring ``line.xy[first..last]`` clipped by Sutherland–Hodgman.
 
     The fallback for invalid polygons, clipped ring by ring (Sutherland & Hodgman 1974:
     one pass per window edge, keeping inside vertices and adding the crossings). The
     result is closed, may run along the window's edge and is not repaired. Each pass at
     most doubles the vertex count, hence the buffers.
     """
+    xy = line.xy
+    z = line.z
+    has_z = line.has_z
     n = last - first  # without the closing vertex
     size = 16 * n + 16
     a = np.empty((size, 3), dtype=np.float64)
@@ -473,12 +646,11 @@ def sutherland_hodgman(xy, z, has_z, first, last, reverse, xmin, ymin, xmax, yma
         m = 0
         for k in range(n):
             j = k - 1 if k > 0 else n - 1
-            cur_in = _inside_edge(a[k, 0], a[k, 1], edge, xmin, ymin, xmax, ymax)
-            prev_in = _inside_edge(a[j, 0], a[j, 1], edge, xmin, ymin, xmax, ymax)
+            cur_in = _inside_edge(a[k, 0], a[k, 1], edge, window)
+            prev_in = _inside_edge(a[j, 0], a[j, 1], edge, window)
             if cur_in != prev_in:
                 b[m, 0], b[m, 1], b[m, 2] = _cross_edge(a[j, 0], a[j, 1], a[j, 2], a[k, 0],
-                                                        a[k, 1], a[k, 2], edge, xmin, ymin,
-                                                        xmax, ymax)
+                                                        a[k, 1], a[k, 2], edge, window)
                 m += 1
             if cur_in:
                 b[m, 0] = a[k, 0]
@@ -495,28 +667,31 @@ def sutherland_hodgman(xy, z, has_z, first, last, reverse, xmin, ymin, xmax, yma
     return a, n + 1
 
 
-@scalar
-def _clip_rings_alone(xy, z, has_z, ring_offsets, r_begin, r_end, ring_rev, xmin, ymin, xmax,
-                      ymax, write, out_xy, out_z, out_ring_starts, out_poly_rings, v, n_rings,
+@allocating
+def _clip_rings_alone(line, ring_offsets, r_begin, r_end, ring_rev, window, out, v, n_rings,
                       n_polys):
     """Write an invalid polygon clipped ring by ring: one polygon, its shell then its holes.
 
-    Without `write` only the counts advance. A shell clipped to nothing drops the polygon.
+    Without ``out.write`` only the counts advance. A shell clipped to nothing drops the
+    polygon.
     """
+    write = out.write
+    has_z = line.has_z
     rings_before = n_rings
     for r in range(r_begin, r_end):
         first = ring_offsets[r]
         last = ring_offsets[r + 1] - 1
         if last - first < 3:
             continue
-        ring, m = sutherland_hodgman(xy, z, has_z, first, last, ring_rev[r - r_begin],
-                                     xmin, ymin, xmax, ymax)
+        ring, m = sutherland_hodgman(line, first, last, ring_rev[r - r_begin], window)
         if m == 0:
             if r == r_begin:
                 return v, n_rings, n_polys
             continue
         if write:
-            out_ring_starts[n_rings] = v
+            out_xy = out.xy
+            out_z = out.z
+            out.ring_starts[n_rings] = v
             for k in range(m):
                 out_xy[v + k, 0] = ring[k, 0]
                 out_xy[v + k, 1] = ring[k, 1]
@@ -526,336 +701,494 @@ def _clip_rings_alone(xy, z, has_z, ring_offsets, r_begin, r_end, ring_rev, xmin
         n_rings += 1
     if n_rings > rings_before:
         if write:
-            out_poly_rings[n_polys] = n_rings - rings_before
+            out.poly_rings[n_polys] = n_rings - rings_before
         n_polys += 1
     return v, n_rings, n_polys
 
 
-@scalar
-def clip_polygon(xy, z, has_z, ring_offsets, r_begin, r_end, xmin, ymin, xmax, ymax, method,
-                 n_fixed, max_depth, tol, auto_piece, exact, out_xy, out_z, out_ring_starts,
-                 out_poly_rings, v, n_rings, n_polys, st, run_stack, stack_f, stack_i,
-                 ch_xy, ch_z, ch_starts, lc, ev_key, ev_chain, order, ring_state, ring_rev,
-                 ring_first, ring_last, tmp_xy, tmp_z, stk, rg_xy, rg_z, rg_start, rg_sign,
-                 rg_done, write, decided, chunk_start, decision, piece_start, keep, pieces):
-    """Clip the polygon of rings ``r_begin..r_end-1`` (shell first); write valid pieces.
+@borrowing
+def clip_polygon(line, polygons, p, window, options, decisions, scratch, out, v, n_rings,
+                 n_polys):
+    """Clip polygon p of `polygons` (on the vertices `line`) against `window`.
 
-    Output polygons are written from ``out_xy[v]``, their rings' starts from
-    ``out_ring_starts[n_rings]`` and their ring counts from ``out_poly_rings[n_polys]``;
-    shells counter-clockwise, holes clockwise. The remaining arguments are the caller's
-    scratch, sized by the bounds of `bound_chains`. Returns ``(v, n_rings, n_polys, ok)``;
-    ``ok`` is False when the input is found invalid: a cut ring without area, or chains
-    whose entries and exits do not alternate along the boundary (the rings cross); the
-    polygon is then clipped ring by ring (`sutherland_hodgman`), not repaired. `write`
-    is False in the counting pass (the fallback then only counts; the rest writes to
-    the caller's scratch). With `decided` the rings' runs were pruned and their segments
-    clipped elsewhere (the OpenCL backend): ring r's chains are assembled from
-    ``decision[chunk_start[r]:]``, ``piece_start``, ``keep`` and ``pieces``
+    Output polygons are written from ``out.xy[v]``, their rings' starts from
+    ``out.ring_starts[n_rings]`` and their ring counts from ``out.poly_rings[n_polys]``;
+    shells counter-clockwise, holes clockwise. `scratch` is the caller's, sized by the
+    bounds of `bound_chains`; the stats go to its block's counter row. Returns
+    ``(v, n_rings, n_polys, ok)``; ``ok`` is False when the input is found invalid: a
+    cut ring without area, or chains whose entries and exits do not alternate along the
+    boundary (the rings cross); the polygon is then clipped ring by ring
+    (`sutherland_hodgman`), not repaired. In the counting pass (``out.write`` False)
+    that fallback only counts; the rest writes to `out`, the caller's scratch then.
+    With ``decisions.decided`` the rings' runs were pruned and their segments clipped
+    elsewhere (the OpenCL backend): ring r's chains are assembled from them
     (`polylines.assemble_chains`) instead of cut by `polylines.clip_chains`.
+
+    The steps (each inlined here): cut the rings into chains (`_cut_rings`); sort the
+    chains' ends along the boundary (`_sort_events`) and check that exits and entries
+    alternate (`_events_alternate`); walk from each exit to the next entry, through the
+    corners between, until the ring closes (`_walk`); keep the rings never cut
+    (`_add_uncut_rings`), or the window itself if nothing is cut and the window lies
+    inside the polygon (`_add_window_if_covered`); write each shell with its holes
+    (`_write_pieces`). Only `_split_loops` and the fallback allocate (``allocating``):
+    no other array is reference-counted per polygon.
     """
+    r_begin = polygons.polygon_offsets[p]
+    r_end = polygons.polygon_offsets[p + 1]
     n_r = r_end - r_begin
     if n_r == 0:
         return v, n_rings, n_polys, True
-    no_codes = np.empty(0, dtype=np.uint8)  # rings are short: runs coded from vertices
-    no_plan = np.empty((0, 2), dtype=np.int64)  # and their chains written as decided
+    has_z = line.has_z
+    ring_offsets = polygons.ring_offsets
+    # 1. Cut every ring into chains, oriented so the polygon's interior is on the left.
+    n_lc, ok = _cut_rings(line, ring_offsets, r_begin, r_end, Cut(window, True), options,
+                          decisions, scratch)
+    if has_z:
+        _find_corner_z(line, ring_offsets, r_begin, r_end, window, scratch.corners)
+    # 2. The walk goes over boundary events (chain starts and ends), sorted
+    # counter-clockwise: exits and entries must alternate.
+    n_ev = _sort_events(scratch.chains.xy, scratch.logical, n_lc, window, scratch.events)
+    if not (ok and _events_alternate(scratch.events, n_ev)):
+        v, n_rings, n_polys = _clip_rings_alone(line, ring_offsets, r_begin, r_end,
+                                                scratch.rings.reversed, window, out, v,
+                                                n_rings, n_polys)
+        return v, n_rings, n_polys, False
+    # 3. The walk: chains closed into rings along the boundary.
+    n_rg, walked = _walk(scratch, has_z, n_lc, n_ev, window)
+    # 4. Rings never cut: inside the window whole.
+    n_rg, uncut_ok = _add_uncut_rings(line, n_r, n_lc, scratch, n_rg)
+    # 5. No chain and no uncut shell: the window lies inside the polygon or outside it.
+    if n_lc == 0 and scratch.rings.state[0] == _UNTOUCHED:
+        n_rg = _add_window_if_covered(line, n_r, window, scratch, n_rg)
+    # 6. Output: each shell, then the holes inside it.
+    v, n_rings, n_polys, placed = _write_pieces(has_z, scratch.closed, n_rg, out, v, n_rings,
+                                                n_polys)
+    return v, n_rings, n_polys, walked and uncut_ok and placed
+
+
+@inlined
+def _cut_rings(line, ring_offsets, r_begin, r_end, cut, options, decisions, scratch):
+    """Cut rings r_begin..r_end-1 into ``scratch.chains``; return ``(n_logical, ok)``.
+
+    Fills ``scratch.rings`` (each ring's state and orientation) and
+    ``scratch.logical``, the chains of the cut rings, oriented so that the polygon's
+    interior is on their left (shells counter-clockwise, holes clockwise); a ring's
+    last and first chains join across its closing vertex. ``ok`` is False for a ring
+    without area (self-intersecting or degenerate input).
+    """
+    chains = scratch.chains
+    starts = chains.starts
+    rings = scratch.rings
+    lc = scratch.logical
     v_ch = 0
     c_ch = 0
     n_lc = 0
     ok = True
-    # 1. Cut every ring into chains, oriented so the polygon's interior is on the left.
     for r in range(r_begin, r_end):
         first = ring_offsets[r]
         last = ring_offsets[r + 1] - 1
         j = r - r_begin
-        ring_first[j] = first
-        ring_last[j] = last
-        area = signed_area(xy, first, last) if last > first else 0.0
-        ring_rev[j] = (area < 0.0) if j == 0 else (area > 0.0)
+        rings.first[j] = first
+        rings.last[j] = last
+        area = signed_area(line.xy, first, last) if last > first else 0.0
+        rings.reversed[j] = (area < 0.0) if j == 0 else (area > 0.0)
         c0 = c_ch
-        if decided:
+        if decisions.decided:
             v_ch, c_ch, at_first, at_last = assemble_chains(
-                xy, z, has_z, True, first, last, True, True, xmin, ymin, xmax, ymax, decision,
-                chunk_start[r], piece_start, keep, pieces, ch_xy, ch_z, ch_starts, v_ch, c_ch)
+                line, first, last, cut, True, decisions, decisions.chunk_start[r], chains, True,
+                v_ch, c_ch)
         else:
+            # Rings are short: their runs are coded from the vertices, and their chains
+            # written as decided (no chunk codes, no plan).
             v_ch, c_ch, at_first, at_last, _ = clip_chains(
-                xy, z, has_z, True, first, last, xmin, ymin, xmax, ymax, method, n_fixed,
-                max_depth, tol, auto_piece, exact, True, True, ch_xy, ch_z, ch_starts, v_ch,
-                c_ch, st, run_stack, stack_f, stack_i, no_codes, no_codes, 0, no_plan, 0)
-        ch_starts[c_ch] = v_ch
+                line, first, last, cut, True, options, chains, True, v_ch, c_ch, scratch.block,
+                scratch.no_plan)
+        starts[c_ch] = v_ch
         n_chains = c_ch - c0
         if last > first and area == 0.0:
             ok = False  # a ring without area: self-intersecting (or degenerate) input
         if n_chains == 0:
-            ring_state[j] = _UNTOUCHED
+            rings.state[j] = _UNTOUCHED
             continue
         if n_chains == 1 and at_first and at_last:
-            ring_state[j] = _FULL
+            rings.state[j] = _FULL
             continue
-        ring_state[j] = _CUT
+        rings.state[j] = _CUT
         if area == 0.0:
             ok = False
         # Logical chains; the last and first chains join across the closing vertex.
         joined = at_first and at_last and n_chains >= 2
         for k in range(c0 + 1 if joined else c0, c_ch):
-            lc[n_lc, 0] = ch_starts[k]
-            lc[n_lc, 1] = ch_starts[k + 1]
-            lc[n_lc, 2] = 0
-            lc[n_lc, 3] = 0
+            lc.start1[n_lc] = starts[k]
+            lc.end1[n_lc] = starts[k + 1]
+            lc.start2[n_lc] = 0
+            lc.end2[n_lc] = 0
             if joined and k == c_ch - 1:
                 # The first chain's first vertex repeats the joint: skip it.
-                lc[n_lc, 2] = ch_starts[c0] + 1
-                lc[n_lc, 3] = ch_starts[c0 + 1]
-            lc[n_lc, 4] = 1 if ring_rev[j] else 0
-            lc[n_lc, 6] = j
+                lc.start2[n_lc] = starts[c0] + 1
+                lc.end2[n_lc] = starts[c0 + 1]
+            lc.reversed[n_lc] = rings.reversed[j]
+            lc.ring[n_lc] = j
             n_lc += 1
-    # Z of the window's corners that lie on an input segment (the walk passes corners;
-    # one on an input edge takes that edge's Z rather than one interpolated along the
-    # boundary).
-    corner_z = np.zeros(4)
-    corner_z_known = np.zeros(4, dtype=np.bool_)
-    if has_z:
-        for r in range(r_begin, r_end):
-            for i in range(ring_offsets[r], ring_offsets[r + 1] - 1):
-                for e in range(4):
-                    if corner_z_known[e]:
-                        continue
-                    cx, cy = _corner_after(e, xmin, ymin, xmax, ymax)
-                    x0 = xy[i, 0]
-                    y0 = xy[i, 1]
-                    x1 = xy[i + 1, 0]
-                    y1 = xy[i + 1, 1]
-                    # An input vertex at the corner, or a segment through it: within the
-                    # accuracy promise (1e-9 of the window's size) of the corner.
-                    dx = x1 - x0
-                    dy = y1 - y0
-                    dd = dx * dx + dy * dy
-                    t = 0.0
-                    if dd > 0.0:
-                        t = min(1.0, max(0.0, ((cx - x0) * dx + (cy - y0) * dy) / dd))
-                    near = math.hypot(x0 + t * dx - cx, y0 + t * dy - cy) <= 1e-9 * max(
-                        xmax - xmin, ymax - ymin)
-                    if not near:
-                        continue
-                    corner_z[e] = z[i] + t * (z[i + 1] - z[i])
-                    corner_z_known[e] = True
-    n_rg = 0
-    rg_start[0] = 0
-    # 2. The walk over boundary events (chain starts and ends), sorted counter-clockwise.
+    return n_lc, ok
+
+
+@inlined
+def _find_corner_z(line, ring_offsets, r_begin, r_end, window, corners):
+    """Store the Z of the window's corners that lie on an input segment of the polygon.
+
+    The walk passes corners; one on an input edge takes that edge's Z rather than one
+    interpolated along the boundary.
+    """
+    xy = line.xy
+    z = line.z
+    xmin, ymin, xmax, ymax = window
+    for e in range(4):
+        corners.z[e] = 0.0
+        corners.known[e] = False
+    for r in range(r_begin, r_end):
+        for i in range(ring_offsets[r], ring_offsets[r + 1] - 1):
+            for e in range(4):
+                if corners.known[e]:
+                    continue
+                cx, cy = _corner_after(e, window)
+                x0 = xy[i, 0]
+                y0 = xy[i, 1]
+                x1 = xy[i + 1, 0]
+                y1 = xy[i + 1, 1]
+                # An input vertex at the corner, or a segment through it: within the
+                # accuracy promise (1e-9 of the window's size) of the corner.
+                dx = x1 - x0
+                dy = y1 - y0
+                dd = dx * dx + dy * dy
+                t = 0.0
+                if dd > 0.0:
+                    t = min(1.0, max(0.0, ((cx - x0) * dx + (cy - y0) * dy) / dd))
+                near = math.hypot(x0 + t * dx - cx, y0 + t * dy - cy) <= 1e-9 * max(
+                    xmax - xmin, ymax - ymin)
+                if not near:
+                    continue
+                corners.z[e] = z[i] + t * (z[i + 1] - z[i])
+                corners.known[e] = True
+
+
+@inlined
+def _sort_events(ch_xy, lc, n_lc, window, events):
+    """Place the start and end of every logical chain on the boundary, and sort them.
+
+    Counter-clockwise from (xmin, ymin), then by angle (`_event_angle`); returns the
+    number of events.
+    """
     n_ev = 2 * n_lc
+    order = events.order
     for k in range(n_lc):
         for end in range(2):
             i = _chain_vertex(lc, k, 0 if end == 0 else _chain_length(lc, k) - 1)
-            e, s = boundary_key(ch_xy[i, 0], ch_xy[i, 1], xmin, ymin, xmax, ymax)
+            e, s = boundary_key(ch_xy[i, 0], ch_xy[i, 1], window)
             ev = 2 * k + end
-            ev_key[ev, 0] = e
-            ev_key[ev, 1] = s
-            ev_key[ev, 2] = _event_angle(ch_xy, lc, k, end == 0, e, xmin, ymin, xmax, ymax)
+            events.edge[ev] = e
+            events.s[ev] = s
+            events.angle[ev] = _event_angle(ch_xy, lc, k, end == 0, e, window)
             order[ev] = ev
     for a in range(1, n_ev):  # insertion sort: few events per polygon
         item = order[a]
         b = a - 1
-        while b >= 0 and _key_less(ev_key[item, 0], ev_key[item, 1], ev_key[item, 2],
-                                   ev_key[order[b], 0], ev_key[order[b], 1],
-                                   ev_key[order[b], 2]):
+        while b >= 0 and _key_less(events.edge[item], events.s[item], events.angle[item],
+                                   events.edge[order[b]], events.s[order[b]],
+                                   events.angle[order[b]]):
             order[b + 1] = order[b]
             b -= 1
         order[b + 1] = item
     for a in range(n_ev):
-        ev_chain[order[a]] = a  # position of each event in the sorted order
-    # Along the boundary, exits and entries alternate: two exits (or entries) in a row
-    # mean rings that cross, or a hole outside its shell. Events at one point (a ring
-    # touching the edge there) count as one, by their balance, which must be -1, 0 or 1.
-    # (Every chain has one exit and one entry, so alternating balances also close up
-    # cyclically.)
+        events.rank[order[a]] = a
+    return n_ev
+
+
+@inlined
+def _same_point(events, e1, e2):
+    """Return whether events e1 and e2 lie at the same boundary point."""
+    return events.edge[e1] == events.edge[e2] and events.s[e1] == events.s[e2]
+
+
+@inlined
+def _events_alternate(events, n_ev):
+    """Return whether exits and entries alternate along the boundary.
+
+    Two exits (or entries) in a row mean rings that cross, or a hole outside its shell.
+    Events at one point (a ring touching the edge there) count as one, by their
+    balance, which must be -1, 0 or 1. (Every chain has one exit and one entry, so
+    alternating balances also close up cyclically.)
+    """
+    order = events.order
     previous = 0
     a = 0
     while a < n_ev:
         b = a
         net = 0
-        while b < n_ev and ev_key[order[b], 0] == ev_key[order[a], 0] \
-                and ev_key[order[b], 1] == ev_key[order[a], 1]:
+        while b < n_ev and _same_point(events, order[b], order[a]):
             net += 1 if order[b] % 2 == 1 else -1
             b += 1
         if net > 1 or net < -1 or (net != 0 and net == previous):
-            ok = False
+            return False
         if net != 0:
             previous = net
         a = b
-    if not ok:
-        v, n_rings, n_polys = _clip_rings_alone(
-            xy, z, has_z, ring_offsets, r_begin, r_end, ring_rev, xmin, ymin, xmax, ymax,
-            write, out_xy, out_z, out_ring_starts, out_poly_rings, v, n_rings, n_polys)
-        return v, n_rings, n_polys, False
-    visited = lc[:, 5]
+    return True
+
+
+@inlined
+def _next_chain(events, n_ev, k):
+    """Return ``(next, direct)``: the chain the walk continues with after chain k's end.
+
+    The chain entering at the same point just clockwise of it (the polygon is pinched
+    there: `direct`, no boundary between), else the first entry counter-clockwise along
+    the boundary, the most clockwise one at its point; -1 if there is none.
+    """
+    order = events.order
+    i = events.rank[2 * k + 1]
+    if i > 0 and _same_point(events, order[i - 1], order[i]) and order[i - 1] % 2 == 0:
+        return order[i - 1] // 2, True
+    g = i + 1
+    while g < n_ev and _same_point(events, order[g], order[i]):
+        g += 1
+    for _ in range(n_ev):
+        if g >= n_ev:
+            g = 0
+        g_end = g + 1
+        while g_end < n_ev and _same_point(events, order[g_end], order[g]):
+            g_end += 1
+        q = g_end - 1
+        while q >= g and order[q] % 2 == 1:
+            q -= 1
+        if q >= g:
+            return order[q] // 2, False
+        g = g_end
+    return -1, False
+
+
+@inlined
+def _walk_corners(scratch, has_z, k, nxt, window, m):
+    """Append the corners passed from chain k's exit to chain nxt's entry; return the end.
+
+    None if the entry lies further along the exit's edge. Their Z is the input's at a
+    corner on an input segment (`_find_corner_z`), else interpolated along the boundary
+    between the exit's and the entry's.
+    """
+    events = scratch.events
+    ee = events.edge[2 * k + 1]
+    es = events.s[2 * k + 1]
+    se = events.edge[2 * nxt]
+    ss = events.s[2 * nxt]
+    if se == ee and ss > es:
+        return m
+    xmin, ymin, xmax, ymax = window
+    lc = scratch.logical
+    walk = scratch.walk
+    corners = scratch.corners
+    z_from = 0.0
+    z_to = 0.0
+    p_from = 0.0
+    span = 1.0
+    perimeter = 2.0 * ((xmax - xmin) + (ymax - ymin))
+    if has_z:
+        z_from = scratch.chains.z[_chain_vertex(lc, k, _chain_length(lc, k) - 1)]
+        z_to = scratch.chains.z[_chain_vertex(lc, nxt, 0)]
+        p_from = _perimeter_position(ee, es, window)
+        span = _perimeter_position(se, ss, window) - p_from
+        if span <= 0.0:
+            span += perimeter
+    e = ee
+    while True:
+        x, y = _corner_after(e, window)
+        zc = 0.0
+        if has_z:
+            d = _corner_position(e, window) - p_from
+            if d < 0.0:
+                d += perimeter
+            zc = z_from + (z_to - z_from) * min(1.0, d / span)
+            if corners.known[e]:
+                zc = corners.z[e]
+        m = _put(walk.xy, walk.z, has_z, m, 0, x, y, zc)
+        e = (e + 1) % 4
+        if e == se:
+            break
+    return m
+
+
+@inlined
+def _walk(scratch, has_z, n_lc, n_ev, window):
+    """Close the logical chains into rings along the boundary; return ``(n_closed, ok)``.
+
+    Each walk (`_walk_from`) starts at a chain not yet visited and is split into simple
+    rings (`_split_loops`) stored in ``scratch.closed``. ``ok`` is False when the chains
+    are inconsistent (invalid input): what was walked is closed anyway.
+    """
+    walk = scratch.walk
+    closed = scratch.closed
+    visited = scratch.logical.visited
+    n_rg = 0
+    closed.start[0] = 0
+    ok = True
     for k in range(n_lc):
-        visited[k] = 0
+        visited[k] = False
     for k0 in range(n_lc):
         if visited[k0]:
             continue
-        m = 0
-        k = k0
-        # Only a walk joining chains of two or more rings (a cut hole and its shell) can
-        # pass a vertex of one inside an edge of the other (a hole touching its shell
-        # mid-edge), so only such a walk is noded (`_split_loops`): the chains of one
-        # valid ring never touch each other. Noding every walk of a polygon with holes
-        # took about a fifth of the polygon benchmark's time.
-        several_rings = False
-        while True:
-            visited[k] = 1
-            several_rings = several_rings or lc[k, 6] != lc[k0, 6]
-            m = _put_chain(ch_xy, ch_z, has_z, lc, k, tmp_xy, tmp_z, m, 0)
-            # Where the ring goes from chain k's end: the chain entering at the same point
-            # just clockwise of it (the polygon is pinched there), else the first entry
-            # counter-clockwise along the boundary, the most clockwise one at its point.
-            i = ev_chain[2 * k + 1]
-            ee = ev_key[order[i], 0]
-            es = ev_key[order[i], 1]
-            nxt = -1
-            direct = False
-            if i > 0 and ev_key[order[i - 1], 0] == ee and ev_key[order[i - 1], 1] == es \
-                    and order[i - 1] % 2 == 0:
-                nxt = order[i - 1] // 2
-                direct = True
-            else:
-                g = i + 1
-                while g < n_ev and ev_key[order[g], 0] == ee and ev_key[order[g], 1] == es:
-                    g += 1
-                for _ in range(n_ev):
-                    if g >= n_ev:
-                        g = 0
-                    g_end = g + 1
-                    while g_end < n_ev and ev_key[order[g_end], 0] == ev_key[order[g], 0] \
-                            and ev_key[order[g_end], 1] == ev_key[order[g], 1]:
-                        g_end += 1
-                    q = g_end - 1
-                    while q >= g and order[q] % 2 == 1:
-                        q -= 1
-                    if q >= g:
-                        nxt = order[q] // 2
-                        break
-                    g = g_end
-            if nxt < 0:
-                ok = False
-                break
-            if not direct:
-                se = ev_key[2 * nxt, 0]
-                ss = ev_key[2 * nxt, 1]
-                if not (se == ee and ss > es):
-                    z_from = 0.0
-                    z_to = 0.0
-                    p_from = 0.0
-                    span = 1.0
-                    perimeter = 2.0 * ((xmax - xmin) + (ymax - ymin))
-                    if has_z:
-                        z_from = ch_z[_chain_vertex(lc, k, _chain_length(lc, k) - 1)]
-                        z_to = ch_z[_chain_vertex(lc, nxt, 0)]
-                        p_from = _perimeter_position(ee, es, xmin, ymin, xmax, ymax)
-                        span = _perimeter_position(se, ss, xmin, ymin, xmax, ymax) - p_from
-                        if span <= 0.0:
-                            span += perimeter
-                    e = int(ee)
-                    while True:
-                        x, y = _corner_after(e, xmin, ymin, xmax, ymax)
-                        zc = 0.0
-                        if has_z:
-                            d = _corner_position(e, xmin, ymin, xmax, ymax) - p_from
-                            if d < 0.0:
-                                d += perimeter
-                            zc = z_from + (z_to - z_from) * min(1.0, d / span)
-                            if corner_z_known[e]:
-                                zc = corner_z[e]
-                        m = _put(tmp_xy, tmp_z, has_z, m, 0, x, y, zc)
-                        e = (e + 1) % 4
-                        if e == se:
-                            break
-            if nxt == k0:
-                break
-            if visited[nxt]:
-                ok = False  # inconsistent chains (invalid input): close what we have
-                break
-            k = nxt
-        if m > 0 and not (tmp_xy[m - 1, 0] == tmp_xy[0, 0] and tmp_xy[m - 1, 1] == tmp_xy[0, 1]):
-            tmp_xy[m, 0] = tmp_xy[0, 0]
-            tmp_xy[m, 1] = tmp_xy[0, 1]
-            if has_z:
-                tmp_z[m] = tmp_z[0]
-            m += 1
+        m, several_rings, consistent = _walk_from(scratch, has_z, k0, n_ev, window)
+        ok = ok and consistent
         if m >= 4:
-            n_rg = _split_loops(tmp_xy, tmp_z, has_z, m, several_rings, stk, rg_xy, rg_z,
-                                rg_start, rg_sign, n_rg)
-    # 3. Rings never cut: inside the window whole. The shell of a cut polygon is never
-    # one of them unless the input is invalid.
+            n_rg = _split_loops(walk, has_z, m, several_rings, closed, n_rg)
+    return n_rg, ok
+
+
+@inlined
+def _walk_from(scratch, has_z, k0, n_ev, window):
+    """Walk from chain k0 back to it into ``scratch.walk``: ``(m, several_rings, ok)``.
+
+    Appends each chain, goes to the chain the ring continues with (`_next_chain`)
+    through the corners between (`_walk_corners`), until back at k0, and closes the
+    ring (m vertices). `several_rings`: the walk joined chains of two or more rings.
+    ``ok`` is False if the chains are inconsistent (a chain without a next one, or one
+    visited before): the walk stops there.
+    """
+    lc = scratch.logical
+    walk = scratch.walk
+    ok = True
+    m = 0
+    k = k0
+    # Only a walk joining chains of two or more rings (a cut hole and its shell) can
+    # pass a vertex of one inside an edge of the other (a hole touching its shell
+    # mid-edge), so only such a walk is noded (`_split_loops`): the chains of one
+    # valid ring never touch each other. Noding every walk of a polygon with holes
+    # took about a fifth of the polygon benchmark's time.
+    several_rings = False
+    while True:
+        lc.visited[k] = True
+        several_rings = several_rings or lc.ring[k] != lc.ring[k0]
+        m = _put_chain(scratch.chains, has_z, lc, k, walk, m)
+        nxt, direct = _next_chain(scratch.events, n_ev, k)
+        if nxt < 0:
+            ok = False
+            break
+        if not direct:
+            m = _walk_corners(scratch, has_z, k, nxt, window, m)
+        if nxt == k0:
+            break
+        if lc.visited[nxt]:
+            ok = False  # inconsistent chains (invalid input): close what we have
+            break
+        k = nxt
+    if m > 0 and not (walk.xy[m - 1, 0] == walk.xy[0, 0]
+                      and walk.xy[m - 1, 1] == walk.xy[0, 1]):
+        walk.xy[m, 0] = walk.xy[0, 0]
+        walk.xy[m, 1] = walk.xy[0, 1]
+        if has_z:
+            walk.z[m] = walk.z[0]
+        m += 1
+    return m, several_rings, ok
+
+
+@inlined
+def _add_uncut_rings(line, n_r, n_lc, scratch, n_rg):
+    """Store the rings inside the window whole; return ``(n_closed, ok)``.
+
+    The shell of a cut polygon is never one of them unless the input is invalid (then
+    ``ok`` is False).
+    """
+    rings = scratch.rings
+    walk = scratch.walk
+    ok = True
     for j in range(n_r):
-        if ring_state[j] != _FULL:
+        if rings.state[j] != _FULL:
             continue
         if j == 0 and n_lc > 0:
             ok = False
-        first = ring_first[j]
-        count = _put_ring(xy, z, has_z, first, ring_last[j], ring_rev[j], tmp_xy, tmp_z, 0)
+        count = _put_ring(line.xy, line.z, line.has_z, rings.first[j], rings.last[j],
+                          rings.reversed[j], walk.xy, walk.z, 0)
         for i in range(count):
-            stk[i] = i
-        n_rg = _add_ring(rg_xy, rg_z, has_z, rg_start, rg_sign, n_rg, tmp_xy, tmp_z, stk,
+            walk.index[i] = i
+        n_rg = _add_ring(scratch.closed, line.has_z, n_rg, walk.xy, walk.z, walk.index,
                          count, False)
-    # 4. No chain and no uncut shell: the window lies inside the polygon or outside it.
-    if n_lc == 0 and ring_state[0] == _UNTOUCHED:
-        cx = 0.5 * xmin + 0.5 * xmax
-        cy = 0.5 * ymin + 0.5 * ymax
-        covered = point_in_ring(cx, cy, xy, ring_first[0], ring_last[0]) > 0
-        for j in range(1, n_r):
-            if covered and ring_state[j] == _UNTOUCHED and point_in_ring(
-                    cx, cy, xy, ring_first[j], ring_last[j]) > 0:
-                covered = False
-        if covered:
-            zc = 0.0
-            if has_z:
-                for k in range(ring_first[0], ring_last[0]):
-                    zc += z[k]
-                zc /= max(1, ring_last[0] - ring_first[0])
-            for corner in range(4):
-                x, y = _corner_after((corner + 3) % 4, xmin, ymin, xmax, ymax)
-                tmp_xy[corner, 0] = x
-                tmp_xy[corner, 1] = y
-                if has_z:
-                    tmp_z[corner] = corner_z[(corner + 3) % 4] if corner_z_known[
-                        (corner + 3) % 4] else zc
-                stk[corner] = corner
-            n_rg = _add_ring(rg_xy, rg_z, has_z, rg_start, rg_sign, n_rg, tmp_xy, tmp_z, stk,
-                             4, True)
-    # 5. Output: each shell, then the holes inside it.
+    return n_rg, ok
+
+
+@inlined
+def _add_window_if_covered(line, n_r, window, scratch, n_rg):
+    """Store the window as a ring if its centre lies inside the shell and outside the holes.
+
+    For a polygon none of whose rings is cut or inside the window. Returns the ring count.
+    """
+    xmin, ymin, xmax, ymax = window
+    rings = scratch.rings
+    walk = scratch.walk
+    corners = scratch.corners
+    cx = 0.5 * xmin + 0.5 * xmax
+    cy = 0.5 * ymin + 0.5 * ymax
+    covered = point_in_ring(cx, cy, line.xy, rings.first[0], rings.last[0]) > 0
+    for j in range(1, n_r):
+        if covered and rings.state[j] == _UNTOUCHED and point_in_ring(
+                cx, cy, line.xy, rings.first[j], rings.last[j]) > 0:
+            covered = False
+    if not covered:
+        return n_rg
+    zc = 0.0
+    if line.has_z:
+        for k in range(rings.first[0], rings.last[0]):
+            zc += line.z[k]
+        zc /= max(1, rings.last[0] - rings.first[0])
+    for corner in range(4):
+        x, y = _corner_after((corner + 3) % 4, window)
+        walk.xy[corner, 0] = x
+        walk.xy[corner, 1] = y
+        if line.has_z:
+            walk.z[corner] = corners.z[(corner + 3) % 4] if corners.known[
+                (corner + 3) % 4] else zc
+        walk.index[corner] = corner
+    return _add_ring(scratch.closed, line.has_z, n_rg, walk.xy, walk.z, walk.index, 4, True)
+
+
+@inlined
+def _write_pieces(has_z, closed, n_rg, out, v, n_rings, n_polys):
+    """Write each closed shell, then the holes inside it, as one polygon.
+
+    Returns ``(v, n_rings, n_polys, placed)``; ``placed`` is False if a hole lies
+    outside every shell (invalid input).
+    """
     for a in range(n_rg):
-        rg_done[a] = False
+        closed.done[a] = False
     for a in range(n_rg):
-        if rg_sign[a] < 0:
+        if closed.sign[a] < 0:
             continue
-        out_ring_starts[n_rings] = v
+        out.ring_starts[n_rings] = v
         n_rings += 1
         rings_before = n_rings - 1
-        v = _put_ring(rg_xy, rg_z, has_z, rg_start[a], rg_start[a + 1] - 1, False, out_xy,
-                      out_z, v)
-        shell_start = out_ring_starts[n_rings - 1]
+        v = _put_ring(closed.xy, closed.z, has_z, closed.start[a], closed.start[a + 1] - 1,
+                      False, out.xy, out.z, v)
+        shell_start = out.ring_starts[n_rings - 1]
         shell_last = v - 1
         for b in range(n_rg):
-            if rg_sign[b] > 0 or rg_done[b]:
+            if closed.sign[b] > 0 or closed.done[b]:
                 continue
             where = 0
-            for i in range(rg_start[b], rg_start[b + 1] - 1):
-                where = point_in_ring(rg_xy[i, 0], rg_xy[i, 1], out_xy, shell_start,
+            for i in range(closed.start[b], closed.start[b + 1] - 1):
+                where = point_in_ring(closed.xy[i, 0], closed.xy[i, 1], out.xy, shell_start,
                                       shell_last)
                 if where != 0:
                     break
             if where < 0:
                 continue
-            rg_done[b] = True
-            out_ring_starts[n_rings] = v
+            closed.done[b] = True
+            out.ring_starts[n_rings] = v
             n_rings += 1
-            v = _put_ring(rg_xy, rg_z, has_z, rg_start[b], rg_start[b + 1] - 1, False,
-                          out_xy, out_z, v)
-        out_poly_rings[n_polys] = n_rings - rings_before
+            v = _put_ring(closed.xy, closed.z, has_z, closed.start[b],
+                          closed.start[b + 1] - 1, False, out.xy, out.z, v)
+        out.poly_rings[n_polys] = n_rings - rings_before
         n_polys += 1
+    placed = True
     for b in range(n_rg):
-        if rg_sign[b] < 0 and not rg_done[b]:
-            ok = False  # a hole outside every piece: invalid input
-    return v, n_rings, n_polys, ok
+        if closed.sign[b] < 0 and not closed.done[b]:
+            placed = False  # a hole outside every piece: invalid input
+    return v, n_rings, n_polys, placed
 
 
 _OUTSIDE, _INSIDE, _AMBIGUOUS = 0, 1, 2
@@ -874,7 +1207,7 @@ def _output_bound(scratch_vertices, scratch_chains, n_r):
 
 
 @scalar
-def polygon_class_of(xy, ring_offsets, r_begin, r_end, xmin, ymin, xmax, ymax):
+def polygon_class_of(xy, ring_offsets, r_begin, r_end, window):
     """Return what the shell's bounding box says of a polygon: outside, inside, ambiguous.
 
     The run test of `clip_chains` on the whole shell: beyond an edge, nothing is left;
@@ -886,175 +1219,224 @@ def polygon_class_of(xy, ring_offsets, r_begin, r_end, xmin, ymin, xmax, ymax):
     last = ring_offsets[r_begin + 1] - 1
     if last <= first:
         return _OUTSIDE
-    lo, hi, strict = run_box_codes(xy, first, last, xmin, ymin, xmax, ymax)
+    lo, hi, strict = run_box_codes(xy, first, last, window)
     return _OUTSIDE if lo & hi else (_INSIDE if strict else _AMBIGUOUS)
 
 
+@borrowing
+def _class_of(line, polygons, p):
+    """Return `polygon_class_of` polygon p against its window."""
+    return polygon_class_of(line.xy, polygons.ring_offsets, polygons.polygon_offsets[p],
+                            polygons.polygon_offsets[p + 1],
+                            window_of(polygons.windows, polygons.polygon_window, p))
+
+
 @parallel
-def classify_polygons(xy, ring_offsets, polygon_offsets, polygon_window, windows,
-                      polygon_class):
+def classify_polygons(line, polygons, polygon_class):
     """Store `polygon_class_of` of every polygon (as `clip_polygon_blocks` decides it)."""
-    for p in prange(polygon_offsets.shape[0] - 1):
-        w = polygon_window[p]
-        polygon_class[p] = polygon_class_of(xy, ring_offsets, polygon_offsets[p],
-                                            polygon_offsets[p + 1], windows[w, 0],
-                                            windows[w, 1], windows[w, 2], windows[w, 3])
+    for p in prange(polygons.polygon_offsets.shape[0] - 1):
+        polygon_class[p] = _class_of(line, polygons, p)
 
 
 @parallel
-def clip_polygon_blocks(xy, z, has_z, ring_offsets, polygon_offsets, polygon_window, windows,
-                        method, n_fixed, max_depth, tol, auto_piece, exact, block_size, write,
-                        polygon_class, scratch_vertices, scratch_chains, vertex_start,
-                        ring_start, poly_start, out_xy, out_z, out_ring_starts, out_poly_rings,
-                        n_vertices, n_rings, n_polys, counters, decided, chunk_start, decision,
-                        piece_start, keep, pieces):
-    """Count (``write=False``) or write (``write=True``) every polygon of a ragged array.
-
-    Polygon ``p`` has rings ``polygon_offsets[p]..polygon_offsets[p+1]-1`` (the shell
-    first) of ``ring_offsets``, clipped against ``windows[polygon_window[p]]``.
+def clip_polygon_blocks(line, polygons, options, block_size, plan, counts, out, counters,
+                        decisions):
+    """Count (``out.write`` False) or write every polygon of a ragged array.
 
     The shell's bounding box classifies each polygon (the run test of `clip_chains` on
     the whole shell): beyond an edge, nothing is left; strictly inside the window, every
     ring is copied as it is (holes lie inside their shell); only the others are cut.
-    The count pass records the class and the exact output counts (`n_vertices`,
-    `n_rings`, `n_polys`), cutting the ambiguous polygons into scratch space; the write
-    pass writes polygon p at ``vertex_start[p]``, ``ring_start[p]`` and
-    ``poly_start[p]`` (exclusive sums of the counts), cutting the ambiguous ones again.
-    Ambiguous polygons are few where it matters, so cutting them twice costs less than
-    over-allocating every output and compacting it. Stats are counted in the write pass.
-    With `decided`, the runs of the ambiguous polygons' rings were pruned and their
-    segments clipped elsewhere (see `clip_polygon`; those counters are the caller's).
+    The count pass records the class in `plan` and the exact output counts in `counts`
+    (``n_vertices``, ``n_rings``, ``n_polys``), cutting the ambiguous polygons into
+    scratch space; the write pass writes polygon p at ``counts.vertex_start[p]``,
+    ``ring_start[p]`` and ``poly_start[p]`` (exclusive sums of the counts), cutting the
+    ambiguous ones again. Ambiguous polygons are few where it matters, so cutting them
+    twice costs less than over-allocating every output and compacting it. Stats are
+    counted in the write pass, one row of `counters` per block of `block_size`
+    polygons. With ``decisions.decided``, the runs of the ambiguous polygons' rings were
+    pruned and their segments clipped elsewhere (see `clip_polygon`; those counters are
+    the caller's).
     """
-    n_polygons = polygon_offsets.shape[0] - 1
-    n_blocks = counters.shape[0]
-    for blk in prange(n_blocks):
-        st = counters[blk]
+    for blk in prange(counters.shape[0]):
+        _polygon_block(blk, line, polygons, options, block_size, plan, counts, out, counters,
+                       decisions)
+
+
+@scalar
+def _polygon_block(blk, line, polygons, options, block_size, plan, counts, out, counters,
+                   decisions):
+    """Count or write polygons ``blk * block_size`` on: the body of `clip_polygon_blocks`."""
+    n_polygons = polygons.polygon_offsets.shape[0] - 1
+    write = out.write
+    lo_p = blk * block_size
+    hi_p = min(n_polygons, (blk + 1) * block_size)
+    st = counters[blk]
+    if not write:
+        st = np.zeros(C.WIDTH, dtype=np.int64)  # counted once, in the write pass
+    max_v, max_c, max_r, max_out = _plan_block(line, polygons, lo_p, hi_p, not write, plan,
+                                               counts)
+    if write:
+        _copy_decided(line, polygons, lo_p, hi_p, plan.polygon_class, counts, out, st)
+    if max_out == 1:
+        return  # no ambiguous polygon in this block
+    has_z = line.has_z
+    scratch = _polygon_scratch(st, max_v, max_c, max_r, max_out, has_z)
+    dst = out
+    if not write:
+        dst = PolygonsOut(write, np.empty((max_out, 2), dtype=np.float64),
+                          np.empty(max_out if has_z else 0, dtype=np.float64),
+                          np.empty(max_out // 4 + 2, dtype=np.int64),
+                          np.empty(max_out // 4 + 2, dtype=np.int64))
+    _clip_ambiguous(line, polygons, lo_p, hi_p, options, decisions, plan.polygon_class, counts,
+                    scratch, dst)
+
+
+@borrowing
+def _clip_ambiguous(line, polygons, lo_p, hi_p, options, decisions, polygon_class, counts,
+                    scratch, out):
+    """Clip (`clip_polygon`) the ambiguous polygons among lo_p..hi_p-1 into `out`.
+
+    In the count pass (``out.write`` False, `out` one polygon's scratch) store their
+    output counts in `counts`; in the write pass write them from their starts.
+    """
+    write = out.write
+    for p in range(lo_p, hi_p):
+        if polygon_class[p] != _AMBIGUOUS:
+            continue
+        v0 = counts.vertex_start[p] if write else 0
+        r0 = counts.ring_start[p] if write else 0
+        q0 = counts.poly_start[p] if write else 0
+        window = window_of(polygons.windows, polygons.polygon_window, p)
+        v, nr, npoly, ok = clip_polygon(line, polygons, p, window, options, decisions, scratch,
+                                        out, v0, r0, q0)
+        if not ok:
+            scratch.block.st[C.INVALID_POLYGONS] += 1
         if not write:
-            st = np.zeros(C.WIDTH, dtype=np.int64)  # counted once, in the write pass
-        lo_p = blk * block_size
-        hi_p = min(n_polygons, (blk + 1) * block_size)
-        max_v = 1
-        max_c = 1
-        max_r = 1
-        max_out = 1
-        for p in range(lo_p, hi_p):
-            r_begin = polygon_offsets[p]
-            r_end = polygon_offsets[p + 1]
-            n_r = r_end - r_begin
-            if not write:
-                w = polygon_window[p]
-                cls = polygon_class_of(xy, ring_offsets, r_begin, r_end, windows[w, 0],
-                                       windows[w, 1], windows[w, 2], windows[w, 3])
-                polygon_class[p] = cls
-                n_vertices[p] = 0
-                n_rings[p] = 0
-                n_polys[p] = 0
-                if cls == _INSIDE:
-                    n_vertices[p] = ring_offsets[r_end] - ring_offsets[r_begin]
-                    n_rings[p] = n_r
-                    n_polys[p] = 1
-                elif cls == _AMBIGUOUS:
-                    sv = n_r
-                    sc = 0
-                    for r in range(r_begin, r_end):
-                        first = ring_offsets[r]
-                        last = ring_offsets[r + 1] - 1
-                        if last > first:
-                            nv, nc, _ = bound_chains(xy, first, last, windows[w, 0],
-                                                     windows[w, 1], windows[w, 2],
-                                                     windows[w, 3])
-                            sv += nv
-                            sc += nc
-                        else:
-                            sc += 1
-                    scratch_vertices[p] = sv
-                    scratch_chains[p] = sc
-            if polygon_class[p] == _AMBIGUOUS:
-                max_v = max(max_v, scratch_vertices[p])
-                max_c = max(max_c, scratch_chains[p])
-                max_r = max(max_r, n_r)
-                max_out = max(max_out, _output_bound(scratch_vertices[p], scratch_chains[p],
-                                                     n_r))
-        if max_out == 1 and not write:
-            continue  # no ambiguous polygon in this block
-        run_stack = np.empty((RUN_STACK_CAPACITY, 3), dtype=np.int64)
-        stack_f = np.empty((STACK_CAPACITY, 6), dtype=np.float64)
-        stack_i = np.empty((STACK_CAPACITY, 3), dtype=np.int64)
-        ch_xy = np.empty((max_v, 2), dtype=np.float64)
-        ch_z = np.empty(max_v if has_z else 0, dtype=np.float64)
-        ch_starts = np.empty(max_c + 1, dtype=np.int64)
-        lc = np.empty((max_c, 7), dtype=np.int64)
-        ev_key = np.empty((2 * max_c, 3), dtype=np.float64)
-        ev_chain = np.empty(2 * max_c, dtype=np.int64)
-        order = np.empty(2 * max_c, dtype=np.int64)
-        ring_state = np.empty(max_r, dtype=np.int64)
-        ring_rev = np.empty(max_r, dtype=np.bool_)
-        ring_first = np.empty(max_r, dtype=np.int64)
-        ring_last = np.empty(max_r, dtype=np.int64)
-        tmp_xy = np.empty((max_out, 2), dtype=np.float64)
-        tmp_z = np.empty(max_out if has_z else 0, dtype=np.float64)
-        stk = np.empty(max_out, dtype=np.int64)
-        rg_xy = np.empty((max_out, 2), dtype=np.float64)
-        rg_z = np.empty(max_out if has_z else 0, dtype=np.float64)
-        rg_start = np.empty(max_out // 4 + 2, dtype=np.int64)
-        rg_sign = np.empty(max_out // 4 + 2, dtype=np.int64)
-        rg_done = np.empty(max_out // 4 + 2, dtype=np.bool_)
-        if write:
-            dst_xy = out_xy
-            dst_z = out_z
-            dst_rings = out_ring_starts
-            dst_polys = out_poly_rings
-        else:
-            dst_xy = np.empty((max_out, 2), dtype=np.float64)
-            dst_z = np.empty(max_out if has_z else 0, dtype=np.float64)
-            dst_rings = np.empty(max_out // 4 + 2, dtype=np.int64)
-            dst_polys = np.empty(max_out // 4 + 2, dtype=np.int64)
-        for p in range(lo_p, hi_p):
-            cls = polygon_class[p]
-            r_begin = polygon_offsets[p]
-            r_end = polygon_offsets[p + 1]
-            n_segments = ring_offsets[r_end] - ring_offsets[r_begin] - (r_end - r_begin)
-            if cls != _AMBIGUOUS:
-                if not write:
-                    continue
-                st[C.RUNS_EVALUATED] += 1
-                st[C.RUN_LEVELS] += 1
-                st[C.SEGMENT_LEVELS] += n_segments
-                if cls == _OUTSIDE:
-                    st[C.RUNS_REJECTED] += 1
-                    continue
-                st[C.RUNS_ACCEPTED] += 1
-                v = vertex_start[p]
-                invalid = False
+            counts.n_vertices[p] = v - v0
+            counts.n_rings[p] = nr - r0
+            counts.n_polys[p] = npoly - q0
+
+
+@borrowing
+def _plan_block(line, polygons, lo_p, hi_p, classify, plan, counts):
+    """Return the block's scratch sizes ``(vertices, chains, rings, output)``.
+
+    With `classify` (the count pass), first classify each polygon into ``plan``, count
+    the output of those not cut (all or nothing) into ``counts``, and bound the chain
+    scratch of the ambiguous ones (`bound_chains`). The sizes are the largest over the
+    block's ambiguous polygons (1 if there is none).
+    """
+    xy = line.xy
+    ring_offsets = polygons.ring_offsets
+    max_v = 1
+    max_c = 1
+    max_r = 1
+    max_out = 1
+    for p in range(lo_p, hi_p):
+        r_begin = polygons.polygon_offsets[p]
+        r_end = polygons.polygon_offsets[p + 1]
+        n_r = r_end - r_begin
+        if classify:
+            window = window_of(polygons.windows, polygons.polygon_window, p)
+            cls = polygon_class_of(xy, ring_offsets, r_begin, r_end, window)
+            plan.polygon_class[p] = cls
+            counts.n_vertices[p] = 0
+            counts.n_rings[p] = 0
+            counts.n_polys[p] = 0
+            if cls == _INSIDE:
+                counts.n_vertices[p] = ring_offsets[r_end] - ring_offsets[r_begin]
+                counts.n_rings[p] = n_r
+                counts.n_polys[p] = 1
+            elif cls == _AMBIGUOUS:
+                sv = n_r
+                sc = 0
                 for r in range(r_begin, r_end):
                     first = ring_offsets[r]
                     last = ring_offsets[r + 1] - 1
-                    area = signed_area(xy, first, last) if last > first else 0.0
-                    if area == 0.0:
-                        invalid = True
-                    out_ring_starts[ring_start[p] + r - r_begin] = v
-                    v = _put_ring(xy, z, has_z, first, last,
-                                  (area < 0.0) if r == r_begin else (area > 0.0),
-                                  out_xy, out_z, v)
-                out_poly_rings[poly_start[p]] = r_end - r_begin
-                if invalid:
-                    st[C.INVALID_POLYGONS] += 1  # a ring without area (a symmetric bow tie)
-                continue
-            w = polygon_window[p]
-            v0 = vertex_start[p] if write else 0
-            r0 = ring_start[p] if write else 0
-            q0 = poly_start[p] if write else 0
-            v, nr, npoly, ok = clip_polygon(
-                xy, z, has_z, ring_offsets, r_begin, r_end, windows[w, 0], windows[w, 1],
-                windows[w, 2], windows[w, 3], method, n_fixed, max_depth, tol, auto_piece,
-                exact, dst_xy, dst_z, dst_rings, dst_polys, v0, r0, q0, st, run_stack,
-                stack_f, stack_i, ch_xy, ch_z, ch_starts, lc, ev_key, ev_chain, order,
-                ring_state, ring_rev, ring_first, ring_last, tmp_xy, tmp_z, stk, rg_xy, rg_z,
-                rg_start, rg_sign, rg_done, write, decided, chunk_start, decision, piece_start,
-                keep, pieces)
-            if not ok:
-                st[C.INVALID_POLYGONS] += 1
-            if not write:
-                n_vertices[p] = v - v0
-                n_rings[p] = nr - r0
-                n_polys[p] = npoly - q0
+                    if last > first:
+                        nv, nc, _ = bound_chains(xy, first, last, window)
+                        sv += nv
+                        sc += nc
+                    else:
+                        sc += 1
+                plan.scratch_vertices[p] = sv
+                plan.scratch_chains[p] = sc
+        if plan.polygon_class[p] == _AMBIGUOUS:
+            max_v = max(max_v, plan.scratch_vertices[p])
+            max_c = max(max_c, plan.scratch_chains[p])
+            max_r = max(max_r, n_r)
+            max_out = max(max_out, _output_bound(plan.scratch_vertices[p],
+                                                 plan.scratch_chains[p], n_r))
+    return max_v, max_c, max_r, max_out
+
+
+@scalar
+def _polygon_scratch(st, max_v, max_c, max_r, max_out, has_z):
+    """Return the scratch to clip polygons of up to these sizes (see `_plan_block`).
+
+    `st` is the block's counter row.
+    """
+    no_codes = np.empty(0, dtype=np.uint8)
+    ch_xy = np.empty((max_v, 2), dtype=np.float64)
+    return PolygonScratch(
+        BlockState(st, np.empty((RUN_STACK_CAPACITY, 3), dtype=np.int64), segment_stack(),
+                   no_codes),
+        ChainsOut(ch_xy, ch_xy.reshape(-1), np.empty(max_v if has_z else 0),
+                  np.empty(max_c + 1, dtype=np.int64)),
+        LogicalChains(np.empty(max_c, dtype=np.int64), np.empty(max_c, dtype=np.int64),
+                      np.empty(max_c, dtype=np.int64), np.empty(max_c, dtype=np.int64),
+                      np.empty(max_c, dtype=np.bool_), np.empty(max_c, dtype=np.bool_),
+                      np.empty(max_c, dtype=np.int64)),
+        Events(np.empty(2 * max_c, dtype=np.int64), np.empty(2 * max_c, dtype=np.float64),
+               np.empty(2 * max_c, dtype=np.float64), np.empty(2 * max_c, dtype=np.int64),
+               np.empty(2 * max_c, dtype=np.int64)),
+        RingStates(np.empty(max_r, dtype=np.int64), np.empty(max_r, dtype=np.bool_),
+                   np.empty(max_r, dtype=np.int64), np.empty(max_r, dtype=np.int64)),
+        Walk(np.empty((max_out, 2), dtype=np.float64),
+             np.empty(max_out if has_z else 0, dtype=np.float64),
+             np.empty(max_out, dtype=np.int64)),
+        ClosedRings(np.empty((max_out, 2), dtype=np.float64),
+                    np.empty(max_out if has_z else 0, dtype=np.float64),
+                    np.empty(max_out // 4 + 2, dtype=np.int64),
+                    np.empty(max_out // 4 + 2, dtype=np.int64),
+                    np.empty(max_out // 4 + 2, dtype=np.bool_)),
+        Corners(np.zeros(4), np.zeros(4, dtype=np.bool_)),
+        PartPlan(no_codes, no_codes, np.empty((0, 2), dtype=np.int64)))
+
+
+@borrowing
+def _copy_decided(line, polygons, lo_p, hi_p, polygon_class, counts, out, st):
+    """Write the polygons lo_p..hi_p-1 the window's box test decided whole.
+
+    Outside: nothing; inside: all its rings, oriented on the way (shells
+    counter-clockwise, holes clockwise). Ambiguous polygons are left to `clip_polygon`.
+    """
+    ring_offsets = polygons.ring_offsets
+    for p in range(lo_p, hi_p):
+        cls = polygon_class[p]
+        if cls == _AMBIGUOUS:
+            continue
+        r_begin = polygons.polygon_offsets[p]
+        r_end = polygons.polygon_offsets[p + 1]
+        n_segments = ring_offsets[r_end] - ring_offsets[r_begin] - (r_end - r_begin)
+        st[C.RUNS_EVALUATED] += 1
+        st[C.RUN_LEVELS] += 1
+        st[C.SEGMENT_LEVELS] += n_segments
+        if cls == _OUTSIDE:
+            st[C.RUNS_REJECTED] += 1
+            continue
+        st[C.RUNS_ACCEPTED] += 1
+        v = counts.vertex_start[p]
+        invalid = False
+        for r in range(r_begin, r_end):
+            first = ring_offsets[r]
+            last = ring_offsets[r + 1] - 1
+            area = signed_area(line.xy, first, last) if last > first else 0.0
+            if area == 0.0:
+                invalid = True
+            out.ring_starts[counts.ring_start[p] + r - r_begin] = v
+            v = _put_ring(line.xy, line.z, line.has_z, first, last,
+                          (area < 0.0) if r == r_begin else (area > 0.0), out.xy, out.z, v)
+        out.poly_rings[counts.poly_start[p]] = r_end - r_begin
+        if invalid:
+            st[C.INVALID_POLYGONS] += 1  # a ring without area (a symmetric bow tie)

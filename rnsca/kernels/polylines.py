@@ -27,7 +27,17 @@ of chunks then costs one step per chunk at every level of the recursion, and acc
 runs are copied whole.
 
 Stacks are explicit (no recursion), so the logic ports to OpenCL.
+
+What travels together is one record (named tuples; see `rnsca.kernels.records`): the
+vertices (`Vertices`), the parts and their windows (`Lines`), where a line is cut
+(`Cut`), where its chains go (`ChainsOut`), a block's counters and scratch
+(`BlockState`), the chunk codes and plans (`Chunks`, one part's: `PartPlan`), decisions
+made on a device (`Decisions`). The flags that choose a pass (`write`,
+`break_at_boundary`) stay arguments, passed as constants, so that each pass compiles
+without the other's branches.
 """
+
+from typing import NamedTuple
 
 import numpy as np
 from numba import prange
@@ -44,13 +54,13 @@ from rnsca.constants import (
 from rnsca.kernels import counters as C
 from rnsca.kernels.jit import borrowing, inlined, parallel, scalar
 from rnsca.kernels.outcode import outcode
-from rnsca.kernels.records import CoreOptions, Window
+from rnsca.kernels.records import Window, window_of
 from rnsca.kernels.segments import (
     RNSCA,
-    STACK_CAPACITY,
     SegmentStack,
     clip_one,
     rnsca_segment,
+    segment_stack,
 )
 
 __all__ = [
@@ -63,6 +73,15 @@ __all__ = [
     "OUTSIDE",
     "NOT_STRICTLY_INSIDE",
     "NOT_FINITE",
+    "ChainsOut",
+    "Chunks",
+    "Cut",
+    "Decisions",
+    "Lines",
+    "PartCounts",
+    "Piece",
+    "BlockState",
+    "PartPlan",
     "assemble_chains",
     "assemble_line_blocks",
     "bound_chains",
@@ -92,21 +111,147 @@ CODE_SCRATCH_BYTES = CODE_STEP_CHUNKS * RUN_LEAF_SEGMENTS + 8
 SERIAL_VERTICES = 32768
 
 
+class Cut(NamedTuple):
+    """Where a line is cut into chains: its window, and whether edge pieces are dropped.
+
+    With `drop_edge_runs` a piece along a window edge is not visible (lines with
+    ``boundary="interior"``, and rings). Whether chains also break at a vertex on the
+    boundary (rings) is each function's `break_at_boundary` argument: a constant where
+    it is passed (``False`` for lines, ``True`` for rings), so that Numba compiles the
+    line version without the test.
+    """
+
+    window: Window
+    drop_edge_runs: bool
+
+
+class ChainsOut(NamedTuple):
+    """Where chains go: vertices from ``xy[v]`` (and ``z[v]``), chain starts from ``starts[c]``.
+
+    `flat` is ``xy.reshape(-1)`` (see `Vertices`). In the counting pass nothing is
+    written, and the arrays may be empty. Whether a function writes is its own `write`
+    argument, not a field: passed as a constant (``True``, ``False``), it lets Numba
+    compile the counting and the writing versions each without the other's branches.
+    """
+
+    xy: np.ndarray
+    flat: np.ndarray
+    z: np.ndarray
+    starts: np.ndarray
+
+
+class BlockState(NamedTuple):
+    """What one block of geometries counts into and works in.
+
+    `st` is the block's counter row (`counters`); `run_stack` (`RUN_STACK_CAPACITY`, 3)
+    the runs pending, empty where no run is decided; `segment_stack` the scratch of
+    `segments.rnsca_segment`; `codes` (`CODE_SCRATCH_BYTES`) that of `code_chunks`, empty
+    where nothing is coded.
+    """
+
+    st: np.ndarray
+    run_stack: np.ndarray
+    segment_stack: SegmentStack
+    codes: np.ndarray
+
+
+class Piece(NamedTuple):
+    """The piece [t0, t1] of a segment the segment core kept, from (ax, ay) to (bx, by)."""
+
+    t0: float
+    t1: float
+    ax: float
+    ay: float
+    bx: float
+    by: float
+
+
+class Chunks(NamedTuple):
+    """The chunk codes and plans of a line array (`clip_lines`).
+
+    Part p's chunks are ``chunk_start[p]`` on: the OR and AND of each one's vertex codes
+    (`code_chunks`), and from the same row on, the part's plan, the runs the count pass
+    decided (`clip_chains`), up to ``plan_end[p]``.
+    """
+
+    chunk_start: np.ndarray
+    chunk_or: np.ndarray
+    chunk_and: np.ndarray
+    plan: np.ndarray
+    plan_end: np.ndarray
+
+
+class PartPlan(NamedTuple):
+    """One part's chunk codes and plan rows (views of `Chunks` from its first chunk).
+
+    Empty (rings): the runs are coded from the vertices, and no plan is recorded.
+    """
+
+    chunk_or: np.ndarray
+    chunk_and: np.ndarray
+    plan: np.ndarray
+
+
+class Decisions(NamedTuple):
+    """Chunk decisions made elsewhere (the OpenCL backend's device), for `assemble_chains`.
+
+    Part (or ring) r's chunk k was ``decision[chunk_start[r] + k]`` (``CHUNK_*``); a
+    segmented chunk's segments have `keep` and `pieces` rows (t0, t1, ax, ay, bx, by)
+    from ``piece_start[chunk_start[r] + k]`` on. `decided` False: nothing was decided
+    (all empty), the kernels decide.
+    """
+
+    decided: bool
+    chunk_start: np.ndarray
+    decision: np.ndarray
+    piece_start: np.ndarray
+    keep: np.ndarray
+    pieces: np.ndarray
+
+
+class Lines(NamedTuple):
+    """The parts and geometries of a ragged line array, and their windows.
+
+    Geometry g owns parts ``geometry_parts[g]`` to ``geometry_parts[g+1] - 1``; part p
+    runs through vertices ``part_offsets[p]`` to ``part_offsets[p+1] - 1`` (of a
+    `Vertices`); geometry g is clipped against ``window_of(windows, geometry_window,
+    g)``.
+    """
+
+    part_offsets: np.ndarray
+    geometry_parts: np.ndarray
+    windows: np.ndarray
+    geometry_window: np.ndarray
+
+
+class PartCounts(NamedTuple):
+    """Per part: output vertices and chains (the count pass), and their starts (prefix sums).
+
+    A part with a non-finite coordinate gets ``n_vertices = -1``. The starts are empty
+    in the count pass.
+    """
+
+    n_vertices: np.ndarray
+    n_chains: np.ndarray
+    vertex_start: np.ndarray
+    chain_start: np.ndarray
+
+
 @scalar
-def _edge_bits(x, y, xmin, ymin, xmax, ymax):
+def _edge_bits(x, y, window):
     """Return which window edge lines the point lies on (LEFT, RIGHT, BOTTOM, TOP bits)."""
+    xmin, ymin, xmax, ymax = window
     return ((x == xmin) * 1) | ((x == xmax) * 2) | ((y == ymin) * 4) | ((y == ymax) * 8)
 
 
 @scalar
-def on_one_edge(ax, ay, bx, by, xmin, ymin, xmax, ymax):
+def on_one_edge(ax, ay, bx, by, window):
     """Return whether the segment (a, b) of the closed window lies along one of its edges."""
-    return (_edge_bits(ax, ay, xmin, ymin, xmax, ymax)
-            & _edge_bits(bx, by, xmin, ymin, xmax, ymax)) != 0
+    return (_edge_bits(ax, ay, window) & _edge_bits(bx, by, window)) != 0
 
 
 @scalar
-def bound_chains(xy, first, last, xmin, ymin, xmax, ymax):
+def bound_chains(xy, first, last, window):
     """Return upper bounds (vertices, chains, crossings) for clipping ``xy[first..last]``.
 
     A vertex inside the closed window is output at most once, twice if it lies on the
@@ -116,15 +261,16 @@ def bound_chains(xy, first, last, xmin, ymin, xmax, ymax):
     chains' ends for polygon assembly. One branch-free pass, so the write pass can be
     given a slot without a counting pass that repeats the clipping.
     """
+    xmin, ymin, xmax, ymax = window
     vertices = 0
     crossings = 0
     cp = outcode(xy[first, 0], xy[first, 1], xmin, ymin, xmax, ymax)
-    bp = _edge_bits(xy[first, 0], xy[first, 1], xmin, ymin, xmax, ymax)
+    bp = _edge_bits(xy[first, 0], xy[first, 1], window)
     vertices += cp == 0
     crossings += bp != 0
     for i in range(first + 1, last + 1):
         c = outcode(xy[i, 0], xy[i, 1], xmin, ymin, xmax, ymax)
-        b = _edge_bits(xy[i, 0], xy[i, 1], xmin, ymin, xmax, ymax)
+        b = _edge_bits(xy[i, 0], xy[i, 1], window)
         vertices += c == 0
         ambiguous = ((cp | c) != 0) & ((cp & c) == 0)
         along = ((cp | c) == 0) & ((bp & b) != 0)
@@ -136,86 +282,89 @@ def bound_chains(xy, first, last, xmin, ymin, xmax, ymax):
 
 
 @inlined
-def _append(out_xy, out_z, has_z, write, v, x, y, z):
+def _append(line, out, write, v, x, y, z):
     if write:
-        out_xy[v, 0] = x
-        out_xy[v, 1] = y
-        if has_z:
-            out_z[v] = z
+        out.xy[v, 0] = x
+        out.xy[v, 1] = y
+        if line.has_z:
+            out.z[v] = z
     return v + 1
 
 
 @inlined
-def _emit_piece(xy, z, has_z, write, i, t0, t1, ax, ay, bx, by, out_xy, out_z, out_starts,
-                v, c, last_v, breaks):
-    """Add the piece [t0, t1] of segment i to the chains; return (v, c, last_v).
+def _emit_piece(line, out, write, i, piece, v, c, last_v, breaks):
+    """Add `piece` of segment i to the chains; return (v, c, last_v).
 
     The piece continues the chain if the chain ends at vertex i and the piece starts
     there, unless `breaks` (rings break at a vertex on the boundary). Without `write`
     only the positions advance (the counting pass).
     """
+    xy = line.xy
+    z = line.z
+    t0, t1, ax, ay, bx, by = piece
     if breaks or not (last_v == i and ax == xy[i, 0] and ay == xy[i, 1]):
         if write:
-            out_starts[c] = v
+            out.starts[c] = v
         c += 1
         za = 0.0
-        if has_z:
+        if line.has_z:
             za = z[i] if t0 == 0.0 else z[i] + t0 * (z[i + 1] - z[i])
-        v = _append(out_xy, out_z, has_z, write, v, ax, ay, za)
+        v = _append(line, out, write, v, ax, ay, za)
     end_is_vertex = bx == xy[i + 1, 0] and by == xy[i + 1, 1]
     zb = 0.0
-    if has_z:
+    if line.has_z:
         zb = z[i + 1] if end_is_vertex else z[i] + t1 * (z[i + 1] - z[i])
-    v = _append(out_xy, out_z, has_z, write, v, bx, by, zb)
+    v = _append(line, out, write, v, bx, by, zb)
     return v, c, (i + 1) if end_is_vertex else -1
 
 
 @inlined
-def _emit_run(flat_xy, z, has_z, write, a, b, flat_out, out_z, out_starts, v, c, last_v):
+def _emit_run(line, out, write, a, b, v, c, last_v):
     """Add the whole run of vertices a..b (inside the window); return (v, c, last_v).
 
-    `flat_xy` and `flat_out` are the input and output coordinates as one row each
-    (``xy.reshape(-1)``): the copy then runs over views from index 0 and vectorizes.
+    The copy runs over views of the coordinates as one row (``flat``) from index 0,
+    which vectorizes.
     """
     start = a + 1
     if last_v != a:
         if write:
-            out_starts[c] = v
+            out.starts[c] = v
         c += 1
         start = a
     count = b + 1 - start
     if write:
-        src = flat_xy[2 * start:2 * (b + 1)]
-        dst = flat_out[2 * v:2 * (v + count)]
+        src = line.flat[2 * start:2 * (b + 1)]
+        dst = out.flat[2 * v:2 * (v + count)]
         for k in range(src.shape[0]):
             dst[k] = src[k]
-        if has_z:
-            src_z = z[start:b + 1]
-            dst_z = out_z[v:v + count]
+        if line.has_z:
+            src_z = line.z[start:b + 1]
+            dst_z = out.z[v:v + count]
             for k in range(count):
                 dst_z[k] = src_z[k]
     return v + count, c, b
 
 
-@borrowing
-def _clip_segments(xy, z, has_z, write, a, b, xmin, ymin, xmax, ymax, method, n_fixed,
-                   max_depth, tol, auto_piece, exact, drop_edge_runs, break_at_boundary, out_xy,
-                   out_z, out_starts, v, c, last_v, st, stack_f, stack_i, flat_xy, flat_out):
+@inlined
+def _clip_segments(line, a, b, cut, break_at_boundary, options, out, write, v, c, last_v,
+                   block):
     """Clip segments a..b-1 one by one into the chains; return (v, c, last_v).
 
-    With `break_at_boundary` (rings) a chain also breaks at a vertex on the boundary,
-    so that a ring touching the window's edge from inside is cut there too.
-    `flat_xy` and `flat_out` are `xy` and `out_xy` as one row each (see `_emit_run`).
+    With `break_at_boundary` (rings) a chain also breaks at a vertex on the boundary, so
+    that a ring touching the window's edge from inside is cut there too. Inlined: as a
+    call, passing its records' hundred-odd words cost more per run than the segments
+    (measured: the curve workload's write pass 20% slower).
     """
-    if method != RNSCA:
+    xy = line.xy
+    window = cut.window
+    xmin, ymin, xmax, ymax = window
+    st = block.st
+    if options.method != RNSCA:
         for i in range(a, b):
             keep, t0, t1, ax, ay, bx, by = clip_one(
-                xy[i, 0], xy[i, 1], xy[i + 1, 0], xy[i + 1, 1], Window(xmin, ymin, xmax, ymax),
-                CoreOptions(method, n_fixed, max_depth, tol, auto_piece, exact), st)
-            v, c, last_v = _emit_visible(xy, z, has_z, write, i, keep, t0, t1, ax, ay, bx,
-                                         by, xmin, ymin, xmax, ymax, drop_edge_runs,
-                                         break_at_boundary, out_xy, out_z, out_starts, v, c,
-                                         last_v)
+                xy[i, 0], xy[i, 1], xy[i + 1, 0], xy[i + 1, 1], window, options, st)
+            v, c, last_v = _emit_visible(line, i, keep, Piece(t0, t1, ax, ay, bx, by), cut,
+                                         break_at_boundary, out, write, v, c, last_v)
         return v, c, last_v
     # RNSCA's level 0 for every segment, decided here from its end points' outcodes
     # (each computed once) with the counts kept in registers: most segments of a leaf
@@ -231,14 +380,11 @@ def _clip_segments(xy, z, has_z, write, a, b, xmin, ymin, xmax, ymax, method, n_
         c1 = outcode(xy[i + 1, 0], xy[i + 1, 1], xmin, ymin, xmax, ymax)
         if (c0 | c1) == 0:
             accepted += 1
-            visible = not (drop_edge_runs and on_one_edge(xy[i, 0], xy[i, 1], xy[i + 1, 0],
-                                                          xy[i + 1, 1], xmin, ymin, xmax,
-                                                          ymax))
-            breaks = break_at_boundary and _edge_bits(xy[i, 0], xy[i, 1], xmin, ymin, xmax,
-                                                      ymax) != 0
+            visible = not (cut.drop_edge_runs and on_one_edge(xy[i, 0], xy[i, 1], xy[i + 1, 0],
+                                                              xy[i + 1, 1], window))
+            breaks = break_at_boundary and _edge_bits(xy[i, 0], xy[i, 1], window) != 0
             if stretch >= 0 and (breaks or not visible):
-                v, c, last_v = _emit_run(flat_xy, z, has_z, write, stretch, i, flat_out,
-                                         out_z, out_starts, v, c, last_v)
+                v, c, last_v = _emit_run(line, out, write, stretch, i, v, c, last_v)
                 stretch = -1
             if visible and stretch < 0:
                 stretch = i
@@ -246,22 +392,18 @@ def _clip_segments(xy, z, has_z, write, a, b, xmin, ymin, xmax, ymax, method, n_
                     last_v = -1  # the stretch starts a chain of its own
             continue
         if stretch >= 0:
-            v, c, last_v = _emit_run(flat_xy, z, has_z, write, stretch, i, flat_out, out_z,
-                                     out_starts, v, c, last_v)
+            v, c, last_v = _emit_run(line, out, write, stretch, i, v, c, last_v)
             stretch = -1
         if c0 & c1:
             rejected += 1
             continue
         keep, t0, t1, ax, ay, bx, by = rnsca_segment(
-            xy[i, 0], xy[i, 1], xy[i + 1, 0], xy[i + 1, 1], Window(xmin, ymin, xmax, ymax),
-            CoreOptions(method, n_fixed, max_depth, tol, auto_piece, exact), st,
-            SegmentStack(stack_f, stack_i))
-        v, c, last_v = _emit_visible(xy, z, has_z, write, i, keep, t0, t1, ax, ay, bx, by,
-                                     xmin, ymin, xmax, ymax, drop_edge_runs, break_at_boundary,
-                                     out_xy, out_z, out_starts, v, c, last_v)
+            xy[i, 0], xy[i, 1], xy[i + 1, 0], xy[i + 1, 1], window, options, st,
+            block.segment_stack)
+        v, c, last_v = _emit_visible(line, i, keep, Piece(t0, t1, ax, ay, bx, by), cut,
+                                     break_at_boundary, out, write, v, c, last_v)
     if stretch >= 0:
-        v, c, last_v = _emit_run(flat_xy, z, has_z, write, stretch, b, flat_out, out_z,
-                                 out_starts, v, c, last_v)
+        v, c, last_v = _emit_run(line, out, write, stretch, b, v, c, last_v)
     st[C.EVALUATED] += accepted + rejected
     st[C.LEVELS] += accepted + rejected
     st[C.ACCEPTED] += accepted
@@ -270,25 +412,24 @@ def _clip_segments(xy, z, has_z, write, a, b, xmin, ymin, xmax, ymax, method, n_
 
 
 @inlined
-def _emit_visible(xy, z, has_z, write, i, keep, t0, t1, ax, ay, bx, by, xmin, ymin, xmax,
-                  ymax, drop_edge_runs, break_at_boundary, out_xy, out_z, out_starts, v, c,
-                  last_v):
+def _emit_visible(line, i, keep, piece, cut, break_at_boundary, out, write, v, c, last_v):
     """Add the piece of segment i the segment core kept, unless it is not visible."""
-    if keep and not (drop_edge_runs and on_one_edge(ax, ay, bx, by, xmin, ymin, xmax, ymax)):
-        breaks = break_at_boundary and _edge_bits(xy[i, 0], xy[i, 1], xmin, ymin, xmax,
-                                                  ymax) != 0
-        return _emit_piece(xy, z, has_z, write, i, t0, t1, ax, ay, bx, by, out_xy, out_z,
-                           out_starts, v, c, last_v, breaks)
+    if keep and not (cut.drop_edge_runs and on_one_edge(piece.ax, piece.ay, piece.bx,
+                                                        piece.by, cut.window)):
+        breaks = break_at_boundary and _edge_bits(line.xy[i, 0], line.xy[i, 1],
+                                                  cut.window) != 0
+        return _emit_piece(line, out, write, i, piece, v, c, last_v, breaks)
     return v, c, last_v
 
 
 @scalar
-def run_box_codes(xy, a, b, xmin, ymin, xmax, ymax):
+def run_box_codes(xy, a, b, window):
     """Return the outcodes of the bounding box corners of vertices a..b, and strictness.
 
     The third value says whether the box lies strictly inside the window (no vertex on
     an edge line), which ``drop_edge_runs`` needs before accepting a run whole.
     """
+    xmin, ymin, xmax, ymax = window
     lo_x = xy[a, 0]
     hi_x = lo_x
     lo_y = xy[a, 1]
@@ -311,13 +452,14 @@ def _level_slot(level):
 
 
 @scalar
-def vertex_code(x, y, xmin, ymin, xmax, ymax, strict):
+def vertex_code(x, y, window, strict):
     """Return the vertex code: outcode, `NOT_FINITE`, if `strict` `NOT_STRICTLY_INSIDE`.
 
     The OR and AND of a run's codes classify the run as its bounding box's outcodes
     would (see the module docstring). ``x - x == y - y`` is false exactly when x or y is
     NaN or infinite (IEEE arithmetic; no fast-math flag is set).
     """
+    xmin, ymin, xmax, ymax = window
     code = outcode(x, y, xmin, ymin, xmax, ymax) | (not (x - x == y - y)) * NOT_FINITE
     if strict:
         code |= ((x <= xmin) | (x >= xmax) | (y <= ymin) | (y >= ymax)) * NOT_STRICTLY_INSIDE
@@ -331,8 +473,7 @@ def chunk_count(first, last):
 
 
 @borrowing
-def code_chunks(flat, first, last, xmin, ymin, xmax, ymax, strict, codes, chunk_or, chunk_and,
-                c0):
+def code_chunks(flat, first, last, window, strict, codes, chunk_or, chunk_and, c0):
     """Store the OR and AND of each chunk's vertex codes; return those of the whole line.
 
     `flat` is the coordinate array as one row (x0, y0, x1, y1, ...); the line runs
@@ -350,8 +491,7 @@ def code_chunks(flat, first, last, xmin, ymin, xmax, ymax, strict, codes, chunk_
         n_codes = min(step, last - first - s) + 1
         points = flat[2 * (first + s):2 * (first + s + n_codes)]
         for i in range(n_codes):
-            codes[i] = vertex_code(points[2 * i], points[2 * i + 1], xmin, ymin, xmax, ymax,
-                                   strict)
+            codes[i] = vertex_code(points[2 * i], points[2 * i + 1], window, strict)
         n_chunks = (n_codes - 1 + RUN_LEAF_SEGMENTS - 1) // RUN_LEAF_SEGMENTS
         # Pad the last chunk with the last vertex's code, neutral for both OR and AND.
         end = codes[n_codes - 1]
@@ -385,6 +525,8 @@ def code_chunks(flat, first, last, xmin, ymin, xmax, ymax, strict, codes, chunk_
     return line_or, line_and
 
 
+
+
 @inlined
 def _chunk_run_codes(chunk_or, chunk_and, first_chunk, end_chunk):
     """Return the OR and AND of the stored codes of chunks first_chunk..end_chunk-1."""
@@ -405,59 +547,62 @@ def _chunk_run_codes(chunk_or, chunk_and, first_chunk, end_chunk):
 
 
 @inlined
-def _vertex_run_codes(xy, a, b, xmin, ymin, xmax, ymax, strict):
+def _vertex_run_codes(xy, a, b, window, strict):
     """Return the OR and AND of the codes of vertices a..b (`vertex_code`)."""
     any_ = 0
     every = _ALL_CODE_BITS
     for k in range(a, b + 1):
-        code = vertex_code(xy[k, 0], xy[k, 1], xmin, ymin, xmax, ymax, strict)
+        code = vertex_code(xy[k, 0], xy[k, 1], window, strict)
         any_ |= code
         every &= code
     return any_, every
 
 
 @borrowing
-def clip_chains(xy, z, has_z, write, first, last, xmin, ymin, xmax, ymax, method, n_fixed,
-                max_depth, tol, auto_piece, exact, drop_edge_runs, break_at_boundary, out_xy,
-                out_z, out_starts, v, c, st, run_stack, stack_f, stack_i, chunk_or, chunk_and,
-                c0, plan, plan0):
-    """Clip the line through vertices ``xy[first..last]`` into chains.
+def clip_chains(line, first, last, cut, break_at_boundary, options, out, write, v, c, block,
+                part):
+    """Clip the line through vertices ``line.xy[first..last]`` into chains.
 
-    Writes the chains' vertices from ``out_xy[v]`` (and ``out_z``) on, and the start of
-    each chain at ``out_starts[c]`` on; the caller guarantees room (`bound_chains`).
+    Writes the chains' vertices from ``out.xy[v]`` (and ``out.z``) on, and the start of
+    each chain at ``out.starts[c]`` on; the caller guarantees room (`bound_chains`).
     Returns ``(v, c, starts_at_first, ends_at_last, plan_end)``: the next free
     positions, whether the first chain starts at vertex `first` itself, whether the
     last ends at vertex `last` (a ring's chains across its closing vertex join there),
     and the end of the plan (below).
 
+    With `break_at_boundary` (rings) a chain also breaks at a vertex on the boundary.
     Runs are whole chunks of `RUN_LEAF_SEGMENTS` segments, classified by the OR and AND
-    of their vertex codes: from the chunk codes at ``chunk_or[c0:]``, ``chunk_and[c0:]``
-    (see `code_chunks`, which must have been given ``strict=drop_edge_runs``) or, if
-    those are empty, from the vertices. Runs are pruned only for ``method == RNSCA``;
-    the baselines clip every segment. Without `write` nothing is written and only the
-    counts come back (the exact counting pass).
+    of their vertex codes: from the part's chunk codes (``part.chunk_or``,
+    ``part.chunk_and``, see `code_chunks`, which must have been given
+    ``strict=cut.drop_edge_runs``) or, if those are empty, from the vertices. Runs are
+    pruned only for ``options.method == RNSCA``; the baselines clip every segment.
+    Without `write` nothing is written and only the counts come back (the exact
+    counting pass).
 
-    If `plan` (int64 (k, 2)) is not empty, the decided runs that leave something are
-    also recorded from ``plan[plan0]`` on, in input order, for `emit_plan` to replay
-    without deciding again: ``[first chunk, end chunk]`` for a run accepted whole
-    (adjacent ones merged), ``[first chunk, -end chunk]`` for a run clipped segment by
-    segment. A line of k chunks needs at most k rows.
+    If ``part.plan`` (int64 (k, 2)) is not empty, the decided runs that leave something
+    are also recorded in its rows, in input order, for `emit_plan` to replay without
+    deciding again: ``[first chunk, end chunk]`` for a run accepted whole (adjacent
+    ones merged), ``[first chunk, -end chunk]`` for a run clipped segment by segment. A
+    line of k chunks needs at most k rows; the last value returned is how many it took.
     """
     c_begin = c
     last_v = -1
     if last <= first:
-        return v, c, False, False, plan0
-    flat_xy = xy.reshape(-1)
-    flat_out = out_xy.reshape(-1)
+        return v, c, False, False, 0
+    xy = line.xy
+    window = cut.window
+    drop_edge_runs = cut.drop_edge_runs
+    chunk_or = part.chunk_or
+    chunk_and = part.chunk_and
+    plan = part.plan
+    st = block.st
+    run_stack = block.run_stack
     coded = chunk_or.shape[0] > 0
     recording = plan.shape[0] > 0
-    n_plan = plan0
-    if method != RNSCA:
-        v, c, last_v = _clip_segments(xy, z, has_z, write, first, last, xmin, ymin, xmax, ymax,
-                                      method, n_fixed, max_depth, tol, auto_piece, exact,
-                                      drop_edge_runs, break_at_boundary, out_xy, out_z,
-                                      out_starts, v, c, last_v, st, stack_f, stack_i, flat_xy,
-                                      flat_out)
+    n_plan = 0
+    if options.method != RNSCA:
+        v, c, last_v = _clip_segments(line, first, last, cut, break_at_boundary, options, out,
+                                      write, v, c, last_v, block)
         if recording:
             plan[n_plan, 0] = 0
             plan[n_plan, 1] = -chunk_count(first, last)
@@ -471,7 +616,7 @@ def clip_chains(xy, z, has_z, write, first, last, xmin, ymin, xmax, ymax, method
         subdivided = 0
         segmented = 0
         deepest = st[C.RUN_DEEPEST]
-        n_runs = n_fixed if n_fixed > 0 else RUN_N_AUTO
+        n_runs = options.n_fixed if options.n_fixed > 0 else RUN_N_AUTO
         run_stack[0, 0] = 0
         run_stack[0, 1] = chunk_count(first, last)
         run_stack[0, 2] = 0
@@ -487,18 +632,16 @@ def clip_chains(xy, z, has_z, write, first, last, xmin, ymin, xmax, ymax, method
             deepest = max(deepest, level)
             evaluated += 1
             if coded:
-                any_, every = _chunk_run_codes(chunk_or, chunk_and, c0 + ca, c0 + cb)
+                any_, every = _chunk_run_codes(chunk_or, chunk_and, ca, cb)
             else:
-                any_, every = _vertex_run_codes(xy, a, b, xmin, ymin, xmax, ymax,
-                                                drop_edge_runs)
+                any_, every = _vertex_run_codes(xy, a, b, window, drop_edge_runs)
             if (any_ & OUTSIDE) == 0 and not (drop_edge_runs and (any_ & NOT_STRICTLY_INSIDE)):
                 accepted += 1
                 st[C.RUN_LEVELS + slot] += 1
                 st[C.SEGMENT_LEVELS + slot] += b - a
-                v, c, last_v = _emit_run(flat_xy, z, has_z, write, a, b, flat_out, out_z,
-                                         out_starts, v, c, last_v)
+                v, c, last_v = _emit_run(line, out, write, a, b, v, c, last_v)
                 if recording:
-                    if n_plan > plan0 and plan[n_plan - 1, 1] == ca:
+                    if n_plan > 0 and plan[n_plan - 1, 1] == ca:
                         plan[n_plan - 1, 1] = cb  # continues the accepted run before it
                     else:
                         plan[n_plan, 0] = ca
@@ -512,11 +655,8 @@ def clip_chains(xy, z, has_z, write, first, last, xmin, ymin, xmax, ymax, method
                 segmented += 1
                 st[C.RUN_LEVELS + slot] += 1
                 st[C.SEGMENT_LEVELS + slot] += b - a
-                v, c, last_v = _clip_segments(xy, z, has_z, write, a, b, xmin, ymin, xmax,
-                                              ymax, method, n_fixed, max_depth, tol, auto_piece,
-                                              exact, drop_edge_runs, break_at_boundary,
-                                              out_xy, out_z, out_starts, v, c, last_v, st,
-                                              stack_f, stack_i, flat_xy, flat_out)
+                v, c, last_v = _clip_segments(line, a, b, cut, break_at_boundary, options, out,
+                                              write, v, c, last_v, block)
                 if recording:
                     plan[n_plan, 0] = ca
                     plan[n_plan, 1] = -cb
@@ -551,123 +691,117 @@ def clip_chains(xy, z, has_z, write, first, last, xmin, ymin, xmax, ymax, method
         st[C.RUNS_SEGMENTED] += segmented
     if c == c_begin or not write:
         return v, c, False, False, n_plan
-    starts_at_first = out_xy[out_starts[c_begin], 0] == xy[first, 0] and \
-        out_xy[out_starts[c_begin], 1] == xy[first, 1]
-    if break_at_boundary and _edge_bits(xy[first, 0], xy[first, 1], xmin, ymin, xmax, ymax) != 0:
-        starts_at_first = False  # a ring breaks at its closing vertex on the boundary
+    starts_at_first = _starts_at(line, first, window, break_at_boundary, out, c_begin)
     return v, c, starts_at_first, last_v == last, n_plan
 
 
-@borrowing
-def emit_plan(xy, z, has_z, first, last, xmin, ymin, xmax, ymax, method, n_fixed, max_depth,
-              tol, auto_piece, exact, drop_edge_runs, out_xy, out_z, out_starts, v, c, st,
-              stack_f, stack_i, plan, plan0, plan_end):
-    """Write the chains of the line ``xy[first..last]`` as recorded by `clip_chains`.
+@inlined
+def _starts_at(line, first, window, break_at_boundary, out, c_begin):
+    """Return whether chain `c_begin` (written) starts at vertex `first` and continues it.
 
-    Replays ``plan[plan0:plan_end]``: runs accepted whole are copied, the others
-    clipped segment by segment, exactly as `clip_chains` did when it recorded them.
-    Returns ``(v, c)``. The segment core counts into `st` again (pass a scratch row).
+    A ring breaks at its closing vertex on the boundary: its first chain then does not
+    continue its last one there.
     """
-    flat_xy = xy.reshape(-1)
-    flat_out = out_xy.reshape(-1)
+    xy = line.xy
+    start = out.starts[c_begin]
+    if not (out.xy[start, 0] == xy[first, 0] and out.xy[start, 1] == xy[first, 1]):
+        return False
+    return not (break_at_boundary and _edge_bits(xy[first, 0], xy[first, 1], window) != 0)
+
+
+@borrowing
+def emit_plan(line, first, last, cut, options, out, v, c, block, plan):
+    """Write the chains of the line ``line.xy[first..last]`` as `clip_chains` recorded them.
+
+    Replays `plan` (the part's rows): runs accepted whole are copied, the others clipped
+    segment by segment, exactly as `clip_chains` did when it recorded them. Returns
+    ``(v, c)``. The segment core counts into ``block.st`` again (give it a scratch row).
+    """
     last_v = -1
-    for k in range(plan0, plan_end):
+    for k in range(plan.shape[0]):
         a = first + plan[k, 0] * RUN_LEAF_SEGMENTS
         if plan[k, 1] >= 0:
             b = min(first + plan[k, 1] * RUN_LEAF_SEGMENTS, last)
-            v, c, last_v = _emit_run(flat_xy, z, has_z, True, a, b, flat_out, out_z,
-                                     out_starts, v, c, last_v)
+            v, c, last_v = _emit_run(line, out, True, a, b, v, c, last_v)
         else:
             b = min(first - plan[k, 1] * RUN_LEAF_SEGMENTS, last)
-            v, c, last_v = _clip_segments(xy, z, has_z, True, a, b, xmin, ymin, xmax, ymax,
-                                          method, n_fixed, max_depth, tol, auto_piece, exact,
-                                          drop_edge_runs, False, out_xy, out_z, out_starts, v,
-                                          c, last_v, st, stack_f, stack_i, flat_xy, flat_out)
+            v, c, last_v = _clip_segments(line, a, b, cut, False, options, out, True, v, c,
+                                          last_v, block)
     return v, c
 
 
 @scalar
-def _line_block(blk, block_size, xy, z, has_z, part_offsets, geometry_parts, geometry_window,
-                windows, method, n_fixed, max_depth, tol, auto_piece, exact, drop_edge_runs,
-                write, chunk_start, chunk_or, chunk_and, plan, plan_end, vertex_start,
-                chain_start, out_xy, out_z, out_starts, n_vertices, n_chains, counters):
+def _line_block(blk, block_size, line, lines, options, drop_edge_runs, write, chunks, counts,
+                out, counters):
     """Count or write the parts of geometries ``blk * block_size`` on: the body of a pass.
 
     The count pass codes each part's chunks (`code_chunks`, which also checks that the
     coordinates are finite: a part with a non-finite one gets ``n_vertices = -1``),
     runs RNSCA over its runs (`clip_chains` without writing), which counts the output
-    exactly and the stats into the block's counter row, and records the decided runs
-    in the part's rows of `plan` (from ``chunk_start[p]`` to ``plan_end[p]``). The write
-    pass replays the plan (`emit_plan`) from ``vertex_start[p]`` and ``chain_start[p]``:
-    runs are not decided twice, and only the segments of ambiguous chunks are clipped
-    twice.
+    exactly and the stats into the block's counter row, and records the decided runs in
+    the part's rows of ``chunks.plan`` (from ``chunk_start[p]`` to ``plan_end[p]``). The
+    write pass replays the plan (`emit_plan`) from ``counts.vertex_start[p]`` and
+    ``counts.chain_start[p]``: runs are not decided twice, and only the segments of
+    ambiguous chunks are clipped twice. Allocates the block's state; the parts are done
+    by `_line_parts`, which borrows it.
     """
-    n_geometries = geometry_parts.shape[0] - 1
     st = np.zeros(C.WIDTH, dtype=np.int64) if write else counters[blk]
     # The write pass replays plans: it needs neither the run stack nor the code scratch.
-    run_stack = np.empty((0 if write else RUN_STACK_CAPACITY, 3), dtype=np.int64)
-    stack_f = np.empty((STACK_CAPACITY, 6), dtype=np.float64)
-    stack_i = np.empty((STACK_CAPACITY, 3), dtype=np.int64)
-    codes = np.empty(0 if write else CODE_SCRATCH_BYTES, dtype=np.uint8)
-    flat = xy.reshape(-1)
-    for g in range(blk * block_size, min(n_geometries, (blk + 1) * block_size)):
-        w = geometry_window[g] if geometry_window.shape[0] > 0 else 0
-        xmin = windows[w, 0]
-        ymin = windows[w, 1]
-        xmax = windows[w, 2]
-        ymax = windows[w, 3]
+    block = BlockState(st, np.empty((0 if write else RUN_STACK_CAPACITY, 3), dtype=np.int64),
+                       segment_stack(),
+                       np.empty(0 if write else CODE_SCRATCH_BYTES, dtype=np.uint8))
+    n_geometries = lines.geometry_parts.shape[0] - 1
+    _line_parts(blk * block_size, min(n_geometries, (blk + 1) * block_size), line, lines,
+                options, drop_edge_runs, write, chunks, counts, out, block)
+
+
+@borrowing
+def _line_parts(g_begin, g_end, line, lines, options, drop_edge_runs, write, chunks, counts,
+                out, block):
+    """Count or write the parts of geometries g_begin..g_end-1 (see `_line_block`)."""
+    part_offsets = lines.part_offsets
+    geometry_parts = lines.geometry_parts
+    for g in range(g_begin, g_end):
+        cut = Cut(window_of(lines.windows, lines.geometry_window, g), drop_edge_runs)
         for p in range(geometry_parts[g], geometry_parts[g + 1]):
             first = part_offsets[p]
             last = part_offsets[p + 1] - 1
+            c0 = chunks.chunk_start[p]
             if write:
-                emit_plan(xy, z, has_z, first, last, xmin, ymin, xmax, ymax, method, n_fixed,
-                          max_depth, tol, auto_piece, exact, drop_edge_runs, out_xy, out_z,
-                          out_starts, vertex_start[p], chain_start[p], st, stack_f, stack_i,
-                          plan, chunk_start[p], plan_end[p])
+                emit_plan(line, first, last, cut, options, out, counts.vertex_start[p],
+                          counts.chain_start[p], block, chunks.plan[c0:chunks.plan_end[p]])
                 continue
-            line_or, _ = code_chunks(flat, first, last, xmin, ymin, xmax, ymax, drop_edge_runs,
-                                     codes, chunk_or, chunk_and, chunk_start[p])
+            line_or, _ = code_chunks(line.flat, first, last, cut.window, drop_edge_runs,
+                                     block.codes, chunks.chunk_or, chunks.chunk_and, c0)
             if line_or & NOT_FINITE:
-                n_vertices[p] = -1
-                n_chains[p] = 0
-                plan_end[p] = chunk_start[p]
+                counts.n_vertices[p] = -1
+                counts.n_chains[p] = 0
+                chunks.plan_end[p] = c0
                 continue
-            v, c, _, _, plan_end[p] = clip_chains(
-                xy, z, has_z, False, first, last, xmin, ymin, xmax, ymax, method, n_fixed,
-                max_depth, tol, auto_piece, exact, drop_edge_runs, False, out_xy, out_z,
-                out_starts, 0, 0, st, run_stack, stack_f, stack_i, chunk_or, chunk_and,
-                chunk_start[p], plan, chunk_start[p])
-            n_vertices[p] = v
-            n_chains[p] = c
+            part = PartPlan(chunks.chunk_or[c0:], chunks.chunk_and[c0:], chunks.plan[c0:])
+            v, c, _, _, rows = clip_chains(line, first, last, cut, False, options, out, False, 0,
+                                           0, block, part)
+            chunks.plan_end[p] = c0 + rows
+            counts.n_vertices[p] = v
+            counts.n_chains[p] = c
 
 
 @parallel
-def _line_pass(block_size, xy, z, has_z, part_offsets, geometry_parts, geometry_window,
-               windows, method, n_fixed, max_depth, tol, auto_piece, exact, drop_edge_runs,
-               write, chunk_start, chunk_or, chunk_and, plan, plan_end, vertex_start,
-               chain_start, out_xy, out_z, out_starts, n_vertices, n_chains, counters):
+def _line_pass(block_size, line, lines, options, drop_edge_runs, write, chunks, counts, out,
+               counters):
     """Run `_line_block` over every block, one prange iteration each."""
     for blk in prange(counters.shape[0]):
-        _line_block(blk, block_size, xy, z, has_z, part_offsets, geometry_parts,
-                    geometry_window, windows, method, n_fixed, max_depth, tol, auto_piece,
-                    exact, drop_edge_runs, write, chunk_start, chunk_or, chunk_and, plan,
-                    plan_end, vertex_start, chain_start, out_xy, out_z, out_starts, n_vertices,
-                    n_chains, counters)
+        _line_block(blk, block_size, line, lines, options, drop_edge_runs, write, chunks,
+                    counts, out, counters)
 
 
 @scalar
-def _line_pass_serial(block_size, xy, z, has_z, part_offsets, geometry_parts, geometry_window,
-                      windows, method, n_fixed, max_depth, tol, auto_piece, exact,
-                      drop_edge_runs, write, chunk_start, chunk_or, chunk_and, plan, plan_end,
-                      vertex_start, chain_start, out_xy, out_z, out_starts, n_vertices,
-                      n_chains, counters):
+def _line_pass_serial(block_size, line, lines, options, drop_edge_runs, write, chunks, counts,
+                      out, counters):
     """Do what `_line_pass` does on the calling thread (small inputs)."""
     for blk in range(counters.shape[0]):
-        _line_block(blk, block_size, xy, z, has_z, part_offsets, geometry_parts,
-                    geometry_window, windows, method, n_fixed, max_depth, tol, auto_piece,
-                    exact, drop_edge_runs, write, chunk_start, chunk_or, chunk_and, plan,
-                    plan_end, vertex_start, chain_start, out_xy, out_z, out_starts, n_vertices,
-                    n_chains, counters)
+        _line_block(blk, block_size, line, lines, options, drop_edge_runs, write, chunks,
+                    counts, out, counters)
 
 
 @scalar
@@ -680,24 +814,18 @@ def _exclusive_sum(counts):
 
 
 @scalar
-def clip_lines(xy, z, part_offsets, geometry_parts, geometry_window, windows, method, n_fixed,
-               max_depth, tol, auto_piece, exact, drop_edge_runs):
+def clip_lines(line, lines, options, drop_edge_runs):
     """Clip every part of a ragged line array into chains: count, prefix sum, write.
 
     Parameters
     ----------
-    xy : float64 (n, 2), C-contiguous
-        Vertices; part p is ``xy[part_offsets[p]:part_offsets[p+1]]`` (no part of
-        exactly one vertex). Checked here to be finite (fused into the coding pass).
-    z : float64 (n,) or (0,)
-        Z of each vertex (finite), or empty for 2D.
-    part_offsets, geometry_parts : int64
-        Geometry g owns parts ``geometry_parts[g]`` to ``geometry_parts[g+1] - 1``.
-    geometry_window : int64 (G,) or (0,)
-        Row of `windows` for each geometry; empty: row 0 for all.
-    windows : float64 (w, 4)
-        ``[xmin, ymin, xmax, ymax]`` rows.
-    method, n_fixed, max_depth, tol, auto_piece, exact
+    line : Vertices
+        The vertices: ``xy`` float64 (n, 2), C-contiguous, checked here to be finite
+        (fused into the coding pass); ``z`` finite, or empty for 2D.
+    lines : Lines
+        The parts (no part of exactly one vertex), their geometries and windows
+        (``geometry_window`` empty: row 0 for all geometries).
+    options : CoreOptions
         The segment core's options (see `segments`).
     drop_edge_runs : bool
         Pieces along a window edge are not visible (``boundary="interior"``).
@@ -722,55 +850,57 @@ def clip_lines(xy, z, part_offsets, geometry_parts, geometry_window, windows, me
     prange over blocks of geometries, each writing only its own parts' slots; the
     prefix sums between them run here rather than in Python (a call costs less).
     """
+    part_offsets = lines.part_offsets
+    geometry_parts = lines.geometry_parts
     n_parts = part_offsets.shape[0] - 1
     n_geometries = geometry_parts.shape[0] - 1
-    has_z = z.shape[0] > 0
+    has_z = line.has_z
     chunk_start = np.empty(n_parts + 1, dtype=np.int64)
     chunk_start[0] = 0
     for p in range(n_parts):
         chunk_start[p + 1] = chunk_start[p] + chunk_count(part_offsets[p],
                                                           part_offsets[p + 1] - 1)
-    chunk_or = np.empty(chunk_start[n_parts], dtype=np.uint8)
-    chunk_and = np.empty(chunk_start[n_parts], dtype=np.uint8)
-    plan = np.empty((max(chunk_start[n_parts], 1), 2), dtype=np.int64)
-    plan_end = np.empty(n_parts, dtype=np.int64)
+    chunks = Chunks(chunk_start, np.empty(chunk_start[n_parts], dtype=np.uint8),
+                    np.empty(chunk_start[n_parts], dtype=np.uint8),
+                    np.empty((max(chunk_start[n_parts], 1), 2), dtype=np.int64),
+                    np.empty(n_parts, dtype=np.int64))
     # About 64 blocks for load balance, 1..1024 geometries each.
     block_size = max(1, min(1024, (n_geometries + 63) // 64))
     n_blocks = max(1, (n_geometries + block_size - 1) // block_size)
-    serial = xy.shape[0] < SERIAL_VERTICES
+    serial = line.xy.shape[0] < SERIAL_VERTICES
     counters = np.zeros((n_blocks, C.WIDTH), dtype=np.int64)
-    n_vertices = np.empty(n_parts, dtype=np.int64)
-    n_chains = np.empty(n_parts, dtype=np.int64)
     nothing_i = np.empty(0, dtype=np.int64)
     nothing_xy = np.empty((0, 2), dtype=np.float64)
     nothing_z = np.empty(0, dtype=np.float64)
-    args_count = (block_size, xy, z, has_z, part_offsets, geometry_parts, geometry_window,
-                  windows, method, n_fixed, max_depth, tol, auto_piece, exact, drop_edge_runs,
-                  False, chunk_start, chunk_or, chunk_and, plan, plan_end, nothing_i,
-                  nothing_i, nothing_xy, nothing_z, nothing_i, n_vertices, n_chains, counters)
+    counts = PartCounts(np.empty(n_parts, dtype=np.int64), np.empty(n_parts, dtype=np.int64),
+                        nothing_i, nothing_i)
+    nowhere = ChainsOut(nothing_xy, nothing_xy.reshape(-1), nothing_z, nothing_i)
     if serial:
-        _line_pass_serial(*args_count)
+        _line_pass_serial(block_size, line, lines, options, drop_edge_runs, False, chunks,
+                          counts, nowhere, counters)
     else:
-        _line_pass(*args_count)
+        _line_pass(block_size, line, lines, options, drop_edge_runs, False, chunks, counts,
+                   nowhere, counters)
+    n_vertices = counts.n_vertices
     for p in range(n_parts):
         if n_vertices[p] < 0:
             return nothing_xy, nothing_z, np.zeros(1, dtype=np.int64), \
                 np.zeros(n_geometries + 1, dtype=np.int64), counters, p
-    vertex_start = _exclusive_sum(n_vertices)
-    chain_start = _exclusive_sum(n_chains)
+    vertex_start = _exclusive_sum(counts.n_vertices)
+    chain_start = _exclusive_sum(counts.n_chains)
     m = vertex_start[n_parts]
     out_xy = np.empty((m, 2), dtype=np.float64)
     out_z = np.empty(m if has_z else 0, dtype=np.float64)
     chain_offsets = np.empty(chain_start[n_parts] + 1, dtype=np.int64)
     chain_offsets[chain_start[n_parts]] = m
-    args_write = (block_size, xy, z, has_z, part_offsets, geometry_parts, geometry_window,
-                  windows, method, n_fixed, max_depth, tol, auto_piece, exact, drop_edge_runs,
-                  True, chunk_start, chunk_or, chunk_and, plan, plan_end, vertex_start,
-                  chain_start, out_xy, out_z, chain_offsets, n_vertices, n_chains, counters)
+    counts = PartCounts(counts.n_vertices, counts.n_chains, vertex_start, chain_start)
+    out = ChainsOut(out_xy, out_xy.reshape(-1), out_z, chain_offsets)
     if serial:
-        _line_pass_serial(*args_write)
+        _line_pass_serial(block_size, line, lines, options, drop_edge_runs, True, chunks,
+                          counts, out, counters)
     else:
-        _line_pass(*args_write)
+        _line_pass(block_size, line, lines, options, drop_edge_runs, True, chunks, counts, out,
+                   counters)
     geometry_chains = np.empty(n_geometries + 1, dtype=np.int64)
     geometry_chains[0] = 0
     for g in range(n_geometries):
@@ -778,77 +908,76 @@ def clip_lines(xy, z, part_offsets, geometry_parts, geometry_window, windows, me
     return out_xy, out_z, chain_offsets, geometry_chains, counters, -1
 
 
-@scalar
-def assemble_chains(xy, z, has_z, write, first, last, drop_edge_runs, break_at_boundary, xmin,
-                    ymin, xmax, ymax, decision, chunk0, piece_start, keep, pieces, out_xy, out_z,
-                    out_starts, v, c):
-    """Emit the chains of the line ``xy[first..last]`` from decisions made elsewhere.
+@borrowing
+def assemble_chains(line, first, last, cut, break_at_boundary, decisions, chunk0, out, write,
+                    v, c):
+    """Emit the chains of the line ``line.xy[first..last]`` from decisions made elsewhere.
 
-    `decision[chunk0 + k]` says what became of the line's chunk k (``CHUNK_*``); the
-    segments of a segmented chunk have ``keep`` and ``pieces`` rows (t0, t1, ax, ay, bx,
-    by) from ``piece_start[chunk0 + k]`` on. The chains are the ones `clip_chains` emits
-    for those decisions (its `_emit_run` and `_emit_piece`; an accepted run of chunks
-    copied chunk by chunk is the same chain), and so is the return value:
-    ``(v, c, starts_at_first, ends_at_last)``.
+    ``decisions.decision[chunk0 + k]`` says what became of the line's chunk k
+    (``CHUNK_*``); the segments of a segmented chunk have ``keep`` and ``pieces`` rows
+    (t0, t1, ax, ay, bx, by) from ``piece_start[chunk0 + k]`` on. The chains are the
+    ones `clip_chains` emits for those decisions (its `_emit_run` and `_emit_piece`; an
+    accepted run of chunks copied chunk by chunk is the same chain), and so is the
+    return value: ``(v, c, starts_at_first, ends_at_last)``.
     """
+    xy = line.xy
+    decision = decisions.decision
+    keep = decisions.keep
+    pieces = decisions.pieces
     c_begin = c
     last_v = -1
-    flat_xy = xy.reshape(-1)
-    flat_out = out_xy.reshape(-1)
     for k in range(chunk_count(first, last)):
         a = first + k * RUN_LEAF_SEGMENTS
         b = min(a + RUN_LEAF_SEGMENTS, last)
         d = decision[chunk0 + k]
         if d == CHUNK_ACCEPTED:
-            v, c, last_v = _emit_run(flat_xy, z, has_z, write, a, b, flat_out, out_z,
-                                     out_starts, v, c, last_v)
+            v, c, last_v = _emit_run(line, out, write, a, b, v, c, last_v)
         elif d == CHUNK_SEGMENTED:
-            row = piece_start[chunk0 + k]
+            row = decisions.piece_start[chunk0 + k]
             for i in range(a, b):
                 if keep[row]:
-                    ax = pieces[row, 2]
-                    ay = pieces[row, 3]
-                    bx = pieces[row, 4]
-                    by = pieces[row, 5]
-                    if not (drop_edge_runs and on_one_edge(ax, ay, bx, by, xmin, ymin, xmax,
-                                                           ymax)):
+                    piece = Piece(pieces[row, 0], pieces[row, 1], pieces[row, 2],
+                                  pieces[row, 3], pieces[row, 4], pieces[row, 5])
+                    if not (cut.drop_edge_runs and on_one_edge(piece.ax, piece.ay, piece.bx,
+                                                               piece.by, cut.window)):
                         breaks = break_at_boundary and _edge_bits(
-                            xy[i, 0], xy[i, 1], xmin, ymin, xmax, ymax) != 0
-                        v, c, last_v = _emit_piece(xy, z, has_z, write, i, pieces[row, 0],
-                                                   pieces[row, 1], ax, ay, bx, by, out_xy,
-                                                   out_z, out_starts, v, c, last_v, breaks)
+                            xy[i, 0], xy[i, 1], cut.window) != 0
+                        v, c, last_v = _emit_piece(line, out, write, i, piece, v, c, last_v,
+                                                   breaks)
                 row += 1
     if c == c_begin or not write:
         return v, c, False, False
-    starts_at_first = out_xy[out_starts[c_begin], 0] == xy[first, 0] and \
-        out_xy[out_starts[c_begin], 1] == xy[first, 1]
-    if break_at_boundary and _edge_bits(xy[first, 0], xy[first, 1], xmin, ymin, xmax, ymax) != 0:
-        starts_at_first = False  # a ring breaks at its closing vertex on the boundary
-    return v, c, starts_at_first, last_v == last
+    return v, c, _starts_at(line, first, cut.window, break_at_boundary, out, c_begin), \
+        last_v == last
 
 
 @parallel
-def assemble_line_blocks(xy, z, has_z, part_offsets, part_window, windows, drop_edge_runs,
-                         block_size, write, chunk_start, decision, piece_start, keep, pieces,
-                         vertex_start, chain_start, out_xy, out_z, out_starts, n_vertices,
-                         n_chains):
+def assemble_line_blocks(line, part_offsets, windows, part_window, drop_edge_runs, block_size,
+                         write, decisions, counts, out):
     """Count (``write=False``) or write the chains of every part from device decisions.
 
-    The host half of the OpenCL line clip (`assemble_chains` per part); the counts and
-    the layout are those of `clip_lines`.
+    The host half of the OpenCL line clip (`assemble_chains` per part, against
+    ``window_of(windows, part_window, p)``); the counts and the layout are those of
+    `clip_lines`.
     """
     n_parts = part_offsets.shape[0] - 1
     n_blocks = -(-n_parts // block_size)
     for blk in prange(n_blocks):
-        for p in range(blk * block_size, min(n_parts, (blk + 1) * block_size)):
-            w = part_window[p]
-            v0 = vertex_start[p] if write else 0
-            c0 = chain_start[p] if write else 0
-            v, c, _, _ = assemble_chains(xy, z, has_z, write, part_offsets[p],
-                                         part_offsets[p + 1] - 1, drop_edge_runs, False,
-                                         windows[w, 0], windows[w, 1], windows[w, 2],
-                                         windows[w, 3], decision, chunk_start[p], piece_start,
-                                         keep, pieces, out_xy, out_z, out_starts, v0, c0)
-            if not write:
-                n_vertices[p] = v
-                n_chains[p] = c
+        _assemble_block(blk, line, part_offsets, windows, part_window, drop_edge_runs,
+                        block_size, write, decisions, counts, out)
+
+
+@borrowing
+def _assemble_block(blk, line, part_offsets, windows, part_window, drop_edge_runs, block_size,
+                    write, decisions, counts, out):
+    """Count or write the chains of parts ``blk * block_size`` on (`assemble_line_blocks`)."""
+    n_parts = part_offsets.shape[0] - 1
+    for p in range(blk * block_size, min(n_parts, (blk + 1) * block_size)):
+        cut = Cut(window_of(windows, part_window, p), drop_edge_runs)
+        v0 = counts.vertex_start[p] if write else 0
+        c0 = counts.chain_start[p] if write else 0
+        v, c, _, _ = assemble_chains(line, part_offsets[p], part_offsets[p + 1] - 1, cut, False,
+                                     decisions, decisions.chunk_start[p], out, write, v0, c0)
+        if not write:
+            counts.n_vertices[p] = v
+            counts.n_chains[p] = c

@@ -23,7 +23,11 @@ first call, numba#6018), so clear the cache (``find rnsca -name '*.nb[ic]' -dele
 
 from typing import NamedTuple
 
-__all__ = ["CoreOptions", "Fragment", "Window"]
+import numpy as np
+
+from rnsca.kernels.jit import inlined
+
+__all__ = ["CoreOptions", "Fragment", "Vertices", "Window", "vertices", "window_of"]
 
 
 class Window(NamedTuple):
@@ -44,6 +48,35 @@ class CoreOptions(NamedTuple):
     tol: float          #: pieces no longer than this are leaves
     auto_piece: float   #: the piece length auto N aims at
     exact: bool         #: clip undecided leaves exactly (else drop them: approx mode)
+
+
+class Vertices(NamedTuple):
+    """Input coordinates: ``xy`` (n, 2) float64 C-contiguous, `flat` the same as one row.
+
+    `flat` is ``xy.reshape(-1)``: copies run over views of it from index 0, which LLVM
+    vectorizes. `z` is float64 (n,), or empty when `has_z` is False.
+    """
+
+    xy: np.ndarray
+    flat: np.ndarray
+    z: np.ndarray
+    has_z: bool
+
+
+def vertices(xy, z):
+    """Return the `Vertices` of `xy` and `z` (host side: kernels get it built)."""
+    return Vertices(xy, xy.reshape(-1), z, z.shape[0] > 0)
+
+
+@inlined
+def window_of(windows, index, g):
+    """Return the `Window` geometry `g` is clipped against: row ``index[g]`` of `windows`.
+
+    `windows` is float64 (w, 4), ``[xmin, ymin, xmax, ymax]`` rows; `index` int64, the
+    row of each geometry (or part, or polygon), or empty: row 0 for all.
+    """
+    w = index[g] if index.shape[0] > 0 else 0
+    return Window(windows[w, 0], windows[w, 1], windows[w, 2], windows[w, 3])
 
 
 class Fragment(NamedTuple):

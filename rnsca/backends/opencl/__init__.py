@@ -78,6 +78,7 @@ from rnsca.kernels import bezier as BZ
 from rnsca.kernels import counters as C
 from rnsca.kernels import polygons as PG
 from rnsca.kernels import polylines as PL
+from rnsca.kernels import records as R
 from rnsca.kernels.outcode import BOTTOM, LEFT, RIGHT, TOP
 from rnsca.options import Backend, Curves, Method, Mode, PathOptions, Precision, SegmentOptions
 from rnsca.stats import ClipStats, DeviceStats
@@ -491,7 +492,8 @@ class OpenCLBackend:
         windows = windows.bounds
         n_polygons = polygon_offsets.shape[0] - 1
         polygon_class = np.empty(n_polygons, dtype=np.int8)
-        PG.classify_polygons(xy, ring_offsets, polygon_offsets, polygon_window, windows,
+        PG.classify_polygons(R.vertices(xy, z), PG.Polygons(ring_offsets, polygon_offsets,
+                                                            windows, polygon_window),
                              polygon_class)
         ring_polygon = np.repeat(np.arange(n_polygons, dtype=np.int64),
                                  np.diff(polygon_offsets))
@@ -501,7 +503,7 @@ class OpenCLBackend:
             xy, ring_offsets, ring_window, windows, options, True, active)
         out_xy, out_z, out_rings, rings_per_output, outputs_per_polygon, counters = \
             polygon_passes(xy, z, ring_offsets, polygon_offsets, polygon_window, windows,
-                           options, polygon_class, (True, *tables))
+                           options, polygon_class, PL.Decisions(True, *tables))
         return GeometryPieces(out_xy, out_z, (
             out_rings, exclusive_sum(rings_per_output),
             group_offsets(outputs_per_polygon, geometry_polygons)),
@@ -812,10 +814,13 @@ def _assemble_lines(xy, z, part_offsets, part_window, windows, drop_edge_runs, c
     n_vertices = np.empty(n_parts, dtype=np.int64)
     n_chains = np.empty(n_parts, dtype=np.int64)
     nothing_i = np.empty(0, dtype=np.int64)
-    args = (xy, z, has_z, part_offsets, part_window, windows, drop_edge_runs, block)
-    tables = (chunk_start, decision, piece_start, keep, pieces)
-    PL.assemble_line_blocks(*args, False, *tables, nothing_i, nothing_i, np.empty((0, 2)),
-                            np.empty(0), nothing_i, n_vertices, n_chains)
+    line = R.vertices(xy, z)
+    decisions = PL.Decisions(True, chunk_start, decision, piece_start, keep, pieces)
+    nowhere = np.empty((0, 2))
+    PL.assemble_line_blocks(line, part_offsets, windows, part_window, drop_edge_runs, block,
+                            False, decisions,
+                            PL.PartCounts(n_vertices, n_chains, nothing_i, nothing_i),
+                            PL.ChainsOut(nowhere, nowhere.reshape(-1), np.empty(0), nothing_i))
     vertex_start = np.zeros(n_parts + 1, dtype=np.int64)
     np.cumsum(n_vertices, out=vertex_start[1:])
     chain_start = np.zeros(n_parts + 1, dtype=np.int64)
@@ -824,8 +829,10 @@ def _assemble_lines(xy, z, part_offsets, part_window, windows, drop_edge_runs, c
     out_z = np.empty(int(vertex_start[-1]) if has_z else 0)
     chain_offsets = np.empty(int(chain_start[-1]) + 1, dtype=np.int64)
     chain_offsets[-1] = out_xy.shape[0]
-    PL.assemble_line_blocks(*args, True, *tables, vertex_start, chain_start, out_xy, out_z,
-                            chain_offsets, n_vertices, n_chains)
+    PL.assemble_line_blocks(line, part_offsets, windows, part_window, drop_edge_runs, block,
+                            True, decisions,
+                            PL.PartCounts(n_vertices, n_chains, vertex_start, chain_start),
+                            PL.ChainsOut(out_xy, out_xy.reshape(-1), out_z, chain_offsets))
     return out_xy, out_z, chain_offsets, n_chains
 
 

@@ -1,4 +1,4 @@
-"""The jit presets: a test that fails if Numba stops honouring the private `_nrt=False`."""
+"""The jit presets: tests that fail if Numba stops honouring the private `_nrt` option."""
 
 import numba
 import numpy as np
@@ -21,3 +21,13 @@ def test_borrowing_functions_compile_without_numbas_runtime():
 def test_borrowing_functions_read_arrays_they_are_given():
     total = jit.borrowing(lambda a: a.sum())
     assert total(np.arange(4.0)) == 6.0
+
+
+@pytest.mark.skipif(numba.config.DISABLE_JIT, reason="the presets are plain Python then")
+def test_allocating_functions_allocate_under_a_borrowing_caller():
+    # A helper compiled for a `borrowing` caller inherits its no-NRT setting unless it
+    # sets its own: `allocating` does (`_nrt=True`), so the polygon clip can borrow its
+    # scratch and still split loops. If Numba ignored it, this would not compile.
+    zeros = jit.allocating(lambda n: np.zeros(n).shape[0])
+    caller = jit.borrowing(lambda n: zeros(n) + 1)
+    assert caller(3) == 4

@@ -15,6 +15,7 @@ import shapely
 from rnsca import InvalidGeometryError, clip_ragged
 from rnsca.kernels import polylines as PL
 from rnsca.kernels.outcode import outcode
+from rnsca.kernels.records import Window
 
 # Under NUMBA_DISABLE_JIT the kernels run as Python on NumPy scalars, which warn on inf - inf.
 pytestmark = pytest.mark.filterwarnings("ignore:invalid value encountered:RuntimeWarning")
@@ -57,8 +58,8 @@ def test_chunk_codes_are_the_or_and_and_of_their_vertices_codes(n_segments, stri
     chunk_or = np.zeros(n_chunks + 2, dtype=np.uint8)
     chunk_and = np.zeros(n_chunks + 2, dtype=np.uint8)
     codes = np.empty(PL.CODE_SCRATCH_BYTES, dtype=np.uint8)
-    line_or, line_and = PL.code_chunks(xy.reshape(-1), first, last, *WINDOW, strict, codes,
-                                       chunk_or, chunk_and, 1)
+    line_or, line_and = PL.code_chunks(xy.reshape(-1), first, last, Window(*WINDOW), strict,
+                                       codes, chunk_or, chunk_and, 1)
     expected = reference_codes(xy[first:last + 1], WINDOW, strict)
     for k in range(n_chunks):
         members = expected[16 * k:16 * k + 17]
@@ -78,8 +79,8 @@ def test_chunk_codes_flag_a_non_finite_vertex_in_any_step(bad, row):
     n_chunks = PL.chunk_count(0, xy.shape[0] - 1)
     chunk_or = np.zeros(n_chunks, dtype=np.uint8)
     chunk_and = np.zeros(n_chunks, dtype=np.uint8)
-    line_or, _ = PL.code_chunks(xy.reshape(-1), 0, xy.shape[0] - 1, *WINDOW, False, codes,
-                                chunk_or, chunk_and, 0)
+    line_or, _ = PL.code_chunks(xy.reshape(-1), 0, xy.shape[0] - 1, Window(*WINDOW), False,
+                                codes, chunk_or, chunk_and, 0)
     assert line_or & PL.NOT_FINITE
     flagged = np.flatnonzero(chunk_or & PL.NOT_FINITE)
     # Chunk k holds vertices 16k to 16k + 16: a vertex on a chunk boundary is in two.

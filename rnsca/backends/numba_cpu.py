@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 
 from rnsca.arrays import GeometryKind, PathArrays, Ragged, exclusive_sum, group_offsets
@@ -21,10 +23,10 @@ from rnsca.kernels import records as R
 from rnsca.kernels import segments as K
 from rnsca.kernels.validate import all_finite
 from rnsca.options import Backend, Curves, Method, Mode, PathOptions, SegmentOptions
-from rnsca.stats import ClipStats
+from rnsca.stats import ClipStats, DeviceStats
 from rnsca.window import Window, WindowTable
 
-__all__ = ["NumbaBackend"]
+__all__ = ["DevicePaths", "DevicePolygons", "NumbaBackend"]
 
 # Segments per prange iteration: large enough that per-block scratch and counters cost
 # nothing, small enough that the scratch columns (14 x 16 KiB) stay in L2 cache.
@@ -39,9 +41,39 @@ _NO_INDEX = np.empty(0, dtype=np.int64)
 # such as the 200 curves of 500 cubics of the benchmark, are still shared out evenly).
 _PATH_BLOCK = 64
 _PATH_MIN_BLOCKS = 32
+
+
+class DevicePolygons(NamedTuple):
+    """What the OpenCL backend's device decided for `NumbaBackend.clip_polygons`.
+
+    `polygon_class` (int8 per polygon, `polygons.classify_polygons`), `decisions` (the
+    rings' run decisions and clipped pieces), and the device's counter rows and stats.
+    """
+
+    polygon_class: np.ndarray
+    decisions: PL.Decisions
+    counters: np.ndarray
+    stats: DeviceStats | None
+
+
+class DevicePaths(NamedTuple):
+    """What the OpenCL backend's device decided for `NumbaBackend.clip_paths`.
+
+    `run_decisions` (int8 per segment), `segment_class`, `point_start` and `points` (each
+    segment's class and the flattened points of the curves accepted whole; None when
+    nothing was decided), and the device's stats.
+    """
+
+    run_decisions: np.ndarray | None
+    segment_class: np.ndarray | None
+    point_start: np.ndarray | None
+    points: np.ndarray | None
+    stats: DeviceStats | None
+
+
 # The path kernel decides every segment itself: no run decisions, no device, no classes.
-_UNDECIDED_PATHS = (None, None, (False, np.empty(0, np.uint8), np.empty(0, dtype=np.int64),
-                                 np.empty((0, 2))))
+_UNDECIDED_PATHS = DevicePaths(None, None, None, None, None)
+_NO_CLASSES = (np.empty(0, np.uint8), np.empty(0, dtype=np.int64), np.empty((0, 2)))
 
 
 class NumbaBackend:
@@ -103,32 +135,128 @@ class NumbaBackend:
                                  f"{bad_part} that the full check did not")
         return GeometryPieces(out_xy, out_z, (chain_offsets, geometry_chains), counters)
 
-    def clip_polygons(self, polygons: Ragged, windows: WindowTable,
-                      options: SegmentOptions) -> GeometryPieces:
+    def clip_polygons(self, polygons: Ragged, windows: WindowTable, options: SegmentOptions,
+                      *, device: DevicePolygons | None = None) -> GeometryPieces:
         """Return the output polygons of each geometry; see `ClipBackend.clip_polygons`.
 
-        Count, prefix sum, write (`polygon_passes`).
+        The polygon kernel's count pass, prefix sums and write pass. `device` is for the
+        OpenCL backend, which assembles here from what its device decided: the polygons'
+        classes and the rings' run decisions and pieces (its counters and stats are
+        added to the result). Without it, the kernel decides everything itself.
         """
         xy, z = polygons.split_z()
+        ring_offsets = polygons.offsets[0]
         polygon_offsets, geometry_polygons = polygons.item_offsets()
         n_polygons = polygon_offsets.shape[0] - 1
         polygon_window = windows.of_items(polygon_geometry(geometry_polygons))
+        if device is None:
+            nothing_i = np.empty(0, dtype=np.int64)
+            # Runs and segments are clipped here, not decided elsewhere: no decision tables.
+            decisions = PL.Decisions(False, nothing_i, np.empty(0, dtype=np.uint8), nothing_i,
+                                     np.empty(0, dtype=np.bool_), np.empty((0, 6)))
+            device = DevicePolygons(np.empty(n_polygons, dtype=np.int8), decisions,
+                                    np.empty((0, C.WIDTH), dtype=np.int64), None)
+        has_z = z.shape[0] > 0
+        block = _block_size(n_polygons)
+        n_blocks = max(1, -(-n_polygons // block))
+        counters = np.zeros((n_blocks, C.WIDTH), dtype=np.int64)
+        vertices = R.vertices(xy, z)
+        items = PG.Polygons(ring_offsets, polygon_offsets, windows.bounds, polygon_window)
+        plan = PG.PolygonPlan(device.polygon_class, np.zeros(n_polygons, dtype=np.int64),
+                              np.zeros(n_polygons, dtype=np.int64))
         nothing_i = np.empty(0, dtype=np.int64)
-        # Runs and segments are clipped here, not decided elsewhere: no decision tables.
-        undecided = PL.Decisions(False, nothing_i, np.empty(0, dtype=np.uint8), nothing_i,
-                                 np.empty(0, dtype=np.bool_), np.empty((0, 6)))
-        out_xy, out_z, out_rings, rings_per_output, outputs_per_polygon, counters = \
-            polygon_passes(xy, z, polygons.offsets[0], polygon_offsets, polygon_window,
-                           windows.bounds, options, np.empty(n_polygons, dtype=np.int8),
-                           undecided)
+        counts = PG.PolygonCounts(np.empty(n_polygons, dtype=np.int64),
+                                  np.empty(n_polygons, dtype=np.int64),
+                                  np.empty(n_polygons, dtype=np.int64), nothing_i, nothing_i,
+                                  nothing_i)
+        nowhere = PG.PolygonsOut(False, np.empty((0, 2)), np.empty(0), nothing_i, nothing_i)
+        # Polygons are always clipped exactly: valid output needs exact cut points.
+        kernel_options = core_options(options)._replace(exact=True)
+        PG.clip_polygon_blocks(vertices, items, kernel_options, block, plan, counts, nowhere,
+                               counters, device.decisions)
+        vertex_start = exclusive_sum(counts.n_vertices)
+        ring_start = exclusive_sum(counts.n_rings)
+        poly_start = exclusive_sum(counts.n_polys)
+        out_xy = np.empty((int(vertex_start[-1]), 2))
+        out_z = np.empty(int(vertex_start[-1]) if has_z else 0)
+        out_rings = np.empty(int(ring_start[-1]) + 1, dtype=np.int64)
+        out_rings[-1] = out_xy.shape[0]
+        out_poly_rings = np.empty(int(poly_start[-1]), dtype=np.int64)
+        counts = counts._replace(vertex_start=vertex_start, ring_start=ring_start,
+                                 poly_start=poly_start)
+        out = PG.PolygonsOut(True, out_xy, out_z, out_rings, out_poly_rings)
+        PG.clip_polygon_blocks(vertices, items, kernel_options, block, plan, counts, out,
+                               counters, device.decisions)
         return GeometryPieces(out_xy, out_z, (
-            out_rings, exclusive_sum(rings_per_output),
-            group_offsets(outputs_per_polygon, geometry_polygons)), counters)
+            out_rings, exclusive_sum(out_poly_rings),
+            group_offsets(counts.n_polys, geometry_polygons)),
+            np.concatenate([counters, device.counters]), device.stats)
 
-    def clip_paths(self, paths: PathArrays, window: Window,
-                   options: PathOptions) -> PathPieces:
-        """Return the paths clipped to the window; see `ClipBackend.clip_paths`."""
-        return path_passes(paths, window, options, _UNDECIDED_PATHS)
+    def clip_paths(self, paths: PathArrays, window: Window, options: PathOptions,
+                   *, device: DevicePaths | None = None) -> PathPieces:
+        """Return the paths clipped to the window; see `ClipBackend.clip_paths`.
+
+        The path kernel's count pass, prefix sums and write pass. `device` is for the
+        OpenCL backend, which assembles here from what its device decided: each segment's
+        class, the runs' decisions and the flattened points of the curves accepted whole.
+        Without it, the kernel decides everything itself.
+        """
+        if device is None:
+            device = _UNDECIDED_PATHS
+        n_subpaths = paths.closed.shape[0]
+        subpath_source = np.repeat(np.arange(len(paths), dtype=np.int64),
+                                   np.diff(paths.path_offsets))
+        block = max(1, min(_PATH_BLOCK, n_subpaths // _PATH_MIN_BLOCKS))
+        n_blocks = max(1, -(-n_subpaths // block))
+        counters = np.zeros((n_blocks, C.WIDTH), dtype=np.int64)
+        n_segments = np.zeros(n_subpaths, dtype=np.int64)
+        n_out = np.zeros(n_subpaths, dtype=np.int64)
+        run_decisions = device.run_decisions
+        if run_decisions is None:
+            run_decisions = np.empty(paths.degree.shape[0], dtype=np.int8)
+        kernel_input = (
+            BZ.PathInput(paths.controls, paths.degree, paths.subpath_offsets, paths.closed,
+                         paths.start, subpath_source),
+            R.Window(window.xmin, window.ymin, window.xmax, window.ymax),
+            BZ.Options(fill=options.fill is not None, flatten=options.curves is Curves.FLATTEN,
+                       exact=options.mode is Mode.EXACT, n_split=int(options.n_split),
+                       leaf_depth=int(options.leaf_depth), tolerance=float(options.tolerance)),
+            BZ.Decisions(device.segment_class is not None, run_decisions,
+                         *(_NO_CLASSES if device.segment_class is None else
+                           (device.segment_class, device.point_start, device.points))))
+        nothing = np.empty(0, dtype=np.int64)
+        BZ.clip_path_blocks(*kernel_input, BZ.Layout(n_segments, n_out, nothing, nothing),
+                            BZ.Output(False, np.empty((0, 4, 2)), np.empty(0, np.int8), nothing,
+                                      np.empty((0, 2)), np.empty(0, bool), nothing),
+                            counters, block)
+        segment_start = exclusive_sum(n_segments)
+        subpath_start = exclusive_sum(n_out)
+        m = int(segment_start[-1])
+        k = int(subpath_start[-1])
+        out_ctrl = np.empty((m, 4, 2))
+        out_deg = np.empty(m, dtype=np.int8)
+        out_first = np.empty(k + 1, dtype=np.int64)
+        out_first[k] = m
+        out_start = np.empty((k, 2))
+        out_closed = np.empty(k, dtype=bool)
+        out_from = np.empty(k, dtype=np.int64)
+        BZ.clip_path_blocks(*kernel_input,
+                            BZ.Layout(n_segments, n_out, segment_start, subpath_start),
+                            BZ.Output(True, out_ctrl, out_deg, out_first, out_start, out_closed,
+                                      out_from),
+                            np.zeros((n_blocks, C.WIDTH), dtype=np.int64), block)
+        kept = out_from >= 0
+        if not kept.all():  # entries freed by joining the two ends of a closed stroke
+            out_first = np.append(out_first[:-1][kept], m)
+            out_start, out_closed, out_from = out_start[kept], out_closed[kept], out_from[kept]
+        path_offsets = exclusive_sum(np.bincount(out_from, minlength=len(paths)))
+        clipped = PathArrays.from_kernel(controls=out_ctrl, degree=out_deg,
+                                         subpath_offsets=out_first, closed=out_closed,
+                                         start=out_start, path_offsets=path_offsets)
+        segments_in = paths.degree.shape[0] + BZ.closing_edges(
+            paths.controls, paths.subpath_offsets, paths.closed, paths.start,
+            options.fill is not None)
+        return PathPieces(clipped, int(segments_in), counters, device.stats)
 
     def flatten_paths(self, paths: PathArrays, tolerance: float, close: bool) -> Polylines:
         """Return the paths as polylines within `tolerance`; see `ClipBackend.flatten_paths`."""
@@ -176,66 +304,6 @@ def warm_up_paths(backend) -> None:
         backend.clip_paths(paths, window, PathOptions.resolve(window, curves=curves,
                                                               fill=fill, mode=mode))
     backend.flatten_paths(paths, 1e-3, True)
-
-
-def path_passes(paths: PathArrays, window: Window, options: PathOptions,
-                decisions) -> PathPieces:
-    """Run the path kernel's count pass, prefix sums and write pass.
-
-    Shared by the Numba backend (`decisions` says nothing is decided) and the OpenCL
-    backend (`decisions` carries the device's classes and flattened points: ``(True,
-    segment_class, point_start, points)``, and its run decisions and `DeviceStats`).
-    """
-    run_decisions, device_stats, (given, segment_class, point_start, points) = decisions
-    n_subpaths = paths.closed.shape[0]
-    subpath_source = np.repeat(np.arange(len(paths), dtype=np.int64),
-                               np.diff(paths.path_offsets))
-    block = max(1, min(_PATH_BLOCK, n_subpaths // _PATH_MIN_BLOCKS))
-    n_blocks = max(1, -(-n_subpaths // block))
-    counters = np.zeros((n_blocks, C.WIDTH), dtype=np.int64)
-    n_segments = np.zeros(n_subpaths, dtype=np.int64)
-    n_out = np.zeros(n_subpaths, dtype=np.int64)
-    if run_decisions is None:
-        run_decisions = np.empty(paths.degree.shape[0], dtype=np.int8)
-    kernel_input = (
-        BZ.PathInput(paths.controls, paths.degree, paths.subpath_offsets, paths.closed,
-                     paths.start, subpath_source),
-        R.Window(window.xmin, window.ymin, window.xmax, window.ymax),
-        BZ.Options(fill=options.fill is not None, flatten=options.curves is Curves.FLATTEN,
-                   exact=options.mode is Mode.EXACT, n_split=int(options.n_split),
-                   leaf_depth=int(options.leaf_depth), tolerance=float(options.tolerance)),
-        BZ.Decisions(given, run_decisions, segment_class, point_start, points))
-    nothing = np.empty(0, dtype=np.int64)
-    BZ.clip_path_blocks(*kernel_input, BZ.Layout(n_segments, n_out, nothing, nothing),
-                        BZ.Output(False, np.empty((0, 4, 2)), np.empty(0, np.int8), nothing,
-                                  np.empty((0, 2)), np.empty(0, bool), nothing),
-                        counters, block)
-    segment_start = exclusive_sum(n_segments)
-    subpath_start = exclusive_sum(n_out)
-    m = int(segment_start[-1])
-    k = int(subpath_start[-1])
-    out_ctrl = np.empty((m, 4, 2))
-    out_deg = np.empty(m, dtype=np.int8)
-    out_first = np.empty(k + 1, dtype=np.int64)
-    out_first[k] = m
-    out_start = np.empty((k, 2))
-    out_closed = np.empty(k, dtype=bool)
-    out_from = np.empty(k, dtype=np.int64)
-    BZ.clip_path_blocks(*kernel_input, BZ.Layout(n_segments, n_out, segment_start, subpath_start),
-                        BZ.Output(True, out_ctrl, out_deg, out_first, out_start, out_closed,
-                                  out_from),
-                        np.zeros((n_blocks, C.WIDTH), dtype=np.int64), block)
-    kept = out_from >= 0
-    if not kept.all():  # entries freed by joining the two ends of a closed stroke
-        out_first = np.append(out_first[:-1][kept], m)
-        out_start, out_closed, out_from = out_start[kept], out_closed[kept], out_from[kept]
-    path_offsets = exclusive_sum(np.bincount(out_from, minlength=len(paths)))
-    clipped = PathArrays.from_kernel(controls=out_ctrl, degree=out_deg,
-                                     subpath_offsets=out_first, closed=out_closed,
-                                     start=out_start, path_offsets=path_offsets)
-    segments_in = paths.degree.shape[0] + BZ.closing_edges(
-        paths.controls, paths.subpath_offsets, paths.closed, paths.start, options.fill is not None)
-    return PathPieces(clipped, int(segments_in), counters, device_stats)
 
 
 def polyline_layout(paths: PathArrays, segment_points: np.ndarray, close: bool):
@@ -286,53 +354,6 @@ def core_options(options: SegmentOptions) -> R.CoreOptions:
     return R.CoreOptions(METHOD_ID[options.method], int(options.n), int(options.max_depth),
                          float(options.tolerance), float(options.auto_piece),
                          options.mode is Mode.EXACT)
-
-
-def polygon_passes(xy, z, ring_offsets, polygon_offsets, polygon_window, windows,
-                   options: SegmentOptions, polygon_class, decisions: PL.Decisions):
-    """Run the polygon kernel's count pass, prefix sums and write pass.
-
-    Shared by the Numba backend (`decisions` says nothing is decided) and the OpenCL
-    backend (`decisions` carries the device's run decisions and pieces).
-
-    Returns
-    -------
-    tuple
-        ``(xy, z, ring_offsets, rings_per_output, outputs_per_polygon, counters)``.
-    """
-    n_polygons = polygon_offsets.shape[0] - 1
-    has_z = z.shape[0] > 0
-    block = _block_size(n_polygons)
-    n_blocks = max(1, -(-n_polygons // block))
-    counters = np.zeros((n_blocks, C.WIDTH), dtype=np.int64)
-    vertices = R.vertices(xy, z)
-    polygons = PG.Polygons(ring_offsets, polygon_offsets, windows, polygon_window)
-    plan = PG.PolygonPlan(polygon_class, np.zeros(n_polygons, dtype=np.int64),
-                          np.zeros(n_polygons, dtype=np.int64))
-    nothing_i = np.empty(0, dtype=np.int64)
-    counts = PG.PolygonCounts(np.empty(n_polygons, dtype=np.int64),
-                              np.empty(n_polygons, dtype=np.int64),
-                              np.empty(n_polygons, dtype=np.int64), nothing_i, nothing_i,
-                              nothing_i)
-    nowhere = PG.PolygonsOut(False, np.empty((0, 2)), np.empty(0), nothing_i, nothing_i)
-    # Polygons are always clipped exactly: valid output needs exact cut points.
-    kernel_options = core_options(options)._replace(exact=True)
-    PG.clip_polygon_blocks(vertices, polygons, kernel_options, block, plan, counts, nowhere,
-                           counters, decisions)
-    vertex_start = exclusive_sum(counts.n_vertices)
-    ring_start = exclusive_sum(counts.n_rings)
-    poly_start = exclusive_sum(counts.n_polys)
-    out_xy = np.empty((int(vertex_start[-1]), 2))
-    out_z = np.empty(int(vertex_start[-1]) if has_z else 0)
-    out_rings = np.empty(int(ring_start[-1]) + 1, dtype=np.int64)
-    out_rings[-1] = out_xy.shape[0]
-    out_poly_rings = np.empty(int(poly_start[-1]), dtype=np.int64)
-    counts = counts._replace(vertex_start=vertex_start, ring_start=ring_start,
-                             poly_start=poly_start)
-    out = PG.PolygonsOut(True, out_xy, out_z, out_rings, out_poly_rings)
-    PG.clip_polygon_blocks(vertices, polygons, kernel_options, block, plan, counts, out,
-                           counters, decisions)
-    return out_xy, out_z, out_rings, out_poly_rings, counts.n_polys, counters
 
 
 def _block_size(n_items: int) -> int:

@@ -66,9 +66,10 @@ from rnsca.backends.base import (
     SegmentPieces,
 )
 from rnsca.backends.numba_cpu import (
-    path_passes,
+    DevicePaths,
+    DevicePolygons,
+    NumbaBackend,
     polygon_geometry,
-    polygon_passes,
     polyline_layout,
     warm_up_geometry,
     warm_up_paths,
@@ -86,6 +87,10 @@ from rnsca.window import Window, WindowTable
 
 __all__ = ["OpenCLBackend", "list_devices", "select_device", "constant_options",
            "FLOAT32_RELATIVE_BOUND", "LOCAL_SIZE"]
+
+# The host half of the OpenCL backend's lines, polygons and paths: the Numba backend's
+# passes, fed with the device's decisions.
+_HOST = NumbaBackend()
 
 #: Work-items per group: the stats are summed per group in local memory.
 LOCAL_SIZE = 64
@@ -489,25 +494,19 @@ class OpenCLBackend:
         ring_offsets = polygons.offsets[0]
         polygon_offsets, geometry_polygons = polygons.item_offsets()
         polygon_window = windows.of_items(polygon_geometry(geometry_polygons))
-        windows = windows.bounds
         n_polygons = polygon_offsets.shape[0] - 1
         polygon_class = np.empty(n_polygons, dtype=np.int8)
         PG.classify_polygons(R.vertices(xy, z), PG.Polygons(ring_offsets, polygon_offsets,
-                                                            windows, polygon_window),
+                                                            windows.bounds, polygon_window),
                              polygon_class)
         ring_polygon = np.repeat(np.arange(n_polygons, dtype=np.int64),
                                  np.diff(polygon_offsets))
         ring_window = np.ascontiguousarray(polygon_window[ring_polygon])
         active = (polygon_class[ring_polygon] == PG.AMBIGUOUS).astype(np.uint8)
         tables, device_counters, device_stats = self._prune(
-            xy, ring_offsets, ring_window, windows, options, True, active)
-        out_xy, out_z, out_rings, rings_per_output, outputs_per_polygon, counters = \
-            polygon_passes(xy, z, ring_offsets, polygon_offsets, polygon_window, windows,
-                           options, polygon_class, PL.Decisions(True, *tables))
-        return GeometryPieces(out_xy, out_z, (
-            out_rings, exclusive_sum(rings_per_output),
-            group_offsets(outputs_per_polygon, geometry_polygons)),
-            np.concatenate([counters, device_counters]), device_stats)
+            xy, ring_offsets, ring_window, windows.bounds, options, True, active)
+        return _HOST.clip_polygons(polygons, windows, options, device=DevicePolygons(
+            polygon_class, PL.Decisions(True, *tables), device_counters, device_stats))
 
     def _prune(self, xy, part_offsets, part_window, windows, options: SegmentOptions,
                drop_edge_runs: bool, active):
@@ -612,8 +611,8 @@ class OpenCLBackend:
             self.classify_curves(paths.controls, paths.degree, window, options.tolerance,
                                  "accepted" if options.curves is Curves.FLATTEN else "none",
                                  paths.subpath_offsets)
-        return path_passes(paths, window, options, (run_decisions, device_stats, (
-            True, segment_class, point_start, points)))
+        return _HOST.clip_paths(paths, window, options, device=DevicePaths(
+            run_decisions, segment_class, point_start, points, device_stats))
 
     def flatten_paths(self, paths: PathArrays, tolerance: float, close: bool) -> Polylines:
         """Return the paths as polylines within `tolerance`; see `ClipBackend.flatten_paths`.

@@ -8,15 +8,24 @@ and for the flatten-then-clip baseline). The algorithm is in `rnsca.kernels.bezi
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
+from typing import Any, SupportsIndex
 
 from rnsca.arrays import PathArrays
 from rnsca.backends.base import Operation, Polylines
 from rnsca.backends.registry import get_backend
 from rnsca.errors import InvalidOptionError
 from rnsca.io.svgpath import parse_paths, write_paths
-from rnsca.options import CURVE_RELATIVE_TOLERANCE, Curves, Fill, PathOptions
+from rnsca.options import (
+    CURVE_RELATIVE_TOLERANCE,
+    Backend,
+    Curves,
+    Fill,
+    Method,
+    Mode,
+    PathOptions,
+)
 from rnsca.stats import ClipStats
 from rnsca.window import Window
 
@@ -57,9 +66,11 @@ class PathClipResult:
     tolerance: float = 0.0
 
 
-def clip_paths(paths: PathArrays, window, *, curves="preserve", fill=None, tolerance=None,
-               method="rnsca", n="auto", max_depth=None, mode="exact",
-               backend="numba") -> PathClipResult:
+def clip_paths(paths: PathArrays, window: Window | Iterable[float], *,
+               curves: Curves | str = "preserve", fill: Fill | str | None = None,
+               tolerance: float | None = None, method: Method | str = "rnsca",
+               n: SupportsIndex | str = "auto", max_depth: SupportsIndex | None = None,
+               mode: Mode | str = "exact", backend: Backend | str = "numba") -> PathClipResult:
     """Return paths clipped to a rectangular window, keeping curves as curves.
 
     Parameters
@@ -118,8 +129,10 @@ def clip_paths(paths: PathArrays, window, *, curves="preserve", fill=None, toler
                           options.mode.value, options.tolerance)
 
 
-def clip_svg(d, window, *, curves="preserve", fill=None, tolerance=None, precision=None,
-             **options):
+def clip_svg(d: str | Sequence[str], window: Window | Iterable[float], *,
+             curves: Curves | str = "preserve", fill: Fill | str | None = None,
+             tolerance: float | None = None, precision: int | None = None,
+             **options: Any) -> tuple[str | list[str], ClipStats]:
     """Return SVG path data clipped to a rectangular window, and the stats.
 
     Parameters
@@ -160,7 +173,7 @@ def clip_svg(d, window, *, curves="preserve", fill=None, tolerance=None, precisi
     single = isinstance(d, str)
     if not single and not isinstance(d, Sequence):
         raise TypeError(f"d must be a str or a sequence of str, not {type(d).__name__}")
-    paths = parse_paths([d] if single else list(d), tolerance=tolerance)
+    paths = parse_paths([d] if isinstance(d, str) else list(d), tolerance=tolerance)
     result = clip_paths(paths, window, curves=curves, fill=fill, tolerance=tolerance,
                         **options)
     written = write_paths(result.paths, precision=precision)
@@ -168,7 +181,7 @@ def clip_svg(d, window, *, curves="preserve", fill=None, tolerance=None, precisi
 
 
 def flatten_paths(paths: PathArrays, tolerance: float, *, close: bool = False,
-                  backend="numba") -> Polylines:
+                  backend: Backend | str = "numba") -> Polylines:
     """Return the paths as polylines within `tolerance` of every curve.
 
     Parameters

@@ -10,6 +10,7 @@ from rnsca.arrays import GeometryKind, PathArrays, Ragged, exclusive_sum, group_
 from rnsca.backends.base import (
     METHOD_ID,
     Capabilities,
+    ClipBackend,
     GeometryPieces,
     PathPieces,
     Polylines,
@@ -280,7 +281,7 @@ class NumbaBackend:
         warm_up_paths(self)
 
 
-def warm_up_paths(backend) -> None:
+def warm_up_paths(backend: ClipBackend) -> None:
     """Clip and flatten Bézier paths on `backend` in each curve handling, fill and mode.
 
     Three subpaths: lines, quadratic and cubic curves crossing the window, and a closed
@@ -306,7 +307,8 @@ def warm_up_paths(backend) -> None:
     backend.flatten_paths(paths, 1e-3, True)
 
 
-def polyline_layout(paths: PathArrays, segment_points: np.ndarray, close: bool):
+def polyline_layout(paths: PathArrays, segment_points: np.ndarray,
+                    close: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Return where each subpath's polyline goes when paths are flattened.
 
     `segment_points` are the offsets of each segment's flattened points (after the
@@ -330,7 +332,7 @@ def polygon_geometry(geometry_polygons: np.ndarray) -> np.ndarray:
                      np.diff(geometry_polygons))
 
 
-def warm_up_geometry(backend) -> None:
+def warm_up_geometry(backend: ClipBackend) -> None:
     """Clip lines and polygons on `backend`: one square ring across the window, 2D and 3D.
 
     Every kernel specialisation a geometry clip uses is compiled (or loaded) by it.

@@ -160,7 +160,7 @@ def parse_paths(ds: Sequence[str], *, tolerance: float | None = None) -> PathArr
     return _parse(ds, tolerance, bulk=True)
 
 
-def _arc_tolerance(tolerance) -> tuple[float, float]:
+def _arc_tolerance(tolerance: float | None) -> tuple[float, float]:
     """Return the kernel's (absolute, relative) tolerance pair; one of them is 0."""
     if tolerance is None:
         return 0.0, ARC_RELATIVE_TOLERANCE
@@ -172,7 +172,7 @@ def _arc_tolerance(tolerance) -> tuple[float, float]:
     return value, 0.0
 
 
-def _parse(ds: Sequence[str], tolerance, bulk: bool) -> PathArrays:
+def _parse(ds: Sequence[str], tolerance: float | None, bulk: bool) -> PathArrays:
     tol_abs, tol_rel = _arc_tolerance(tolerance)
     data, path_bytes = _encode(ds)
     buf = np.frombuffer(data, dtype=np.uint8)
@@ -219,7 +219,7 @@ def _encode(ds: Sequence[str]) -> tuple[bytes, np.ndarray]:
     return data, _prefix_sum(lengths)
 
 
-def _parse_error(ds, p: int, position: int, code: int, bulk: bool) -> ParseError:
+def _parse_error(ds: Sequence[str], p: int, position: int, code: int, bulk: bool) -> ParseError:
     """Return the ParseError for `code` at byte `position` of path `p`.
 
     Every byte before the error was accepted by the grammar, hence ASCII, so the byte
@@ -227,7 +227,10 @@ def _parse_error(ds, p: int, position: int, code: int, bulk: bool) -> ParseError
     """
     d = ds[p]
     if code == svgparse.OUT_OF_RANGE:
-        number = _NUMBER.match(d, position).group()
+        # The kernel stopped at a number it read: the pattern matches there (the
+        # rest of the path, should it ever not).
+        match = _NUMBER.match(d, position)
+        number = match.group() if match else d[position:]
         found = f"found {number if len(number) <= 40 else number[:37] + '...'!r}"
     elif position < len(d):
         found = f"found {d[position]!r}"
@@ -240,7 +243,7 @@ def _parse_error(ds, p: int, position: int, code: int, bulk: bool) -> ParseError
     return error
 
 
-def _convert_fallback(ds, data: bytes, buf: np.ndarray, path_bytes: np.ndarray,
+def _convert_fallback(ds: Sequence[str], data: bytes, buf: np.ndarray, path_bytes: np.ndarray,
                       fallback: np.ndarray, nums: np.ndarray, bulk: bool) -> None:
     """Convert the numbers off Clinger's fast path with Python's parser, into `nums`."""
     first, end, where = fallback[:, 0], fallback[:, 1], fallback[:, 2]

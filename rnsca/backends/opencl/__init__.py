@@ -50,6 +50,7 @@ import threading
 import warnings
 from dataclasses import dataclass, field
 from importlib import resources
+from typing import cast
 
 import numpy as np
 import pyopencl as cl
@@ -297,25 +298,25 @@ def _device(entry: dict) -> _Device:
 class _Ledger:
     """Transfers and kernel runs of one call, timed by OpenCL event profiling."""
 
-    def __init__(self):
+    def __init__(self) -> None:
         self.transfers = 0
         self.bytes_to_device = 0
         self.bytes_from_device = 0
-        self.copy_events = []
-        self.kernel_events = []
+        self.copy_events: list[cl.Event] = []
+        self.kernel_events: list[cl.Event] = []
 
-    def to_device(self, queue, array: np.ndarray):
+    def to_device(self, queue: cl.CommandQueue, array: np.ndarray) -> cl_array.Array:
         buffer = cl_array.empty(queue, array.shape, array.dtype)
         if array.nbytes:
-            self.copy_events.append(cl.enqueue_copy(queue, buffer.data, array))
+            self.copy_events.append(cl.enqueue_copy(queue, _data(buffer), array))
             self.transfers += 1
             self.bytes_to_device += array.nbytes
         return buffer
 
-    def from_device(self, queue, buffer) -> np.ndarray:
+    def from_device(self, queue: cl.CommandQueue, buffer: cl_array.Array) -> np.ndarray:
         out = np.empty(buffer.shape, buffer.dtype)
         if out.nbytes:
-            self.copy_events.append(cl.enqueue_copy(queue, out, buffer.base_data,
+            self.copy_events.append(cl.enqueue_copy(queue, out, cast(cl.Buffer, buffer.base_data),
                                                     src_offset=buffer.offset))
             self.transfers += 1
             self.bytes_from_device += out.nbytes
@@ -331,7 +332,7 @@ class _Ledger:
                            kernel_seconds=_seconds(self.kernel_events))
 
 
-def _seconds(events) -> float:
+def _seconds(events: list[cl.Event]) -> float:
     return sum(e.profile.end - e.profile.start for e in events) * 1e-9
 
 
@@ -400,8 +401,8 @@ class OpenCLBackend:
         real = self.real
         n = segments.shape[0]
         with np.errstate(over="ignore"):  # float32: checked below, with the row named
-            data = np.ascontiguousarray(segments, dtype=real)
-        bounds = np.array(window.bounds, dtype=real)
+            data: np.ndarray = np.ascontiguousarray(segments, dtype=real)
+        bounds: np.ndarray = np.array(window.bounds, dtype=real)
         if real is np.float32:
             _check_float32(data, bounds)
         xmin, ymin, xmax, ymax = (real(b) for b in bounds)
@@ -416,11 +417,11 @@ class OpenCLBackend:
             keep = cl_array.empty(queue, max(1, n), np.int64)
             counters = cl_array.empty(queue, groups * _SEGMENT_COUNTERS, np.int64)
             ledger.kernel_events.append(clip_kernel(
-                queue, (groups * LOCAL_SIZE,), (LOCAL_SIZE,), device_segments.data,
+                queue, (groups * LOCAL_SIZE,), (LOCAL_SIZE,), _data(device_segments),
                 np.int64(n), xmin, ymin, xmax, ymax, np.int32(METHOD_ID[options.method]),
                 np.int32(options.n), np.int32(options.max_depth), real(options.tolerance),
-                real(options.auto_piece), np.int32(options.mode is Mode.EXACT), result.data,
-                keep.data, counters.data, wait_for=ledger.copy_events))
+                real(options.auto_piece), np.int32(options.mode is Mode.EXACT), _data(result),
+                _data(keep), _data(counters), wait_for=ledger.copy_events))
             m = 0
             if n:
                 event, position = cl_array.cumsum(keep[:n], queue=queue, return_event=True,
@@ -432,8 +433,8 @@ class OpenCLBackend:
             t = cl_array.empty(queue, max(1, 2 * m), real)
             if m:
                 ledger.kernel_events.append(write_kernel(
-                    queue, (n,), None, result.data, keep.data, position.data, np.int64(n),
-                    xmin, ymin, xmax, ymax, pieces.data, source.data, t.data,
+                    queue, (n,), None, _data(result), _data(keep), _data(position), np.int64(n),
+                    xmin, ymin, xmax, ymax, _data(pieces), _data(source), _data(t),
                     wait_for=ledger.kernel_events[-1:]))
             rows = ledger.from_device(queue, counters).reshape(groups, _SEGMENT_COUNTERS)
             out_pieces = ledger.from_device(queue, pieces[:4 * m]).reshape(m, 4)
@@ -508,8 +509,10 @@ class OpenCLBackend:
         return _HOST.clip_polygons(polygons, windows, options, device=DevicePolygons(
             polygon_class, PL.Decisions(True, *tables), device_counters, device_stats))
 
-    def _prune(self, xy, part_offsets, part_window, windows, options: SegmentOptions,
-               drop_edge_runs: bool, active):
+    def _prune(self, xy: np.ndarray, part_offsets: np.ndarray, part_window: np.ndarray,
+               windows: np.ndarray, options: SegmentOptions, drop_edge_runs: bool,
+               active: np.ndarray | None,
+               ) -> tuple[tuple[np.ndarray, ...], np.ndarray, DeviceStats]:
         """Prune the runs of every part and clip the undecided chunks' segments on the device.
 
         Returns ``(tables, counters, device_stats)``: `tables` is ``(chunk_start,
@@ -520,8 +523,8 @@ class OpenCLBackend:
         real = self.real
         n_parts = part_offsets.shape[0] - 1
         with np.errstate(over="ignore"):
-            data = np.ascontiguousarray(xy, dtype=real)
-            bounds = np.ascontiguousarray(windows, dtype=real)
+            data: np.ndarray = np.ascontiguousarray(xy, dtype=real)
+            bounds: np.ndarray = np.ascontiguousarray(windows, dtype=real)
         if real is np.float32:
             _check_float32_lines(data, bounds)
         segments = np.maximum(np.diff(part_offsets), 1) - 1
@@ -557,13 +560,13 @@ class OpenCLBackend:
             if n_chunks:
                 ledger.kernel_events.append(kernels.chunk_boxes(
                     queue, (n_chunks,), None, _data(d_xy), _data(d_offsets),
-                    _data(d_chunk_start), _data(d_chunk_part), np.int64(n_chunks), boxes.data))
+                    _data(d_chunk_start), _data(d_chunk_part), np.int64(n_chunks), _data(boxes)))
             ledger.kernel_events.append(kernels.classify_runs(
-                queue, (part_groups * LOCAL_SIZE,), (LOCAL_SIZE,), boxes.data, _data(d_offsets),
+                queue, (part_groups * LOCAL_SIZE,), (LOCAL_SIZE,), _data(boxes), _data(d_offsets),
                 _data(d_chunk_start), _data(d_part_window), _data(d_windows),
                 np.int64(n_parts), np.int32(n_runs), np.int32(drop_edge_runs),
                 np.int32(options.method is Method.RNSCA), _data(d_active),
-                np.int32(active is None), decision.data, segmented.data, run_counters.data))
+                np.int32(active is None), _data(decision), _data(segmented), _data(run_counters)))
             total = 0
             position = segmented
             if n_chunks:
@@ -576,11 +579,11 @@ class OpenCLBackend:
             ledger.kernel_events.append(kernels.clip_chunk_segments(
                 queue, (chunk_groups * LOCAL_SIZE,), (LOCAL_SIZE,), _data(d_xy),
                 _data(d_offsets), _data(d_chunk_start), _data(d_chunk_part),
-                _data(d_part_window), _data(d_windows), np.int64(n_chunks), decision.data,
-                segmented.data, position.data, np.int32(METHOD_ID[options.method]),
+                _data(d_part_window), _data(d_windows), np.int64(n_chunks), _data(decision),
+                _data(segmented), _data(position), np.int32(METHOD_ID[options.method]),
                 np.int32(options.n), np.int32(options.max_depth), real(options.tolerance),
-                real(options.auto_piece), np.int32(options.mode is Mode.EXACT), keep.data,
-                result.data, chunk_counters.data))
+                real(options.auto_piece), np.int32(options.mode is Mode.EXACT), _data(keep),
+                _data(result), _data(chunk_counters)))
             chunk_decision = ledger.from_device(queue, decision[:n_chunks])
             kept = ledger.from_device(queue, keep[:total]).view(np.bool_)
             pieces = ledger.from_device(queue, result[:6 * total]).reshape(total, 6)
@@ -641,7 +644,8 @@ class OpenCLBackend:
         return Polylines(coords, line_offsets, line_path[lines])
 
     def classify_curves(self, controls: np.ndarray, degree: np.ndarray, window: Window | None,
-                        tolerance: float, flatten: str, subpath_offsets: np.ndarray | None = None):
+                        tolerance: float, flatten: str, subpath_offsets: np.ndarray | None = None,
+                        ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, DeviceStats]:
         """Classify Bézier segments and runs of them, and flatten some segments, on the device.
 
         Parameters
@@ -704,7 +708,7 @@ class OpenCLBackend:
             kernels = self._device.program(double)
             with np.errstate(over="ignore"):  # float32: beyond its range is ±inf, which
                 # still orders the points against the window (`_windows32`)
-                device_controls = controls[:m].astype(self.real).reshape(-1)
+                device_controls: np.ndarray = controls[:m].astype(self.real).reshape(-1)
             d_controls = ledger.to_device(queue, device_controls)
             d_degree = ledger.to_device(queue, degree[:m])
             segment_class = cl_array.empty(queue, max(1, m), np.uint8)
@@ -714,7 +718,7 @@ class OpenCLBackend:
                     queue, (m,), None, _data(d_controls), _data(d_degree), np.int64(m),
                     *accept, *reject,
                     np.float64(tolerance) if double else np.float32(0),  # float32: unused
-                    np.int32(_FLATTEN[device_flatten]), segment_class.data, n_points.data))
+                    np.int32(_FLATTEN[device_flatten]), _data(segment_class), _data(n_points)))
             point_end = np.zeros(0, dtype=np.int64)
             total = 0
             if m and device_flatten != "none":
@@ -726,17 +730,17 @@ class OpenCLBackend:
             points = cl_array.empty(queue, max(1, 2 * total), self.real)
             if total:
                 ledger.kernel_events.append(kernels.flatten_bezier(
-                    queue, (m,), None, _data(d_controls), _data(d_degree), n_points.data,
-                    d_point_end.data, np.int64(m), points.data))
+                    queue, (m,), None, _data(d_controls), _data(d_degree), _data(n_points),
+                    _data(d_point_end), np.int64(m), _data(points)))
             run_class = np.zeros(0, dtype=np.int8)
             if n_runs:
                 d_run_first = ledger.to_device(queue, run_first)
                 d_run_end = ledger.to_device(queue, run_end)
                 d_run_class = cl_array.empty(queue, n_runs, np.int8)
                 ledger.kernel_events.append(kernels.classify_bezier_runs(
-                    queue, (n_runs,), None, _data(d_controls), d_run_first.data,
-                    d_run_end.data, np.int64(n_runs), *accept, *reject,
-                    np.int32(flatten != "none"), d_run_class.data))
+                    queue, (n_runs,), None, _data(d_controls), _data(d_run_first),
+                    _data(d_run_end), np.int64(n_runs), *accept, *reject,
+                    np.int32(flatten != "none"), _data(d_run_class)))
                 run_class = ledger.from_device(queue, d_run_class)
             classes = ledger.from_device(queue, segment_class[:m])
             flat = ledger.from_device(queue, points[:2 * total]).reshape(total, 2)
@@ -780,9 +784,15 @@ class OpenCLBackend:
         warm_up_paths(self)
 
 
-def _data(array):
-    """Return the buffer of a device array (the empty ones included: 1 byte then)."""
-    return array.data if array.size else cl.Buffer(array.context, cl.mem_flags.READ_ONLY, 1)
+def _data(array: cl_array.Array) -> cl.Buffer:
+    """Return the buffer of a device array (the empty ones included: 1 byte then).
+
+    pyopencl types `_data(Array)` as optional (an SVM array has none); these arrays are
+    all allocated from buffers.
+    """
+    if not array.size:
+        return cl.Buffer(cast(cl.Context, array.context), cl.mem_flags.READ_ONLY, 1)
+    return cast(cl.Buffer, array.data)
 
 
 def _runs(subpath_offsets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -859,7 +869,7 @@ def _exact_float32_ends(pieces, xy, windows, part_window, chunk_part, chunk_firs
         np.clip(values, window[:, bound], window[:, bound + 2], out=values)
 
 
-def _windows32(bounds) -> tuple[tuple, tuple]:
+def _windows32(bounds: tuple[float, ...] | np.ndarray) -> tuple[tuple, tuple]:
     """Return the (accept, reject) float32 windows that make the device's curve classes sure.
 
     Rounding to float32 keeps order (``x <= y`` gives ``f(x) <= f(y)``, also where it
@@ -897,8 +907,9 @@ def _outcodes(x, y, bounds):
         (y > ymax) * TOP)
 
 
-def _decide_ambiguous(classes, run_class, controls, degree, run_first, run_end, bounds,
-                      flatten: bool) -> None:
+def _decide_ambiguous(classes: np.ndarray, run_class: np.ndarray, controls: np.ndarray,
+                      degree: np.ndarray, run_first: np.ndarray, run_end: np.ndarray,
+                      bounds: tuple[float, ...], flatten: bool) -> None:
     """Decide, in float64 and in place, the segments and runs a float32 device left open.
 
     The same tests as `bezier.clip_path_blocks` (control points' outcodes, a run's box),

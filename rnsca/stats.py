@@ -13,6 +13,21 @@ from rnsca.kernels import counters as C
 
 __all__ = ["ClipStats", "DeviceStats"]
 
+# The stats that are a counter summed over the blocks, and the counter each one reads.
+_TOTALS = (
+    ("fragments_evaluated", C.EVALUATED), ("accepted", C.ACCEPTED),
+    ("rejected", C.REJECTED), ("subdivided", C.SUBDIVIDED), ("clipped", C.CLIPPED),
+    ("dropped", C.DROPPED), ("intersections", C.INTERSECTIONS),
+    ("runs_evaluated", C.RUNS_EVALUATED), ("runs_accepted", C.RUNS_ACCEPTED),
+    ("runs_rejected", C.RUNS_REJECTED), ("runs_subdivided", C.RUNS_SUBDIVIDED),
+    ("runs_segmented", C.RUNS_SEGMENTED), ("invalid_polygons", C.INVALID_POLYGONS),
+)
+# The per-level stats, and the first of their N_LEVELS counters.
+_PER_LEVEL = (
+    ("decided_per_level", C.LEVELS), ("runs_decided_per_level", C.RUN_LEVELS),
+    ("segments_decided_per_level", C.SEGMENT_LEVELS),
+)
+
 
 @dataclass(frozen=True, slots=True)
 class DeviceStats:
@@ -167,30 +182,12 @@ class ClipStats:
         total = rows.sum(axis=0).tolist()
         deepest = [int(rows[:, C.DEEPEST].max()), int(rows[:, C.RUN_DEEPEST].max())] \
             if rows.shape[0] else [0, 0]
-        return cls(
-            segments_in=int(segments_in),
-            pieces_out=int(pieces_out),
-            fragments_evaluated=total[C.EVALUATED],
-            accepted=total[C.ACCEPTED],
-            rejected=total[C.REJECTED],
-            subdivided=total[C.SUBDIVIDED],
-            clipped=total[C.CLIPPED],
-            dropped=total[C.DROPPED],
-            intersections=total[C.INTERSECTIONS],
-            deepest_level=deepest[0],
-            decided_per_level=tuple(total[C.LEVELS:C.LEVELS + C.N_LEVELS]),
-            runs_evaluated=total[C.RUNS_EVALUATED],
-            runs_accepted=total[C.RUNS_ACCEPTED],
-            runs_rejected=total[C.RUNS_REJECTED],
-            runs_subdivided=total[C.RUNS_SUBDIVIDED],
-            runs_segmented=total[C.RUNS_SEGMENTED],
-            runs_deepest_level=deepest[1],
-            runs_decided_per_level=tuple(total[C.RUN_LEVELS:C.RUN_LEVELS + C.N_LEVELS]),
-            segments_decided_per_level=tuple(
-                total[C.SEGMENT_LEVELS:C.SEGMENT_LEVELS + C.N_LEVELS]),
-            invalid_polygons=total[C.INVALID_POLYGONS],
-            **geometry,
-        )
+        fields: dict[str, Any] = {name: total[column] for name, column in _TOTALS}
+        fields.update((name, tuple(total[column:column + C.N_LEVELS]))
+                      for name, column in _PER_LEVEL)
+        return cls(segments_in=int(segments_in), pieces_out=int(pieces_out),
+                   deepest_level=deepest[0], runs_deepest_level=deepest[1], **fields,
+                   **geometry)
 
     @classmethod
     def combine(cls, parts: Iterable[ClipStats]) -> ClipStats:

@@ -378,6 +378,20 @@ class _Fallback(Exception):
     """The fast reader met something it does not check itself; the validator decides."""
 
 
+def _non_empty_members(coordinates: list | tuple) -> list:
+    """Return the non-empty members of a Multi* geometry's coordinates.
+
+    A member that is not an array leaves the fast path (`_Fallback`).
+    """
+    members = []
+    for member in coordinates:
+        if not isinstance(member, _ARRAY):
+            raise _Fallback
+        if member:
+            members.append(member)
+    return members
+
+
 class _Reader:
     """Collects coordinate arrays in document order, checking structure only.
 
@@ -451,15 +465,10 @@ class _Reader:
             self.line_counts.append(1 if coordinates else 0)
             self.sources[_LINES].append(coordinates)
         elif kind == "MultiLineString":
-            count = 0
-            for part in coordinates:
-                if not isinstance(part, _ARRAY):
-                    raise _Fallback
-                if part:
-                    self.line_parts.append(part)
-                    count += 1
-            self.line_counts.append(count)
-            self.sources[_LINES].append(coordinates if count == len(coordinates) else None)
+            parts = _non_empty_members(coordinates)
+            self.line_parts.extend(parts)
+            self.line_counts.append(len(parts))
+            self.sources[_LINES].append(coordinates if len(parts) == len(coordinates) else None)
         elif kind == "Polygon":
             if coordinates:
                 self.rings.extend(coordinates)  # rings are checked in bulk in `layout`
@@ -469,16 +478,13 @@ class _Reader:
                 self.polygon_counts.append(0)
             self.sources[_POLYGONS].append(coordinates)
         elif kind == "MultiPolygon":
-            count = 0
-            for polygon in coordinates:
-                if not isinstance(polygon, _ARRAY):
-                    raise _Fallback
-                if polygon:
-                    self.rings.extend(polygon)
-                    self.ring_counts.append(len(polygon))
-                    count += 1
-            self.polygon_counts.append(count)
-            self.sources[_POLYGONS].append(coordinates if count == len(coordinates) else None)
+            polygons = _non_empty_members(coordinates)
+            for polygon in polygons:
+                self.rings.extend(polygon)
+                self.ring_counts.append(len(polygon))
+            self.polygon_counts.append(len(polygons))
+            self.sources[_POLYGONS].append(
+                coordinates if len(polygons) == len(coordinates) else None)
         else:
             raise _Fallback
 

@@ -32,7 +32,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import prange
 
-from rnsca.kernels.jit import borrowing, parallel, scalar
+from rnsca.kernels.jit import borrowing, inlined, parallel, scalar
 
 __all__ = [
     "ERROR_MESSAGES",
@@ -127,6 +127,27 @@ def _skip_comma_wsp(buf, i, last):
     return i
 
 
+@inlined
+def _scan_digits(buf, i, last, mantissa, n_kept):
+    """Append the digits at ``buf[i:]`` to `mantissa`, which keeps `_MAX_DIGITS`.
+
+    Returns ``(end, mantissa, n_kept, n_read)``: the index after the digits, the
+    mantissa and its count of significant digits (leading zeros are not kept), and how
+    many digits were read before it was full; the other ``end - i - n_read`` are dropped.
+    Inlined: as a call it cost the tokenizer 8% more instructions.
+    """
+    n_read = 0
+    while i < last and _CLASS[buf[i]] & _DIGIT:
+        if n_kept < _MAX_DIGITS:
+            d = int(buf[i]) - _ZERO
+            if n_kept > 0 or d != 0:
+                mantissa = mantissa * 10 + d
+                n_kept += 1
+            n_read += 1
+        i += 1
+    return i, mantissa, n_kept, n_read
+
+
 @scalar
 def _scan_number(buf, i, last):
     """Scan the number starting at ``buf[i]`` (a digit, sign or '.').
@@ -139,35 +160,19 @@ def _scan_number(buf, i, last):
     negative = buf[i] == _MINUS
     if buf[i] == _MINUS or buf[i] == _PLUS:
         i += 1
-    mantissa = 0
-    n_kept = 0        # significant digits in `mantissa` (leading zeros are not kept)
-    exponent = 0      # value = mantissa * 10**exponent
-    dropped = False   # a significant digit did not fit in `mantissa`
-    n_digits = 0
-    while i < last and _CLASS[buf[i]] & _DIGIT:
-        d = int(buf[i]) - _ZERO
-        if n_kept < _MAX_DIGITS:
-            if n_kept > 0 or d != 0:
-                mantissa = mantissa * 10 + d
-                n_kept += 1
-        else:
-            dropped = True
-            exponent += 1
-        n_digits += 1
-        i += 1
+    first = i
+    i, mantissa, n_kept, n_read = _scan_digits(buf, i, last, 0, 0)
+    n_digits = i - first
+    # value = mantissa * 10**exponent: each integer digit dropped is a factor of ten,
+    # each fraction digit kept a tenth.
+    exponent = n_digits - n_read
     if i < last and buf[i] == _DOT:
-        i += 1
-        while i < last and _CLASS[buf[i]] & _DIGIT:
-            d = int(buf[i]) - _ZERO
-            if n_kept < _MAX_DIGITS:
-                if n_kept > 0 or d != 0:
-                    mantissa = mantissa * 10 + d
-                    n_kept += 1
-                exponent -= 1
-            else:
-                dropped = True
-            n_digits += 1
-            i += 1
+        first = i + 1
+        i, mantissa, n_kept, n_fraction = _scan_digits(buf, first, last, mantissa, n_kept)
+        exponent -= n_fraction
+        n_read += n_fraction
+        n_digits += i - first
+    dropped = n_digits > n_read   # a significant digit did not fit in `mantissa`
     if n_digits == 0:
         return i, EXPECTED_DIGIT, 0.0, False
     if i < last and (buf[i] == _LOWER_E or buf[i] == _UPPER_E):
@@ -212,7 +217,7 @@ def _scan_number(buf, i, last):
     return i, 0, value, exact
 
 
-@scalar
+@borrowing
 def _tokenize(buf, first, last, write, nums, num_at, cmds, cmd_at, fallback, fallback_at):
     """Check and split the path ``buf[first:last]`` into argument groups and numbers.
 
@@ -221,6 +226,8 @@ def _tokenize(buf, first, last, write, nums, num_at, cmds, cmd_at, fallback, fal
     ``(start, end, number index)`` of numbers the caller must convert to
     ``fallback[fallback_at:]``; without it, nothing is written (the arrays may be empty).
     Every step advances ``i`` or returns, so no input can make it loop forever.
+    `borrowing`, so its calls per number count no references to `buf` (measured: 3 to
+    8% faster).
     """
     n_nums = 0
     n_cmds = 0
@@ -464,8 +471,9 @@ def _arc_pieces(rx, ry, delta, tolerance):
 
 
 @scalar
-def _put(controls, degree, at, deg, x0, y0, x1, y1, x2, y2, x3, y3):
-    """Write one segment; unused control rows repeat the end point (never NaN)."""
+def _put(out, at, deg, x0, y0, x1, y1, x2, y2, x3, y3):
+    """Write segment `at` of `out` (`Segments`); unused control rows repeat the end point."""
+    controls = out.controls
     controls[at, 0, 0] = x0
     controls[at, 0, 1] = y0
     controls[at, 1, 0] = x1
@@ -474,7 +482,22 @@ def _put(controls, degree, at, deg, x0, y0, x1, y1, x2, y2, x3, y3):
     controls[at, 2, 1] = y2
     controls[at, 3, 0] = x3
     controls[at, 3, 1] = y3
-    degree[at] = deg
+    out.degree[at] = deg
+
+
+@scalar
+def _start_subpath(out, row, x, y, first_segment):
+    """Write subpath `row` of `out` (`Segments`): open, starting at (x, y)."""
+    out.start[row, 0] = x
+    out.start[row, 1] = y
+    out.closed[row] = False
+    out.subpath_offsets[row] = first_segment
+
+
+@scalar
+def _point(nums, q, ox, oy):
+    """Return the point ``(nums[q], nums[q + 1])`` relative to the origin (ox, oy)."""
+    return nums[q] + ox, nums[q + 1] + oy
 
 
 @borrowing
@@ -492,7 +515,7 @@ def _arc(start, rx, ry, angle, large, sweep, end, tolerance, write, out, at):
         return 0
     if kind == 1:
         if write:
-            _put(out.controls, out.degree, at, 1, x0, y0, x, y, x, y, x, y)
+            _put(out, at, 1, x0, y0, x, y, x, y, x, y)
         return 1
     n = _arc_pieces(rx, ry, delta, tolerance)
     if not write:
@@ -519,8 +542,7 @@ def _arc(start, rx, ry, angle, large, sweep, end, tolerance, write, out, at):
         day = k * (-sin_phi * (rx * s) + cos_phi * (ry * c))
         dbx = k * (-cos_phi * (rx * s1) - sin_phi * (ry * c1))
         dby = k * (-sin_phi * (rx * s1) + cos_phi * (ry * c1))
-        _put(out.controls, out.degree, at + j, 3, ax, ay, ax + dax, ay + day, bx - dbx,
-             by - dby, bx, by)
+        _put(out, at + j, 3, ax, ay, ax + dax, ay + day, bx - dbx, by - dby, bx, by)
         ax = bx
         ay = by
         c = c1
@@ -555,11 +577,6 @@ def _build(nums, num_at, cmds, cmd_first, cmd_last, tolerance, write, out, seg_a
     ``out.subpath_offsets[sub_at:]`` (the global index of each subpath's first
     segment). The first group is a moveto (checked by the tokenizer).
     """
-    controls = out.controls
-    degree = out.degree
-    start = out.start
-    closed = out.closed
-    sub_offsets = out.subpath_offsets
     q = num_at
     n_seg = 0
     n_sub = 0
@@ -568,8 +585,8 @@ def _build(nums, num_at, cmds, cmd_first, cmd_last, tolerance, write, out, seg_a
     sx = 0.0          # start of the current subpath
     sy = 0.0
     is_open = False   # a subpath is open (False before the first M and after Z)
-    # The previous command, for the reflections of S and T: 3 after C/S, 2 after Q/T,
-    # 0 otherwise; (px, py) its last control point before the end point.
+    # For the reflections of S and T: the degree of the previous segment (0 after M, Z
+    # and A) and (px, py) its last control point before the end point.
     prev = 0
     px = 0.0
     py = 0.0
@@ -581,119 +598,88 @@ def _build(nums, num_at, cmds, cmd_first, cmd_last, tolerance, write, out, seg_a
         ox = cx if cmd & _CASE_BIT else -0.0
         oy = cy if cmd & _CASE_BIT else -0.0
         if lower == 109:                      # m: a new subpath
-            cx = nums[q] + ox
-            cy = nums[q + 1] + oy
+            cx, cy = _point(nums, q, ox, oy)
             q += 2
             sx = cx
             sy = cy
-            if write:
-                start[sub_at + n_sub, 0] = cx
-                start[sub_at + n_sub, 1] = cy
-                closed[sub_at + n_sub] = False
-                sub_offsets[sub_at + n_sub] = seg_at + n_seg
-            n_sub += 1
-            is_open = True
+            is_open = False
             prev = 0
-            continue
         if not is_open:
-            # A command after Z (other than M) starts a new subpath at the same
-            # initial point as the closed one (SVG 2, 9.3.4).
+            # A subpath starts at M, and at any other command after Z, at the closed
+            # one's initial point (SVG 2, 9.3.4): at the current point either way.
             if write:
-                start[sub_at + n_sub, 0] = sx
-                start[sub_at + n_sub, 1] = sy
-                closed[sub_at + n_sub] = False
-                sub_offsets[sub_at + n_sub] = seg_at + n_seg
+                _start_subpath(out, sub_at + n_sub, cx, cy, seg_at + n_seg)
             n_sub += 1
             is_open = True
         at = seg_at + n_seg
+        if lower == 109:
+            continue
         if lower == 122:                      # z: close; the closing edge is implicit
             if write:
-                closed[sub_at + n_sub - 1] = True
+                out.closed[sub_at + n_sub - 1] = True
             cx = sx
             cy = sy
             is_open = False
             prev = 0
-        elif lower == 108:                    # l
-            x = nums[q] + ox
-            y = nums[q + 1] + oy
-            q += 2
-            if write:
-                _put(controls, degree, at, 1, cx, cy, x, y, x, y, x, y)
-            n_seg += 1
-            cx = x
-            cy = y
-            prev = 0
-        elif lower == 104 or lower == 118:    # h, v
-            x = cx
-            y = cy
-            if lower == 104:
-                x = nums[q] + ox
-            else:
-                y = nums[q] + oy
-            q += 1
-            if write:
-                _put(controls, degree, at, 1, cx, cy, x, y, x, y, x, y)
-            n_seg += 1
-            cx = x
-            cy = y
-            prev = 0
-        elif lower == 99 or lower == 115:     # c, s
-            if lower == 99:
-                x1 = nums[q] + ox
-                y1 = nums[q + 1] + oy
-                q += 2
-            elif prev == 3:
-                # Reflection of the previous second control point about the current
-                # point; the writer tests for S with this same expression.
-                x1 = 2.0 * cx - px
-                y1 = 2.0 * cy - py
-            else:
-                x1 = cx
-                y1 = cy
-            x2 = nums[q] + ox
-            y2 = nums[q + 1] + oy
-            x = nums[q + 2] + ox
-            y = nums[q + 3] + oy
-            q += 4
-            if write:
-                _put(controls, degree, at, 3, cx, cy, x1, y1, x2, y2, x, y)
-            n_seg += 1
-            cx = x
-            cy = y
-            prev = 3
-            px = x2
-            py = y2
-        elif lower == 113 or lower == 116:    # q, t
-            if lower == 113:
-                x1 = nums[q] + ox
-                y1 = nums[q + 1] + oy
-                q += 2
-            elif prev == 2:
-                x1 = 2.0 * cx - px
-                y1 = 2.0 * cy - py
-            else:
-                x1 = cx
-                y1 = cy
-            x = nums[q] + ox
-            y = nums[q + 1] + oy
-            q += 2
-            if write:
-                _put(controls, degree, at, 2, cx, cy, x1, y1, x, y, x, y)
-            n_seg += 1
-            cx = x
-            cy = y
-            prev = 2
-            px = x1
-            py = y1
-        else:                                 # A
-            x = nums[q + 5] + ox
-            y = nums[q + 6] + oy
+            continue
+        if lower == 97:                       # a
+            x, y = _point(nums, q + 5, ox, oy)
             n_seg += _arc((cx, cy), nums[q], nums[q + 1], nums[q + 2], nums[q + 3] != 0.0,
                           nums[q + 4] != 0.0, (x, y), tolerance, write, out, at)
             q += 7
             cx = x
             cy = y
             prev = 0
+            continue
+        # One segment of degree `deg` from (cx, cy) through (x1, y1) and (x2, y2) to
+        # (x, y); the rows a line or a quadratic does not use repeat the end point.
+        if lower == 108 or lower == 104 or lower == 118:    # l, h, v
+            deg = 1
+            if lower == 108:
+                x, y = _point(nums, q, ox, oy)
+                q += 2
+            elif lower == 104:
+                x = nums[q] + ox
+                y = cy
+                q += 1
+            else:
+                x = cx
+                y = nums[q] + oy
+                q += 1
+            x1 = x2 = x
+            y1 = y2 = y
+        else:                                 # c, s, q, t
+            deg = 3 if lower == 99 or lower == 115 else 2
+            if lower == 99 or lower == 113:   # c, q: the first control point is given
+                x1, y1 = _point(nums, q, ox, oy)
+                q += 2
+            elif prev == deg:
+                # s after c or s, t after q or t: the reflection of the previous last
+                # control point about the current point; the writer tests for S and T
+                # with this same expression.
+                x1 = 2.0 * cx - px
+                y1 = 2.0 * cy - py
+            else:
+                x1 = cx
+                y1 = cy
+            x2 = x1
+            y2 = y1
+            if deg == 3:
+                x2, y2 = _point(nums, q, ox, oy)
+                q += 2
+            px = x2                           # the control point before the end
+            py = y2
+            x, y = _point(nums, q, ox, oy)
+            q += 2
+            if deg == 2:
+                x2 = x
+                y2 = y
+        if write:
+            _put(out, at, deg, cx, cy, x1, y1, x2, y2, x, y)
+        n_seg += 1
+        cx = x
+        cy = y
+        prev = deg
     return n_seg, n_sub
 
 

@@ -10,10 +10,10 @@
  *                        passed by rnsca.backends.opencl.constant_options. This file
  *                        defines none of them (tests/unit/test_constants.py checks).
  * Each function is a line-by-line port of the Numba kernel of the same name
- * (rnsca/kernels/outcode.py, segments.py, rnsca/baselines/*.py): the same formulas in
- * the same order, so in float64 the pieces agree with the Numba backend's to rounding
- * (in practice bit for bit). Read those modules for the geometry and the reasons; the
- * comments here only note what differs in C.
+ * (rnsca/kernels/outcode.py, segments.py, the modules of rnsca/baselines): the same
+ * formulas in the same order, so in float64 the pieces agree with the Numba backend's to
+ * rounding (in practice bit for bit). Read those modules for the geometry and the
+ * reasons; the comments here only note what differs in C.
  *
  * Variable-length output in three passes (see rnsca/backends/opencl/__init__.py):
  * `clip_segments` clips one segment per work-item and stores its result and a 0/1 count;
@@ -84,21 +84,60 @@ int outcode(REAL x, REAL y, REAL xmin, REAL ymin, REAL xmax, REAL ymax) {
 
 int wide(int code) { return code | (code << SURE_SHIFT); }
 
+/* A box, or a window: [xmin, xmax] x [ymin, ymax]. */
+typedef struct {
+    REAL xmin, ymin, xmax, ymax;
+} Box;
+
+/* The box stored as v[0..3] = (xmin, ymin, xmax, ymax). */
+Box box_at(__global const REAL *v) {
+    Box b = {v[0], v[1], v[2], v[3]};
+    return b;
+}
+
+Box point_box(REAL x, REAL y) {
+    Box b = {x, y, x, y};
+    return b;
+}
+
+Box box_union(Box a, Box b) {
+    Box u = {py_min(a.xmin, b.xmin), py_min(a.ymin, b.ymin), py_max(a.xmax, b.xmax),
+             py_max(a.ymax, b.ymax)};
+    return u;
+}
+
+int box_outcode(REAL x, REAL y, Box w) {
+    return outcode(x, y, w.xmin, w.ymin, w.xmax, w.ymax);
+}
+
 REAL clamp_real(REAL v, REAL low, REAL high) { return py_min(py_max(v, low), high); }
+
+/* (s, *err) with s + *err == a + b exactly (Knuth's TwoSum). */
+REAL two_sum(REAL a, REAL b, REAL *err) {
+    REAL s = a + b;
+    REAL v = s - a;
+    *err = (a - (s - v)) + (b - v);
+    return s;
+}
+
+/* (p, *err) with p + *err == a * b exactly (Dekker's TwoProduct, Veltkamp's splits). */
+REAL two_product(REAL a, REAL b, REAL *err) {
+    REAL p = a * b;
+    REAL c = SPLITTER * a;
+    REAL ah = c - (c - a);
+    REAL al = a - ah;
+    c = SPLITTER * b;
+    REAL bh = c - (c - b);
+    REAL bl = b - bh;
+    *err = (((ah * bh - p) + ah * bl) + al * bh) + al * bl;
+    return p;
+}
 
 /* a = a0 + t * da as rounded, and its error (TwoProduct, TwoSum). */
 REAL interpolate_dd(REAL a0, REAL da, REAL da_err, REAL t, REAL *err) {
-    REAL p = t * da;
-    REAL c = SPLITTER * t;
-    REAL th = c - (c - t);
-    REAL tl = t - th;
-    c = SPLITTER * da;
-    REAL dh = c - (c - da);
-    REAL dl = da - dh;
-    REAL p_err = (((th * dh - p) + th * dl) + tl * dh) + tl * dl;
-    REAL a = a0 + p;
-    REAL v = a - a0;
-    REAL a_err = (a0 - (a - v)) + (p - v);
+    REAL p_err, a_err;
+    REAL p = two_product(t, da, &p_err);
+    REAL a = two_sum(a0, p, &a_err);
     *err = a_err + p_err + t * da_err;
     return a;
 }
@@ -136,43 +175,21 @@ int wide_outcode(REAL x, REAL y, REAL cx, REAL mx, REAL cy, REAL my, REAL xmin,
     return unsure | (sure << SURE_SHIFT);
 }
 
-/* (d, d_err) with d + d_err == x1 - x0 exactly (Knuth's TwoSum). */
-REAL difference_dd(REAL x1, REAL x0, REAL *d_err) {
-    REAL d = x1 - x0;
-    REAL v = d - x1;
-    *d_err = (x1 - (d - v)) + (-x0 - v);
-    return d;
-}
+/* (d, d_err) with d + d_err == x1 - x0 exactly (TwoSum of x1 and -x0). */
+REAL difference_dd(REAL x1, REAL x0, REAL *d_err) { return two_sum(x1, -x0, d_err); }
 
 /* b + ((e - a) / da) * db in double-double; returns the rounded value, *residual the rest. */
 REAL line_coordinate_dd(REAL e, REAL a, REAL b, REAL da, REAL da_err, REAL db,
                                REAL db_err, REAL *residual) {
-    REAL s = e - a;
-    REAL v = s - e;
-    REAL s_err = (e - (s - v)) + (-a - v);
+    REAL s_err, r_err, p_err, y_err;
+    REAL s = difference_dd(e, a, &s_err);
     REAL t = s / da;
-    REAL r = t * da;
-    REAL c = SPLITTER * t;
-    REAL th = c - (c - t);
-    REAL tl = t - th;
-    c = SPLITTER * da;
-    REAL ah = c - (c - da);
-    REAL al = da - ah;
-    REAL r_err = (((th * ah - r) + th * al) + tl * ah) + tl * al;
+    REAL r = two_product(t, da, &r_err);
     REAL t_lo = ((((s - r) - r_err) + s_err) - t * da_err) / da;
-    REAL p = t * db;
-    c = SPLITTER * db;
-    REAL dh = c - (c - db);
-    REAL dl = db - dh;
-    REAL p_err = (((th * dh - p) + th * dl) + tl * dh) + tl * dl + (t_lo * db + t * db_err);
-    REAL y = b + p;
-    v = y - b;
-    REAL y_err = (b - (y - v)) + (p - v);
-    REAL ee = y_err + p_err;
-    REAL z = y + ee;
-    v = z - y;
-    *residual = (y - (z - v)) + (ee - v);
-    return z;
+    REAL p = two_product(t, db, &p_err);
+    p_err = p_err + (t_lo * db + t * db_err);
+    REAL y = two_sum(b, p, &y_err);
+    return two_sum(y, y_err + p_err, residual);
 }
 
 REAL line_coordinate_residual(REAL e, REAL a0, REAL b0, REAL a1, REAL b1,
@@ -261,8 +278,36 @@ void end_point(REAL x0, REAL y0, REAL x1, REAL y1, int edge, REAL px, REAL py,
     snap_into_window(x, y, x0, y0, x1, y1, xmin, ymin, xmax, ymax);
 }
 
-int is_piece(int degenerate, REAL t0, REAL t1, REAL ax, REAL ay, REAL bx, REAL by) {
-    return (t0 <= t1) && (degenerate || ax != bx || ay != by);
+/* A piece is stored as (t0, t1, ax, ay, bx, by): its parameters on the segment and its
+ * ends. */
+void set_piece(REAL *out, REAL t0, REAL t1, REAL ax, REAL ay, REAL bx, REAL by) {
+    out[0] = t0; out[1] = t1; out[2] = ax; out[3] = ay; out[4] = bx; out[5] = by;
+}
+
+int is_piece(int degenerate, const REAL *piece) {
+    return (piece[0] <= piece[1])
+           && (degenerate || piece[2] != piece[4] || piece[3] != piece[5]);
+}
+
+/* out = the part [u0, u1] of the segment: an end cut at an edge (e0, e1) on that edge,
+ * else (xa, ya) or (xb, yb); both snapped into the window (`end_point`). */
+void cut_piece(REAL x0, REAL y0, REAL x1, REAL y1, REAL u0, int e0, REAL xa, REAL ya,
+               REAL u1, int e1, REAL xb, REAL yb, REAL xmin, REAL ymin, REAL xmax,
+               REAL ymax, REAL *out) {
+    out[0] = u0;
+    out[1] = u1;
+    end_point(x0, y0, x1, y1, e0, xa, ya, xmin, ymin, xmax, ymax, &out[2], &out[3]);
+    end_point(x0, y0, x1, y1, e1, xb, yb, xmin, ymin, xmax, ymax, &out[4], &out[5]);
+}
+
+/* An analytic baseline's part [u0, u1] of the whole segment, cut at the edges e0 and e1
+ * (NO_EDGE: that end not cut): counted (accepted whole, or clipped), and stored in out. */
+int baseline_piece(int degenerate, REAL x0, REAL y0, REAL x1, REAL y1, REAL u0, int e0,
+                   REAL u1, int e1, REAL xmin, REAL ymin, REAL xmax, REAL ymax, Counters st,
+                   REAL *out) {
+    COUNT(st, e0 == NO_EDGE && e1 == NO_EDGE ? ACCEPTED : CLIPPED, 1);
+    cut_piece(x0, y0, x1, y1, u0, e0, x0, y0, u1, e1, x1, y1, xmin, ymin, xmax, ymax, out);
+    return is_piece(degenerate, out);
 }
 
 /* --- baselines/liang_barsky.py ------------------------------------------------------ */
@@ -308,15 +353,8 @@ int liang_barsky_segment(REAL x0, REAL y0, REAL x1, REAL y1, REAL xmin, REAL ymi
         COUNT(st, REJECTED, 1);
         return 0;
     }
-    if (e0 == NO_EDGE && e1 == NO_EDGE)
-        COUNT(st, ACCEPTED, 1);
-    else
-        COUNT(st, CLIPPED, 1);
-    REAL ax, ay, bx, by;
-    end_point(x0, y0, x1, y1, e0, x0, y0, xmin, ymin, xmax, ymax, &ax, &ay);
-    end_point(x0, y0, x1, y1, e1, x1, y1, xmin, ymin, xmax, ymax, &bx, &by);
-    out[0] = u0; out[1] = u1; out[2] = ax; out[3] = ay; out[4] = bx; out[5] = by;
-    return is_piece(dx == 0 && dy == 0, u0, u1, ax, ay, bx, by);
+    return baseline_piece(dx == 0 && dy == 0, x0, y0, x1, y1, u0, e0, u1, e1, xmin, ymin, xmax,
+                          ymax, st, out);
 }
 
 /* The half-plane of edge `bit`, applied when `flags` has that bit (selects, no branches). */
@@ -345,21 +383,37 @@ int count_divisions(int flags) {
     return (flags & 1) + ((flags >> 1) & 1) + ((flags >> 2) & 1) + ((flags >> 3) & 1);
 }
 
+/* [u0, u1] cut by the flagged half-planes (left, right, bottom, top), e0 and e1 the edges
+ * that cut it (else left as they are). */
+void leaf_cuts(int flags, REAL *u0, int *e0, REAL *u1, int *e1, REAL x0, REAL y0, REAL x1,
+               REAL y1, REAL xmin, REAL ymin, REAL xmax, REAL ymax) {
+    leaf_cut(LEFT, flags, u0, e0, u1, e1, x0, y0, x1, y1, xmin, ymin, xmax, ymax);
+    leaf_cut(RIGHT, flags, u0, e0, u1, e1, x0, y0, x1, y1, xmin, ymin, xmax, ymax);
+    leaf_cut(BOTTOM, flags, u0, e0, u1, e1, x0, y0, x1, y1, xmin, ymin, xmax, ymax);
+    leaf_cut(TOP, flags, u0, e0, u1, e1, x0, y0, x1, y1, xmin, ymin, xmax, ymax);
+}
+
 /* Clip the leaf [ta, tb] on the flagged half-planes; out = (u0, u1, ax, ay, bx, by). */
 int liang_barsky_leaf(REAL x0, REAL y0, REAL x1, REAL y1, REAL ta, REAL tb, REAL xa,
                              REAL ya, REAL xb, REAL yb, int flags, REAL xmin, REAL ymin,
                              REAL xmax, REAL ymax, REAL *out) {
     REAL u0 = ta, u1 = tb;
     int e0 = NO_EDGE, e1 = NO_EDGE;
-    leaf_cut(LEFT, flags, &u0, &e0, &u1, &e1, x0, y0, x1, y1, xmin, ymin, xmax, ymax);
-    leaf_cut(RIGHT, flags, &u0, &e0, &u1, &e1, x0, y0, x1, y1, xmin, ymin, xmax, ymax);
-    leaf_cut(BOTTOM, flags, &u0, &e0, &u1, &e1, x0, y0, x1, y1, xmin, ymin, xmax, ymax);
-    leaf_cut(TOP, flags, &u0, &e0, &u1, &e1, x0, y0, x1, y1, xmin, ymin, xmax, ymax);
-    out[0] = u0;
-    out[1] = u1;
-    end_point(x0, y0, x1, y1, e0, xa, ya, xmin, ymin, xmax, ymax, &out[2], &out[3]);
-    end_point(x0, y0, x1, y1, e1, xb, yb, xmin, ymin, xmax, ymax, &out[4], &out[5]);
+    leaf_cuts(flags, &u0, &e0, &u1, &e1, x0, y0, x1, y1, xmin, ymin, xmax, ymax);
+    cut_piece(x0, y0, x1, y1, u0, e0, xa, ya, u1, e1, xb, yb, xmin, ymin, xmax, ymax, out);
     return u0 <= u1;
+}
+
+/* An undecided leaf [ta, tb] (ends a and b, `codes` their outcodes or'ed) clipped in
+ * exact mode: counted, and cut on the edges of the unsure bits of `codes`. */
+int clip_leaf(REAL x0, REAL y0, REAL x1, REAL y1, REAL ta, REAL tb, REAL xa, REAL ya,
+              REAL xb, REAL yb, int codes, REAL xmin, REAL ymin, REAL xmax, REAL ymax,
+              Counters st, REAL *out) {
+    int flags = codes & UNSURE_BITS;
+    COUNT(st, CLIPPED, 1);
+    COUNT(st, INTERSECTIONS, count_divisions(flags));
+    return liang_barsky_leaf(x0, y0, x1, y1, ta, tb, xa, ya, xb, yb, flags, xmin, ymin, xmax,
+                             ymax, out);
 }
 
 /* --- baselines/cohen_sutherland.py -------------------------------------------------- */
@@ -382,6 +436,21 @@ REAL cs_edge_parameter(int code, REAL x0, REAL y0, REAL dx, REAL dy, REAL xmin,
     return (xmin - x0) / dx;
 }
 
+/* One move of an outside end, (t, x, y) with outcode *code (`at_end`: the end at t1, else
+ * the one at t0): onto the line of an edge it is beyond, if that moves it inward, else
+ * that edge's bit is dropped from its outcode. */
+void cs_move(int at_end, REAL *t, REAL *x, REAL *y, int *code, REAL x0, REAL y0, REAL x1,
+             REAL y1, REAL dx, REAL dy, REAL xmin, REAL ymin, REAL xmax, REAL ymax) {
+    int edge, bit;
+    REAL t_edge = cs_edge_parameter(*code, x0, y0, dx, dy, xmin, ymin, xmax, ymax, &edge, &bit);
+    if (at_end ? t_edge < *t : t_edge > *t) {
+        *t = t_edge;
+        *code = edge_point_code(x0, y0, x1, y1, edge, xmin, ymin, xmax, ymax, x, y);
+    } else {
+        *code &= ~bit;
+    }
+}
+
 int cohen_sutherland_segment(REAL x0, REAL y0, REAL x1, REAL y1, REAL xmin, REAL ymin,
                                     REAL xmax, REAL ymax, Counters st, REAL *out) {
     REAL dx = x1 - x0;
@@ -395,8 +464,8 @@ int cohen_sutherland_segment(REAL x0, REAL y0, REAL x1, REAL y1, REAL xmin, REAL
         COUNT(st, LEVELS, 1);
         if ((ca | cb) == 0) {
             COUNT(st, ACCEPTED, 1);
-            out[0] = t0; out[1] = t1; out[2] = ax; out[3] = ay; out[4] = bx; out[5] = by;
-            return is_piece(dx == 0 && dy == 0, t0, t1, ax, ay, bx, by);
+            set_piece(out, t0, t1, ax, ay, bx, by);
+            return is_piece(dx == 0 && dy == 0, out);
         }
         if (ca & cb) {
             COUNT(st, REJECTED, 1);
@@ -404,24 +473,10 @@ int cohen_sutherland_segment(REAL x0, REAL y0, REAL x1, REAL y1, REAL xmin, REAL
         }
         COUNT(st, CLIPPED, 1);
         COUNT(st, INTERSECTIONS, 1);
-        int edge, bit;
-        if (ca != 0) {
-            REAL t = cs_edge_parameter(ca, x0, y0, dx, dy, xmin, ymin, xmax, ymax, &edge, &bit);
-            if (t > t0) {
-                t0 = t;
-                ca = edge_point_code(x0, y0, x1, y1, edge, xmin, ymin, xmax, ymax, &ax, &ay);
-            } else {
-                ca &= ~bit;
-            }
-        } else {
-            REAL t = cs_edge_parameter(cb, x0, y0, dx, dy, xmin, ymin, xmax, ymax, &edge, &bit);
-            if (t < t1) {
-                t1 = t;
-                cb = edge_point_code(x0, y0, x1, y1, edge, xmin, ymin, xmax, ymax, &bx, &by);
-            } else {
-                cb &= ~bit;
-            }
-        }
+        if (ca != 0)
+            cs_move(0, &t0, &ax, &ay, &ca, x0, y0, x1, y1, dx, dy, xmin, ymin, xmax, ymax);
+        else
+            cs_move(1, &t1, &bx, &by, &cb, x0, y0, x1, y1, dx, dy, xmin, ymin, xmax, ymax);
         if (t0 > t1)
             return 0;
     }
@@ -548,7 +603,7 @@ int nicholl_lee_nicholl_segment(REAL x0, REAL y0, REAL x1, REAL y1, REAL xmin,
     if (dx == 0 && dy == 0) {
         if (c0 == 0) {
             COUNT(st, ACCEPTED, 1);
-            out[0] = 0; out[1] = 1; out[2] = x0; out[3] = y0; out[4] = x1; out[5] = y1;
+            set_piece(out, 0, 1, x0, y0, x1, y1);
             return 1;
         }
         COUNT(st, REJECTED, 1);
@@ -577,17 +632,9 @@ int nicholl_lee_nicholl_segment(REAL x0, REAL y0, REAL x1, REAL y1, REAL xmin,
         COUNT(st, REJECTED, 1);
         return 0;
     }
-    if (e0 == NO_EDGE && e1 == NO_EDGE)
-        COUNT(st, ACCEPTED, 1);
-    else
-        COUNT(st, CLIPPED, 1);
     e0 = nln_original_edge(e0, flip_x, flip_y, swap);
     e1 = nln_original_edge(e1, flip_x, flip_y, swap);
-    REAL ax, ay, bx, by;
-    end_point(x0, y0, x1, y1, e0, x0, y0, xmin, ymin, xmax, ymax, &ax, &ay);
-    end_point(x0, y0, x1, y1, e1, x1, y1, xmin, ymin, xmax, ymax, &bx, &by);
-    out[0] = u0; out[1] = u1; out[2] = ax; out[3] = ay; out[4] = bx; out[5] = by;
-    return is_piece(0, u0, u1, ax, ay, bx, by);
+    return baseline_piece(0, x0, y0, x1, y1, u0, e0, u1, e1, xmin, ymin, xmax, ymax, st, out);
 }
 
 /* --- baselines/midpoint.py ---------------------------------------------------------- */
@@ -684,11 +731,11 @@ Bracket midpoint_search(REAL x0, REAL y0, REAL dx, REAL dy, REAL x1, REAL y1, in
    zero-length piece; 0 if neither end is inside. */
 int inside_end_only(Bracket k, REAL *out) {
     if (k.ca == 0) {
-        out[0] = k.a; out[1] = k.a; out[2] = k.xa; out[3] = k.ya; out[4] = k.xa; out[5] = k.ya;
+        set_piece(out, k.a, k.a, k.xa, k.ya, k.xa, k.ya);
         return 1;
     }
     if (k.cb == 0) {
-        out[0] = k.b; out[1] = k.b; out[2] = k.xb; out[3] = k.yb; out[4] = k.xb; out[5] = k.yb;
+        set_piece(out, k.b, k.b, k.xb, k.yb, k.xb, k.yb);
         return 1;
     }
     return 0;
@@ -705,21 +752,33 @@ int midpoint_leaf(REAL x0, REAL y0, REAL x1, REAL y1, Bracket k, int exact, REAL
     }
     if ((k.ca | k.cb) == 0) {
         COUNT(st, ACCEPTED, 1);
-        out[0] = k.a; out[1] = k.b; out[2] = k.xa; out[3] = k.ya; out[4] = k.xb; out[5] = k.yb;
+        set_piece(out, k.a, k.b, k.xa, k.ya, k.xb, k.yb);
         return 1;
     }
     if (!exact) {
         COUNT(st, DROPPED, 1);
         return inside_end_only(k, out);
     }
-    COUNT(st, CLIPPED, 1);
-    int flags = (k.ca | k.cb) & UNSURE_BITS;
-    int ok = liang_barsky_leaf(x0, y0, x1, y1, k.a, k.b, k.xa, k.ya, k.xb, k.yb, flags,
-                               xmin, ymin, xmax, ymax, out);
-    COUNT(st, INTERSECTIONS, count_divisions(flags));
-    if (!ok) {
+    if (!clip_leaf(x0, y0, x1, y1, k.a, k.b, k.xa, k.ya, k.xb, k.yb, k.ca | k.cb, xmin, ymin,
+                   xmax, ymax, st, out))
         return inside_end_only(k, out);
-    }
+    return 1;
+}
+
+/* The visible part's end on one side of a segment whose end there is outside (`at_end`:
+ * the end at t = 1, else t = 0), searched from the other end: its (t, x, y) in *t, *x, *y;
+ * 0 if nothing is visible. */
+int midpoint_end(int at_end, REAL x0, REAL y0, REAL dx, REAL dy, REAL x1, REAL y1, int c0,
+                 int c1, REAL length, int max_depth, REAL tol, int exact, REAL xmin,
+                 REAL ymin, REAL xmax, REAL ymax, Counters st, REAL *t, REAL *x, REAL *y) {
+    Bracket k = midpoint_search(x0, y0, dx, dy, x1, y1, wide(c0), wide(c1), length, at_end,
+                                max_depth, tol, exact, xmin, ymin, xmax, ymax, st);
+    REAL leaf[6];
+    if (!midpoint_leaf(x0, y0, x1, y1, k, exact, xmin, ymin, xmax, ymax, st, leaf))
+        return 0;
+    *t = leaf[at_end];
+    *x = leaf[2 + 2 * at_end];
+    *y = leaf[3 + 2 * at_end];
     return 1;
 }
 
@@ -731,39 +790,23 @@ int midpoint_segment(REAL x0, REAL y0, REAL x1, REAL y1, REAL xmin, REAL ymin,
     REAL length = hypot(dx, dy);
     int c0 = outcode(x0, y0, xmin, ymin, xmax, ymax);
     int c1 = outcode(x1, y1, xmin, ymin, xmax, ymax);
-    REAL leaf[6];
     if ((c0 | c1) == 0 || (c0 & c1) || max_depth == 0 || length <= tol) {
         Bracket whole = {0, x0, y0, wide(c0), 1, x1, y1, wide(c1), 0};
-        int ok = midpoint_leaf(x0, y0, x1, y1, whole, exact, xmin, ymin, xmax, ymax, st, leaf);
-        if (!ok || (!exact && leaf[0] == leaf[1] && (c0 | c1) != 0))
+        int ok = midpoint_leaf(x0, y0, x1, y1, whole, exact, xmin, ymin, xmax, ymax, st, out);
+        if (!ok || (!exact && out[0] == out[1] && (c0 | c1) != 0))
             return 0;
-        for (int k = 0; k < 6; k++) out[k] = leaf[k];
-        return is_piece(dx == 0 && dy == 0, leaf[0], leaf[1], leaf[2], leaf[3], leaf[4],
-                        leaf[5]);
+        return is_piece(dx == 0 && dy == 0, out);
     }
     COUNT(st, EVALUATED, 1);
     COUNT(st, SUBDIVIDED, 1);
-    REAL t0, t1, ax, ay, bx, by;
-    if (c1 == 0) {
-        t1 = 1; bx = x1; by = y1;
-    } else {
-        Bracket k = midpoint_search(x0, y0, dx, dy, x1, y1, wide(c0), wide(c1), length, 1,
-                                    max_depth, tol, exact, xmin, ymin, xmax, ymax, st);
-        if (!midpoint_leaf(x0, y0, x1, y1, k, exact, xmin, ymin, xmax, ymax, st, leaf))
-            return 0;
-        t1 = leaf[1]; bx = leaf[4]; by = leaf[5];
-    }
-    if (c0 == 0) {
-        t0 = 0; ax = x0; ay = y0;
-    } else {
-        Bracket k = midpoint_search(x0, y0, dx, dy, x1, y1, wide(c0), wide(c1), length, 0,
-                                    max_depth, tol, exact, xmin, ymin, xmax, ymax, st);
-        if (!midpoint_leaf(x0, y0, x1, y1, k, exact, xmin, ymin, xmax, ymax, st, leaf))
-            return 0;
-        t0 = leaf[0]; ax = leaf[2]; ay = leaf[3];
-    }
-    out[0] = t0; out[1] = t1; out[2] = ax; out[3] = ay; out[4] = bx; out[5] = by;
-    return is_piece(0, t0, t1, ax, ay, bx, by);
+    set_piece(out, 0, 1, x0, y0, x1, y1);
+    if (c1 != 0 && !midpoint_end(1, x0, y0, dx, dy, x1, y1, c0, c1, length, max_depth, tol,
+                                 exact, xmin, ymin, xmax, ymax, st, &out[1], &out[4], &out[5]))
+        return 0;
+    if (c0 != 0 && !midpoint_end(0, x0, y0, dx, dy, x1, y1, c0, c1, length, max_depth, tol,
+                                 exact, xmin, ymin, xmax, ymax, st, &out[0], &out[2], &out[3]))
+        return 0;
+    return is_piece(0, out);
 }
 
 /* --- kernels/segments.py: RNSCA ----------------------------------------------------- */
@@ -781,7 +824,29 @@ typedef struct {
     int i[STACK_CAPACITY][3];
 } Stack;
 
-/* Fold a clipped leaf (or accepted child) into the merged interval [lo, hi]. */
+void stack_push(Stack *stack, int sp, REAL ta, REAL tb, REAL xa, REAL ya, REAL xb, REAL yb,
+                int ca, int cb, int level) {
+    set_piece(stack->f[sp], ta, tb, xa, ya, xb, yb);
+    stack->i[sp][0] = ca;
+    stack->i[sp][1] = cb;
+    stack->i[sp][2] = level;
+}
+
+/* A segment that its outcodes decide at level 0 ((c0 | c1) == 0: accepted, out = the
+ * segment; c0 & c1: rejected), counted; returns kept. */
+int rnsca_decided(REAL x0, REAL y0, REAL x1, REAL y1, int c0, int c1, Counters st,
+                  REAL *out) {
+    COUNT(st, EVALUATED, 1);
+    COUNT(st, LEVELS, 1);
+    if (c0 & c1) {
+        COUNT(st, REJECTED, 1);
+        return 0;
+    }
+    COUNT(st, ACCEPTED, 1);
+    set_piece(out, 0, 1, x0, y0, x1, y1);
+    return 1;
+}
+
 int rnsca_segment(REAL x0, REAL y0, REAL x1, REAL y1, REAL xmin, REAL ymin, REAL xmax,
                          REAL ymax, int n_fixed, int max_depth, REAL tol, REAL auto_piece,
                          int exact, Counters st, Stack *stack, REAL *out) {
@@ -789,44 +854,30 @@ int rnsca_segment(REAL x0, REAL y0, REAL x1, REAL y1, REAL xmin, REAL ymin, REAL
     REAL dy = y1 - y0;
     int c0 = outcode(x0, y0, xmin, ymin, xmax, ymax);
     int c1 = outcode(x1, y1, xmin, ymin, xmax, ymax);
-    COUNT(st, EVALUATED, 1);
-    if ((c0 | c1) == 0) {
-        COUNT(st, ACCEPTED, 1);
-        COUNT(st, LEVELS, 1);
-        out[0] = 0; out[1] = 1; out[2] = x0; out[3] = y0; out[4] = x1; out[5] = y1;
-        return 1;
-    }
-    if (c0 & c1) {
-        COUNT(st, REJECTED, 1);
-        COUNT(st, LEVELS, 1);
-        return 0;
-    }
+    if ((c0 | c1) == 0 || (c0 & c1))
+        return rnsca_decided(x0, y0, x1, y1, c0, c1, st, out);
     REAL length = hypot(dx, dy);
-    REAL lo_t = INF_REAL, lo_x = 0, lo_y = 0;
-    REAL hi_t = -INF_REAL, hi_x = 0, hi_y = 0;
-    REAL leaf[6];
     if (max_depth == 0 || length <= tol) {
+        COUNT(st, EVALUATED, 1);
         COUNT(st, LEVELS, 1);
         if (!exact) {
             COUNT(st, DROPPED, 1);
             return 0;
         }
-        COUNT(st, CLIPPED, 1);
-        int flags = c0 | c1;
-        int ok = liang_barsky_leaf(x0, y0, x1, y1, 0, 1, x0, y0, x1, y1, flags,
-                                   xmin, ymin, xmax, ymax, out);
-        COUNT(st, INTERSECTIONS, count_divisions(flags));
-        return ok && is_piece(0, out[0], out[1], out[2], out[3], out[4], out[5]);
+        return clip_leaf(x0, y0, x1, y1, 0, 1, x0, y0, x1, y1, c0 | c1, xmin, ymin, xmax, ymax,
+                         st, out)
+               && is_piece(0, out);
     }
+    /* The merged interval [lo, hi] of the clipped leaves and accepted children. */
+    REAL lo_t = INF_REAL, lo_x = 0, lo_y = 0;
+    REAL hi_t = -INF_REAL, hi_x = 0, hi_y = 0;
+    REAL leaf[6];
+    COUNT(st, EVALUATED, 1);
     COUNT(st, SUBDIVIDED, 1);
-    stack->f[0][0] = 0; stack->f[0][1] = 1;
-    stack->f[0][2] = x0; stack->f[0][3] = y0; stack->f[0][4] = x1; stack->f[0][5] = y1;
+    stack_push(stack, 0, 0, 1, x0, y0, x1, y1, wide(c0), wide(c1), 0);
     REAL dx_err, dy_err;
     difference_dd(x1, x0, &dx_err);
     difference_dd(y1, y0, &dy_err);
-    stack->i[0][0] = wide(c0);
-    stack->i[0][1] = wide(c1);
-    stack->i[0][2] = 0;
     int sp = 1;
     while (sp > 0) {
         sp -= 1;
@@ -873,29 +924,21 @@ int rnsca_segment(REAL x0, REAL y0, REAL x1, REAL y1, REAL xmin, REAL ymin, REAL
             } else if (level >= max_depth || (t - pt) * length <= tol || pc == c
                        || sp >= STACK_CAPACITY) {
                 COUNT(st, LEVELS + level, 1);
-                if (exact) {
-                    COUNT(st, CLIPPED, 1);
-                    int flags = (pc | c) & UNSURE_BITS;
-                    int ok = liang_barsky_leaf(x0, y0, x1, y1, pt, t, px, py, x, y, flags,
-                                               xmin, ymin, xmax, ymax, leaf);
-                    COUNT(st, INTERSECTIONS, count_divisions(flags));
-                    if (ok && is_piece(0, leaf[0], leaf[1], leaf[2], leaf[3], leaf[4], leaf[5])) {
-                        if (leaf[0] < lo_t) {
-                            lo_t = leaf[0]; lo_x = leaf[2]; lo_y = leaf[3];
-                        }
-                        if (leaf[1] > hi_t) {
-                            hi_t = leaf[1]; hi_x = leaf[4]; hi_y = leaf[5];
-                        }
-                    }
-                } else {
+                if (!exact) {
                     COUNT(st, DROPPED, 1);
+                } else if (clip_leaf(x0, y0, x1, y1, pt, t, px, py, x, y, pc | c, xmin, ymin,
+                                     xmax, ymax, st, leaf)
+                           && is_piece(0, leaf)) {
+                    if (leaf[0] < lo_t) {
+                        lo_t = leaf[0]; lo_x = leaf[2]; lo_y = leaf[3];
+                    }
+                    if (leaf[1] > hi_t) {
+                        hi_t = leaf[1]; hi_x = leaf[4]; hi_y = leaf[5];
+                    }
                 }
             } else {
                 COUNT(st, SUBDIVIDED, 1);
-                stack->f[sp][0] = pt; stack->f[sp][1] = t;
-                stack->f[sp][2] = px; stack->f[sp][3] = py;
-                stack->f[sp][4] = x; stack->f[sp][5] = y;
-                stack->i[sp][0] = pc; stack->i[sp][1] = c; stack->i[sp][2] = level;
+                stack_push(stack, sp, pt, t, px, py, x, y, pc, c, level);
                 sp += 1;
             }
             pt = t; px = x; py = y; pc = c;
@@ -903,13 +946,15 @@ int rnsca_segment(REAL x0, REAL y0, REAL x1, REAL y1, REAL xmin, REAL ymin, REAL
     }
     if (!(lo_t <= hi_t))
         return 0;
-    out[0] = lo_t; out[1] = hi_t; out[2] = lo_x; out[3] = lo_y; out[4] = hi_x; out[5] = hi_y;
-    return is_piece(0, lo_t, hi_t, lo_x, lo_y, hi_x, hi_y);
+    set_piece(out, lo_t, hi_t, lo_x, lo_y, hi_x, hi_y);
+    return is_piece(0, out);
 }
 
 /* RNSCA's level 0 as the Numba block driver runs it (`_rnsca_block`): a segment that is
  * accepted, rejected, or a leaf (short, or max_depth 0) is decided here; only the
- * others go through the depth-first `rnsca_segment`. Same pieces, same counters. */
+ * others go through the depth-first `rnsca_segment`. Same pieces, same counters. The
+ * decided ones take one path, without branches up to the end points: the half-planes of
+ * the clipped ones' flags (none for the others) are applied to every segment. */
 int rnsca_level0(REAL x0, REAL y0, REAL x1, REAL y1, REAL xmin, REAL ymin, REAL xmax,
                         REAL ymax, int n_fixed, int max_depth, REAL tol, REAL auto_piece,
                         int exact, Counters st, Stack *stack, REAL *out) {
@@ -932,20 +977,30 @@ int rnsca_level0(REAL x0, REAL y0, REAL x1, REAL y1, REAL xmin, REAL ymin, REAL 
     COUNT(st, INTERSECTIONS, count_divisions(flags));
     REAL u0 = 0, u1 = 1;
     int e0 = NO_EDGE, e1 = NO_EDGE;
-    leaf_cut(LEFT, flags, &u0, &e0, &u1, &e1, x0, y0, x1, y1, xmin, ymin, xmax, ymax);
-    leaf_cut(RIGHT, flags, &u0, &e0, &u1, &e1, x0, y0, x1, y1, xmin, ymin, xmax, ymax);
-    leaf_cut(BOTTOM, flags, &u0, &e0, &u1, &e1, x0, y0, x1, y1, xmin, ymin, xmax, ymax);
-    leaf_cut(TOP, flags, &u0, &e0, &u1, &e1, x0, y0, x1, y1, xmin, ymin, xmax, ymax);
+    leaf_cuts(flags, &u0, &e0, &u1, &e1, x0, y0, x1, y1, xmin, ymin, xmax, ymax);
     if (reject || (amb && !exact))
         return 0;
-    REAL ax, ay, bx, by;
-    end_point(x0, y0, x1, y1, e0, x0, y0, xmin, ymin, xmax, ymax, &ax, &ay);
-    end_point(x0, y0, x1, y1, e1, x1, y1, xmin, ymin, xmax, ymax, &bx, &by);
-    out[0] = u0; out[1] = u1; out[2] = ax; out[3] = ay; out[4] = bx; out[5] = by;
-    return u0 <= u1 && is_piece(x0 == x1 && y0 == y1, u0, u1, ax, ay, bx, by);
+    cut_piece(x0, y0, x1, y1, u0, e0, x0, y0, u1, e1, x1, y1, xmin, ymin, xmax, ymax, out);
+    return u0 <= u1 && is_piece(x0 == x1 && y0 == y1, out);
 }
 
 /* --- kernels --------------------------------------------------------------------------- */
+
+/* A work-group's counters (the `width` of its row): zeroed before its work-items count,
+ * summed in local memory, written once to its row of `counters` after. Every work-item
+ * of the group calls both (they hold barriers). */
+void clear_counters(Counters st, int width) {
+    for (int k = get_local_id(0); k < width; k += LOCAL_SIZE)
+        st[k] = 0;
+    barrier(CLK_LOCAL_MEM_FENCE);
+}
+
+void store_counters(Counters st, int width, __global long *counters) {
+    barrier(CLK_LOCAL_MEM_FENCE);
+    __global long *row = counters + get_group_id(0) * width;
+    for (int k = get_local_id(0); k < width; k += LOCAL_SIZE)
+        row[k] = st[k];
+}
 
 /* Pass 1: clip segment i, store (t0, t1, ax, ay, bx, by) at result[6 i] and keep[i] in
  * {0, 1}; each group writes its summed counters to counters[group]. */
@@ -956,9 +1011,7 @@ void clip_segments(__global const REAL *segments, const long n, const REAL xmin,
                    const REAL auto_piece, const int exact, __global REAL *result,
                    __global long *keep, __global long *counters) {
     __local int st[SEGMENT_COUNTERS];
-    for (int k = get_local_id(0); k < SEGMENT_COUNTERS; k += LOCAL_SIZE)
-        st[k] = 0;
-    barrier(CLK_LOCAL_MEM_FENCE);
+    clear_counters(st, SEGMENT_COUNTERS);
     long i = get_global_id(0);
     if (i < n) {
         REAL x0 = segments[4 * i], y0 = segments[4 * i + 1];
@@ -984,10 +1037,7 @@ void clip_segments(__global const REAL *segments, const long n, const REAL xmin,
             for (int k = 0; k < 6; k++)
                 result[6 * i + k] = out[k];
     }
-    barrier(CLK_LOCAL_MEM_FENCE);
-    __global long *row = counters + get_group_id(0) * SEGMENT_COUNTERS;
-    for (int k = get_local_id(0); k < SEGMENT_COUNTERS; k += LOCAL_SIZE)
-        row[k] = st[k];
+    store_counters(st, SEGMENT_COUNTERS, counters);
 }
 
 /* Pass 3: copy segment i's kept result to slot position[i] - 1 (`position` is the
@@ -1025,6 +1075,23 @@ long chunk_count(long first, long last) {
     return last <= first ? 0 : (last - first + RUN_LEAF_SEGMENTS - 1) / RUN_LEAF_SEGMENTS;
 }
 
+/* Chunk k: its part p = chunk_part[k], whose vertices are first..last, and its segments
+ * a..b-1 (vertices a..b). */
+typedef struct {
+    long p, first, last, a, b;
+} Chunk;
+
+Chunk chunk_at(long k, __global const long *part_offsets, __global const long *chunk_start,
+               __global const long *chunk_part) {
+    Chunk c;
+    c.p = chunk_part[k];
+    c.first = part_offsets[c.p];
+    c.last = part_offsets[c.p + 1] - 1;
+    c.a = c.first + (k - chunk_start[c.p]) * RUN_LEAF_SEGMENTS;
+    c.b = min(c.a + RUN_LEAF_SEGMENTS, c.last);
+    return c;
+}
+
 /* Chunk k (of part chunk_part[k]): the box of its vertices, [xmin, ymin, xmax, ymax]. */
 __kernel void chunk_boxes(__global const REAL *xy, __global const long *part_offsets,
                           __global const long *chunk_start, __global const long *chunk_part,
@@ -1032,22 +1099,14 @@ __kernel void chunk_boxes(__global const REAL *xy, __global const long *part_off
     long k = get_global_id(0);
     if (k >= n_chunks)
         return;
-    long p = chunk_part[k];
-    long first = part_offsets[p];
-    long last = part_offsets[p + 1] - 1;
-    long a = first + (k - chunk_start[p]) * RUN_LEAF_SEGMENTS;
-    long b = min(a + RUN_LEAF_SEGMENTS, last);
-    REAL lo_x = xy[2 * a], hi_x = lo_x, lo_y = xy[2 * a + 1], hi_y = lo_y;
-    for (long i = a + 1; i <= b; i++) {
-        lo_x = py_min(lo_x, xy[2 * i]);
-        hi_x = py_max(hi_x, xy[2 * i]);
-        lo_y = py_min(lo_y, xy[2 * i + 1]);
-        hi_y = py_max(hi_y, xy[2 * i + 1]);
-    }
-    boxes[4 * k] = lo_x;
-    boxes[4 * k + 1] = lo_y;
-    boxes[4 * k + 2] = hi_x;
-    boxes[4 * k + 3] = hi_y;
+    Chunk c = chunk_at(k, part_offsets, chunk_start, chunk_part);
+    Box box = point_box(xy[2 * c.a], xy[2 * c.a + 1]);
+    for (long i = c.a + 1; i <= c.b; i++)
+        box = box_union(box, point_box(xy[2 * i], xy[2 * i + 1]));
+    boxes[4 * k] = box.xmin;
+    boxes[4 * k + 1] = box.ymin;
+    boxes[4 * k + 2] = box.xmax;
+    boxes[4 * k + 3] = box.ymax;
 }
 
 void mark_chunks(__global uchar *decision, __global long *segmented, long chunk0,
@@ -1070,18 +1129,14 @@ void classify_runs(__global const REAL *boxes, __global const long *part_offsets
                    const int all_active, __global uchar *decision, __global long *segmented,
                    __global long *counters) {
     __local int st[COUNTERS_WIDTH];
-    for (int k = get_local_id(0); k < COUNTERS_WIDTH; k += LOCAL_SIZE)
-        st[k] = 0;
-    barrier(CLK_LOCAL_MEM_FENCE);
+    clear_counters(st, COUNTERS_WIDTH);
     long p = get_global_id(0);
     if (p < n_parts) {
         long first = part_offsets[p];
         long last = part_offsets[p + 1] - 1;
         long chunk0 = chunk_start[p];
         int chunks = (int)chunk_count(first, last);
-        long w = part_window[p];
-        REAL xmin = windows[4 * w], ymin = windows[4 * w + 1];
-        REAL xmax = windows[4 * w + 2], ymax = windows[4 * w + 3];
+        Box w = box_at(windows + 4 * part_window[p]);
         if (!all_active && !active[p]) {
             mark_chunks(decision, segmented, chunk0, 0, chunks, CHUNK_REJECTED, first, last);
         } else if (!prune) {
@@ -1102,33 +1157,24 @@ void classify_runs(__global const REAL *boxes, __global const long *part_offsets
                 int slot = level >= N_LEVELS ? N_LEVELS - 1 : level;
                 atomic_max(&st[RUN_DEEPEST], level);
                 COUNT(st, RUNS_EVALUATED, 1);
-                __global const REAL *box = boxes + 4 * (chunk0 + ca);
-                REAL lo_x = box[0], lo_y = box[1], hi_x = box[2], hi_y = box[3];
-                for (long k = chunk0 + ca + 1; k < chunk0 + cb; k++) {
-                    lo_x = py_min(lo_x, boxes[4 * k]);
-                    lo_y = py_min(lo_y, boxes[4 * k + 1]);
-                    hi_x = py_max(hi_x, boxes[4 * k + 2]);
-                    hi_y = py_max(hi_y, boxes[4 * k + 3]);
-                }
-                int strict = lo_x > xmin && hi_x < xmax && lo_y > ymin && hi_y < ymax;
-                int lo = outcode(lo_x, lo_y, xmin, ymin, xmax, ymax);
-                int hi = outcode(hi_x, hi_y, xmin, ymin, xmax, ymax);
+                Box box = box_at(boxes + 4 * (chunk0 + ca));
+                for (long k = chunk0 + ca + 1; k < chunk0 + cb; k++)
+                    box = box_union(box, box_at(boxes + 4 * k));
+                int strict = box.xmin > w.xmin && box.xmax < w.xmax && box.ymin > w.ymin
+                             && box.ymax < w.ymax;
+                int lo = box_outcode(box.xmin, box.ymin, w);
+                int hi = box_outcode(box.xmax, box.ymax, w);
+                uchar d;
+                int runs;
                 if ((lo | hi) == 0 && (strict || !drop_edge_runs)) {
-                    COUNT(st, RUNS_ACCEPTED, 1);
-                    COUNT(st, RUN_LEVELS + slot, 1);
-                    COUNT(st, SEGMENT_LEVELS + slot, b - a);
-                    mark_chunks(decision, segmented, chunk0, ca, cb, CHUNK_ACCEPTED, first, last);
+                    d = CHUNK_ACCEPTED;
+                    runs = RUNS_ACCEPTED;
                 } else if (lo & hi) {
-                    COUNT(st, RUNS_REJECTED, 1);
-                    COUNT(st, RUN_LEVELS + slot, 1);
-                    COUNT(st, SEGMENT_LEVELS + slot, b - a);
-                    mark_chunks(decision, segmented, chunk0, ca, cb, CHUNK_REJECTED, first, last);
+                    d = CHUNK_REJECTED;
+                    runs = RUNS_REJECTED;
                 } else if (cb - ca <= 1 || sp + n_runs > RUN_STACK_CAPACITY) {
-                    COUNT(st, RUNS_SEGMENTED, 1);
-                    COUNT(st, RUN_LEVELS + slot, 1);
-                    COUNT(st, SEGMENT_LEVELS + slot, b - a);
-                    mark_chunks(decision, segmented, chunk0, ca, cb, CHUNK_SEGMENTED, first,
-                                last);
+                    d = CHUNK_SEGMENTED;
+                    runs = RUNS_SEGMENTED;
                 } else {
                     COUNT(st, RUNS_SUBDIVIDED, 1);
                     int k = min(n_runs, cb - ca);
@@ -1138,14 +1184,16 @@ void classify_runs(__global const REAL *boxes, __global const long *part_offsets
                         levels[sp] = (uchar)(level + 1);
                         sp += 1;
                     }
+                    continue;
                 }
+                COUNT(st, runs, 1);
+                COUNT(st, RUN_LEVELS + slot, 1);
+                COUNT(st, SEGMENT_LEVELS + slot, b - a);
+                mark_chunks(decision, segmented, chunk0, ca, cb, d, first, last);
             }
         }
     }
-    barrier(CLK_LOCAL_MEM_FENCE);
-    __global long *row = counters + get_group_id(0) * COUNTERS_WIDTH;
-    for (int k = get_local_id(0); k < COUNTERS_WIDTH; k += LOCAL_SIZE)
-        row[k] = st[k];
+    store_counters(st, COUNTERS_WIDTH, counters);
 }
 
 /* Chunk k, if it is to be clipped segment by segment: clip each of its segments
@@ -1162,64 +1210,45 @@ void clip_chunk_segments(__global const REAL *xy, __global const long *part_offs
                          __global uchar *keep, __global REAL *result,
                          __global long *counters) {
     __local int st[COUNTERS_WIDTH];
-    for (int k = get_local_id(0); k < COUNTERS_WIDTH; k += LOCAL_SIZE)
-        st[k] = 0;
-    barrier(CLK_LOCAL_MEM_FENCE);
+    clear_counters(st, COUNTERS_WIDTH);
     long k = get_global_id(0);
     if (k < n_chunks && decision[k] == CHUNK_SEGMENTED) {
-        long p = chunk_part[k];
-        long first = part_offsets[p];
-        long last = part_offsets[p + 1] - 1;
-        long a = first + (k - chunk_start[p]) * RUN_LEAF_SEGMENTS;
-        long b = min(a + RUN_LEAF_SEGMENTS, last);
+        Chunk c = chunk_at(k, part_offsets, chunk_start, chunk_part);
         long slot = position[k] - segmented[k];
-        long w = part_window[p];
-        REAL xmin = windows[4 * w], ymin = windows[4 * w + 1];
-        REAL xmax = windows[4 * w + 2], ymax = windows[4 * w + 3];
+        Box w = box_at(windows + 4 * part_window[c.p]);
         Stack stack;
-        for (long i = a; i < b; i++, slot++) {
+        for (long i = c.a; i < c.b; i++, slot++) {
             REAL x0 = xy[2 * i], y0 = xy[2 * i + 1], x1 = xy[2 * i + 2], y1 = xy[2 * i + 3];
             REAL out[6];
             int kept;
             if (method == RNSCA) {
-                int c0 = outcode(x0, y0, xmin, ymin, xmax, ymax);
-                int c1 = outcode(x1, y1, xmin, ymin, xmax, ymax);
-                if ((c0 | c1) == 0 || (c0 & c1) != 0) {
-                    COUNT(st, EVALUATED, 1);
-                    COUNT(st, LEVELS, 1);
-                    if (c0 & c1) {
-                        COUNT(st, REJECTED, 1);
-                        kept = 0;
-                    } else {
-                        COUNT(st, ACCEPTED, 1);
-                        out[0] = 0; out[1] = 1; out[2] = x0; out[3] = y0; out[4] = x1;
-                        out[5] = y1;
-                        kept = 1;
-                    }
-                } else {
-                    kept = rnsca_segment(x0, y0, x1, y1, xmin, ymin, xmax, ymax, n_fixed,
-                                         max_depth, tol, auto_piece, exact, st, &stack, out);
-                }
+                int c0 = outcode(x0, y0, w.xmin, w.ymin, w.xmax, w.ymax);
+                int c1 = outcode(x1, y1, w.xmin, w.ymin, w.xmax, w.ymax);
+                if ((c0 | c1) == 0 || (c0 & c1))
+                    kept = rnsca_decided(x0, y0, x1, y1, c0, c1, st, out);
+                else
+                    kept = rnsca_segment(x0, y0, x1, y1, w.xmin, w.ymin, w.xmax, w.ymax,
+                                         n_fixed, max_depth, tol, auto_piece, exact, st, &stack,
+                                         out);
             } else if (method == COHEN_SUTHERLAND) {
-                kept = cohen_sutherland_segment(x0, y0, x1, y1, xmin, ymin, xmax, ymax, st, out);
+                kept = cohen_sutherland_segment(x0, y0, x1, y1, w.xmin, w.ymin, w.xmax, w.ymax,
+                                                st, out);
             } else if (method == LIANG_BARSKY) {
-                kept = liang_barsky_segment(x0, y0, x1, y1, xmin, ymin, xmax, ymax, st, out);
+                kept = liang_barsky_segment(x0, y0, x1, y1, w.xmin, w.ymin, w.xmax, w.ymax, st,
+                                            out);
             } else if (method == NICHOLL_LEE_NICHOLL) {
-                kept = nicholl_lee_nicholl_segment(x0, y0, x1, y1, xmin, ymin, xmax, ymax, st,
-                                                   out);
+                kept = nicholl_lee_nicholl_segment(x0, y0, x1, y1, w.xmin, w.ymin, w.xmax,
+                                                   w.ymax, st, out);
             } else {
-                kept = midpoint_segment(x0, y0, x1, y1, xmin, ymin, xmax, ymax, max_depth, tol,
-                                        exact, st, out);
+                kept = midpoint_segment(x0, y0, x1, y1, w.xmin, w.ymin, w.xmax, w.ymax,
+                                        max_depth, tol, exact, st, out);
             }
             keep[slot] = (uchar)kept;
             for (int j = 0; j < 6; j++)
                 result[6 * slot + j] = kept ? out[j] : 0;
         }
     }
-    barrier(CLK_LOCAL_MEM_FENCE);
-    __global long *row = counters + get_group_id(0) * COUNTERS_WIDTH;
-    for (int j = get_local_id(0); j < COUNTERS_WIDTH; j += LOCAL_SIZE)
-        row[j] = st[j];
+    store_counters(st, COUNTERS_WIDTH, counters);
 }
 
 /* --- bezier.py: classification and flattening of Bézier segments ------------------ */
@@ -1232,28 +1261,49 @@ REAL bezier_lerp(REAL a, REAL b, REAL t) {
     return t < (REAL)0.5 ? a + t * (b - a) : b - ((REAL)1 - t) * (b - a);
 }
 
-/* point_value: the 1-D Bézier (a0..a_degree) at t, by de Casteljau. */
-REAL point_value(int degree, REAL a0, REAL a1, REAL a2, REAL a3, REAL t) {
+/* Bézier segment i: its degree (1..3) and control points 0..3 (`controls[8 i:]`, x y
+ * interleaved; the slots a degree does not use repeat the end, so point 3 is the end). */
+typedef struct {
+    int degree;
+    REAL x[4], y[4];
+} Bezier;
+
+Bezier bezier_at(__global const REAL *controls, __global const char *degree, long i) {
+    Bezier b;
+    b.degree = degree[i];
+    for (int k = 0; k < 4; k++) {
+        b.x[k] = controls[8 * i + 2 * k];
+        b.y[k] = controls[8 * i + 2 * k + 1];
+    }
+    return b;
+}
+
+/* point_value: the 1-D Bézier (a[0]..a[degree]) at t, by de Casteljau. */
+REAL point_value(int degree, const REAL *a, REAL t) {
     if (degree == 1)
-        return bezier_lerp(a0, a1, t);
+        return bezier_lerp(a[0], a[1], t);
     if (degree == 2)
-        return bezier_lerp(bezier_lerp(a0, a1, t), bezier_lerp(a1, a2, t), t);
-    REAL b0 = bezier_lerp(a0, a1, t);
-    REAL b1 = bezier_lerp(a1, a2, t);
-    REAL b2 = bezier_lerp(a2, a3, t);
+        return bezier_lerp(bezier_lerp(a[0], a[1], t), bezier_lerp(a[1], a[2], t), t);
+    REAL b0 = bezier_lerp(a[0], a[1], t);
+    REAL b1 = bezier_lerp(a[1], a[2], t);
+    REAL b2 = bezier_lerp(a[2], a[3], t);
     return bezier_lerp(bezier_lerp(b0, b1, t), bezier_lerp(b1, b2, t), t);
 }
 
-long flatten_count(int degree, REAL x0, REAL x1, REAL x2, REAL x3, REAL y0, REAL y1,
-                   REAL y2, REAL y3, REAL tol) {
-    if (degree == 1)
+/* The length of the second difference of control points k, k + 1, k + 2. */
+REAL second_difference(const Bezier *b, int k) {
+    return hypot(b->x[k] - (REAL)2 * b->x[k + 1] + b->x[k + 2],
+                 b->y[k] - (REAL)2 * b->y[k + 1] + b->y[k + 2]);
+}
+
+long flatten_count(const Bezier *b, REAL tol) {
+    if (b->degree == 1)
         return 1;
     REAL m;
-    if (degree == 2)
-        m = hypot(x0 - (REAL)2 * x1 + x2, y0 - (REAL)2 * y1 + y2) * (REAL)0.25;
+    if (b->degree == 2)
+        m = second_difference(b, 0) * (REAL)0.25;
     else
-        m = (REAL)0.75 * py_max(hypot(x0 - (REAL)2 * x1 + x2, y0 - (REAL)2 * y1 + y2),
-                                hypot(x1 - (REAL)2 * x2 + x3, y1 - (REAL)2 * y2 + y3));
+        m = (REAL)0.75 * py_max(second_difference(b, 0), second_difference(b, 1));
     if (!(m > tol))
         return 1;
     REAL n = ceil(sqrt(m / tol));
@@ -1275,27 +1325,20 @@ __kernel void classify_bezier(__global const REAL *controls, __global const char
     long i = get_global_id(0);
     if (i >= m)
         return;
-    __global const REAL *c = controls + 8 * i;
-    int d = degree[i];
-    int c_or = outcode(c[0], c[1], a_xmin, a_ymin, a_xmax, a_ymax)
-               | outcode(c[2], c[3], a_xmin, a_ymin, a_xmax, a_ymax);
-    int c_and = outcode(c[0], c[1], r_xmin, r_ymin, r_xmax, r_ymax)
-                & outcode(c[2], c[3], r_xmin, r_ymin, r_xmax, r_ymax);
-    if (d >= 2) {
-        c_or |= outcode(c[4], c[5], a_xmin, a_ymin, a_xmax, a_ymax);
-        c_and &= outcode(c[4], c[5], r_xmin, r_ymin, r_xmax, r_ymax);
-    }
-    if (d == 3) {
-        c_or |= outcode(c[6], c[7], a_xmin, a_ymin, a_xmax, a_ymax);
-        c_and &= outcode(c[6], c[7], r_xmin, r_ymin, r_xmax, r_ymax);
+    Bezier b = bezier_at(controls, degree, i);
+    Box accept = {a_xmin, a_ymin, a_xmax, a_ymax}, reject = {r_xmin, r_ymin, r_xmax, r_ymax};
+    int c_or = 0, c_and = ~0;
+    for (int k = 0; k <= b.degree; k++) {
+        c_or |= box_outcode(b.x[k], b.y[k], accept);
+        c_and &= box_outcode(b.x[k], b.y[k], reject);
     }
     uchar cls = c_or == 0 ? SEGMENT_ACCEPTED
                           : (c_and != 0 ? SEGMENT_REJECTED : SEGMENT_AMBIGUOUS);
     segment_class[i] = cls;
     int wanted = flatten == FLATTEN_ALL
-                 || (flatten == FLATTEN_ACCEPTED_CURVES && cls == SEGMENT_ACCEPTED && d > 1);
-    n_points[i] = wanted ? flatten_count(d, c[0], c[2], c[4], c[6], c[1], c[3], c[5], c[7], tol)
-                         : 0;
+                 || (flatten == FLATTEN_ACCEPTED_CURVES && cls == SEGMENT_ACCEPTED
+                     && b.degree > 1);
+    n_points[i] = wanted ? flatten_count(&b, tol) : 0;
 }
 
 /* Segment i's n_points[i] points at equal parameter steps k / n (its end point exactly
@@ -1306,18 +1349,17 @@ __kernel void flatten_bezier(__global const REAL *controls, __global const char 
     long i = get_global_id(0);
     if (i >= m)
         return;
-    __global const REAL *c = controls + 8 * i;
-    int d = degree[i];
+    Bezier b = bezier_at(controls, degree, i);
     long n = n_points[i];
     long pos = point_end[i] - n;
     for (long k = 1; k <= n; k++, pos++) {
         if (k == n) {
-            points[2 * pos] = c[6];
-            points[2 * pos + 1] = c[7];
+            points[2 * pos] = b.x[3];
+            points[2 * pos + 1] = b.y[3];
         } else {
             REAL t = (REAL)k / (REAL)n;
-            points[2 * pos] = point_value(d, c[0], c[2], c[4], c[6], t);
-            points[2 * pos + 1] = point_value(d, c[1], c[3], c[5], c[7], t);
+            points[2 * pos] = point_value(b.degree, b.x, t);
+            points[2 * pos + 1] = point_value(b.degree, b.y, t);
         }
     }
 }
@@ -1339,20 +1381,16 @@ __kernel void classify_bezier_runs(__global const REAL *controls,
     if (r >= n_runs)
         return;
     long a = run_first[r], b = run_end[r];
-    REAL lo_x = controls[8 * a], hi_x = lo_x, lo_y = controls[8 * a + 1], hi_y = lo_y;
-    for (long i = a; i < b; i++) {
-        for (int k = 1; k < 4; k++) {  /* slot 0 is the previous segment's end (slot 3) */
-            REAL x = controls[8 * i + 2 * k], y = controls[8 * i + 2 * k + 1];
-            lo_x = py_min(lo_x, x);
-            hi_x = py_max(hi_x, x);
-            lo_y = py_min(lo_y, y);
-            hi_y = py_max(hi_y, y);
-        }
-    }
-    int inside = (outcode(lo_x, lo_y, a_xmin, a_ymin, a_xmax, a_ymax)
-                  | outcode(hi_x, hi_y, a_xmin, a_ymin, a_xmax, a_ymax)) == 0;
-    int beyond = (outcode(lo_x, lo_y, r_xmin, r_ymin, r_xmax, r_ymax)
-                  & outcode(hi_x, hi_y, r_xmin, r_ymin, r_xmax, r_ymax)) != 0;
+    Box box = point_box(controls[8 * a], controls[8 * a + 1]);
+    for (long i = a; i < b; i++)
+        for (int k = 1; k < 4; k++)  /* slot 0 is the previous segment's end (slot 3) */
+            box = box_union(box,
+                            point_box(controls[8 * i + 2 * k], controls[8 * i + 2 * k + 1]));
+    Box accept = {a_xmin, a_ymin, a_xmax, a_ymax}, reject = {r_xmin, r_ymin, r_xmax, r_ymax};
+    int inside = (box_outcode(box.xmin, box.ymin, accept)
+                  | box_outcode(box.xmax, box.ymax, accept)) == 0;
+    int beyond = (box_outcode(box.xmin, box.ymin, reject)
+                  & box_outcode(box.xmax, box.ymax, reject)) != 0;
     run_decision[r] = (inside && !flatten) ? CURVE_RUN_ACCEPTED
                       : (beyond ? CURVE_RUN_REJECTED : CURVE_RUN_SEGMENTED);
 }

@@ -57,22 +57,38 @@ def wide(code):
     return code | (code << SURE_SHIFT)
 
 
+# Veltkamp's splitter for Dekker's exact product (2**27 + 1): no fused multiply-add is
+# needed, so the compiled kernels, plain Python and OpenCL round identically.
+_SPLITTER = 134217729.0
+
+
+@scalar
+def two_product(a, b):
+    """Return (p, e): ``p = a * b`` rounded and ``p + e == a * b`` exactly (Dekker's TwoProduct).
+
+    Each factor is split into halves of 26 bits (Veltkamp), whose products are exact.
+    Exact while no partial product overflows or underflows: |a|, |b| below about 1e300,
+    a * b not subnormal. Shared by the segment kernels and `rnsca.io.svgwrite`.
+    """
+    p = a * b
+    c = _SPLITTER * a
+    ah = c - (c - a)
+    al = a - ah
+    c = _SPLITTER * b
+    bh = c - (c - b)
+    bl = b - bh
+    return p, (((ah * bh - p) + ah * bl) + al * bh) + al * bl
+
+
 def interpolate_dd(a0, da, da_err, t):
     """Return (a, err): ``a = a0 + t * da`` as the kernels round it, and its error.
 
     ``a + err`` is ``a0 + t * (da + da_err)`` (the point of the exact segment at t) up
     to a rounding of `err` itself: Dekker's TwoProduct and Knuth's TwoSum recover the
-    two roundings, and `da_err` is that of the direction. Plain arithmetic, shared by
-    Numba (jitted below) and NumPy.
+    two roundings, and `da_err` is that of the direction. Plain arithmetic and
+    `two_product`, shared by Numba (jitted below) and NumPy.
     """
-    p = t * da  # TwoProduct(t, da)
-    c = _SPLITTER * t
-    th = c - (c - t)
-    tl = t - th
-    c = _SPLITTER * da
-    dh = c - (c - da)
-    dl = da - dh
-    p_err = (((th * dh - p) + th * dl) + tl * dh) + tl * dl
+    p, p_err = two_product(t, da)
     a = a0 + p  # TwoSum(a0, p)
     v = a - a0
     a_err = (a0 - (a - v)) + (p - v)
@@ -137,11 +153,6 @@ def clamp(v, low, high):
     return min(max(v, low), high)
 
 
-# Veltkamp's splitter for Dekker's exact product (2**27 + 1): no fused multiply-add is
-# needed, so the compiled kernels, plain Python and OpenCL round identically.
-_SPLITTER = 134217729.0
-
-
 def difference_dd(x1, x0):
     """Return (d, d_err) with ``d + d_err == x1 - x0`` exactly (Knuth's TwoSum)."""
     d = x1 - x0
@@ -158,30 +169,20 @@ def line_coordinate_dd(e, a, b, da, da_err, db, db_err):
     own size (a segment 1e8 windows long misses by ~1e-8 of the window). Every rounding
     step here keeps its error term (Knuth's TwoSum, Dekker's TwoProduct). The parameter
     is formed first, so with the nearer end as base |t| <= 1/2 and no product underflows
-    or overflows that the result would not. Plain arithmetic only, so this one function
-    serves Numba (jitted below) and NumPy arrays alike. Returns the rounded value and
-    its residual (true minus rounded); NaN when a split overflows (magnitudes beyond
-    ~1e300), and callers then fall back to the plain formula.
+    or overflows that the result would not. Plain arithmetic and `two_product` only, so
+    this one function serves Numba (jitted below) and NumPy arrays alike. Returns the
+    rounded value and its residual (true minus rounded); NaN when a split overflows
+    (magnitudes beyond ~1e300), and callers then fall back to the plain formula.
     """
     s = e - a  # TwoSum(e, -a), written out: the jitted copy may call no plain function
     v = s - e
     s_err = (e - (s - v)) + (-a - v)
     t = s / da
-    r = t * da  # TwoProduct(t, da)
-    c = _SPLITTER * t
-    th = c - (c - t)
-    tl = t - th
-    c = _SPLITTER * da
-    ah = c - (c - da)
-    al = da - ah
-    r_err = (((th * ah - r) + th * al) + tl * ah) + tl * al
+    r, r_err = two_product(t, da)
     # t + t_lo == (e - a) / (da + da_err) to ~eps**2
     t_lo = ((((s - r) - r_err) + s_err) - t * da_err) / da
-    p = t * db  # TwoProduct(t, db)
-    c = _SPLITTER * db
-    dh = c - (c - db)
-    dl = db - dh
-    p_err = (((th * dh - p) + th * dl) + tl * dh) + tl * dl + (t_lo * db + t * db_err)
+    p, p_err = two_product(t, db)
+    p_err += t_lo * db + t * db_err
     y = b + p  # TwoSum(b, p)
     v = y - b
     y_err = (b - (y - v)) + (p - v)

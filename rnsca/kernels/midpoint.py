@@ -21,12 +21,11 @@ from rnsca.kernels.liang_barsky import liang_barsky_leaf
 from rnsca.kernels.outcode import (
     SURE_SHIFT,
     UNSURE_BITS,
-    direction_error,
+    direction,
     interpolated_point,
     is_piece,
     outcode,
     wide,
-    wide_outcode,
 )
 from rnsca.kernels.records import Fragment
 
@@ -47,13 +46,7 @@ def _search(x0, y0, x1, y1, c0, c1, length, toward_end, window, options, st):
     surely inside point, else that last surely inside point: a segment lying an ulp
     outside an edge never yields a piece.
     """
-    max_depth = options.max_depth
-    tol = options.tol
-    exact = options.exact
-    dx = x1 - x0
-    dy = y1 - y0
-    _, dx_err = direction_error(x1, x0)
-    _, dy_err = direction_error(y1, y0)
+    d = direction(x0, y0, x1, y1)
     a = 0.0
     xa, ya, ca = x0, y0, c0
     b = 1.0
@@ -65,12 +58,9 @@ def _search(x0, y0, x1, y1, c0, c1, length, toward_end, window, options, st):
         st_t, st_x, st_y, st_c = b, xb, yb, cb
     found = False
     level = 0
-    while level < max_depth and (b - a) * length > tol:
+    while level < options.max_depth and (b - a) * length > options.tol:
         m = a + (b - a) * 1 / 2
-        xm, ym, cx, mx, cy, my = interpolated_point(x0, y0, dx, dx_err, dy, dy_err, m)
-        cm = wide_outcode(xm, ym, cx, mx, cy, my, window)
-        xm += cx  # the corrected position, for output
-        ym += cy
+        xm, ym, cm = interpolated_point(x0, y0, d, m, window)
         level += 1
         st[C.EVALUATED] += 1
         # The half on the far side of the searched end: [m, b] for the exit, [a, m] for the entry.
@@ -101,16 +91,15 @@ def _search(x0, y0, x1, y1, c0, c1, length, toward_end, window, options, st):
         lo = min(near_t, st_t)
         hi = max(near_t, st_t)
         h = lo + (hi - lo) * 1 / 2
-        hx, hy, cx, mx, cy, my = interpolated_point(x0, y0, dx, dx_err, dy, dy_err, h)
-        found = (wide_outcode(hx, hy, cx, mx, cy, my, window) & UNSURE_BITS) == 0
+        found = (interpolated_point(x0, y0, d, h, window)[2] & UNSURE_BITS) == 0
     # In approx mode a near end within rounding of the boundary counts as visible (0).
     if toward_end:
-        if exact or not (found and (ca >> SURE_SHIFT) == 0):
+        if options.exact or not (found and (ca >> SURE_SHIFT) == 0):
             a, xa, ya, ca = st_t, st_x, st_y, st_c
         else:
             ca = 0
         return Fragment(a, xa, ya, ca, b, xb, yb, cb), level
-    if exact or not (found and (cb >> SURE_SHIFT) == 0):
+    if options.exact or not (found and (cb >> SURE_SHIFT) == 0):
         b, xb, yb, cb = st_t, st_x, st_y, st_c
     else:
         cb = 0

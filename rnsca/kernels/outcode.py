@@ -31,6 +31,7 @@ from rnsca.constants import (
 )
 from rnsca.constants import EDGE_TOP as EDGE_TOP  # re-exported (not used here)
 from rnsca.kernels.jit import scalar
+from rnsca.kernels.records import Direction
 
 
 @scalar
@@ -115,18 +116,6 @@ def interpolation_margin(err, a0, da):
     return err, abs(err) * 8.881784197001252e-16 + floor
 
 
-@scalar
-def interpolated_point(x0, y0, dx, dx_err, dy, dy_err, t):
-    """Return the rounded point at t with corrections and margins: (x, y, cx, mx, cy, my).
-
-    For each coordinate: the correction to the true one and its margin
-    (`interpolation_margin`).
-    """
-    x, x_err = _interpolate_dd(x0, dx, dx_err, t)
-    y, y_err = _interpolate_dd(y0, dy, dy_err, t)
-    cx, mx = interpolation_margin(x_err, x0, dx)
-    cy, my = interpolation_margin(y_err, y0, dy)
-    return x, y, cx, mx, cy, my
 
 
 @scalar
@@ -145,6 +134,21 @@ def wide_outcode(x, y, cx, mx, cy, my, window):
     unsure = (dl < mx) * LEFT | (dr < mx) * RIGHT | (db < my) * BOTTOM | (dt < my) * TOP
     sure = (-dl > mx) * LEFT | (-dr > mx) * RIGHT | (-db > my) * BOTTOM | (-dt > my) * TOP
     return unsure | (sure << SURE_SHIFT)
+
+
+@scalar
+def interpolated_point(x0, y0, d, t, window):
+    """Return (x, y, code): the point at t of the segment from (x0, y0) along `d`.
+
+    `d` is the segment's `Direction`. The point is rounded, then moved by the correction
+    `interpolation_margin` finds (so an output end lies as near the true point as it
+    can), and `code` is the `wide_outcode` of the true point within the margins.
+    """
+    x, x_err = _interpolate_dd(x0, d.dx, d.dx_err, t)
+    y, y_err = _interpolate_dd(y0, d.dy, d.dy_err, t)
+    cx, mx = interpolation_margin(x_err, x0, d.dx)
+    cy, my = interpolation_margin(y_err, y0, d.dy)
+    return x + cx, y + cy, wide_outcode(x, y, cx, mx, cy, my, window)
 
 
 @scalar
@@ -193,8 +197,15 @@ def line_coordinate_dd(e, a, b, da, da_err, db, db_err):
 
 
 _difference_dd = scalar(difference_dd)
-direction_error = _difference_dd
 _line_coordinate_dd = scalar(line_coordinate_dd)
+
+
+@scalar
+def direction(x0, y0, x1, y1):
+    """Return the `Direction` of the segment from (x0, y0) to (x1, y1), errors included."""
+    dx, dx_err = _difference_dd(x1, x0)
+    dy, dy_err = _difference_dd(y1, y0)
+    return Direction(dx, dx_err, dy, dy_err)
 
 
 @scalar

@@ -144,6 +144,27 @@ def _leaf(x0, y0, x1, y1, bracket, level, window, exact, st):
 
 
 @scalar
+def _piece_end(x0, y0, x1, y1, c0, c1, length, toward_end, window, options, st):
+    """Return (ok, t, x, y): the piece's exit (``toward_end``) or its entry.
+
+    The end itself (P1, or P0) when its outcode (`c1`, or `c0`) is zero; else the end
+    that `_search` brackets and `_leaf` decides. Not `ok` when that leaf holds nothing
+    visible. The other parameters are those of `midpoint_segment` and `_search`.
+    """
+    if toward_end and c1 == 0:
+        return True, 1.0, x1, y1
+    if not toward_end and c0 == 0:
+        return True, 0.0, x0, y0
+    bracket, level = _search(x0, y0, x1, y1, wide(c0), wide(c1), length, toward_end,
+                             window, options, st)
+    ok, u0, ax, ay, u1, bx, by = _leaf(x0, y0, x1, y1, bracket, level, window,
+                                       options.exact, st)
+    if toward_end:
+        return ok, u1, bx, by
+    return ok, u0, ax, ay
+
+
+@scalar
 def midpoint_segment(x0, y0, x1, y1, window, options, st):
     """Clip one segment by midpoint subdivision; return (keep, t0, t1, ax, ay, bx, by).
 
@@ -167,21 +188,11 @@ def midpoint_segment(x0, y0, x1, y1, window, options, st):
         return is_piece(dx == 0.0 and dy == 0.0, t0, t1, ax, ay, bx, by), t0, t1, ax, ay, bx, by
     st[C.EVALUATED] += 1
     st[C.SUBDIVIDED] += 1
-    # Exit end: P1 itself when visible, else the end found by the search from P0.
-    if c1 == 0:
-        t1, bx, by = 1.0, x1, y1
-    else:
-        bracket, level = _search(x0, y0, x1, y1, wide(c0), wide(c1), length, True,
-                                 window, options, st)
-        ok, _, _, _, t1, bx, by = _leaf(x0, y0, x1, y1, bracket, level, window, exact, st)
-        if not ok:
-            return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
-    if c0 == 0:
-        t0, ax, ay = 0.0, x0, y0
-    else:
-        bracket, level = _search(x0, y0, x1, y1, wide(c0), wide(c1), length, False,
-                                 window, options, st)
-        ok, t0, ax, ay, _, _, _ = _leaf(x0, y0, x1, y1, bracket, level, window, exact, st)
-        if not ok:
-            return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    # The exit first: when nothing is visible, the entry is not searched for.
+    ok, t1, bx, by = _piece_end(x0, y0, x1, y1, c0, c1, length, True, window, options, st)
+    if not ok:
+        return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    ok, t0, ax, ay = _piece_end(x0, y0, x1, y1, c0, c1, length, False, window, options, st)
+    if not ok:
+        return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
     return is_piece(False, t0, t1, ax, ay, bx, by), t0, t1, ax, ay, bx, by

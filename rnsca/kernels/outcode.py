@@ -30,6 +30,7 @@ from rnsca.constants import (
     UNSURE_BITS,
 )
 from rnsca.constants import EDGE_TOP as EDGE_TOP  # re-exported (not used here)
+from rnsca.kernels import counters as C
 from rnsca.kernels.jit import scalar
 from rnsca.kernels.records import Direction
 
@@ -326,3 +327,26 @@ def is_piece(degenerate, t0, t1, ax, ay, bx, by):
     is not a piece.
     """
     return (t0 <= t1) & (degenerate | (ax != bx) | (ay != by))
+
+
+@scalar
+def piece_of_interval(x0, y0, x1, y1, ok, u0, e0, u1, e1, window, st):
+    """Return (keep, t0, t1, ax, ay, bx, by) for the interval [u0, u1] a method found.
+
+    For the methods that find the visible interval of the segment before any end point
+    (Liang–Barsky, Nicholl–Lee–Nicholl): not `ok` when nothing is visible; `e0`, `e1`
+    name the edge that cut each end, ``NO_EDGE`` for an end of the segment itself.
+    Counts the segment in `st` as rejected, accepted or clipped, and computes each end
+    once (`end_point`).
+    """
+    if not ok:
+        st[C.REJECTED] += 1
+        return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    if e0 == NO_EDGE and e1 == NO_EDGE:
+        st[C.ACCEPTED] += 1
+    else:
+        st[C.CLIPPED] += 1
+    ax, ay = end_point(x0, y0, x1, y1, e0, x0, y0, window)
+    bx, by = end_point(x0, y0, x1, y1, e1, x1, y1, window)
+    keep = is_piece(x1 - x0 == 0.0 and y1 - y0 == 0.0, u0, u1, ax, ay, bx, by)
+    return keep, u0, u1, ax, ay, bx, by

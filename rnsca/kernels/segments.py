@@ -273,8 +273,10 @@ def _subdivide(x0, y0, x1, y1, whole, length, window, options, st, stack):
 def clip_one(x0, y0, x1, y1, window, options, st):
     """Clip one segment with the baseline ``options.method``; return (keep, t0, t1, ax, ay, bx, by).
 
-    `window` is a `Window`, `options` a `CoreOptions`, `st` the block's counter row. RNSCA
-    is not here: it runs block-wise (`_rnsca_block`).
+    Every method returns so: whether the segment leaves a piece, the piece's parameter
+    interval and its end points (in the window). `window` is a `Window`, `options` a
+    `CoreOptions` (read by midpoint subdivision only), `st` the block's counter row,
+    which the method counts into. RNSCA is not here: it runs block-wise (`_rnsca_block`).
     """
     method = options.method
     if method == COHEN_SUTHERLAND:

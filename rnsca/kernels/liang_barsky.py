@@ -84,10 +84,16 @@ def liang_barsky_segment(x0, y0, x1, y1, window, st):
     Four half-plane tests (`liang_barsky_interval`), one division each unless parallel;
     returns as every method does (`segments.clip_one`).
     """
+    dx = x1 - x0
+    dy = y1 - y0
     st[C.EVALUATED] += 1
     st[C.LEVELS] += 1
-    ok, u0, e0, u1, e1 = liang_barsky_interval(x0, y0, x1 - x0, y1 - y0, 0.0, 1.0, window, st)
-    return piece_of_interval(x0, y0, x1, y1, ok, u0, e0, u1, e1, window, st)
+    ok, u0, e0, u1, e1 = liang_barsky_interval(x0, y0, dx, dy, 0.0, 1.0, window, st)
+    if not ok:
+        st[C.REJECTED] += 1
+        return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    return piece_of_interval(x0, y0, x1, y1, dx == 0.0 and dy == 0.0, u0, e0, u1, e1,
+                             window, st)
 
 
 @scalar

@@ -16,7 +16,7 @@ lost per end; in exact mode the bracket is clipped with Liang–Barsky, as RNSCA
 import math
 
 from rnsca.kernels import counters as C
-from rnsca.kernels.jit import scalar
+from rnsca.kernels.jit import inlined, scalar
 from rnsca.kernels.liang_barsky import liang_barsky_leaf
 from rnsca.kernels.outcode import (
     SURE_SHIFT,
@@ -143,13 +143,14 @@ def _leaf(x0, y0, x1, y1, bracket, level, window, exact, st):
     return True, u0, px, py, u1, qx, qy
 
 
-@scalar
+@inlined
 def _piece_end(x0, y0, x1, y1, c0, c1, length, toward_end, window, options, st):
     """Return (ok, t, x, y): the piece's exit (``toward_end``) or its entry.
 
     The end itself (P1, or P0) when its outcode (`c1`, or `c0`) is zero; else the end
     that `_search` brackets and `_leaf` decides. Not `ok` when that leaf holds nothing
     visible. The other parameters are those of `midpoint_segment` and `_search`.
+    Inlined, so each call site searches with `toward_end` a constant, as written out.
     """
     if toward_end and c1 == 0:
         return True, 1.0, x1, y1

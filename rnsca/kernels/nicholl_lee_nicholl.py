@@ -216,6 +216,10 @@ def nicholl_lee_nicholl_segment(x0, y0, x1, y1, window, st):
         px, py, qx, qy = py, px, qy, qx
         left, bottom, right, top = bottom, left, top, right
     ok, u0, e0, u1, e1 = _canonical_clip(px, py, qx, qy, Window(left, bottom, right, top), st)
+    if not ok:
+        st[C.REJECTED] += 1
+        return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
     e0 = _original_edge(e0, flip_x, flip_y, swap)
     e1 = _original_edge(e1, flip_x, flip_y, swap)
-    return piece_of_interval(x0, y0, x1, y1, ok, u0, e0, u1, e1, window, st)
+    # Not degenerate: a zero-length segment was decided above.
+    return piece_of_interval(x0, y0, x1, y1, False, u0, e0, u1, e1, window, st)

@@ -29,6 +29,7 @@ import numpy as np
 from numba import prange
 
 from rnsca.kernels.jit import borrowing, inlined, parallel, scalar
+from rnsca.kernels.outcode import two_product as _two_product
 
 __all__ = [
     "TEXT_WIDTH",
@@ -74,7 +75,6 @@ for _k in range(_P10_MIN, _P10_MAX + 1):
     _exact = Fraction(10) ** _k
     _P10_HI[_k - _P10_MIN] = float(_exact)
     _P10_LO[_k - _P10_MIN] = float(_exact - Fraction(_P10_HI[_k - _P10_MIN]))
-_SPLITTER = 134217729.0    # 2**27 + 1
 # Magnitudes the kernel formats: with up to 17 digits, the scale 10**k stays within the
 # table and the Veltkamp split of both factors cannot overflow. Others go to Python.
 _SMALLEST = 1e-280
@@ -143,22 +143,6 @@ def classify(controls, degree, subpath_offsets, closed, start, path_offsets, t_a
                     smooth = _reflects(controls, i, 1, 2 if prev == 3 else -1)
                     kind[i] = S if smooth else C
     return kind, with_moveto
-
-
-@scalar
-def _two_product(a, b):
-    """Return (p, e) with p = fl(a * b) and p + e = a * b exactly (Dekker, Veltkamp split).
-
-    Exact while no partial product overflows: |a|, |b| below about 1e300.
-    """
-    p = a * b
-    c = _SPLITTER * a
-    ah = c - (c - a)
-    al = a - ah
-    c = _SPLITTER * b
-    bh = c - (c - b)
-    bl = b - bh
-    return p, ((ah * bh - p) + ah * bl + al * bh) + al * bl
 
 
 @scalar

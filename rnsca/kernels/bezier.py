@@ -55,6 +55,7 @@ from rnsca.constants import (
 from rnsca.kernels import counters as C
 from rnsca.kernels.jit import borrowing, inlined, parallel, scalar
 from rnsca.kernels.outcode import BOTTOM, LEFT, RIGHT, TOP, clamp, outcode
+from rnsca.kernels.stacks import interval_at, put_interval
 
 # Helpers that take arrays are `borrowing` (no reference counting of their arrays): a
 # call then costs no more than passing the arrays' fields, and LLVM inlines the small
@@ -844,15 +845,11 @@ def clip_segment(out, state, work, opts, window, c):
         _outside(out, state, opts, window, end_x, end_y)
         return
     st[C.EVALUATED] -= 1  # counted again when popped
-    stack[0, 0] = 0.0
-    stack[0, 1] = 1.0
-    stack[0, 2] = 0.0
+    put_interval(stack, 0, 0.0, 1.0, 0)
     sp = 1
     while sp > 0:
         sp -= 1
-        a = stack[sp, 0]
-        b = stack[sp, 1]
-        level = int(stack[sp, 2])
+        a, b, level = interval_at(stack, sp)
         slot = min(level, C.N_LEVELS - 1)
         if level > st[C.DEEPEST]:
             st[C.DEEPEST] = level
@@ -886,9 +883,8 @@ def clip_segment(out, state, work, opts, window, c):
         if not is_leaf and sp + n_split <= stack.shape[0]:
             st[C.SUBDIVIDED] += 1
             for j in range(n_split, 0, -1):
-                stack[sp, 0] = a + (b - a) * (j - 1) / n_split
-                stack[sp, 1] = b if j == n_split else a + (b - a) * j / n_split
-                stack[sp, 2] = level + 1
+                put_interval(stack, sp, a + (b - a) * (j - 1) / n_split,
+                             b if j == n_split else a + (b - a) * j / n_split, level + 1)
                 sp += 1
             continue
         st[C.LEVELS + slot] += 1

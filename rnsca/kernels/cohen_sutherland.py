@@ -41,9 +41,10 @@ def _edge_parameter(code, x0, y0, dx, dy, window):
 
 @scalar
 def cohen_sutherland_segment(x0, y0, x1, y1, window, st):
-    """Clip one segment with Cohen–Sutherland; return (keep, t0, t1, ax, ay, bx, by).
+    """Clip one segment with Cohen–Sutherland: move an outside end to an edge, test again.
 
-    `window` is a `rnsca.kernels.records.Window`; `st` the block's counter row.
+    At most `_MAX_MOVES` moves, one intersection each; the moved end is the true cut
+    point's (`edge_point_code`). Returns as every method does (`segments.clip_one`).
     """
     xmin, ymin, xmax, ymax = window
     dx = x1 - x0

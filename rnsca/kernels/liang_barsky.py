@@ -26,7 +26,7 @@ from rnsca.kernels.outcode import (
     TOP,
     UNSURE_BITS,
     end_point,
-    is_piece,
+    piece_of_interval,
 )
 
 
@@ -79,9 +79,10 @@ def liang_barsky_interval(x0, y0, dx, dy, ta, tb, window, st):
 
 @scalar
 def liang_barsky_segment(x0, y0, x1, y1, window, st):
-    """Clip one segment with Liang–Barsky; return (keep, t0, t1, ax, ay, bx, by).
+    """Clip one segment with Liang–Barsky: its interval in [0, 1], then its two ends.
 
-    `window` is a `rnsca.kernels.records.Window`; `st` the block's counter row.
+    Four half-plane tests (`liang_barsky_interval`), one division each unless parallel;
+    returns as every method does (`segments.clip_one`).
     """
     dx = x1 - x0
     dy = y1 - y0
@@ -91,14 +92,8 @@ def liang_barsky_segment(x0, y0, x1, y1, window, st):
     if not ok:
         st[C.REJECTED] += 1
         return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
-    if e0 == NO_EDGE and e1 == NO_EDGE:
-        st[C.ACCEPTED] += 1
-    else:
-        st[C.CLIPPED] += 1
-    ax, ay = end_point(x0, y0, x1, y1, e0, x0, y0, window)
-    bx, by = end_point(x0, y0, x1, y1, e1, x1, y1, window)
-    keep = is_piece(dx == 0.0 and dy == 0.0, u0, u1, ax, ay, bx, by)
-    return keep, u0, u1, ax, ay, bx, by
+    return piece_of_interval(x0, y0, x1, y1, dx == 0.0 and dy == 0.0, u0, e0, u1, e1,
+                             window, st)
 
 
 @scalar

@@ -16,17 +16,16 @@ lost per end; in exact mode the bracket is clipped with Liang–Barsky, as RNSCA
 import math
 
 from rnsca.kernels import counters as C
-from rnsca.kernels.jit import scalar
+from rnsca.kernels.jit import inlined, scalar
 from rnsca.kernels.liang_barsky import liang_barsky_leaf
 from rnsca.kernels.outcode import (
     SURE_SHIFT,
     UNSURE_BITS,
-    direction_error,
+    direction,
     interpolated_point,
     is_piece,
     outcode,
     wide,
-    wide_outcode,
 )
 from rnsca.kernels.records import Fragment
 
@@ -47,13 +46,7 @@ def _search(x0, y0, x1, y1, c0, c1, length, toward_end, window, options, st):
     surely inside point, else that last surely inside point: a segment lying an ulp
     outside an edge never yields a piece.
     """
-    max_depth = options.max_depth
-    tol = options.tol
-    exact = options.exact
-    dx = x1 - x0
-    dy = y1 - y0
-    _, dx_err = direction_error(x1, x0)
-    _, dy_err = direction_error(y1, y0)
+    d = direction(x0, y0, x1, y1)
     a = 0.0
     xa, ya, ca = x0, y0, c0
     b = 1.0
@@ -65,12 +58,9 @@ def _search(x0, y0, x1, y1, c0, c1, length, toward_end, window, options, st):
         st_t, st_x, st_y, st_c = b, xb, yb, cb
     found = False
     level = 0
-    while level < max_depth and (b - a) * length > tol:
+    while level < options.max_depth and (b - a) * length > options.tol:
         m = a + (b - a) * 1 / 2
-        xm, ym, cx, mx, cy, my = interpolated_point(x0, y0, dx, dx_err, dy, dy_err, m)
-        cm = wide_outcode(xm, ym, cx, mx, cy, my, window)
-        xm += cx  # the corrected position, for output
-        ym += cy
+        xm, ym, cm = interpolated_point(x0, y0, d, m, window)
         level += 1
         st[C.EVALUATED] += 1
         # The half on the far side of the searched end: [m, b] for the exit, [a, m] for the entry.
@@ -101,16 +91,15 @@ def _search(x0, y0, x1, y1, c0, c1, length, toward_end, window, options, st):
         lo = min(near_t, st_t)
         hi = max(near_t, st_t)
         h = lo + (hi - lo) * 1 / 2
-        hx, hy, cx, mx, cy, my = interpolated_point(x0, y0, dx, dx_err, dy, dy_err, h)
-        found = (wide_outcode(hx, hy, cx, mx, cy, my, window) & UNSURE_BITS) == 0
+        found = (interpolated_point(x0, y0, d, h, window)[2] & UNSURE_BITS) == 0
     # In approx mode a near end within rounding of the boundary counts as visible (0).
     if toward_end:
-        if exact or not (found and (ca >> SURE_SHIFT) == 0):
+        if options.exact or not (found and (ca >> SURE_SHIFT) == 0):
             a, xa, ya, ca = st_t, st_x, st_y, st_c
         else:
             ca = 0
         return Fragment(a, xa, ya, ca, b, xb, yb, cb), level
-    if exact or not (found and (cb >> SURE_SHIFT) == 0):
+    if options.exact or not (found and (cb >> SURE_SHIFT) == 0):
         b, xb, yb, cb = st_t, st_x, st_y, st_c
     else:
         cb = 0
@@ -154,6 +143,28 @@ def _leaf(x0, y0, x1, y1, bracket, level, window, exact, st):
     return True, u0, px, py, u1, qx, qy
 
 
+@inlined
+def _piece_end(x0, y0, x1, y1, c0, c1, length, toward_end, window, options, st):
+    """Return (ok, t, x, y): the piece's exit (``toward_end``) or its entry.
+
+    The end itself (P1, or P0) when its outcode (`c1`, or `c0`) is zero; else the end
+    that `_search` brackets and `_leaf` decides. Not `ok` when that leaf holds nothing
+    visible. The other parameters are those of `midpoint_segment` and `_search`.
+    Inlined, so each call site searches with `toward_end` a constant, as written out.
+    """
+    if toward_end and c1 == 0:
+        return True, 1.0, x1, y1
+    if not toward_end and c0 == 0:
+        return True, 0.0, x0, y0
+    bracket, level = _search(x0, y0, x1, y1, wide(c0), wide(c1), length, toward_end,
+                             window, options, st)
+    ok, u0, ax, ay, u1, bx, by = _leaf(x0, y0, x1, y1, bracket, level, window,
+                                       options.exact, st)
+    if toward_end:
+        return ok, u1, bx, by
+    return ok, u0, ax, ay
+
+
 @scalar
 def midpoint_segment(x0, y0, x1, y1, window, options, st):
     """Clip one segment by midpoint subdivision; return (keep, t0, t1, ax, ay, bx, by).
@@ -178,21 +189,11 @@ def midpoint_segment(x0, y0, x1, y1, window, options, st):
         return is_piece(dx == 0.0 and dy == 0.0, t0, t1, ax, ay, bx, by), t0, t1, ax, ay, bx, by
     st[C.EVALUATED] += 1
     st[C.SUBDIVIDED] += 1
-    # Exit end: P1 itself when visible, else the end found by the search from P0.
-    if c1 == 0:
-        t1, bx, by = 1.0, x1, y1
-    else:
-        bracket, level = _search(x0, y0, x1, y1, wide(c0), wide(c1), length, True,
-                                 window, options, st)
-        ok, _, _, _, t1, bx, by = _leaf(x0, y0, x1, y1, bracket, level, window, exact, st)
-        if not ok:
-            return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
-    if c0 == 0:
-        t0, ax, ay = 0.0, x0, y0
-    else:
-        bracket, level = _search(x0, y0, x1, y1, wide(c0), wide(c1), length, False,
-                                 window, options, st)
-        ok, t0, ax, ay, _, _, _ = _leaf(x0, y0, x1, y1, bracket, level, window, exact, st)
-        if not ok:
-            return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    # The exit first: when nothing is visible, the entry is not searched for.
+    ok, t1, bx, by = _piece_end(x0, y0, x1, y1, c0, c1, length, True, window, options, st)
+    if not ok:
+        return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    ok, t0, ax, ay = _piece_end(x0, y0, x1, y1, c0, c1, length, False, window, options, st)
+    if not ok:
+        return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
     return is_piece(False, t0, t1, ax, ay, bx, by), t0, t1, ax, ay, bx, by

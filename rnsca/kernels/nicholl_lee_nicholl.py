@@ -29,9 +29,8 @@ from rnsca.kernels.outcode import (
     NO_EDGE,
     RIGHT,
     TOP,
-    end_point,
-    is_piece,
     outcode,
+    piece_of_interval,
 )
 from rnsca.kernels.records import Window
 
@@ -186,17 +185,17 @@ def _original_edge(edge, flip_x, flip_y, swap):
 
 @scalar
 def nicholl_lee_nicholl_segment(x0, y0, x1, y1, window, st):
-    """Clip one segment with Nicholl–Lee–Nicholl; return (keep, t0, t1, ax, ay, bx, by).
+    """Clip one segment with Nicholl–Lee–Nicholl: P0's region names the edges that can cut.
 
-    `window` is a `rnsca.kernels.records.Window`; `st` the block's counter row.
+    A zero-length segment is decided by its outcode. Otherwise the segment is moved into
+    one of three canonical cases (module docstring), clipped there, and the edges that
+    cut it mapped back; returns as every method does (`segments.clip_one`).
     """
     xmin, ymin, xmax, ymax = window
-    dx = x1 - x0
-    dy = y1 - y0
     st[C.EVALUATED] += 1
     st[C.LEVELS] += 1
     c0 = outcode(x0, y0, xmin, ymin, xmax, ymax)
-    if dx == 0.0 and dy == 0.0:
+    if x1 - x0 == 0.0 and y1 - y0 == 0.0:
         if c0 == 0:
             st[C.ACCEPTED] += 1
             return True, 0.0, 1.0, x0, y0, x1, y1
@@ -220,12 +219,7 @@ def nicholl_lee_nicholl_segment(x0, y0, x1, y1, window, st):
     if not ok:
         st[C.REJECTED] += 1
         return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
-    if e0 == NO_EDGE and e1 == NO_EDGE:
-        st[C.ACCEPTED] += 1
-    else:
-        st[C.CLIPPED] += 1
     e0 = _original_edge(e0, flip_x, flip_y, swap)
     e1 = _original_edge(e1, flip_x, flip_y, swap)
-    ax, ay = end_point(x0, y0, x1, y1, e0, x0, y0, window)
-    bx, by = end_point(x0, y0, x1, y1, e1, x1, y1, window)
-    return is_piece(False, u0, u1, ax, ay, bx, by), u0, u1, ax, ay, bx, by
+    # Not degenerate: a zero-length segment was decided above.
+    return piece_of_interval(x0, y0, x1, y1, False, u0, e0, u1, e1, window, st)

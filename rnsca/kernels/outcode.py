@@ -30,7 +30,9 @@ from rnsca.constants import (
     UNSURE_BITS,
 )
 from rnsca.constants import EDGE_TOP as EDGE_TOP  # re-exported (not used here)
-from rnsca.kernels.jit import scalar
+from rnsca.kernels import counters as C
+from rnsca.kernels.jit import inlined, scalar
+from rnsca.kernels.records import Direction
 
 
 @scalar
@@ -57,22 +59,39 @@ def wide(code):
     return code | (code << SURE_SHIFT)
 
 
+# Veltkamp's splitter for Dekker's exact product (2**27 + 1): no fused multiply-add is
+# needed, so the compiled kernels, plain Python and OpenCL round identically.
+_SPLITTER = 134217729.0
+
+
+@inlined
+def two_product(a, b):
+    """Return (p, e): ``p = a * b`` rounded and ``p + e == a * b`` exactly (Dekker's TwoProduct).
+
+    Each factor is split into halves of 26 bits (Veltkamp), whose products are exact.
+    Exact while no partial product overflows or underflows: |a|, |b| below about 1e300,
+    a * b not subnormal. Shared by the segment kernels and `rnsca.io.svgwrite`; inlined,
+    so the split of a factor used twice is computed once (`line_coordinate_dd`).
+    """
+    p = a * b
+    c = _SPLITTER * a
+    ah = c - (c - a)
+    al = a - ah
+    c = _SPLITTER * b
+    bh = c - (c - b)
+    bl = b - bh
+    return p, (((ah * bh - p) + ah * bl) + al * bh) + al * bl
+
+
 def interpolate_dd(a0, da, da_err, t):
     """Return (a, err): ``a = a0 + t * da`` as the kernels round it, and its error.
 
     ``a + err`` is ``a0 + t * (da + da_err)`` (the point of the exact segment at t) up
     to a rounding of `err` itself: Dekker's TwoProduct and Knuth's TwoSum recover the
-    two roundings, and `da_err` is that of the direction. Plain arithmetic, shared by
-    Numba (jitted below) and NumPy.
+    two roundings, and `da_err` is that of the direction. Plain arithmetic and
+    `two_product`, shared by Numba (jitted below) and NumPy.
     """
-    p = t * da  # TwoProduct(t, da)
-    c = _SPLITTER * t
-    th = c - (c - t)
-    tl = t - th
-    c = _SPLITTER * da
-    dh = c - (c - da)
-    dl = da - dh
-    p_err = (((th * dh - p) + th * dl) + tl * dh) + tl * dl
+    p, p_err = two_product(t, da)
     a = a0 + p  # TwoSum(a0, p)
     v = a - a0
     a_err = (a0 - (a - v)) + (p - v)
@@ -99,18 +118,6 @@ def interpolation_margin(err, a0, da):
     return err, abs(err) * 8.881784197001252e-16 + floor
 
 
-@scalar
-def interpolated_point(x0, y0, dx, dx_err, dy, dy_err, t):
-    """Return the rounded point at t with corrections and margins: (x, y, cx, mx, cy, my).
-
-    For each coordinate: the correction to the true one and its margin
-    (`interpolation_margin`).
-    """
-    x, x_err = _interpolate_dd(x0, dx, dx_err, t)
-    y, y_err = _interpolate_dd(y0, dy, dy_err, t)
-    cx, mx = interpolation_margin(x_err, x0, dx)
-    cy, my = interpolation_margin(y_err, y0, dy)
-    return x, y, cx, mx, cy, my
 
 
 @scalar
@@ -131,15 +138,27 @@ def wide_outcode(x, y, cx, mx, cy, my, window):
     return unsure | (sure << SURE_SHIFT)
 
 
+@inlined
+def interpolated_point(x0, y0, d, t, window):
+    """Return (x, y, code): the point at t of the segment from (x0, y0) along `d`.
+
+    `d` is the segment's `Direction`. The point is rounded, then moved by the correction
+    `interpolation_margin` finds (so an output end lies as near the true point as it
+    can), and `code` is the `wide_outcode` of the true point within the margins.
+    Inlined: the subdivision loops run it per point (as a call, RNSCA and midpoint in
+    approx mode ran about 30% more instructions).
+    """
+    x, x_err = _interpolate_dd(x0, d.dx, d.dx_err, t)
+    y, y_err = _interpolate_dd(y0, d.dy, d.dy_err, t)
+    cx, mx = interpolation_margin(x_err, x0, d.dx)
+    cy, my = interpolation_margin(y_err, y0, d.dy)
+    return x + cx, y + cy, wide_outcode(x, y, cx, mx, cy, my, window)
+
+
 @scalar
 def clamp(v, low, high):
     """Return v limited to [low, high]."""
     return min(max(v, low), high)
-
-
-# Veltkamp's splitter for Dekker's exact product (2**27 + 1): no fused multiply-add is
-# needed, so the compiled kernels, plain Python and OpenCL round identically.
-_SPLITTER = 134217729.0
 
 
 def difference_dd(x1, x0):
@@ -158,30 +177,20 @@ def line_coordinate_dd(e, a, b, da, da_err, db, db_err):
     own size (a segment 1e8 windows long misses by ~1e-8 of the window). Every rounding
     step here keeps its error term (Knuth's TwoSum, Dekker's TwoProduct). The parameter
     is formed first, so with the nearer end as base |t| <= 1/2 and no product underflows
-    or overflows that the result would not. Plain arithmetic only, so this one function
-    serves Numba (jitted below) and NumPy arrays alike. Returns the rounded value and
-    its residual (true minus rounded); NaN when a split overflows (magnitudes beyond
-    ~1e300), and callers then fall back to the plain formula.
+    or overflows that the result would not. Plain arithmetic and `two_product` only, so
+    this one function serves Numba (jitted below) and NumPy arrays alike. Returns the
+    rounded value and its residual (true minus rounded); NaN when a split overflows
+    (magnitudes beyond ~1e300), and callers then fall back to the plain formula.
     """
     s = e - a  # TwoSum(e, -a), written out: the jitted copy may call no plain function
     v = s - e
     s_err = (e - (s - v)) + (-a - v)
     t = s / da
-    r = t * da  # TwoProduct(t, da)
-    c = _SPLITTER * t
-    th = c - (c - t)
-    tl = t - th
-    c = _SPLITTER * da
-    ah = c - (c - da)
-    al = da - ah
-    r_err = (((th * ah - r) + th * al) + tl * ah) + tl * al
+    r, r_err = two_product(t, da)
     # t + t_lo == (e - a) / (da + da_err) to ~eps**2
     t_lo = ((((s - r) - r_err) + s_err) - t * da_err) / da
-    p = t * db  # TwoProduct(t, db)
-    c = _SPLITTER * db
-    dh = c - (c - db)
-    dl = db - dh
-    p_err = (((th * dh - p) + th * dl) + tl * dh) + tl * dl + (t_lo * db + t * db_err)
+    p, p_err = two_product(t, db)
+    p_err += t_lo * db + t * db_err
     y = b + p  # TwoSum(b, p)
     v = y - b
     y_err = (b - (y - v)) + (p - v)
@@ -192,8 +201,15 @@ def line_coordinate_dd(e, a, b, da, da_err, db, db_err):
 
 
 _difference_dd = scalar(difference_dd)
-direction_error = _difference_dd
 _line_coordinate_dd = scalar(line_coordinate_dd)
+
+
+@scalar
+def direction(x0, y0, x1, y1):
+    """Return the `Direction` of the segment from (x0, y0) to (x1, y1), errors included."""
+    dx, dx_err = _difference_dd(x1, x0)
+    dy, dy_err = _difference_dd(y1, y0)
+    return Direction(dx, dx_err, dy, dy_err)
 
 
 @scalar
@@ -314,3 +330,24 @@ def is_piece(degenerate, t0, t1, ax, ay, bx, by):
     is not a piece.
     """
     return (t0 <= t1) & (degenerate | (ax != bx) | (ay != by))
+
+
+@inlined
+def piece_of_interval(x0, y0, x1, y1, degenerate, u0, e0, u1, e1, window, st):
+    """Return (keep, t0, t1, ax, ay, bx, by) for the visible interval [u0, u1] of a segment.
+
+    For the methods that find the interval before any end point (Liang–Barsky,
+    Nicholl–Lee–Nicholl), once they know it is not empty: `e0`, `e1` name the edge that
+    cut each end, ``NO_EDGE`` for an end of the segment itself; `degenerate`, the
+    segment has zero length (`is_piece`). Counts the segment in `st` as accepted or
+    clipped, and computes each end once (`end_point`). Inlined: as a call, Liang–Barsky
+    and NLL ran 11% more instructions.
+    """
+    if e0 == NO_EDGE and e1 == NO_EDGE:
+        st[C.ACCEPTED] += 1
+    else:
+        st[C.CLIPPED] += 1
+    ax, ay = end_point(x0, y0, x1, y1, e0, x0, y0, window)
+    bx, by = end_point(x0, y0, x1, y1, e1, x1, y1, window)
+    keep = is_piece(degenerate, u0, u1, ax, ay, bx, by)
+    return keep, u0, u1, ax, ay, bx, by

@@ -265,76 +265,69 @@ def point_in_ring(px, py, xy, first, last):
 
 
 @scalar
-def boundary_key(x, y, window):
-    """Return (edge, s): the position of a boundary point, counter-clockwise from (xmin, ymin).
-
-    `s` increases counter-clockwise along `edge`; a corner belongs to the edge it ends.
-    A point off the boundary (never produced by exact clipping) is put on the nearest edge.
-    """
-    xmin, ymin, xmax, ymax = window
-    if y == ymin:
-        return _BOTTOM, x
-    if x == xmax:
-        return _RIGHT, y
-    if y == ymax:
-        return _TOP, -x
-    if x == xmin:
-        return _LEFT, -y
-    d_bottom = y - ymin
-    d_right = xmax - x
-    d_top = ymax - y
-    d_left = x - xmin
-    d = min(min(d_bottom, d_right), min(d_top, d_left))
-    if d == d_bottom:
-        return _BOTTOM, x
-    if d == d_right:
-        return _RIGHT, y
-    if d == d_top:
-        return _TOP, -x
-    return _LEFT, -y
+def _along(edge, x, y):
+    """Return the coordinate of (x, y) that increases counter-clockwise along `edge`."""
+    if edge == _BOTTOM:
+        return x
+    if edge == _RIGHT:
+        return y
+    if edge == _TOP:
+        return -x
+    return -y
 
 
 @scalar
-def _perimeter_position(edge, s, window):
-    """Return the distance along the boundary, counter-clockwise from (xmin, ymin)."""
+def boundary_key(x, y, window):
+    """Return (edge, s): the position of a boundary point, counter-clockwise from (xmin, ymin).
+
+    `s` increases counter-clockwise along `edge` (`_along`). The edge is the first, in
+    that order, whose line holds the point, so a corner belongs to the edge it ends. A
+    point off the boundary (never produced by exact clipping) is put on the nearest edge.
+    """
+    xmin, ymin, xmax, ymax = window
+    # How far inside the line of each edge the point lies, by edge.
+    gaps = (y - ymin, xmax - x, ymax - y, x - xmin)
+    target = 0.0 if 0.0 in gaps else min(min(gaps[0], gaps[1]), min(gaps[2], gaps[3]))
+    edge = _BOTTOM
+    while edge < _LEFT and gaps[edge] != target:
+        edge += 1
+    return edge, _along(edge, x, y)
+
+
+@scalar
+def _edge_start(edge, window):
+    """Return (x, y, p): the corner where `edge` starts, and its distance along the boundary.
+
+    Both counter-clockwise from (xmin, ymin). The corner where `edge` ends is the start
+    of edge ``(edge + 1) % 4``.
+    """
     xmin, ymin, xmax, ymax = window
     w = xmax - xmin
     h = ymax - ymin
     if edge == _BOTTOM:
-        return s - xmin
+        return xmin, ymin, 0.0
     if edge == _RIGHT:
-        return w + (s - ymin)
+        return xmax, ymin, w
     if edge == _TOP:
-        return w + h + (xmax + s)
-    return 2.0 * w + h + (ymax + s)
+        return xmax, ymax, w + h
+    return xmin, ymax, 2.0 * w + h
+
+
+@scalar
+def _perimeter_position(edge, s, window):
+    """Return the distance along the boundary, counter-clockwise from (xmin, ymin).
+
+    (edge, s) is a `boundary_key`.
+    """
+    x, y, start = _edge_start(edge, window)
+    return start + (s - _along(edge, x, y))
 
 
 @scalar
 def _corner_after(edge, window):
     """Return the corner where `edge` ends (counter-clockwise)."""
-    xmin, ymin, xmax, ymax = window
-    if edge == _BOTTOM:
-        return xmax, ymin
-    if edge == _RIGHT:
-        return xmax, ymax
-    if edge == _TOP:
-        return xmin, ymax
-    return xmin, ymin
-
-
-@scalar
-def _corner_position(edge, window):
-    """Return the boundary distance of the corner where `edge` ends (see `_corner_after`)."""
-    xmin, ymin, xmax, ymax = window
-    w = xmax - xmin
-    h = ymax - ymin
-    if edge == _BOTTOM:
-        return w
-    if edge == _RIGHT:
-        return w + h
-    if edge == _TOP:
-        return 2.0 * w + h
-    return 0.0
+    x, y, _ = _edge_start((edge + 1) % 4, window)
+    return x, y
 
 
 @scalar
@@ -905,9 +898,15 @@ def _sort_events(ch_xy, lc, n_lc, window, events):
 
 
 @inlined
+def _event_key(events, e):
+    """Return (edge, s): where event e lies on the boundary (a `boundary_key`)."""
+    return events.edge[e], events.s[e]
+
+
+@inlined
 def _same_point(events, e1, e2):
     """Return whether events e1 and e2 lie at the same boundary point."""
-    return events.edge[e1] == events.edge[e2] and events.s[e1] == events.s[e2]
+    return _event_key(events, e1) == _event_key(events, e2)
 
 
 @inlined
@@ -974,11 +973,8 @@ def _walk_corners(scratch, has_z, k, nxt, window, m):
     corner on an input segment (`_find_corner_z`), else interpolated along the boundary
     between the exit's and the entry's.
     """
-    events = scratch.events
-    ee = events.edge[2 * k + 1]
-    es = events.s[2 * k + 1]
-    se = events.edge[2 * nxt]
-    ss = events.s[2 * nxt]
+    ee, es = _event_key(scratch.events, 2 * k + 1)  # chain k's exit
+    se, ss = _event_key(scratch.events, 2 * nxt)  # chain nxt's entry
     if se == ee and ss > es:
         return m
     xmin, ymin, xmax, ymax = window
@@ -999,10 +995,10 @@ def _walk_corners(scratch, has_z, k, nxt, window, m):
             span += perimeter
     e = ee
     while True:
-        x, y = _corner_after(e, window)
+        x, y, corner = _edge_start((e + 1) % 4, window)  # the corner where edge e ends
         zc = 0.0
         if has_z:
-            d = _corner_position(e, window) - p_from
+            d = corner - p_from
             if d < 0.0:
                 d += perimeter
             zc = z_from + (z_to - z_from) * min(1.0, d / span)
@@ -1137,7 +1133,7 @@ def _add_window_if_covered(line, n_r, window, scratch, n_rg):
             zc += line.z[k]
         zc /= max(1, rings.last[0] - rings.first[0])
     for corner in range(4):
-        x, y = _corner_after((corner + 3) % 4, window)
+        x, y, _ = _edge_start(corner, window)
         walk.xy[corner, 0] = x
         walk.xy[corner, 1] = y
         if line.has_z:

@@ -62,6 +62,7 @@ from rnsca.kernels.segments import (
     rnsca_segment,
     segment_stack,
 )
+from rnsca.kernels.stacks import interval_at, put_interval
 
 __all__ = [
     "CHUNK_ACCEPTED",
@@ -617,15 +618,11 @@ def clip_chains(line, first, last, cut, break_at_boundary, options, out, write, 
         segmented = 0
         deepest = st[C.RUN_DEEPEST]
         n_runs = options.n_fixed if options.n_fixed > 0 else RUN_N_AUTO
-        run_stack[0, 0] = 0
-        run_stack[0, 1] = chunk_count(first, last)
-        run_stack[0, 2] = 0
+        put_interval(run_stack, 0, 0, chunk_count(first, last), 0)
         sp = 1
         while sp > 0:
             sp -= 1
-            ca = run_stack[sp, 0]
-            cb = run_stack[sp, 1]
-            level = run_stack[sp, 2]
+            ca, cb, level = interval_at(run_stack, sp)
             a = first + ca * RUN_LEAF_SEGMENTS
             b = min(first + cb * RUN_LEAF_SEGMENTS, last)
             slot = _level_slot(level)
@@ -678,9 +675,7 @@ def clip_chains(line, first, last, cut, break_at_boundary, options, out, write, 
                     if carry >= k:
                         carry -= k
                         hi += 1
-                    run_stack[sp + k - j, 0] = lo
-                    run_stack[sp + k - j, 1] = hi
-                    run_stack[sp + k - j, 2] = level + 1
+                    put_interval(run_stack, sp + k - j, lo, hi, level + 1)
                     lo = hi
                 sp += k
         st[C.RUN_DEEPEST] = deepest

@@ -27,7 +27,7 @@ import numpy as np
 
 from rnsca.kernels.jit import inlined
 
-__all__ = ["CoreOptions", "Fragment", "Vertices", "Window", "vertices", "window_of"]
+__all__ = ["CoreOptions", "Direction", "Fragment", "Vertices", "Window", "vertices", "window_of"]
 
 
 class Window(NamedTuple):
@@ -96,3 +96,16 @@ class Fragment(NamedTuple):
     xb: float
     yb: float
     cb: int
+
+
+class Direction(NamedTuple):
+    """A segment's direction ``P1 - P0``, each component rounded, with its rounding error.
+
+    ``dx + dx_err == x1 - x0`` exactly, likewise for y (`outcode.direction`): the
+    subdivision methods interpolate points along it (`outcode.interpolated_point`).
+    """
+
+    dx: float
+    dx_err: float
+    dy: float
+    dy_err: float

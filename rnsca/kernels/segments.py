@@ -48,13 +48,12 @@ from rnsca.kernels.outcode import (
     SURE_SHIFT,
     TOP,
     clamp,
-    direction_error,
+    direction,
     end_point,
     interpolated_point,
     is_piece,
     outcode,
     wide,
-    wide_outcode,
 )
 from rnsca.kernels.records import Fragment
 
@@ -203,14 +202,7 @@ def _subdivide(x0, y0, x1, y1, whole, length, window, options, st, stack):
     those of `rnsca_segment`. The accepted children and clipped leaves are merged into
     one interval as they come.
     """
-    n_fixed = options.n_fixed
-    max_depth = options.max_depth
-    tol = options.tol
-    exact = options.exact
-    dx = x1 - x0
-    dy = y1 - y0
-    _, dx_err = direction_error(x1, x0)
-    _, dy_err = direction_error(y1, y0)
+    d = direction(x0, y0, x1, y1)
     # The merged interval and its end points.
     lo_t = math.inf
     lo_x = lo_y = 0.0
@@ -223,7 +215,7 @@ def _subdivide(x0, y0, x1, y1, whole, length, window, options, st, stack):
         fragment, level = _pop(stack, sp)
         level += 1
         step = fragment.tb - fragment.ta
-        n = n_fixed if n_fixed > 0 else auto_n(step * length, options.auto_piece)
+        n = options.n_fixed if options.n_fixed > 0 else auto_n(step * length, options.auto_piece)
         # Walk the n children left to right; (pt, px, py, pc) is the current child's start.
         pt = fragment.ta
         px = fragment.xa
@@ -236,11 +228,7 @@ def _subdivide(x0, y0, x1, y1, whole, length, window, options, st, stack):
                 t, x, y, c = fragment.tb, fragment.xb, fragment.yb, fragment.cb
             else:
                 t = fragment.ta + step * j / n
-                x, y, cx, mx, cy, my = interpolated_point(x0, y0, dx, dx_err, dy, dy_err, t)
-                c = wide_outcode(x, y, cx, mx, cy, my, window)
-                # Ends of accepted pieces are output: give them the corrected position.
-                x += cx
-                y += cy
+                x, y, c = interpolated_point(x0, y0, d, t, window)
             st[C.EVALUATED] += 1
             if (pc | c) == 0:
                 st[C.ACCEPTED] += 1
@@ -255,12 +243,12 @@ def _subdivide(x0, y0, x1, y1, whole, length, window, options, st, stack):
             elif (pc & c) >> SURE_SHIFT:
                 st[C.REJECTED] += 1
                 st[C.LEVELS + level] += 1
-            elif (level >= max_depth or (t - pt) * length <= tol or pc == c
+            elif (level >= options.max_depth or (t - pt) * length <= options.tol or pc == c
                   or sp >= STACK_CAPACITY):
                 # A leaf; ``pc == c``: both ends within rounding of the same edges (the
                 # child hugs the boundary), which splitting could not resolve.
                 st[C.LEVELS + level] += 1
-                if exact:
+                if options.exact:
                     st[C.CLIPPED] += 1
                     ok, u0, ax, ay, u1, bx, by = _clip_leaf(
                         x0, y0, x1, y1, Fragment(pt, px, py, pc, t, x, y, c), window, st)
@@ -285,8 +273,10 @@ def _subdivide(x0, y0, x1, y1, whole, length, window, options, st, stack):
 def clip_one(x0, y0, x1, y1, window, options, st):
     """Clip one segment with the baseline ``options.method``; return (keep, t0, t1, ax, ay, bx, by).
 
-    `window` is a `Window`, `options` a `CoreOptions`, `st` the block's counter row. RNSCA
-    is not here: it runs block-wise (`_rnsca_block`).
+    Every method returns so: whether the segment leaves a piece, the piece's parameter
+    interval and its end points (in the window). `window` is a `Window`, `options` a
+    `CoreOptions` (read by midpoint subdivision only), `st` the block's counter row,
+    which the method counts into. RNSCA is not here: it runs block-wise (`_rnsca_block`).
     """
     method = options.method
     if method == COHEN_SUTHERLAND:

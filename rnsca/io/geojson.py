@@ -39,7 +39,7 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from itertools import chain
-from typing import Any, NoReturn
+from typing import Any, NoReturn, cast
 
 import numpy as np
 import orjson
@@ -378,6 +378,16 @@ class _Fallback(Exception):
     """The fast reader met something it does not check itself; the validator decides."""
 
 
+def _fast_type_of(member: object) -> str:
+    """Return the ``type`` of a GeoJSON object; anything else leaves the fast path."""
+    if not isinstance(member, dict):
+        raise _Fallback
+    kind = member.get("type")
+    if not isinstance(kind, str):
+        raise _Fallback
+    return kind
+
+
 def _non_empty_members(coordinates: list | tuple) -> list:
     """Return the non-empty members of a Multi* geometry's coordinates.
 
@@ -411,11 +421,8 @@ class _Reader:
         self.sources: tuple[list, list, list] = ([], [], [])
 
     def document(self, doc: object) -> None:
-        if not isinstance(doc, dict):
-            raise _Fallback
-        kind = doc.get("type")
-        if not isinstance(kind, str):
-            raise _Fallback
+        kind = _fast_type_of(doc)
+        doc = cast(dict, doc)
         if kind == "FeatureCollection":
             features = doc.get("features")
             if not isinstance(features, _ARRAY):
@@ -438,11 +445,8 @@ class _Reader:
             self.geometry(geometry, 0)
 
     def geometry(self, geometry: object, depth: int) -> None:
-        if not isinstance(geometry, dict):
-            raise _Fallback
-        kind = geometry.get("type")
-        if not isinstance(kind, str):
-            raise _Fallback
+        kind = _fast_type_of(geometry)
+        geometry = cast(dict, geometry)
         if kind == "GeometryCollection":
             members = geometry.get("geometries")
             if depth >= MAX_COLLECTION_DEPTH or not isinstance(members, _ARRAY):

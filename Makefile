@@ -7,7 +7,7 @@ SERVE_STAMP := $(VENV)/.installed-service
 HOST ?= 127.0.0.1
 PORT ?= 8000
 
-.PHONY: serve test check bench lint clean
+.PHONY: serve test check bench compare lint clean
 
 # The client SDK (clients/python, package rnsca-client) is installed beside rnsca so that
 # `make test` tests it against live servers.
@@ -53,6 +53,12 @@ test: $(STAMP) lint
 
 bench: $(STAMP)
 	$(PY) -m benchmarks.run
+
+# Before/after a change: the benchmark workloads on BASE (another checkout, e.g. a
+# `git worktree add ../base <revision>`) and on this one, interleaved in one run.
+compare: $(STAMP)
+	@test -n "$(BASE)" || { echo "usage: make compare BASE=../base"; exit 2; }
+	$(PY) -m benchmarks.compare --base $(BASE)
 
 clean:
 	rm -rf $(VENV) .pytest_cache .hypothesis .ruff_cache .mypy_cache .import_linter_cache

@@ -96,21 +96,22 @@ class NumbaBackend:
         settings = core_options(options)
         driver = K.clip_segment_blocks_serial if n_blocks <= SERIAL_BLOCKS \
             else K.clip_segment_blocks
-        counted = K.SegmentOutput(
-            np.empty((0, 4)), np.empty(0, dtype=np.int64), np.empty((0, 2)),
-            np.zeros(n_blocks, dtype=np.int64), np.zeros(n_blocks, dtype=np.int64),
-            np.zeros((n_blocks, C.WIDTH), dtype=np.int64))
-        driver(segments, bounds, settings, BLOCK_SIZE, False, counted)
-        block_start = np.zeros(n_blocks, dtype=np.int64)
-        np.cumsum(counted.block_count[:-1], out=block_start[1:])
-        m = int(counted.block_count.sum())
-        written = K.SegmentOutput(
-            np.empty((m, 4), dtype=np.float64), np.empty(m, dtype=np.int64),
-            np.empty((m, 2), dtype=np.float64), block_start,
-            np.empty(n_blocks, dtype=np.int64), np.zeros_like(counted.counters))
-        driver(segments, bounds, settings, BLOCK_SIZE, True, written)
-        return SegmentPieces(written.pieces, written.source, written.t,
-                             ClipStats.from_counters(counted.counters, n, m))
+        # One pass: a segment gives at most one piece, so block k writes its pieces into
+        # its own rows, from k * BLOCK_SIZE on; the blocks are then moved up in place and
+        # the arrays shrunk. Clipping once instead of counting then writing saves about
+        # 40% of the call (10M uniform segments, /work/notes/i15 of session 7).
+        out = K.SegmentOutput(
+            np.empty((n, 4)), np.empty(n, dtype=np.int64), np.empty((n, 2)),
+            np.arange(n_blocks, dtype=np.int64) * BLOCK_SIZE,
+            np.empty(n_blocks, dtype=np.int64), np.zeros((n_blocks, C.WIDTH), dtype=np.int64))
+        driver(segments, bounds, settings, BLOCK_SIZE, True, out)
+        m = K.compact_blocks(out)
+        pieces, source, t = out.pieces, out.source, out.t
+        if m < n:  # new arrays no one else holds: realloc shrinks them where they are
+            pieces.resize((m, 4), refcheck=False)
+            source.resize(m, refcheck=False)
+            t.resize((m, 2), refcheck=False)
+        return SegmentPieces(pieces, source, t, ClipStats.from_counters(out.counters, n, m))
 
     def clip_lines(self, lines: Ragged, windows: WindowTable, options: SegmentOptions,
                    drop_edge_runs: bool) -> GeometryPieces:

@@ -425,14 +425,37 @@ def _clip_block(blk, segments, window, options, block_size, write, out):
     out.block_count[blk] = k - out.block_start[blk]
 
 
+@scalar
+def compact_blocks(out):
+    """Move each block's pieces up to follow the previous block's; return the total.
+
+    `out.block_start[k]` is where block ``k`` wrote its `out.block_count[k]` pieces, in
+    increasing order; a block never moves past its own start, so copying forward, block
+    by block, overwrites only rows already moved.
+    """
+    m = 0
+    for blk in range(out.block_count.shape[0]):
+        start = out.block_start[blk]
+        count = out.block_count[blk]
+        if start != m:
+            for r in range(count):
+                for c in range(4):
+                    out.pieces[m + r, c] = out.pieces[start + r, c]
+                out.source[m + r] = out.source[start + r]
+                out.t[m + r, 0] = out.t[start + r, 0]
+                out.t[m + r, 1] = out.t[start + r, 1]
+        m += count
+    return m
+
+
 @parallel
 def clip_segment_blocks(segments, window, options, block_size, write, out):
     """Clip every segment, one prange iteration per block of `block_size` segments.
 
-    Run twice over one body: with ``write=False`` it fills ``out.block_count`` (pieces
-    per block) and ``out.counters`` (one row per block); with ``write=True`` it writes
-    block ``k``'s pieces from ``out.block_start[k]`` on. Each iteration writes only its
-    own block's slots, so the passes are race-free and always agree.
+    Fills ``out.block_count`` (pieces per block) and ``out.counters`` (one row per
+    block); with ``write=True`` it also writes block ``k``'s pieces from
+    ``out.block_start[k]`` on (the Numba backend gives each block its own rows, then
+    `compact_blocks`). Each iteration writes only its own block's slots: race-free.
 
     Parameters
     ----------

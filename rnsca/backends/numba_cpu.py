@@ -61,19 +61,18 @@ class DevicePaths(NamedTuple):
     """What the OpenCL backend's device decided for `NumbaBackend.clip_paths`.
 
     `run_decisions` (int8 per segment), `segment_class`, `point_start` and `points` (each
-    segment's class and the flattened points of the curves accepted whole; None when
-    nothing was decided), and the device's stats.
+    segment's class and the flattened points of the curves accepted whole), and the
+    device's stats.
     """
 
-    run_decisions: np.ndarray | None
-    segment_class: np.ndarray | None
-    point_start: np.ndarray | None
-    points: np.ndarray | None
+    run_decisions: np.ndarray
+    segment_class: np.ndarray
+    point_start: np.ndarray
+    points: np.ndarray
     stats: DeviceStats | None
 
 
-# The path kernel decides every segment itself: no run decisions, no device, no classes.
-_UNDECIDED_PATHS = DevicePaths(None, None, None, None, None)
+# Without a device, no segment classes nor flattened points are given to the path kernel.
 _NO_CLASSES = (np.empty(0, np.uint8), np.empty(0, dtype=np.int64), np.empty((0, 2)))
 
 
@@ -151,8 +150,8 @@ class NumbaBackend:
         polygon_offsets, geometry_polygons = polygons.item_offsets()
         n_polygons = polygon_offsets.shape[0] - 1
         polygon_window = windows.of_items(polygon_geometry(geometry_polygons))
+        nothing_i = np.empty(0, dtype=np.int64)
         if device is None:
-            nothing_i = np.empty(0, dtype=np.int64)
             # Runs and segments are clipped here, not decided elsewhere: no decision tables.
             decisions = PL.Decisions(False, nothing_i, np.empty(0, dtype=np.uint8), nothing_i,
                                      np.empty(0, dtype=np.bool_), np.empty((0, 6)))
@@ -166,7 +165,6 @@ class NumbaBackend:
         items = PG.Polygons(ring_offsets, polygon_offsets, windows.bounds, polygon_window)
         plan = PG.PolygonPlan(device.polygon_class, np.zeros(n_polygons, dtype=np.int64),
                               np.zeros(n_polygons, dtype=np.int64))
-        nothing_i = np.empty(0, dtype=np.int64)
         counts = PG.PolygonCounts(np.empty(n_polygons, dtype=np.int64),
                                   np.empty(n_polygons, dtype=np.int64),
                                   np.empty(n_polygons, dtype=np.int64), nothing_i, nothing_i,
@@ -203,8 +201,11 @@ class NumbaBackend:
         class, the runs' decisions and the flattened points of the curves accepted whole.
         Without it, the kernel decides everything itself.
         """
+        decided = device is not None
         if device is None:
-            device = _UNDECIDED_PATHS
+            # The kernel decides each run in its count pass and keeps the decision here.
+            device = DevicePaths(np.empty(paths.degree.shape[0], dtype=np.int8),
+                                 *_NO_CLASSES, None)
         n_subpaths = paths.closed.shape[0]
         subpath_source = np.repeat(np.arange(len(paths), dtype=np.int64),
                                    np.diff(paths.path_offsets))
@@ -213,9 +214,6 @@ class NumbaBackend:
         counters = np.zeros((n_blocks, C.WIDTH), dtype=np.int64)
         n_segments = np.zeros(n_subpaths, dtype=np.int64)
         n_out = np.zeros(n_subpaths, dtype=np.int64)
-        run_decisions = device.run_decisions
-        if run_decisions is None:
-            run_decisions = np.empty(paths.degree.shape[0], dtype=np.int8)
         kernel_input = (
             BZ.PathInput(paths.controls, paths.degree, paths.subpath_offsets, paths.closed,
                          paths.start, subpath_source),
@@ -223,9 +221,8 @@ class NumbaBackend:
             BZ.Options(fill=options.fill is not None, flatten=options.curves is Curves.FLATTEN,
                        exact=options.mode is Mode.EXACT, n_split=int(options.n_split),
                        leaf_depth=int(options.leaf_depth), tolerance=float(options.tolerance)),
-            BZ.Decisions(device.segment_class is not None, run_decisions,
-                         *(_NO_CLASSES if device.segment_class is None else
-                           (device.segment_class, device.point_start, device.points))))
+            BZ.Decisions(decided, device.run_decisions, device.segment_class,
+                         device.point_start, device.points))
         nothing = np.empty(0, dtype=np.int64)
         BZ.clip_path_blocks(*kernel_input, BZ.Layout(n_segments, n_out, nothing, nothing),
                             BZ.Output(False, np.empty((0, 4, 2)), np.empty(0, np.int8), nothing,

@@ -48,6 +48,7 @@ from rnsca.kernels.outcode import (
     SURE_SHIFT,
     TOP,
     clamp,
+    common_end_point,
     direction,
     end_point,
     interpolated_point,
@@ -374,12 +375,25 @@ def _rnsca_block(segments, first, last, window, options, st, write, k, out):
         for j in range(size):
             u0[j], e0[j], u1[j], e1[j] = leaf_cut(
                 bit, flags[j], u0[j], e0[j], u1[j], e1[j], x0[j], y0[j], x1[j], y1[j], window)
+    # Each end once, by the common path (selects only, vectorized); the rows that may
+    # give a piece but need the double-double cut or snapping are marked for `end_point`.
+    candidate = np.empty(size, dtype=np.bool_)
+    uncommon = np.empty(size, dtype=np.bool_)
+    for j in range(size):
+        ax[j], ay[j], sure_a = common_end_point(
+            x0[j], y0[j], x1[j], y1[j], e0[j], x0[j], y0[j], window)
+        bx[j], by[j], sure_b = common_end_point(
+            x0[j], y0[j], x1[j], y1[j], e1[j], x1[j], y1[j], window)
+        candidate[j] = (u0[j] <= u1[j]) & (not rejected[j]) & (not split[j]) & (
+            exact | (not ambiguous[j]))
+        uncommon[j] = candidate[j] & ((not sure_a) | (not sure_b))
+    for j in range(size):
+        if uncommon[j]:
+            ax[j], ay[j] = end_point(x0[j], y0[j], x1[j], y1[j], e0[j], x0[j], y0[j], window)
+            bx[j], by[j] = end_point(x0[j], y0[j], x1[j], y1[j], e1[j], x1[j], y1[j], window)
     keep = np.empty(size, dtype=np.bool_)
     for j in range(size):
-        # Each end once: a cut end is computed in double-double here, not per edge.
-        ax[j], ay[j] = end_point(x0[j], y0[j], x1[j], y1[j], e0[j], x0[j], y0[j], window)
-        bx[j], by[j] = end_point(x0[j], y0[j], x1[j], y1[j], e1[j], x1[j], y1[j], window)
-        keep[j] = (u0[j] <= u1[j]) & (not rejected[j]) & (exact | (not ambiguous[j])) & is_piece(
+        keep[j] = candidate[j] & is_piece(
             (x0[j] == x1[j]) & (y0[j] == y1[j]), u0[j], u1[j], ax[j], ay[j], bx[j], by[j])
     # Deeper levels, for the few segments that need them.
     stack = segment_stack()

@@ -61,6 +61,8 @@ from rnsca.kernels.records import Fragment
 # Stack rows: floats (ta, tb, xa, ya, xb, yb); ints (ca, cb, level).
 _TA, _TB, _XA, _YA, _XB, _YB = 0, 1, 2, 3, 4, 5
 _CA, _CB, _LEVEL = 0, 1, 2
+# Below this shift (rows), `move_rows` copies on one thread.
+MIN_PARALLEL_SHIFT = 16384
 
 
 @scalar
@@ -93,12 +95,12 @@ class SegmentOutput(NamedTuple):
 
     Attributes
     ----------
-    pieces, source, t : float64 (m, 4), int64 (m,), float64 (m, 2)
+    pieces, source, t : float64 (n, 4), int64 (n,), float64 (n, 2)
         The pieces (ends clamped into the window), the input row of each, and its
-        parameter interval; written by the write pass, empty in the count pass.
+        parameter interval: one row per input segment, of which each chunk of blocks
+        fills the first rows of its own range (see `clip_segment_blocks`).
     block_start : int64 (n_blocks,)
-        Block ``k`` writes its pieces from row ``block_start[k]`` on (write pass): the
-        exclusive prefix sum of the count pass's `block_count`.
+        The row of block ``k``'s first piece, written by the driver.
     block_count : int64 (n_blocks,)
         Pieces per block.
     counters : int64 (n_blocks, counters.WIDTH)
@@ -302,15 +304,14 @@ def _write_piece(out, k, i, t0, t1, ax, ay, bx, by, window):
 
 
 @scalar
-def _rnsca_block(segments, first, last, window, options, st, write, k, out):
-    """Clip segments ``first:last`` with RNSCA; return the next output row.
+def _rnsca_block(segments, first, last, window, options, st, k, out):
+    """Clip segments ``first:last`` with RNSCA, writing from row `k` on; return the next row.
 
     Most segments are decided at level 0: accepted, rejected, or (short enough) a
     leaf. That case runs as a few simple branch-free loops over the block, one per
     step, on block-sized scratch columns that stay in cache: loops LLVM vectorizes.
     Segments that need splitting are marked and go through the depth-first
-    `rnsca_segment`. Results are then counted or written (into `out`, from row `k`)
-    in input order.
+    `rnsca_segment`. The pieces are then written into `out` in input order.
     """
     xmin, ymin, xmax, ymax = window
     max_depth = options.max_depth
@@ -410,66 +411,95 @@ def _rnsca_block(segments, first, last, window, options, st, write, k, out):
     for j in range(size):
         kept[count] = j
         count += 1 if keep[j] else 0
-    if write:
-        for r in range(count):
-            j = kept[r]
-            _write_piece(out, k + r, first + j, u0[j], u1[j], ax[j], ay[j], bx[j], by[j],
-                         window)
+    for r in range(count):
+        j = kept[r]
+        _write_piece(out, k + r, first + j, u0[j], u1[j], ax[j], ay[j], bx[j], by[j], window)
     return k + count
 
 
 @scalar
-def _clip_block(blk, segments, window, options, block_size, write, out):
-    """Count or write block `blk`'s pieces into `out`: the one body both drivers run."""
+def _clip_block(blk, segments, window, options, block_size, out):
+    """Write block `blk`'s pieces into `out` from row ``out.block_start[blk]`` on."""
     st = out.counters[blk]
     first = blk * block_size
     last = min(first + block_size, segments.shape[0])
     k = out.block_start[blk]
     if options.method == RNSCA:
-        k = _rnsca_block(segments, first, last, window, options, st, write, k, out)
+        k = _rnsca_block(segments, first, last, window, options, st, k, out)
     else:
         for i in range(first, last):
             keep, t0, t1, ax, ay, bx, by = clip_one(
                 segments[i, 0], segments[i, 1], segments[i, 2], segments[i, 3],
                 window, options, st)
             if keep:
-                if write:
-                    _write_piece(out, k, i, t0, t1, ax, ay, bx, by, window)
+                _write_piece(out, k, i, t0, t1, ax, ay, bx, by, window)
                 k += 1
     out.block_count[blk] = k - out.block_start[blk]
 
 
 @scalar
-def compact_blocks(out):
-    """Move each block's pieces up to follow the previous block's; return the total.
+def chunk_blocks(chunk, n_chunks, n_blocks):
+    """Return (first, last): the blocks of chunk `chunk` of `n_chunks` (equal shares)."""
+    return chunk * n_blocks // n_chunks, (chunk + 1) * n_blocks // n_chunks
 
-    `out.block_start[k]` is where block ``k`` wrote its `out.block_count[k]` pieces, in
-    increasing order; a block never moves past its own start, so copying forward, block
-    by block, overwrites only rows already moved.
+
+@scalar
+def _clip_chunk(chunk, n_chunks, segments, window, options, block_size, out):
+    """Clip the blocks of one chunk in order, their pieces one after another.
+
+    The chunk's pieces start at the row of its first segment: a segment gives at most
+    one piece, so they never reach the next chunk's rows.
     """
-    m = 0
-    for blk in range(out.block_count.shape[0]):
-        start = out.block_start[blk]
-        count = out.block_count[blk]
-        if start != m:
-            for r in range(count):
-                for c in range(4):
-                    out.pieces[m + r, c] = out.pieces[start + r, c]
-                out.source[m + r] = out.source[start + r]
-                out.t[m + r, 0] = out.t[start + r, 0]
-                out.t[m + r, 1] = out.t[start + r, 1]
-        m += count
-    return m
+    first, last = chunk_blocks(chunk, n_chunks, out.block_count.shape[0])
+    k = first * block_size
+    for blk in range(first, last):
+        out.block_start[blk] = k
+        _clip_block(blk, segments, window, options, block_size, out)
+        k += out.block_count[blk]
 
 
 @parallel
-def clip_segment_blocks(segments, window, options, block_size, write, out):
-    """Clip every segment, one prange iteration per block of `block_size` segments.
+def move_rows(out, start, to, count):
+    """Move rows ``start:start + count`` of `out`'s pieces, source and t up to row `to`.
 
-    Fills ``out.block_count`` (pieces per block) and ``out.counters`` (one row per
-    block); with ``write=True`` it also writes block ``k``'s pieces from
-    ``out.block_start[k]`` on (the Numba backend gives each block its own rows, then
-    `compact_blocks`). Each iteration writes only its own block's slots: race-free.
+    ``to < start``. In rounds of ``start - to`` rows: each round reads rows that no
+    earlier round has written and writes only rows an earlier round has read, so
+    the rows of one round are copied in parallel. A short shift is copied forward on
+    one thread instead (too many rounds to pay for waking the others).
+    """
+    shift = start - to
+    if shift < MIN_PARALLEL_SHIFT:
+        for r in range(count):
+            _copy_row(out, start + r, to + r)
+        return
+    done = 0
+    while done < count:
+        rows = min(shift, count - done)
+        for r in prange(rows):
+            _copy_row(out, start + done + r, to + done + r)
+        done += rows
+
+
+@scalar
+def _copy_row(out, row, to):
+    """Copy row `row` of `out`'s pieces, source and t to row `to`."""
+    for c in range(4):
+        out.pieces[to, c] = out.pieces[row, c]
+    out.source[to] = out.source[row]
+    out.t[to, 0] = out.t[row, 0]
+    out.t[to, 1] = out.t[row, 1]
+
+
+@parallel
+def clip_segment_blocks(segments, window, options, block_size, n_chunks, out):
+    """Clip every segment, one prange iteration per chunk of consecutive blocks.
+
+    Block ``k`` covers segments ``k * block_size`` on. Each chunk (give one per thread:
+    prange shares iterations out equally) writes its pieces one after another from the
+    row of its first segment, and ``out.block_start``, ``out.block_count`` and
+    ``out.counters`` (one row per block) of its own blocks: race-free. The caller then
+    moves each chunk's rows up behind the previous chunk's (`move_rows`): only the
+    chunks after the first move, none on one thread.
 
     Parameters
     ----------
@@ -479,20 +509,19 @@ def clip_segment_blocks(segments, window, options, block_size, write, out):
     options : CoreOptions
     block_size : int
         Segments per block; ``out.block_count`` has one slot per block.
-    write : bool
-        The write pass (else the count pass).
+    n_chunks : int
+        Chunks of blocks (`chunk_blocks`).
     out : SegmentOutput
     """
-    for blk in prange(out.block_count.shape[0]):
-        _clip_block(blk, segments, window, options, block_size, write, out)
+    for chunk in prange(n_chunks):
+        _clip_chunk(chunk, n_chunks, segments, window, options, block_size, out)
 
 
 @scalar
-def clip_segment_blocks_serial(segments, window, options, block_size, write, out):
-    """Do what `clip_segment_blocks` does on the calling thread (for small inputs).
+def clip_segment_blocks_serial(segments, window, options, block_size, out):
+    """Do what `clip_segment_blocks` does, as one chunk on the calling thread.
 
     Waking the worker threads costs more than clipping a few thousand segments, and
-    far more when the machine is busy.
+    far more when the machine is busy. The pieces are compact: nothing to move.
     """
-    for blk in range(out.block_count.shape[0]):
-        _clip_block(blk, segments, window, options, block_size, write, out)
+    _clip_chunk(0, 1, segments, window, options, block_size, out)

@@ -6,6 +6,7 @@ Usage::
     python -m benchmarks.paper --quick             # Table 2 up to 10k, the families at 10k
     python -m benchmarks.paper --max-size 1000000  # no workload above 1M segments
     python -m benchmarks.run --suite paper         # the same, as a suite of benchmarks.run
+    python -m benchmarks.paper --summary benchmarks/results/latest-paper.json  # tables only
 
 Three measurements, each on the Numba backend (see benchmarks/README.md, "The paper's
 claims, reproduced"):
@@ -442,12 +443,15 @@ def _table(header: list[str], rows: list[list[str]]) -> list[str]:
 def markdown_summary(result: dict) -> str:
     """Return the README's tables of a run (markdown), to paste under its run line."""
     m = result["machine"]
-    approx_tol = result["table2"][0]["runs"]["rnsca:approx"]["tolerance"]
+    first = result["table2"][0]
+    approx_tol = first["runs"]["rnsca:approx"]["tolerance"]
+    xmin, ymin, xmax, ymax = first["workload"]["window"]
     lines = [f"Run `{result['created']}`{' (quick)' if result['quick'] else ''}: "
              f"{m['cpu_model']}, {m['numba_threads']} Numba thread(s), load "
-             f"{m['load_average_at_start']} -> {result['load_average_at_end']}; "
-             f"approx tolerance {approx_tol:g} (the library default: 1e-9 x window size "
-             "here unless it changed), `n=\"auto\"`.", ""]
+             f"{m['load_average_at_start']} -> {result['load_average_at_end']}; approx mode "
+             f"with the library's default tolerance ({approx_tol:g} on the Table 2 window, "
+             f"{approx_tol / max(xmax - xmin, ymax - ymin):.3g} of its side), `n=\"auto\"` "
+             "unless N is given.", ""]
 
     lines += ["**Table 2 sets (uniform, window [250,750]²): ms per call, best of repeats**",
               ""]
@@ -502,7 +506,6 @@ def markdown_summary(result: dict) -> str:
 
 def main(argv: list[str] | None = None) -> int:
     """Parse the command line, run, print the markdown summary."""
-    configure_process()  # as the CLI, the service and benchmarks.run do
     parser = argparse.ArgumentParser(prog="python -m benchmarks.paper", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--quick", action="store_true",
@@ -513,7 +516,13 @@ def main(argv: list[str] | None = None) -> int:
                         help="no workload larger than this many segments")
     parser.add_argument("--no-figure-copy", action="store_true",
                         help="do not update benchmarks/paper-*.png")
+    parser.add_argument("--summary", type=Path, metavar="JSON",
+                        help="run nothing: print the markdown tables of this result file")
     args = parser.parse_args(argv)
+    if args.summary is not None:
+        print(markdown_summary(json.loads(args.summary.read_text())))
+        return 0
+    configure_process()  # as the CLI, the service and benchmarks.run do
     copy_figures = not args.no_figure_copy and args.out.resolve() == DEFAULT_OUT
     result = run(args.quick, args.out, args.max_size, copy_figures)
     print(markdown_summary(result))

@@ -180,3 +180,13 @@ def test_claims_and_the_markdown_summary_are_reported(quick_paper):
     for c in result["claims"]:
         assert c["holds"] in (True, False, "partly")
     assert "**Table 2 sets" in stdout and "| uniform |" in stdout
+
+
+def test_summary_reprints_the_tables_of_a_result_file(quick_paper, capsys):
+    from benchmarks.paper import main, markdown_summary
+
+    out, result, stdout = quick_paper
+    assert main(["--summary", str(out / "latest-paper.json")]) == 0
+    printed = capsys.readouterr().out
+    assert printed.strip() == markdown_summary(result).strip()
+    assert markdown_summary(result).strip() in stdout

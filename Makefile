@@ -7,7 +7,7 @@ SERVE_STAMP := $(VENV)/.installed-service
 HOST ?= 127.0.0.1
 PORT ?= 8000
 
-.PHONY: serve test check bench compare lint clean
+.PHONY: serve test check bench paper compare lint clean
 
 # The client SDK (clients/python, package rnsca-client) is installed beside rnsca so that
 # `make test` tests it against live servers.
@@ -53,6 +53,12 @@ test: $(STAMP) lint
 
 bench: $(STAMP)
 	$(PY) -m benchmarks.run
+
+# The paper's claims, reproduced (benchmarks/README.md): RNSCA against Cohen-Sutherland at
+# the Table 2 sizes up to 10M, fragments decided early, intersections per method. Also part
+# of `make bench`; MAX_SIZE=1000000 caps the workloads.
+paper: $(STAMP)
+	$(PY) -m benchmarks.paper $(if $(MAX_SIZE),--max-size $(MAX_SIZE))
 
 # Before/after a change: the benchmark workloads on BASE (another checkout, e.g. a
 # `git worktree add ../base <revision>`) and on this one, interleaved in one run.

@@ -4,7 +4,7 @@ Usage::
 
     python -m benchmarks.run                    # full run of every suite (make bench)
     python -m benchmarks.run --quick            # small sizes only, a smoke test
-    python -m benchmarks.run --suite svg        # one suite: segments, geometry or svg
+    python -m benchmarks.run --suite svg        # one suite: segments, geometry, svg or paper
     RNSCA_BENCH_QUICK=1 python -m benchmarks.run
     RNSCA_OPENCL_DEVICE=1:0 python -m benchmarks.run   # OpenCL contenders on that device
 
@@ -15,6 +15,9 @@ geometry suite (issue 3: curves, polygons with holes, GeoJSON) writes
 ``<out>/geometry-<timestamp>.json`` and copies it to ``<out>/latest-geometry.json``. The svg
 suite (issue 4: SVG path data parse and write throughput, and Bézier clipping against
 flatten-then-clip) writes ``<out>/svg-<timestamp>.json`` and ``<out>/latest-svg.json``.
+The paper suite (issue 15, `benchmarks.paper`: the paper's claims, reproduced) writes
+``<out>/paper-<timestamp>.json``, ``latest-paper.json`` and its plots; ``--max-size``
+caps its workloads.
 """
 
 from __future__ import annotations
@@ -31,7 +34,7 @@ from pathlib import Path
 
 import numba
 
-from benchmarks import bench_curves, bench_geometry, bench_svg, datasets
+from benchmarks import bench_curves, bench_geometry, bench_svg, datasets, paper
 from benchmarks.bench_segments import (
     Plan,
     backend_unavailable_reason,
@@ -50,7 +53,7 @@ from rnsca.runtime import configure_process
 SCHEMA = "rnsca-bench-segments/1"
 GEOMETRY_SCHEMA = "rnsca-bench-geometry/1"
 SVG_SCHEMA = "rnsca-bench-svg/1"
-SUITES = ("segments", "geometry", "svg")
+SUITES = ("segments", "geometry", "svg", "paper")
 #: Environment variables that change how Numba's parallel kernels behave under load.
 THREADING_ENV = ("NUMBA_NUM_THREADS", "NUMBA_THREADING_LAYER", "OMP_NUM_THREADS",
                  "OMP_WAIT_POLICY")
@@ -296,8 +299,10 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--shapely-10m", choices=("measure", "extrapolate"), default="measure",
                         help="time Shapely once at 10M, or extrapolate from the largest "
                              "smaller uniform size (marked in the JSON)")
+    parser.add_argument("--max-size", type=int, default=None,
+                        help="paper suite: no workload larger than this many segments")
     parser.add_argument("--no-figure-copy", action="store_true",
-                        help="do not update benchmarks/figure5.png")
+                        help="do not update benchmarks/figure5.png nor benchmarks/paper-*.png")
     args = parser.parse_args(argv)
     # The OpenCL device and precision, named as for the command line (README).
     configure_opencl(os.environ.get("RNSCA_OPENCL_DEVICE"),
@@ -311,6 +316,10 @@ def main(argv: list[str] | None = None) -> int:
         svg_result = run_svg(args.quick, args.out)
         bench_svg.print_svg_summary(svg_result)
         bench_curves.print_curve_summary(svg_result)
+    if args.suite in ("all", "paper"):
+        paper_copy = not args.no_figure_copy and args.out.resolve() == paper.DEFAULT_OUT
+        paper_result = paper.run(args.quick, args.out, args.max_size, paper_copy, log=_log)
+        print(paper.markdown_summary(paper_result))
     return 0
 
 

@@ -40,6 +40,7 @@ import rnsca
 from benchmarks.datasets import Workload, classify
 from benchmarks.machine import load_average
 from benchmarks.timing import Contender, Policy, peak_traced_bytes, time_round_robin
+from rnsca.backends.numba_cpu import BLOCK_SIZE, SERIAL_BLOCKS
 from rnsca.clip import as_segments
 
 __all__ = [
@@ -194,9 +195,14 @@ def backend_unavailable_reason(backend: str) -> str | None:
 
 
 def _warm_up(segments, window, variant: Variant, backend: str) -> None:
-    """Compile (or load) the kernels for this configuration on a few rows of the input."""
-    rnsca.clip_segments(segments[:64], window, method=variant.method, mode=variant.mode,
-                        n=variant.n, backend=backend)
+    """Compile (or load) the kernels for this configuration on a few rows of the input.
+
+    Both drivers: a few rows run on the calling thread, more than `SERIAL_BLOCKS` blocks
+    in parallel (otherwise the first timed call loads the parallel one).
+    """
+    for rows in (64, (SERIAL_BLOCKS + 1) * BLOCK_SIZE):
+        rnsca.clip_segments(segments[:rows], window, method=variant.method, mode=variant.mode,
+                            n=variant.n, backend=backend)
 
 
 # --------------------------------------------------------------------------- one workload

@@ -154,6 +154,7 @@ def segments(
     n: Annotated[str, typer.Option(help="pieces per split, 2..64 or auto")] = "auto",
     max_depth: Annotated[int | None, typer.Option(help="0..32")] = None,
     tolerance: Annotated[float | None, typer.Option(help="leaf length")] = None,
+    resolution: Annotated[str | None, typer.Option(help=_RESOLUTION_HELP)] = None,
     mode: Annotated[str, typer.Option(help="exact or approx")] = "exact",
     backend: Annotated[str, typer.Option(help="numba, numpy or opencl")] = "numba",
     verify: Annotated[bool, typer.Option(help="compare with Shapely")] = False,
@@ -163,7 +164,8 @@ def segments(
         data = np.load(source, allow_pickle=False)
         result = rnsca.clip_segments(
             data, window, method=method, n=int(n) if n.isdigit() else n,
-            max_depth=max_depth, tolerance=tolerance, mode=mode, backend=backend)
+            max_depth=max_depth, tolerance=tolerance, mode=mode, backend=backend,
+            resolution=_resolution(resolution))
     except (RnscaError, ValueError, OSError) as exc:
         typer.echo(f"error: {exc}", err=True)
         raise typer.Exit(2) from None
@@ -200,6 +202,7 @@ def clip(
     max_depth: Annotated[int | None, typer.Option(help="0..32")] = None,
     tolerance: Annotated[float | None, typer.Option(
         help="leaf length; SVG: also how far flattened curves may stray")] = None,
+    resolution: Annotated[str | None, typer.Option(help=_RESOLUTION_HELP)] = None,
     mode: Annotated[str, typer.Option(help="exact or approx (lines and points only)")] = "exact",
     backend: Annotated[str, typer.Option(help="numba or opencl")] = "numba",
     boundary: Annotated[str, typer.Option(
@@ -241,6 +244,8 @@ def clip(
         boundary=boundary, method=method, n=int(n) if n.isdigit() else n, max_depth=max_depth,
         tolerance=tolerance, mode=mode, backend=backend, check_validity=check_validity)
     with _reporting(EXIT_USAGE):
+        if resolution is not None:
+            options["resolution"] = _resolution(resolution)
         _check_options(bounds, options)
         if verify and Mode(mode) is Mode.APPROX and approx_bound is None:
             raise InvalidOptionError(
@@ -326,6 +331,21 @@ def _window_bounds(text: str) -> tuple[float, float, float, float]:
     return bounds
 
 
+_RESOLUTION_HELP = ("approx mode: the output's resolution, which sets the tolerance: a length, "
+                    "or <k>px, the window's longer side as k pixels [default: 4096px]")
+
+
+def _resolution(text: str | None) -> float | str | None:
+    """Return a --resolution as the library takes it: a length, or a '<k>px' string."""
+    if text is None or text.strip().lower().endswith("px"):
+        return text
+    try:
+        return float(text)
+    except ValueError:
+        raise InvalidOptionError(f"resolution must be a length > 0 or '<pixels>px' (e.g. "
+                                 f"'4096px'), got {text!r}") from None
+
+
 def _check_options(bounds: tuple[float, float, float, float], options: dict) -> None:
     """Raise the library's error for a bad option before any input is read.
 
@@ -346,7 +366,8 @@ def _clip_svg(data: memoryview, bounds: tuple[float, float, float, float], optio
         if given:
             raise InvalidOptionError(f"{flag} applies to GeoJSON input, not to SVG")
     curve_options = {name: options[name] for name in ("method", "n", "max_depth", "mode",
-                                                      "backend", "tolerance")}
+                                                      "backend", "tolerance", "resolution")
+                     if name in options}
     text, clip_stats = clip_svg_document(bytes(data), bounds, **svg_options,
                                          **curve_options)
     return text.encode("utf-8"), {"stats": clip_stats.to_dict()}

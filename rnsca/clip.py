@@ -100,7 +100,7 @@ def clip_segments(segments: npt.ArrayLike, window: Window | Iterable[float], *,
                   method: Method | str = "rnsca", n: SupportsIndex | str = "auto",
                   max_depth: SupportsIndex | None = None, tolerance: float | None = None,
                   mode: Mode | str = "exact", backend: Backend | str = "numba",
-                  ) -> SegmentClipResult:
+                  resolution: float | str | None = None) -> SegmentClipResult:
     """Return the parts of line segments inside a closed rectangular window.
 
     Each segment gives at most one piece (the window is convex). Boundary rules, the
@@ -121,8 +121,8 @@ def clip_segments(segments: npt.ArrayLike, window: Window | Iterable[float], *,
     max_depth : int in 0..32, default 32
         Deepest subdivision level (RNSCA, midpoint).
     tolerance : float > 0 (may be inf), optional
-        A piece no longer than this is a leaf. Default: ``1e-9 * window.size`` in approx
-        mode; infinite in exact mode, where splitting cannot save the clip at a boundary
+        A piece no longer than this is a leaf. Default: the `resolution` in approx mode;
+        infinite in exact mode, where splitting cannot save the clip at a boundary
         crossing, so every segment is decided at level 0 (see README, "Exact mode").
     mode : {"exact", "approx"}
         What happens to undecided leaves: clipped with Liang–Barsky, or dropped. In
@@ -130,6 +130,10 @@ def clip_segments(segments: npt.ArrayLike, window: Window | Iterable[float], *,
         ``max(tolerance, length / 2**max_depth)``-ish; see README, "Approx mode".
         The analytic methods (Cohen–Sutherland, Liang–Barsky, NLN) are always exact.
     backend : {"numba", "opencl"}
+    resolution : float > 0 or str, optional
+        Approx mode: the output's resolution, which sets the tolerance: a length in
+        output units, or ``"<k>px"``, the window's longer side as k pixels. Default
+        ``"4096px"`` (a vector tile's grid). Not with `tolerance`, nor in exact mode.
 
     Returns
     -------
@@ -150,7 +154,7 @@ def clip_segments(segments: npt.ArrayLike, window: Window | Iterable[float], *,
     """
     window = Window.of(window)
     options = SegmentOptions.resolve(window, method=method, n=n, max_depth=max_depth,
-                                     tolerance=tolerance, mode=mode)
+                                     tolerance=tolerance, mode=mode, resolution=resolution)
     engine = get_backend(backend)
     array = as_segments(segments)
     out = engine.clip_segments(array, window, options)
@@ -175,7 +179,7 @@ def clip(obj: Any, window: Window | Iterable[float] | Iterable[Iterable[float]],
     window : Window, sequence of 4 floats, or array_like of shape (n, 4)
         One window, or one per geometry of an array or triple.
     **options
-        ``boundary``, ``method``, ``n``, ``max_depth``, ``tolerance``, ``mode``,
+        ``boundary``, ``method``, ``n``, ``max_depth``, ``tolerance``, ``resolution``, ``mode``,
         ``backend`` (see `clip_ragged`); ``keep_empty`` for GeoJSON and triples.
 
     Returns

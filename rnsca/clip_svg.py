@@ -70,7 +70,8 @@ def clip_paths(paths: PathArrays, window: Window | Iterable[float], *,
                curves: Curves | str = "preserve", fill: Fill | str | None = None,
                tolerance: float | None = None, method: Method | str = "rnsca",
                n: SupportsIndex | str = "auto", max_depth: SupportsIndex | None = None,
-               mode: Mode | str = "exact", backend: Backend | str = "numba") -> PathClipResult:
+               mode: Mode | str = "exact", backend: Backend | str = "numba",
+               resolution: float | str | None = None) -> PathClipResult:
     """Return paths clipped to a rectangular window, keeping curves as curves.
 
     Parameters
@@ -92,6 +93,9 @@ def clip_paths(paths: PathArrays, window: Window | Iterable[float], *,
     tolerance : float, optional
         Flattening accuracy and approx mode's smallest piece, in user units; default
         `CURVE_RELATIVE_TOLERANCE` times the window's longer side.
+    resolution : float > 0 or str, optional
+        Approx mode: sets the tolerance from the output's resolution instead (see
+        `rnsca.clip_segments`); not with `tolerance`.
     method, n, max_depth, mode, backend
         RNSCA's options: N pieces per split (``"auto"``: 4), deepest level (default:
         0 in exact preserve mode, where an ambiguous segment is solved exactly whole
@@ -114,7 +118,8 @@ def clip_paths(paths: PathArrays, window: Window | Iterable[float], *,
     """
     window = Window.of(window)
     options = PathOptions.resolve(window, curves=curves, fill=fill, tolerance=tolerance,
-                                  method=method, n=n, max_depth=max_depth, mode=mode)
+                                  method=method, n=n, max_depth=max_depth, mode=mode,
+                                  resolution=resolution)
     engine = get_backend(backend)
     engine.capabilities.require(Operation.PATHS, options.mode)
     out = engine.clip_paths(paths, window, options)

@@ -37,7 +37,7 @@ __all__ = [
     # Option bounds.
     "N_MIN",
     "N_MAX",
-    "AUTO_N_MIN",
+    "AUTO_N_BASE",
     "MAX_DEPTH_LIMIT",
     # The counter row.
     "EVALUATED",
@@ -122,10 +122,12 @@ MIDPOINT = 4
 # split is a loop per piece, and the stacks below are sized for N <= N_MAX).
 N_MIN = 2
 N_MAX = 64
-# `n="auto"` never splits into fewer pieces than this: measured on uniform segments in
-# approx mode, N = 8 beats 2, 3, 4 and 16 (fewer levels and stack operations for a few
-# more outcode tests; see benchmarks/README.md). It splits into at most N_MAX.
-AUTO_N_MIN = 8
+# `n="auto"` bisects (N = 2) unless bisection cannot reach the tolerance within the levels
+# left (then the smallest N that can, at most N_MAX): approx mode refines each boundary
+# crossing like a search, and measured at the default resolution on the four benchmark
+# sets (1M segments each, /work/notes/s8), N = 2 was within 7% of the best fixed N on
+# every set, 3 within 10%, 8 (the rule before) 1.3x to 3.3x slower.
+AUTO_N_BASE = 2
 # The deepest subdivision level one may ask for, and the default (`max_depth`): levels
 # 0..32, so a piece at the deepest level is at most 2**-32 of its segment (N >= 2). The
 # per-level counters (N_LEVELS) and the stacks below are sized by it.

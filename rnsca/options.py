@@ -13,10 +13,14 @@ from rnsca.window import Window
 
 __all__ = ["Method", "Mode", "Backend", "Boundary", "Precision", "SegmentOptions", "Curves",
            "Fill", "PathOptions", "N_MIN", "N_MAX", "MAX_DEPTH_LIMIT",
-           "CURVE_RELATIVE_TOLERANCE"]
+           "CURVE_RELATIVE_TOLERANCE", "APPROX_DEFAULT_PIXELS", "approx_tolerance"]
 
+#: Approx mode's default resolution: the window's longer side in this many pixels, the
+#: grid of a vector tile (the Mapbox Vector Tile extent). Output at that resolution
+#: cannot show a loss below one pixel, and every level deeper doubles the work.
+APPROX_DEFAULT_PIXELS = 4096
 #: In approx mode the default tolerance is this fraction of the window's longer side.
-APPROX_RELATIVE_TOLERANCE = 1e-9
+APPROX_RELATIVE_TOLERANCE = 1.0 / APPROX_DEFAULT_PIXELS
 #: Default `tolerance` of curve clipping, relative to the window's longer side: how far
 #: flattened lines may stray from the curve (``curves="flatten"``), and the size below
 #: which approx mode stops subdividing.
@@ -105,8 +109,6 @@ class SegmentOptions:
         Deepest subdivision level, 0..32.
     tolerance : float
         A piece no longer than this is not subdivided further (absolute units).
-    auto_piece : float
-        The piece length that ``n="auto"`` aims for: the window's longer side.
     """
 
     method: Method
@@ -114,21 +116,20 @@ class SegmentOptions:
     n: int
     max_depth: int
     tolerance: float
-    auto_piece: float
 
     @classmethod
     def resolve(cls, window: Window, *, method: Method | str = "rnsca",
                 n: SupportsIndex | str = "auto", max_depth: SupportsIndex | None = None,
-                tolerance: float | None = None,
-                mode: Mode | str = "exact") -> SegmentOptions:
+                tolerance: float | None = None, mode: Mode | str = "exact",
+                resolution: float | str | None = None) -> SegmentOptions:
         """Return checked options, with defaults filled in for `window`.
 
-        Defaults: ``max_depth=32``; ``tolerance`` is ``1e-9 * window.size`` in approx mode
-        (the accuracy promise) and infinite in exact mode: an exact leaf is clipped
-        analytically, and splitting a segment never saves the clip at its boundary
-        crossings, so by default a segment is decided at level 0 (see README, "Exact
-        mode"). Pass a tolerance to make exact mode subdivide.
-        ``method="midpoint"`` always bisects (N = 2).
+        Defaults: ``max_depth=32``; ``tolerance`` is infinite in exact mode (an exact leaf
+        is clipped analytically, and splitting a segment never saves the clip at its
+        boundary crossings, so by default a segment is decided at level 0; see README,
+        "Exact mode"; pass a tolerance to make exact mode subdivide), and in approx mode
+        the `resolution` (`approx_tolerance`). ``method="midpoint"`` always bisects
+        (N = 2).
         """
         method = Method(method)
         mode = Mode(mode)
@@ -138,11 +139,49 @@ class SegmentOptions:
         if method is Method.MIDPOINT:
             n_value = 2
         depth = subdivision_depth(max_depth, MAX_DEPTH_LIMIT)
+        if resolution is not None and mode is not Mode.APPROX:
+            raise InvalidOptionError(
+                "resolution applies to mode='approx' (exact mode is exact to the last ulp)")
         if tolerance is None:
-            tol = window.size * APPROX_RELATIVE_TOLERANCE if mode is Mode.APPROX else math.inf
+            tol = approx_tolerance(window, resolution) if mode is Mode.APPROX else math.inf
+        elif resolution is not None:
+            raise InvalidOptionError("give tolerance or resolution, not both (a resolution "
+                                     "sets the tolerance)")
         else:
             tol = positive_tolerance(tolerance)  # +inf means "never subdivide"
-        return cls(method, mode, n_value, depth, tol, window.size)
+        return cls(method, mode, n_value, depth, tol)
+
+
+def approx_tolerance(window: Window, resolution: float | str | None = None) -> float:
+    """Return approx mode's tolerance for `window` at the output `resolution`.
+
+    A piece no longer than the tolerance is a leaf, and approx mode drops undecided
+    leaves, so each piece end lies within one tolerance of the true end: below the
+    output's resolution, the loss cannot show. `resolution` is a length in output units
+    (a float > 0), or ``"<k>px"``: the window's longer side drawn as k pixels (a vector
+    tile of extent 4096 is ``"4096px"``). Default: ``"4096px"``.
+
+    Examples
+    --------
+    >>> w = Window(0.0, 0.0, 512.0, 256.0)
+    >>> approx_tolerance(w), approx_tolerance(w, "256px"), approx_tolerance(w, 0.5)
+    (0.125, 2.0, 0.5)
+    """
+    if resolution is None:
+        return window.size * APPROX_RELATIVE_TOLERANCE
+    if isinstance(resolution, str):
+        text = resolution.strip().lower()
+        pixels = text[:-2].strip() if text.endswith("px") else ""
+        if not pixels.isdigit() or int(pixels) < 1:
+            raise InvalidOptionError(
+                f"resolution must be a length > 0 or '<pixels>px' (e.g. '4096px'), got "
+                f"{resolution!r}")
+        return window.size / int(pixels)
+    try:
+        return positive_tolerance(resolution, finite=True)
+    except InvalidOptionError:
+        raise InvalidOptionError(f"resolution must be a length > 0 or '<pixels>px' (e.g. "
+                                 f"'4096px'), got {resolution!r}") from None
 
 
 def subdivision_n(n: SupportsIndex | str) -> int | None:
@@ -247,13 +286,16 @@ class PathOptions:
                 fill: Fill | str | None = None, tolerance: float | None = None,
                 method: Method | str = "rnsca", n: SupportsIndex | str = "auto",
                 max_depth: SupportsIndex | None = None,
-                mode: Mode | str = "exact") -> PathOptions:
+                mode: Mode | str = "exact",
+                resolution: float | str | None = None) -> PathOptions:
         """Return checked options, with defaults filled in for `window`.
 
         Defaults: N = `bezier.CURVE_N_AUTO` for ``n="auto"``; depth
         `bezier.EXACT_LEAF_DEPTH` in exact preserve mode (an ambiguous segment is solved
         exactly whole: measured fastest), 32 otherwise; tolerance
-        `CURVE_RELATIVE_TOLERANCE` times the window's longer side.
+        `CURVE_RELATIVE_TOLERANCE` times the window's longer side (it is also the
+        flattening accuracy), or in approx mode the `resolution` if one is given
+        (`approx_tolerance`).
         """
         from rnsca.kernels.bezier import CURVE_N_AUTO, EXACT_LEAF_DEPTH
 
@@ -269,6 +311,15 @@ class PathOptions:
             n_split = CURVE_N_AUTO
         depth = subdivision_depth(max_depth, EXACT_LEAF_DEPTH if (
             mode is Mode.EXACT and curves is Curves.PRESERVE) else MAX_DEPTH_LIMIT)
-        tol = window.size * CURVE_RELATIVE_TOLERANCE if tolerance is None else \
-            positive_tolerance(tolerance, finite=True)
+        if resolution is not None and mode is not Mode.APPROX:
+            raise InvalidOptionError(
+                "resolution applies to mode='approx' (exact mode is exact to the last ulp)")
+        if resolution is not None and tolerance is not None:
+            raise InvalidOptionError("give tolerance or resolution, not both (a resolution "
+                                     "sets the tolerance)")
+        if resolution is not None:
+            tol = approx_tolerance(window, resolution)
+        else:
+            tol = window.size * CURVE_RELATIVE_TOLERANCE if tolerance is None else \
+                positive_tolerance(tolerance, finite=True)
         return cls(curves, fill, mode, n_split, depth, tol)

@@ -88,6 +88,7 @@ def resolve_geometry_options(
         method: Method | str = "rnsca", n: SupportsIndex | str = "auto",
         max_depth: SupportsIndex | None = None, tolerance: float | None = None,
         mode: Mode | str = "exact", backend: Backend | str = "numba",
+        resolution: float | str | None = None,
 ) -> tuple[SegmentOptions, Boundary, ClipBackend]:
     """Return ``(SegmentOptions, Boundary, backend)`` for clipping geometry of `dimension`.
 
@@ -101,7 +102,8 @@ def resolve_geometry_options(
         For a backend that cannot run here or does not clip this kind.
     """
     options = SegmentOptions.resolve(windows.smallest(), method=method, n=n,
-                                     max_depth=max_depth, tolerance=tolerance, mode=mode)
+                                     max_depth=max_depth, tolerance=tolerance, mode=mode,
+                                     resolution=resolution)
     side = Boundary(boundary)
     engine = get_backend(backend)
     if dimension == 2 and options.mode is Mode.APPROX:
@@ -121,7 +123,8 @@ def clip_ragged(geometry_type: shapely.GeometryType | GeometryKind | str, coords
                 check_validity: bool = False, method: Method | str = "rnsca",
                 n: SupportsIndex | str = "auto", max_depth: SupportsIndex | None = None,
                 tolerance: float | None = None, mode: Mode | str = "exact",
-                backend: Backend | str = "numba") -> RaggedClipResult:
+                backend: Backend | str = "numba",
+                resolution: float | str | None = None) -> RaggedClipResult:
     """Return the geometries of a ragged array clipped to a rectangular window.
 
     The columnar fast path: the triple ``shapely.to_ragged_array`` returns (and GeoArrow
@@ -153,7 +156,7 @@ def clip_ragged(geometry_type: shapely.GeometryType | GeometryKind | str, coords
         the count holds what clipping meets: rings without area and rings that cannot
         be closed consistently. Invalid polygons are clipped ring by ring either way,
         never repaired.
-    method, n, max_depth, tolerance, mode
+    method, n, max_depth, tolerance, mode, resolution
         As for `clip_segments`; runs of vertices are pruned by RNSCA with N runs per
         split (``n="auto"``: 16). Polygons need ``mode="exact"``.
     backend : {"numba", "opencl"}
@@ -187,7 +190,8 @@ def clip_ragged(geometry_type: shapely.GeometryType | GeometryKind | str, coords
     windows = WindowTable.of(window, ragged.count)
     options, side, engine = resolve_geometry_options(
         windows, ragged.kind.dimension, boundary=boundary, method=method, n=n,
-        max_depth=max_depth, tolerance=tolerance, mode=mode, backend=backend)
+        max_depth=max_depth, tolerance=tolerance, mode=mode, backend=backend,
+        resolution=resolution)
     if ragged.kind.dimension == 0:
         return _clip_points(ragged, windows, side, keep_empty)
     if ragged.kind.dimension == 1:

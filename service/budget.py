@@ -22,8 +22,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from rnsca.constants import AUTO_N_MIN, N_MAX
-from rnsca.options import APPROX_RELATIVE_TOLERANCE, MAX_DEPTH_LIMIT, Method, Mode
+from rnsca.kernels.segments import auto_n
+from rnsca.options import MAX_DEPTH_LIMIT, Method, Mode, approx_tolerance
 from rnsca.window import Window
 from service.errors import TooManyVerticesError, WorkOverBudgetError
 
@@ -31,13 +31,10 @@ if TYPE_CHECKING:
     from service.schemas import ClipOptions
 
 __all__ = ["subdivision_cost", "segment_work", "check_vertices", "check_work",
-           "geometry_vertex_cap", "AMBIGUOUS_PER_LEVEL", "AUTO_N"]
+           "geometry_vertex_cap", "AMBIGUOUS_PER_LEVEL"]
 
 #: Ambiguous pieces per level of one straight segment, at most.
 AMBIGUOUS_PER_LEVEL = 4
-#: ``n="auto"``: N = clamp(ceil(piece / window size), 8, 64) (see README, "Choosing N"),
-#: the bounds the kernels use (`rnsca.constants`).
-AUTO_N = (AUTO_N_MIN, N_MAX)
 
 
 def _subdivides(options: ClipOptions, window: Window) -> bool:
@@ -49,7 +46,7 @@ def _subdivides(options: ClipOptions, window: Window) -> bool:
 def _tolerance(options: ClipOptions, window: Window) -> float:
     if options.tolerance is not None:
         return options.tolerance
-    return window.size * APPROX_RELATIVE_TOLERANCE
+    return approx_tolerance(window, options.resolution)
 
 
 def subdivision_cost(options: ClipOptions, window: Window, length: float | None) -> int:
@@ -74,15 +71,13 @@ def subdivision_cost(options: ClipOptions, window: Window, length: float | None)
     tolerance = _tolerance(options, window)
     piece = math.inf if length is None else float(length)
     cost = 0
-    for _ in range(depth):
+    for level in range(1, depth + 1):
         if piece <= tolerance:
             break
         if options.method is Method.MIDPOINT:
             n = 2
         elif options.n == "auto":
-            ratio = piece / window.size
-            n = AUTO_N[1] if not math.isfinite(ratio) else int(
-                min(AUTO_N[1], max(AUTO_N[0], math.ceil(ratio))))
+            n = auto_n(piece, tolerance, depth - level + 1)  # the kernel's own rule
         else:
             n = options.n
         cost += AMBIGUOUS_PER_LEVEL * n

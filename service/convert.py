@@ -96,7 +96,8 @@ def _library_options(options: ClipOptions, settings: Settings) -> dict:
     """Return the keyword arguments of a library call (the library checks the backend)."""
     backend = options.backend.value if options.backend else settings.default_backend.value
     return dict(method=options.method, n=options.n, max_depth=options.max_depth,
-                tolerance=options.tolerance, mode=options.mode, backend=backend)
+                tolerance=options.tolerance, mode=options.mode, backend=backend,
+                resolution=options.resolution)
 
 
 def _verify_wanted(asked: bool | None, vertices: int, settings: Settings) -> bool:

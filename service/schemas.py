@@ -66,8 +66,14 @@ class ClipOptions(BaseModel):
         None, description=f"Deepest subdivision level, 0..{MAX_DEPTH_LIMIT} (default "
                           f"{MAX_DEPTH_LIMIT}).")
     tolerance: Annotated[float, Field(gt=0)] | None = Field(
-        None, description="A piece no longer than this is a leaf (default: 1e-9 of the "
-                          "window's size in approx mode, infinite in exact mode).")
+        None, description="A piece no longer than this is a leaf (default: the "
+                          "`resolution` in approx mode, infinite in exact mode).")
+    resolution: Annotated[float, Field(gt=0, allow_inf_nan=False)] | Annotated[
+        str, Field(pattern=r"^[1-9][0-9]{0,8}px$")] | None = Field(
+        None, description="Approx mode: the output's resolution, which sets the tolerance: "
+                          "a length in output units, or `<k>px`, the window's longer side "
+                          "as k pixels (default `4096px`, a vector tile's grid). Not with "
+                          "`tolerance`, nor in exact mode.")
     mode: Mode = Field(Mode.EXACT, description="`exact`: undecided leaves are clipped; "
                                                "`approx`: dropped (no intersections).")
     backend: BackendName | None = Field(

@@ -365,7 +365,7 @@ def warm_up_geometry(backend: ClipBackend) -> None:
 def core_options(options: SegmentOptions) -> R.CoreOptions:
     """Return the kernels' record of the segment core's options (one type per field)."""
     return R.CoreOptions(METHOD_ID[options.method], int(options.n), int(options.max_depth),
-                         float(options.tolerance), float(options.auto_piece),
+                         float(options.tolerance),
                          options.mode is Mode.EXACT)
 
 

@@ -46,7 +46,6 @@ class CoreOptions(NamedTuple):
     n_fixed: int        #: N, or 0 for auto
     max_depth: int      #: deepest subdivision level
     tol: float          #: pieces no longer than this are leaves
-    auto_piece: float   #: the piece length auto N aims at
     exact: bool         #: clip undecided leaves exactly (else drop them: approx mode)
 
 

@@ -20,7 +20,7 @@ from numba import prange
 # Method ids, N's bounds and the stack size are defined in rnsca.constants (shared with
 # clip.cl and the service); importable from here as before.
 from rnsca.constants import (
-    AUTO_N_MIN,
+    AUTO_N_BASE,
     COHEN_SUTHERLAND,
     LIANG_BARSKY,
     N_MAX,
@@ -65,18 +65,23 @@ _CA, _CB, _LEVEL = 0, 1, 2
 MIN_PARALLEL_SHIFT = 16384
 
 
-@scalar
-def auto_n(piece_length, auto_piece):
-    """Return the ``n="auto"`` split count: ``ceil(length / auto_piece)`` clamped to 8..64.
+def auto_n(piece_length, tol, levels_left):
+    """Return the ``n="auto"`` split count of a piece: bisection, unless it falls short.
 
-    `auto_piece` is the window's longer side. A piece much longer than the window is
-    cut into window-sized pieces in one step, so those far from the window are rejected
-    at once; shorter pieces are cut in eight.
+    Approx mode refines each boundary crossing like a search, for which halving costs
+    fewest outcode tests per level (measured: see `AUTO_N_BASE`). Only where
+    `levels_left` halvings cannot bring the piece down to `tol` (a segment millions of
+    windows long), N is the smallest that can, ``ceil((length / tol) ** (1 / levels))``,
+    at most N_MAX. Plain arithmetic, shared by the kernel (jitted below) and the
+    service's work bound.
     """
-    if not piece_length > AUTO_N_MIN * auto_piece:
-        return AUTO_N_MIN  # the common case, without the division
-    k = piece_length / auto_piece  # capped as a float: ceil of 2**63 would wrap around
-    return N_MAX if k > N_MAX else int(math.ceil(k))
+    if not piece_length > tol * 2.0 ** levels_left:
+        return AUTO_N_BASE  # the common case (and tol = inf), without the power
+    k = (piece_length / tol) ** (1.0 / levels_left)
+    return N_MAX if not k < N_MAX else max(AUTO_N_BASE, int(math.ceil(k)))
+
+
+_auto_n = scalar(auto_n)
 
 
 class SegmentStack(NamedTuple):
@@ -163,7 +168,7 @@ def rnsca_segment(x0, y0, x1, y1, window, options, st, stack):
         The segment, finite, with finite differences.
     window : Window
     options : CoreOptions
-        Its subdivision fields are read: `n` is N, or 0 for auto (see `auto_n`).
+        Its subdivision fields are read: `n_fixed` is N, or 0 for auto (`auto_n`).
     st : int64 (counters.WIDTH,)
         The block's counter row.
     stack : SegmentStack
@@ -218,7 +223,8 @@ def _subdivide(x0, y0, x1, y1, whole, length, window, options, st, stack):
         fragment, level = _pop(stack, sp)
         level += 1
         step = fragment.tb - fragment.ta
-        n = options.n_fixed if options.n_fixed > 0 else auto_n(step * length, options.auto_piece)
+        n = options.n_fixed if options.n_fixed > 0 else _auto_n(
+            step * length, options.tol, options.max_depth - level + 1)
         # Walk the n children left to right; (pt, px, py, pc) is the current child's start.
         pt = fragment.ta
         px = fragment.xa

@@ -67,7 +67,7 @@ def test_the_method_ids_are_distinct():
 
 
 def test_auto_n_and_the_levels_stay_within_the_option_bounds():
-    assert N_MIN <= constants.AUTO_N_MIN <= N_MAX
+    assert N_MIN <= constants.AUTO_N_BASE <= N_MAX
     assert N_LEVELS == MAX_DEPTH_LIMIT + 1  # one count per level 0..MAX_DEPTH_LIMIT
 
 

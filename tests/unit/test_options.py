@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from rnsca import Backend, InvalidOptionError, Method, Mode, Window
-from rnsca.options import MAX_DEPTH_LIMIT, N_MAX, N_MIN, SegmentOptions
+from rnsca.options import MAX_DEPTH_LIMIT, N_MAX, N_MIN, PathOptions, SegmentOptions
 
 W = Window(0.0, 0.0, 10.0, 4.0)
 
@@ -55,11 +55,34 @@ def test_defaults_for_exact_mode():
     opts = SegmentOptions.resolve(W)
     assert (opts.method, opts.mode, opts.n, opts.max_depth) == (Method.RNSCA, Mode.EXACT, 0, 32)
     assert opts.tolerance == math.inf
-    assert opts.auto_piece == 10.0
 
 
-def test_default_tolerance_in_approx_mode_is_1e_9_of_the_window():
-    assert SegmentOptions.resolve(W, mode="approx").tolerance == 10.0 * 1e-9
+def test_default_tolerance_in_approx_mode_is_a_4096th_of_the_window():
+    assert SegmentOptions.resolve(W, mode="approx").tolerance == 10.0 / 4096
+
+
+@pytest.mark.parametrize(("resolution", "tolerance"), [
+    ("4096px", 10.0 / 4096), ("256PX", 10.0 / 256), (" 1px ", 10.0), (0.25, 0.25),
+    (np.float32(0.5), 0.5), (3, 3.0)])
+def test_resolution_sets_the_approx_tolerance(resolution, tolerance):
+    assert SegmentOptions.resolve(W, mode="approx", resolution=resolution).tolerance == tolerance
+    assert PathOptions.resolve(W, mode="approx", resolution=resolution).tolerance == tolerance
+
+
+@pytest.mark.parametrize("resolution", ["0px", "px", "-3px", "4096", "1.5px", "abc", 0.0, -1.0,
+                                        math.inf, math.nan, "1e3px"])
+def test_a_bad_resolution_is_refused_naming_it(resolution):
+    with pytest.raises(InvalidOptionError, match="resolution must be"):
+        SegmentOptions.resolve(W, mode="approx", resolution=resolution)
+
+
+def test_resolution_is_for_approx_mode_and_not_with_a_tolerance():
+    with pytest.raises(InvalidOptionError, match="applies to mode='approx'"):
+        SegmentOptions.resolve(W, resolution="4096px")
+    with pytest.raises(InvalidOptionError, match="not both"):
+        SegmentOptions.resolve(W, mode="approx", resolution=0.5, tolerance=0.5)
+    with pytest.raises(InvalidOptionError, match="applies to mode='approx'"):
+        PathOptions.resolve(W, resolution="4096px")
 
 
 @pytest.mark.parametrize("n", ["auto", "AUTO", "Auto"])

@@ -420,7 +420,7 @@ class OpenCLBackend:
                 queue, (groups * LOCAL_SIZE,), (LOCAL_SIZE,), _data(device_segments),
                 np.int64(n), xmin, ymin, xmax, ymax, np.int32(METHOD_ID[options.method]),
                 np.int32(options.n), np.int32(options.max_depth), real(options.tolerance),
-                real(options.auto_piece), np.int32(options.mode is Mode.EXACT), _data(result),
+                np.int32(options.mode is Mode.EXACT), _data(result),
                 _data(keep), _data(counters), wait_for=ledger.copy_events))
             m = 0
             if n:
@@ -582,7 +582,7 @@ class OpenCLBackend:
                 _data(d_part_window), _data(d_windows), np.int64(n_chunks), _data(decision),
                 _data(segmented), _data(position), np.int32(METHOD_ID[options.method]),
                 np.int32(options.n), np.int32(options.max_depth), real(options.tolerance),
-                real(options.auto_piece), np.int32(options.mode is Mode.EXACT), _data(keep),
+                np.int32(options.mode is Mode.EXACT), _data(keep),
                 _data(result), _data(chunk_counters)))
             chunk_decision = ledger.from_device(queue, decision[:n_chunks])
             kept = ledger.from_device(queue, keep[:total]).view(np.bool_)

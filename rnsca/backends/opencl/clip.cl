@@ -811,11 +811,11 @@ int midpoint_segment(REAL x0, REAL y0, REAL x1, REAL y1, REAL xmin, REAL ymin,
 
 /* --- kernels/segments.py: RNSCA ----------------------------------------------------- */
 
-int auto_n(REAL piece_length, REAL auto_piece) {
-    if (!(piece_length > AUTO_N_MIN * auto_piece))
-        return AUTO_N_MIN;
-    REAL k = piece_length / auto_piece;
-    return k > N_MAX ? N_MAX : (int)ceil(k);
+int auto_n(REAL piece_length, REAL tol, int levels_left) {
+    if (!(piece_length > tol * pown((REAL)2, levels_left)))
+        return AUTO_N_BASE;
+    REAL k = pow(piece_length / tol, (REAL)1 / levels_left);
+    return !(k < N_MAX) ? N_MAX : max(AUTO_N_BASE, (int)ceil(k));
 }
 
 /* The RNSCA stack, one per work-item: floats (ta, tb, xa, ya, xb, yb), ints (ca, cb, level). */
@@ -848,7 +848,7 @@ int rnsca_decided(REAL x0, REAL y0, REAL x1, REAL y1, int c0, int c1, Counters s
 }
 
 int rnsca_segment(REAL x0, REAL y0, REAL x1, REAL y1, REAL xmin, REAL ymin, REAL xmax,
-                         REAL ymax, int n_fixed, int max_depth, REAL tol, REAL auto_piece,
+                         REAL ymax, int n_fixed, int max_depth, REAL tol,
                          int exact, Counters st, Stack *stack, REAL *out) {
     REAL dx = x1 - x0;
     REAL dy = y1 - y0;
@@ -888,7 +888,7 @@ int rnsca_segment(REAL x0, REAL y0, REAL x1, REAL y1, REAL xmin, REAL ymin, REAL
         int cb = stack->i[sp][1];
         int level = stack->i[sp][2] + 1;
         REAL step = tb - ta;
-        int n = n_fixed > 0 ? n_fixed : auto_n(step * length, auto_piece);
+        int n = n_fixed > 0 ? n_fixed : auto_n(step * length, tol, max_depth - level + 1);
         REAL pt = ta;
         REAL px = stack->f[sp][2];
         REAL py = stack->f[sp][3];
@@ -956,7 +956,7 @@ int rnsca_segment(REAL x0, REAL y0, REAL x1, REAL y1, REAL xmin, REAL ymin, REAL
  * decided ones take one path, without branches up to the end points: the half-planes of
  * the clipped ones' flags (none for the others) are applied to every segment. */
 int rnsca_level0(REAL x0, REAL y0, REAL x1, REAL y1, REAL xmin, REAL ymin, REAL xmax,
-                        REAL ymax, int n_fixed, int max_depth, REAL tol, REAL auto_piece,
+                        REAL ymax, int n_fixed, int max_depth, REAL tol,
                         int exact, Counters st, Stack *stack, REAL *out) {
     int c0 = outcode(x0, y0, xmin, ymin, xmax, ymax);
     int c1 = outcode(x1, y1, xmin, ymin, xmax, ymax);
@@ -965,7 +965,7 @@ int rnsca_level0(REAL x0, REAL y0, REAL x1, REAL y1, REAL xmin, REAL ymin, REAL 
     int split = amb && max_depth > 0 && (fabs(x1 - x0) + fabs(y1 - y0) > tol);
     if (split)
         return rnsca_segment(x0, y0, x1, y1, xmin, ymin, xmax, ymax, n_fixed, max_depth, tol,
-                             auto_piece, exact, st, stack, out);
+                             exact, st, stack, out);
     int clip = amb && exact;
     int flags = clip ? (c0 | c1) : 0;
     COUNT(st, EVALUATED, 1);
@@ -1008,7 +1008,7 @@ __kernel __attribute__((reqd_work_group_size(LOCAL_SIZE, 1, 1)))
 void clip_segments(__global const REAL *segments, const long n, const REAL xmin,
                    const REAL ymin, const REAL xmax, const REAL ymax, const int method,
                    const int n_fixed, const int max_depth, const REAL tol,
-                   const REAL auto_piece, const int exact, __global REAL *result,
+                   const int exact, __global REAL *result,
                    __global long *keep, __global long *counters) {
     __local int st[SEGMENT_COUNTERS];
     clear_counters(st, SEGMENT_COUNTERS);
@@ -1021,7 +1021,7 @@ void clip_segments(__global const REAL *segments, const long n, const REAL xmin,
         if (method == RNSCA) {
             Stack stack;
             kept = rnsca_level0(x0, y0, x1, y1, xmin, ymin, xmax, ymax, n_fixed, max_depth,
-                                tol, auto_piece, exact, st, &stack, out);
+                                tol, exact, st, &stack, out);
         } else if (method == COHEN_SUTHERLAND) {
             kept = cohen_sutherland_segment(x0, y0, x1, y1, xmin, ymin, xmax, ymax, st, out);
         } else if (method == LIANG_BARSKY) {
@@ -1206,7 +1206,7 @@ void clip_chunk_segments(__global const REAL *xy, __global const long *part_offs
                          const long n_chunks, __global const uchar *decision,
                          __global const long *segmented, __global const long *position,
                          const int method, const int n_fixed, const int max_depth,
-                         const REAL tol, const REAL auto_piece, const int exact,
+                         const REAL tol, const int exact,
                          __global uchar *keep, __global REAL *result,
                          __global long *counters) {
     __local int st[COUNTERS_WIDTH];
@@ -1228,7 +1228,7 @@ void clip_chunk_segments(__global const REAL *xy, __global const long *part_offs
                     kept = rnsca_decided(x0, y0, x1, y1, c0, c1, st, out);
                 else
                     kept = rnsca_segment(x0, y0, x1, y1, w.xmin, w.ymin, w.xmax, w.ymax,
-                                         n_fixed, max_depth, tol, auto_piece, exact, st, &stack,
+                                         n_fixed, max_depth, tol, exact, st, &stack,
                                          out);
             } else if (method == COHEN_SUTHERLAND) {
                 kept = cohen_sutherland_segment(x0, y0, x1, y1, w.xmin, w.ymin, w.xmax, w.ymax,

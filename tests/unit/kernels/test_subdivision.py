@@ -5,10 +5,16 @@ split points are easy to place, so each test states the pieces, the parameter in
 and the counters literally.
 """
 
+from fractions import Fraction
+
 import numpy as np
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 
 from rnsca import clip_segments
+from rnsca.constants import N_MAX, N_MIN
+from rnsca.kernels.segments import auto_n
 
 W10 = (0.0, 0.0, 10.0, 10.0)
 ACROSS = [[-5.0, 5.0, 15.0, 5.0]]
@@ -149,3 +155,27 @@ def test_rnsca_decides_inside_and_outside_segments_at_level_0(backend):
 def test_midpoint_bisects_whatever_n_is_asked(backend):
     r = clip_segments(ACROSS, W10, method="midpoint", n=5, backend=backend)
     assert r.options.n == 2
+
+
+@given(st.floats(1e-300, 1e300), st.floats(1e-300, 1e300), st.integers(1, 33))
+def test_auto_n_bisects_unless_the_levels_left_cannot_reach_the_tolerance(length, tol, levels):
+    """``n="auto"``: 2, or the smallest N whose `levels` splits bring the piece to `tol`."""
+    n = auto_n(length, tol, levels)
+    assert N_MIN <= n <= N_MAX
+    need = Fraction(length) / Fraction(tol)  # exact: the split factor the levels must give
+    if need <= 2 ** levels:
+        assert n == 2
+    elif need <= N_MAX ** levels:
+        assert n ** levels >= need * (1 - Fraction(1, 10**12))  # pow() may round by an ulp
+        assert (n - 1) ** levels < need * (1 + Fraction(1, 10**12)) or n == 2
+    else:
+        assert n == N_MAX
+
+
+def test_auto_n_in_approx_mode_bisects_down_to_the_resolution(backend):
+    """The default resolution (a 4096th of the window) and ``n="auto"``: bisection, 13 levels."""
+    r = clip_segments(ACROSS, W10, mode="approx", backend=backend)
+    # 20 long, leaves of at most 10/4096: 20 / 2**13 = 0.0024 <= 0.00244
+    assert r.stats.deepest_level == 13
+    lost = 10.0 - (r.segments[0, 2] - r.segments[0, 0])
+    assert 0.0 <= lost <= 2 * 10.0 / 4096

@@ -211,6 +211,9 @@ def _subdivide(x0, y0, x1, y1, whole, length, window, options, st, stack):
     one interval as they come.
     """
     d = direction(x0, y0, x1, y1)
+    # ``n="auto"`` bisects every piece of this segment when bisection reaches the tolerance
+    # within max_depth (`auto_n` then returns 2 at every level): decided once, here.
+    bisect = length <= options.tol * 2.0 ** options.max_depth
     # The merged interval and its end points.
     lo_t = math.inf
     lo_x = lo_y = 0.0
@@ -223,8 +226,8 @@ def _subdivide(x0, y0, x1, y1, whole, length, window, options, st, stack):
         fragment, level = _pop(stack, sp)
         level += 1
         step = fragment.tb - fragment.ta
-        n = options.n_fixed if options.n_fixed > 0 else _auto_n(
-            step * length, options.tol, options.max_depth - level + 1)
+        n = options.n_fixed if options.n_fixed > 0 else (2 if bisect else _auto_n(
+            step * length, options.tol, options.max_depth - level + 1))
         # Walk the n children left to right; (pt, px, py, pc) is the current child's start.
         pt = fragment.ta
         px = fragment.xa

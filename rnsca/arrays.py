@@ -21,7 +21,13 @@ import numpy.typing as npt
 import shapely
 
 from rnsca.errors import InvalidGeometryError, UnsupportedGeometryError
-from rnsca.kernels.validate import LAYOUT_MESSAGES, all_finite, check_layout, first_open_ring
+from rnsca.kernels.validate import (
+    LAYOUT_MESSAGES,
+    all_finite,
+    check_layout,
+    first_invalid_segment,
+    first_open_ring,
+)
 
 __all__ = ["GeometryKind", "Ragged", "PathArrays", "OUTPUT_KIND", "exclusive_sum",
            "geometry_error", "group_offsets"]
@@ -113,6 +119,28 @@ def _offsets(array: npt.ArrayLike, name: str, length: int,
         raise InvalidGeometryError(
             f"{name} must start at 0, never decrease and end at {length} ({of}){where}")
     return out
+
+
+def check_segment_values(segments: np.ndarray) -> None:
+    """Raise `InvalidGeometryError` naming the first segment that is not finite.
+
+    `segments` is float64 (n, 4), C-contiguous. A segment is refused for a NaN or
+    infinite coordinate, or differences ``x1 - x0``, ``y1 - y0`` that overflow; the
+    error's ``row`` attribute is its index (callers name it in their own terms: the
+    service, a JSON path).
+    """
+    row = int(first_invalid_segment(segments))
+    if row < 0:
+        return
+    values = segments[row].tolist()
+    if not np.isfinite(segments[row]).all():
+        error = InvalidGeometryError(f"segment {row} has a non-finite coordinate: {values}")
+    else:
+        error = InvalidGeometryError(
+            f"segment {row} spans more than float64 can hold (x1 - x0 or y1 - y0 "
+            f"overflows): {values}")
+    error.row = row
+    raise error
 
 
 def geometry_error(index: int, detail: str) -> InvalidGeometryError:

@@ -220,7 +220,9 @@ class ClipBackend(Protocol):
                       options: SegmentOptions) -> SegmentPieces:
         """Return the visible piece of each segment.
 
-        `segments` is float64 (n, 4), C-contiguous, finite, with finite differences.
+        `segments` is float64 (n, 4), C-contiguous; its values are not yet checked: the
+        backend raises `InvalidGeometryError` (`rnsca.arrays.check_segment_values`) for
+        a segment that is not finite or whose differences overflow, and clips nothing.
         """
         ...
 

@@ -7,7 +7,14 @@ from typing import NamedTuple
 import numba
 import numpy as np
 
-from rnsca.arrays import GeometryKind, PathArrays, Ragged, exclusive_sum, group_offsets
+from rnsca.arrays import (
+    GeometryKind,
+    PathArrays,
+    Ragged,
+    check_segment_values,
+    exclusive_sum,
+    group_offsets,
+)
 from rnsca.backends.base import (
     METHOD_ID,
     Capabilities,
@@ -110,6 +117,10 @@ class NumbaBackend:
         else:
             n_chunks = min(numba.get_num_threads(), n_blocks)
             K.clip_segment_blocks(segments, bounds, settings, BLOCK_SIZE, n_chunks, out)
+        if (out.block_count == K.INVALID_BLOCK).any():
+            check_segment_values(segments)  # raises, naming the first bad segment
+            raise AssertionError("the segment kernel found a segment that is not finite, "
+                                 "the check did not")
         m = 0
         for chunk in range(n_chunks):
             first, last = K.chunk_blocks(chunk, n_chunks, n_blocks)

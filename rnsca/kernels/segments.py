@@ -57,12 +57,16 @@ from rnsca.kernels.outcode import (
     wide,
 )
 from rnsca.kernels.records import Fragment
+from rnsca.kernels.validate import finite_span
 
 # Stack rows: floats (ta, tb, xa, ya, xb, yb); ints (ca, cb, level).
 _TA, _TB, _XA, _YA, _XB, _YB = 0, 1, 2, 3, 4, 5
 _CA, _CB, _LEVEL = 0, 1, 2
 # Below this shift (rows), `move_rows` copies on one thread.
 MIN_PARALLEL_SHIFT = 16384
+# `SegmentOutput.block_count` of a block with a segment that is not finite (or whose
+# differences overflow): nothing of it is clipped, and the caller raises.
+INVALID_BLOCK = -1
 
 
 def auto_n(piece_length, tol, levels_left):
@@ -316,6 +320,9 @@ def _write_piece(out, k, i, t0, t1, ax, ay, bx, by, window):
 def _rnsca_block(segments, first, last, window, options, st, k, out):
     """Clip segments ``first:last`` with RNSCA, writing from row `k` on; return the next row.
 
+    Returns `INVALID_BLOCK` instead, having clipped nothing, if one of the segments is
+    not finite or its differences overflow.
+
     Most segments are decided at level 0: accepted, rejected, or (short enough) a
     leaf. That case runs as a few simple branch-free loops over the block, one per
     step, on block-sized scratch columns that stay in cache: loops LLVM vectorizes.
@@ -327,6 +334,7 @@ def _rnsca_block(segments, first, last, window, options, st, k, out):
     tol = options.tol
     exact = options.exact
     size = last - first
+    n_invalid = 0
     x0 = np.empty(size)
     y0 = np.empty(size)
     x1 = np.empty(size)
@@ -372,6 +380,10 @@ def _rnsca_block(segments, first, last, window, options, st, k, out):
         n_clipped += 1 if clip else 0
         n_dropped += 1 if amb & (not exact) & (not spl) else 0
         n_divisions += count_divisions(flags[j])
+        # The input check, fused into this pass (selects only: the loop still vectorizes).
+        n_invalid += 0 if finite_span(x0[j], y0[j], x1[j], y1[j]) else 1
+    if n_invalid:
+        return INVALID_BLOCK  # before anything is counted, split or written
     decided = n_accepted + n_rejected + n_clipped + n_dropped
     st[C.EVALUATED] += decided
     st[C.LEVELS] += decided
@@ -428,15 +440,25 @@ def _rnsca_block(segments, first, last, window, options, st, k, out):
 
 @scalar
 def _clip_block(blk, segments, window, options, block_size, out):
-    """Write block `blk`'s pieces into `out` from row ``out.block_start[blk]`` on."""
+    """Write block `blk`'s pieces into `out` from row ``out.block_start[blk]`` on.
+
+    Its count is `INVALID_BLOCK` if a segment of it is not finite: the check of the
+    input, fused into the clip (the classic methods stop at that segment).
+    """
     st = out.counters[blk]
     first = blk * block_size
     last = min(first + block_size, segments.shape[0])
     k = out.block_start[blk]
     if options.method == RNSCA:
         k = _rnsca_block(segments, first, last, window, options, st, k, out)
+        if k == INVALID_BLOCK:
+            out.block_count[blk] = INVALID_BLOCK
+            return
     else:
         for i in range(first, last):
+            if not finite_span(segments[i, 0], segments[i, 1], segments[i, 2], segments[i, 3]):
+                out.block_count[blk] = INVALID_BLOCK
+                return
             keep, t0, t1, ax, ay, bx, by = clip_one(
                 segments[i, 0], segments[i, 1], segments[i, 2], segments[i, 3],
                 window, options, st)
@@ -464,7 +486,7 @@ def _clip_chunk(chunk, n_chunks, segments, window, options, block_size, out):
     for blk in range(first, last):
         out.block_start[blk] = k
         _clip_block(blk, segments, window, options, block_size, out)
-        k += out.block_count[blk]
+        k += max(out.block_count[blk], 0)
 
 
 @parallel

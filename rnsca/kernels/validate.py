@@ -13,6 +13,12 @@ BLOCK_SIZE = 65536
 
 
 @scalar
+def finite_span(x0, y0, x1, y1):
+    """Return whether a segment is finite with finite differences (see `_has_invalid`)."""
+    return np.isfinite(x1 - x0) & np.isfinite(y1 - y0)
+
+
+@scalar
 def _has_invalid(segments):
     """Return whether a row of `segments` has a non-finite span.
 

@@ -57,7 +57,13 @@ import pyopencl as cl
 import pyopencl.array as cl_array
 
 from rnsca import constants
-from rnsca.arrays import PathArrays, Ragged, exclusive_sum, group_offsets
+from rnsca.arrays import (
+    PathArrays,
+    Ragged,
+    check_segment_values,
+    exclusive_sum,
+    group_offsets,
+)
 from rnsca.backends.base import (
     METHOD_ID,
     Capabilities,
@@ -398,6 +404,7 @@ class OpenCLBackend:
             In float32, for coordinates (or their differences) beyond float32's range,
             or a window that collapses when rounded to float32.
         """
+        check_segment_values(segments)
         real = self.real
         n = segments.shape[0]
         with np.errstate(over="ignore"):  # float32: checked below, with the row named

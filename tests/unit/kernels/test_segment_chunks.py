@@ -62,3 +62,21 @@ def test_parallel_chunks_equal_the_serial_driver(threads, method):
     np.testing.assert_array_equal(got.t, np.concatenate([p.t for p in parts]))
     assert got.stats.fragments_evaluated == sum(p.stats.fragments_evaluated for p in parts)
     assert got.stats.intersections == sum(p.stats.intersections for p in parts)
+
+
+@pytest.mark.parametrize("method", ["rnsca", "cohen_sutherland", "midpoint"])
+@pytest.mark.parametrize(("bad", "message"), [
+    ([0.0, 0.0, np.nan, 1.0], "non-finite coordinate"),
+    ([0.0, -np.inf, 1.0, 1.0], "non-finite coordinate"),
+    ([-1e308, 0.0, 1e308, 1.0], "overflows"),
+])
+def test_the_check_fused_into_the_clip_names_the_first_bad_segment(method, bad, message):
+    """In the parallel driver, with bad rows in two chunks: the first is named."""
+    n = (SERIAL_BLOCKS + 3) * BLOCK_SIZE
+    segments = np.random.default_rng(5).random((n, 4))
+    first = n // 2 + 7
+    segments[first] = bad
+    segments[n - 3] = [np.nan] * 4
+    with pytest.raises(rnsca.InvalidGeometryError, match=f"segment {first} .*{message}") as info:
+        rnsca.clip_segments(segments, (0.25, 0.25, 0.75, 0.75), method=method)
+    assert info.value.row == first

@@ -28,7 +28,8 @@ RUN_KEYS = {
     "pieces_match_reference",
 }
 TARGETS = {"throughput", "copy_floor", "vs_shapely", "vs_cohen_sutherland", "peak_memory",
-           "second_process"}
+           "second_process", "issue15_throughput", "issue15_vs_shapely", "issue15_copy_floor",
+           "issue15_approx", "issue15_peak_memory"}
 GEOMETRY_LABELS = {
     "rnsca:clip_ragged", "rnsca:clip_ragged:interior", "shapely:clip_by_rect",
     "shapely:intersection", "objects:shapely:clip_by_rect", "objects:shapely:intersection",
@@ -243,3 +244,17 @@ def test_svg_suite_times_curve_clipping_against_flatten_then_clip(quick_run):
     assert {"preserve_vs_flatten+rnsca:clip_ragged",
             "preserve_vs_flatten+shapely:intersection"} <= keys
     assert "Issue 4 curve targets" in stdout
+
+
+def test_thread_scaling_runs_one_process_per_thread_count(tmp_path):
+    subprocess.run([sys.executable, "-m", "benchmarks.threads", "--n", "30000", "--threads",
+                    "1,2", "--repeats", "1", "--out", str(tmp_path)],
+                   cwd=ROOT, check=True, capture_output=True, timeout=600)
+    (path,) = tmp_path.glob("threads-*.json")
+    rows = json.loads(path.read_text())["rows"]
+    assert [r["threads"] for r in rows] == [1, 2]
+    for row in rows:
+        assert row["n"] == 30000 and row["segments_per_s"] > 0
+        assert all(row[k] > 0 for k in ("call_seconds", "clip_fresh_seconds", "move_seconds",
+                                         "check_seconds", "read_seconds", "copy_seconds"))
+    assert rows[0]["speedup_over_1"] == 1.0

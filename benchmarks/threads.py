@@ -142,12 +142,12 @@ def measure(n: int, thread_counts: list[int], repeats: int) -> list[dict]:
                               capture_output=True, text=True, check=True)
         row = json.loads(done.stdout.strip().splitlines()[-1])
         rows.append(row)
-        print(f"{threads:3d} threads: call {row['call_seconds'] * 1e3:8.1f} ms "
-              f"({row['segments_per_s'] / 1e6:5.1f} M/s); clip {row['clip_fresh_seconds'] * 1e3:7.1f}"
-              f" (prefaulted {row['clip_prefaulted_seconds'] * 1e3:.1f}), move "
-              f"{row['move_seconds'] * 1e3:.1f}, separate check {row['check_seconds'] * 1e3:.1f}, "
-              f"read {row['read_seconds'] * 1e3:.1f}, copy {row['copy_seconds'] * 1e3:.1f} ms",
-              flush=True)
+        ms = {key: row[key] * 1e3 for key in row if key.endswith("_seconds")}
+        print(f"{threads:3d} threads: call {ms['call_seconds']:8.1f} ms "
+              f"({row['segments_per_s'] / 1e6:5.1f} M/s); clip {ms['clip_fresh_seconds']:7.1f}"
+              f" (prefaulted {ms['clip_prefaulted_seconds']:.1f}), move "
+              f"{ms['move_seconds']:.1f}, separate check {ms['check_seconds']:.1f}, "
+              f"read {ms['read_seconds']:.1f}, copy {ms['copy_seconds']:.1f} ms", flush=True)
     one = next((r for r in rows if r["threads"] == 1), None)
     for row in rows:
         row["speedup_over_1"] = one["call_seconds"] / row["call_seconds"] if one else None

@@ -21,6 +21,7 @@ from fastapi import FastAPI, Request
 from fastapi.exceptions import RequestValidationError
 from pydantic import ValidationError
 from starlette.exceptions import HTTPException as StarletteHTTPException
+from starlette.requests import ClientDisconnect
 from starlette.responses import Response
 
 from rnsca.errors import (
@@ -49,7 +50,12 @@ __all__ = [
     "problem_bytes",
     "install_handlers",
     "json_path",
+    "CLIENT_CLOSED_REQUEST",
 ]
+
+#: The status logged and counted for a request whose client went away before the answer
+#: (nginx's 499, "client closed request"): no server error, and nothing is sent.
+CLIENT_CLOSED_REQUEST = 499
 
 PROBLEM_JSON = "application/problem+json"
 _TYPE_PREFIX = "urn:rnsca:problem:"
@@ -249,6 +255,14 @@ def install_handlers(app: FastAPI) -> None:
             detail = f"{request.method} is not allowed on {request.url.path}"
         return problem(exc.status_code, slug, title, detail, instance=request.url.path,
                        headers=getattr(exc, "headers", None))
+
+    @app.exception_handler(ClientDisconnect)
+    async def _gone(request: Request, exc: ClientDisconnect) -> Response:
+        # Not the server's failure: no traceback, and the access log and metrics count
+        # it as 499 (the response goes nowhere; uvicorn drops it).
+        _log.info("client disconnected before the request was read",
+                  extra={"fields": {"path": request.url.path}})
+        return Response(status_code=CLIENT_CLOSED_REQUEST)
 
     @app.exception_handler(Exception)
     async def _unexpected(request: Request, exc: Exception) -> Response:

@@ -24,7 +24,7 @@ from service.convert import warm_up_svg
 from service.errors import install_handlers
 from service.logs import configure_logging
 from service.metrics import Metrics
-from service.middleware import AccessMiddleware, BodyLimitMiddleware
+from service.middleware import AccessMiddleware, BodyLimitMiddleware, InflateMiddleware
 from service.routes import api_router
 from service.runner import ClipRunner
 from service.schemas import REQUEST_MODELS
@@ -83,6 +83,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
             expose_headers=["X-Rnsca-Pieces", "X-Rnsca-Layout", "X-Rnsca-Stats",
                             "X-Rnsca-Verification"]))
     middleware.append(Middleware(BodyLimitMiddleware, max_bytes=settings.max_body_bytes))
+    middleware.append(Middleware(InflateMiddleware, max_bytes=settings.max_body_bytes))
 
     app = FastAPI(title="rnsca", version=rnsca.__version__, description=_DESCRIPTION,
                   lifespan=lifespan, middleware=middleware, docs_url="/docs",

@@ -94,9 +94,13 @@ async def clip_svg(request: Request, settings: SettingsDep, runner: RunnerDep,
 
 
 class SegmentQuery(BaseModel):
-    """Window and options of a binary request (ignored for JSON bodies)."""
+    """Window and options of a binary request (ignored for JSON bodies).
 
-    model_config = ConfigDict(extra="ignore")
+    Unknown parameters are refused (422), as unknown members of a JSON body are: a
+    misspelt option must not silently clip with the default.
+    """
+
+    model_config = ConfigDict(extra="forbid")
 
     xmin: FiniteFloat | None = None
     ymin: FiniteFloat | None = None
@@ -106,6 +110,7 @@ class SegmentQuery(BaseModel):
     n: Annotated[int, Field(ge=2, le=64)] | None = Field(None, description="Omitted: auto.")
     max_depth: Annotated[int, Field(ge=0, le=32)] | None = None
     tolerance: Annotated[float, Field(gt=0)] | None = None
+    resolution: str | None = Field(None, description="Approx mode: a length, or `<k>px`.")
     mode: Mode | None = None
     backend: BackendName | None = None
     verify: bool | None = None
@@ -135,7 +140,7 @@ async def clip_segments(request: Request, query: Annotated[SegmentQuery, Query()
         options = ClipOptions.model_validate({
             k: v for k, v in query.model_dump(
                 include={"method", "n", "max_depth", "tolerance", "mode", "backend"}).items()
-            if v is not None}, strict=False)
+            if v is not None} | _query_resolution(query.resolution), strict=False)
         body = await request.body()
         outcome = await runner.run(convert.clip_segments_binary, body, window, options,
                                    query.verify, settings)
@@ -143,6 +148,16 @@ async def clip_segments(request: Request, query: Annotated[SegmentQuery, Query()
         body = await _read_json(request)
         outcome = await runner.run(convert.clip_segments_json, body, settings)
     return _respond(outcome, metrics)
+
+
+def _query_resolution(text: str | None) -> dict:
+    """Return ``{"resolution": ...}`` for ClipOptions: a number, or the ``<k>px`` text."""
+    if text is None:
+        return {}
+    try:
+        return {"resolution": float(text)}
+    except ValueError:
+        return {"resolution": text}  # ClipOptions checks the '<k>px' form
 
 
 def _query_window(query: SegmentQuery) -> Window:

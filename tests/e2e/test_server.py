@@ -4,6 +4,7 @@ error status, the binary form, gzip, concurrency and graceful shutdown."""
 from __future__ import annotations
 
 import gzip
+import re
 import threading
 import time
 from concurrent.futures import ThreadPoolExecutor
@@ -340,3 +341,28 @@ def test_graceful_shutdown_finishes_the_request_in_flight():
             httpx.get(live.url + "/healthz", timeout=2)
     finally:
         live.stop()
+
+
+def test_a_client_that_disconnects_mid_upload_is_a_499_not_a_server_error(server, client):
+    """Content-Length 1000, 22 bytes, then close: logged and counted as 499, no traceback."""
+    import socket
+
+    for _ in range(2):
+        with socket.create_connection(("127.0.0.1", server.port)) as raw:
+            raw.sendall(b"POST /v1/clip/geojson HTTP/1.1\r\nHost: 127.0.0.1\r\n"
+                        b"Content-Type: application/json\r\nContent-Length: 1000\r\n\r\n"
+                        b'{"window": [0, 0, 1, 1')
+    deadline = time.monotonic() + 10
+    text = ""
+    while time.monotonic() < deadline:
+        text = client.get("/metrics").text
+        if 'route="/v1/clip/geojson",status="499"' in text:
+            break
+        time.sleep(0.1)
+    assert re.search(r'rnsca_http_requests_total\{method="POST",route="/v1/clip/geojson",'
+                     r'status="499"\} 2(\.0)?\n', text), text
+    assert 'status="500"' not in text
+    log = server.log()
+    assert "client disconnected" in log
+    assert "Traceback" not in log and "ClientDisconnect" not in log
+    assert client.get("/healthz").status_code == 200

@@ -2,6 +2,7 @@
 threading-layer decision and the problem documents."""
 
 import numpy as np
+import orjson
 import pytest
 
 import rnsca
@@ -120,6 +121,45 @@ def test_binary_body_not_a_multiple_of_32_bytes_is_422(client):
     assert r.status_code == 422 and r.json()["path"].startswith("query.")
 
 
+def test_binary_request_refuses_unknown_query_parameters_naming_them(client):
+    body = np.array([[-5.0, 5.0, 15.0, 5.0]], dtype="<f8").tobytes()
+    window = {"xmin": 0, "ymin": 0, "xmax": 10, "ymax": 10}
+    r = client.post("/v1/clip/segments", content=body,
+                    params={**window, "metod": "liang_barsky"},
+                    headers={"Content-Type": "application/octet-stream"})
+    assert r.status_code == 422 and r.json()["path"] == "query.metod", r.text
+    r = client.post("/v1/clip/segments", content=body, params={**window, "method": "liang_barsky"},
+                    headers={"Content-Type": "application/octet-stream"})
+    assert r.status_code == 200 and r.headers["X-Rnsca-Method"] == "liang_barsky"
+
+
+@pytest.mark.parametrize(("resolution", "depth"), [("16px", 5), ("0.625", 5), (None, 13)])
+def test_binary_and_json_requests_take_the_approx_resolution(client, resolution, depth):
+    """20 long across a window of 10: bisection down to 10/16 takes 5 levels."""
+    body = np.array([[-5.0, 5.0, 15.0, 5.0]], dtype="<f8").tobytes()
+    params = {"xmin": 0, "ymin": 0, "xmax": 10, "ymax": 10, "mode": "approx"}
+    if resolution is not None:
+        params["resolution"] = resolution
+    r = client.post("/v1/clip/segments", content=body, params=params,
+                    headers={"Content-Type": "application/octet-stream"})
+    assert r.status_code == 200, r.text
+    assert orjson.loads(r.headers["X-Rnsca-Stats"])["deepest_level"] == depth
+    options = {"mode": "approx"} | ({} if resolution is None else {
+        "resolution": resolution if resolution.endswith("px") else float(resolution)})
+    r = client.post("/v1/clip/segments", json={"window": WINDOW, "segments": [[-5, 5, 15, 5]],
+                                               "options": options})
+    assert r.status_code == 200 and r.json()["stats"]["deepest_level"] == depth
+
+
+@pytest.mark.parametrize("resolution", ["abc", "0px", "-1", "nan"])
+def test_a_bad_resolution_is_422(client, resolution):
+    r = client.post("/v1/clip/segments", content=b"\0" * 32,
+                    params={"xmin": 0, "ymin": 0, "xmax": 1, "ymax": 1, "mode": "approx",
+                            "resolution": resolution},
+                    headers={"Content-Type": "application/octet-stream"})
+    assert r.status_code == 422, r.text
+
+
 class _FakeNumba:
     def __init__(self, layer):
         self.layer = layer
@@ -164,3 +204,54 @@ def test_svg_path_text_is_read_once_and_verified_from_the_arrays(monkeypatch):
     body = r.json()
     assert body["verification"]["passed"] is True and len(body["paths"]) == 2
     assert len(calls) == 1
+
+
+def _gzip_members(member: bytes, count: int) -> bytes:
+    return b"".join([member] * count)
+
+
+def test_gzip_request_bodies_are_inflated_within_the_body_limit():
+    import gzip
+
+    request = {"window": WINDOW, "segments": [[-5, 5, 15, 5]] * 200, "verify": False}
+    plain = orjson.dumps(request)
+    with make_client(max_body_bytes=1 << 20, warm_up=False) as client:
+        expected = client.post("/v1/clip/segments", content=plain,
+                               headers={"Content-Type": "application/json"})
+        assert expected.status_code == 200
+        for body in (gzip.compress(plain), _gzip_members(gzip.compress(plain[:100]), 1)
+                     + gzip.compress(plain[100:])):  # one member, or two
+            r = client.post("/v1/clip/segments", content=body,
+                            headers={"Content-Type": "application/json",
+                                     "Content-Encoding": "gzip"})
+            assert r.status_code == 200, r.text
+            assert r.json()["segments"] == expected.json()["segments"]
+
+
+def test_a_gzip_bomb_is_413_after_inflating_no_more_than_the_limit():
+    import gzip
+    import time
+
+    # 2,048 members of 1 MiB of zeros: 2 GiB inflated from about 2 MB sent.
+    bomb = _gzip_members(gzip.compress(b"\0" * (1 << 20), 9), 2048)
+    with make_client(max_body_bytes=8 << 20, warm_up=False) as client:
+        started = time.perf_counter()
+        r = client.post("/v1/clip/segments", content=bomb,
+                        headers={"Content-Type": "application/json", "Content-Encoding": "gzip"})
+        assert r.status_code == 413 and r.json()["type"].endswith("body-too-large"), r.text
+        assert "inflates to more than" in r.json()["detail"]
+        assert time.perf_counter() - started < 10  # inflating 2 GiB would take far longer
+
+
+@pytest.mark.parametrize(("body", "encoding", "status"), [
+    (b"not gzip at all", "gzip", 422),
+    (b"\x1f\x8b\x08\x00\x00\x00\x00\x00\x00\x03", "gzip", 422),  # a header, then nothing
+    (b"{}", "br", 415),
+])
+def test_broken_or_unknown_request_encodings_are_refused(body, encoding, status):
+    with make_client(warm_up=False) as client:
+        r = client.post("/v1/clip/segments", content=body,
+                        headers={"Content-Type": "application/json",
+                                 "Content-Encoding": encoding})
+        assert r.status_code == status, r.text
+        assert r.headers["content-type"] == "application/problem+json"

@@ -255,3 +255,16 @@ def test_broken_or_unknown_request_encodings_are_refused(body, encoding, status)
                                  "Content-Encoding": encoding})
         assert r.status_code == status, r.text
         assert r.headers["content-type"] == "application/problem+json"
+
+
+@pytest.mark.parametrize("verify", [True, False])
+def test_positions_of_four_numbers_give_one_answer_with_or_without_verification(verify):
+    """RFC 7946 positions beyond three numbers: read as 3D (the rest dropped), documented."""
+    line = {"type": "LineString", "coordinates": [[-5, 5, 1, 2], [15, 5, 3, 4]]}
+    with make_client(warm_up=False) as client:
+        r = client.post("/v1/clip/geojson", json={"window": WINDOW, "geojson": line,
+                                                  "verify": verify})
+        assert r.status_code == 200, r.text
+        assert r.json()["geojson"]["coordinates"] == [[0.0, 5.0, 1.5], [10.0, 5.0, 2.5]]
+        if verify:
+            assert r.json()["verification"]["passed"]

@@ -24,7 +24,7 @@ from contextlib import nullcontext
 from typing import Any, TypeVar
 
 from rnsca.runtime import numba_threads_started
-from service.errors import TimeLimitError
+from service.errors import NotReadyError, TimeLimitError
 
 __all__ = ["ClipRunner"]
 
@@ -52,6 +52,8 @@ class ClipRunner:
         self._pool: ThreadPoolExecutor | None = None
         self.time_limit = time_limit
         self.ready = threading.Event()
+        # Set while `start` warms up: requests meanwhile get 503 at once, not after a wait.
+        self.warming = False
         self.threading_layer: str | None = None
         self.warm_up_seconds: float | None = None
         self.failure: str | None = None
@@ -80,11 +82,18 @@ class ClipRunner:
         `ready` when done.
         """
         started = time.perf_counter()
-        for engine in backends:
-            if hasattr(engine, "warm_up"):
-                engine.warm_up()
-        for function in extra:
-            function()
+        steps = [(f"{type(engine).__name__}.warm_up", engine.warm_up) for engine in backends
+                 if hasattr(engine, "warm_up")]
+        steps += [(getattr(function, "__name__", repr(function)), function)
+                  for function in extra]
+        for name, step in steps:
+            # One line before and one after each step: a cold start compiles for minutes,
+            # and the log says what it is doing.
+            _log.info("warming up", extra={"fields": {"step": name}})
+            step_started = time.perf_counter()
+            step()
+            _log.info("warmed up", extra={"fields": {
+                "step": name, "seconds": round(time.perf_counter() - step_started, 3)}})
         self.settle()
         self.warm_up_seconds = time.perf_counter() - started
         self.ready.set()
@@ -113,15 +122,26 @@ class ClipRunner:
                     extra: Iterable[Callable[[], object]] = ()) -> None:
         """Warm up in the pool, off the event loop (so `/healthz` answers meanwhile)."""
         loop = asyncio.get_running_loop()
+        self.warming = True
         try:
             await loop.run_in_executor(self._executor(), self._call, self.warm_up,
                                        (backends, extra))
         except Exception as exc:  # reported by /readyz; the process keeps answering
             self.failure = f"{type(exc).__name__}: {exc}"
             _log.error("warming up the kernels failed", exc_info=exc)
+        finally:
+            self.warming = False
 
     async def run(self, function: Callable[..., _T], *args: Any) -> _T:
-        """Return ``function(*args)`` run in the pool; raise `TimeLimitError` past the limit."""
+        """Return ``function(*args)`` run in the pool; raise `TimeLimitError` past the limit.
+
+        While the kernels warm up, raise `NotReadyError` (503, ``Retry-After``) at once:
+        a request would otherwise wait behind the compilation and time out.
+        """
+        if self.warming and not self.ready.is_set():
+            raise NotReadyError(
+                "the server is compiling or loading its kernels (see /readyz); retry shortly",
+                headers={"Retry-After": "2"})
         loop = asyncio.get_running_loop()
         future = loop.run_in_executor(self._executor(), self._call, function, args)
         try:

@@ -268,3 +268,41 @@ def test_positions_of_four_numbers_give_one_answer_with_or_without_verification(
         assert r.json()["geojson"]["coordinates"] == [[0.0, 5.0, 1.5], [10.0, 5.0, 2.5]]
         if verify:
             assert r.json()["verification"]["passed"]
+
+
+def test_a_clip_during_warm_up_is_503_not_ready_at_once_then_served(monkeypatch):
+    import logging
+    import threading
+    import time
+
+    from service import main
+
+    release = threading.Event()
+
+    def slow_warm_up():  # stands in for a cold compile
+        release.wait(20)
+
+    monkeypatch.setattr(main, "warm_up_svg", slow_warm_up)
+    request = {"window": WINDOW, "segments": [[-5, 5, 15, 5]]}
+    records: list[logging.LogRecord] = []
+    handler = logging.Handler()
+    handler.emit = records.append  # type: ignore[method-assign]
+    logger = logging.getLogger("rnsca.service")
+    unstarted = make_client(warm_up=True)  # the app (and its logging) is made here
+    logger.addHandler(handler)
+    with unstarted as client:
+        started = time.perf_counter()
+        r = client.post("/v1/clip/segments", json=request)
+        assert r.status_code == 503 and r.json()["type"].endswith("not-ready"), r.text
+        assert r.headers["Retry-After"] == "2"
+        assert time.perf_counter() - started < 5  # not after the 30 s time limit
+        assert client.get("/readyz").status_code == 503
+        release.set()
+        deadline = time.monotonic() + 60
+        while client.get("/readyz").status_code != 200 and time.monotonic() < deadline:
+            time.sleep(0.05)
+        assert client.post("/v1/clip/segments", json=request).status_code == 200
+    logger.removeHandler(handler)
+    steps = [getattr(r, "fields", {}).get("step") for r in records
+             if r.getMessage() == "warmed up"]
+    assert "slow_warm_up" in steps and any(s.endswith(".warm_up") for s in steps)

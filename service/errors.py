@@ -45,6 +45,7 @@ __all__ = [
     "TooManyVerticesError",
     "WorkOverBudgetError",
     "TimeLimitError",
+    "RequestTimeoutError",
     "NotReadyError",
     "problem",
     "problem_bytes",
@@ -120,6 +121,12 @@ class TimeLimitError(ServiceError):
     """The request waited for and ran longer than ``request_time_limit`` (server load)."""
 
     status, slug, title = 503, "time-limit", "Request time limit exceeded"
+
+
+class RequestTimeoutError(ServiceError):
+    """The client did not send its whole body within the request's time limit."""
+
+    status, slug, title = 408, "request-timeout", "Request timeout"
 
 
 class NotReadyError(ServiceError):

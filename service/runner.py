@@ -24,7 +24,7 @@ from contextlib import nullcontext
 from typing import Any, TypeVar
 
 from rnsca.runtime import numba_threads_started
-from service.errors import NotReadyError, TimeLimitError
+from service.errors import NotReadyError, RequestTimeoutError, TimeLimitError
 
 __all__ = ["ClipRunner"]
 
@@ -132,8 +132,27 @@ class ClipRunner:
         finally:
             self.warming = False
 
-    async def run(self, function: Callable[..., _T], *args: Any) -> _T:
+    async def read_body(self, request: Any) -> tuple[bytes, float]:
+        """Return the request's body and the time the request has left, within the limit.
+
+        The time limit runs from here, so it covers reading the body: a client that sends
+        slowly (or not at all) gets `RequestTimeoutError` (408) and the connection closed.
+        """
+        started = time.monotonic()
+        try:
+            body = await asyncio.wait_for(request.body(), self.time_limit)
+        except TimeoutError:
+            raise RequestTimeoutError(
+                f"the request body did not arrive within the time limit of "
+                f"{self.time_limit:g} s", headers={"Connection": "close"}) from None
+        return body, self.time_limit - (time.monotonic() - started)
+
+    async def run(self, function: Callable[..., _T], *args: Any,
+                  time_left: float | None = None) -> _T:
         """Return ``function(*args)`` run in the pool; raise `TimeLimitError` past the limit.
+
+        `time_left` is what is left of the request's limit after reading its body
+        (`read_body`); by default the whole limit.
 
         While the kernels warm up, raise `NotReadyError` (503, ``Retry-After``) at once:
         a request would otherwise wait behind the compilation and time out.
@@ -145,7 +164,8 @@ class ClipRunner:
         loop = asyncio.get_running_loop()
         future = loop.run_in_executor(self._executor(), self._call, function, args)
         try:
-            return await asyncio.wait_for(future, self.time_limit)
+            return await asyncio.wait_for(
+                future, self.time_limit if time_left is None else max(time_left, 0.001))
         except TimeoutError:
             raise TimeLimitError(
                 f"the request did not finish within the time limit of {self.time_limit:g} s "

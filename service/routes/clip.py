@@ -14,6 +14,7 @@ from service import convert
 from service.deps import MetricsDep, RunnerDep, SettingsDep
 from service.errors import UnsupportedMediaTypeError
 from service.metrics import Metrics
+from service.runner import ClipRunner
 from service.schemas import (
     BackendName,
     ClipGeoJSONRequest,
@@ -55,12 +56,13 @@ def _media_type(request: Request) -> str:
     return request.headers.get("content-type", "").split(";")[0].strip().lower()
 
 
-async def _read_json(request: Request) -> bytes:
+async def _read_json(request: Request, runner: ClipRunner) -> tuple[bytes, float]:
+    """Return the JSON body (unparsed) and the time the request has left."""
     media = _media_type(request)
     if media != "application/json" and not media.endswith("+json"):
         raise UnsupportedMediaTypeError(
             f"send the body as application/json, got {media or 'no Content-Type'}")
-    return await request.body()
+    return await runner.read_body(request)
 
 
 def _respond(outcome: convert.Outcome, metrics: Metrics) -> Response:
@@ -79,8 +81,9 @@ async def clip_geojson(request: Request, settings: SettingsDep, runner: RunnerDe
     Properties, ids and foreign members are kept; a geometry takes the type of what is
     left (a LineString cut in two becomes a MultiLineString).
     """
-    body = await _read_json(request)
-    return _respond(await runner.run(convert.clip_geojson, body, settings), metrics)
+    body, time_left = await _read_json(request, runner)
+    return _respond(await runner.run(convert.clip_geojson, body, settings,
+                                     time_left=time_left), metrics)
 
 
 @router.post("/svg", response_model=ClipSVGResponse,
@@ -89,8 +92,9 @@ async def clip_geojson(request: Request, settings: SettingsDep, runner: RunnerDe
 async def clip_svg(request: Request, settings: SettingsDep, runner: RunnerDep,
                    metrics: MetricsDep) -> Response:
     """Return each path's data clipped to the window (curves kept or flattened)."""
-    body = await _read_json(request)
-    return _respond(await runner.run(convert.clip_svg, body, settings), metrics)
+    body, time_left = await _read_json(request, runner)
+    return _respond(await runner.run(convert.clip_svg, body, settings, time_left=time_left),
+                    metrics)
 
 
 class SegmentQuery(BaseModel):
@@ -141,12 +145,13 @@ async def clip_segments(request: Request, query: Annotated[SegmentQuery, Query()
             k: v for k, v in query.model_dump(
                 include={"method", "n", "max_depth", "tolerance", "mode", "backend"}).items()
             if v is not None} | _query_resolution(query.resolution), strict=False)
-        body = await request.body()
+        body, time_left = await runner.read_body(request)
         outcome = await runner.run(convert.clip_segments_binary, body, window, options,
-                                   query.verify, settings)
+                                   query.verify, settings, time_left=time_left)
     else:
-        body = await _read_json(request)
-        outcome = await runner.run(convert.clip_segments_json, body, settings)
+        body, time_left = await _read_json(request, runner)
+        outcome = await runner.run(convert.clip_segments_json, body, settings,
+                                   time_left=time_left)
     return _respond(outcome, metrics)
 
 

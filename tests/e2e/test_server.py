@@ -369,3 +369,28 @@ def test_a_client_that_disconnects_mid_upload_is_a_499_not_a_server_error(server
     assert "client disconnected" in log
     assert "Traceback" not in log and "ClientDisconnect" not in log, log
     assert client.get("/healthz").status_code == 200
+
+
+def test_the_time_limit_covers_reading_the_body():
+    """A client that stops sending its body gets 408 when the request's time limit ends."""
+    import socket
+
+    with LiveServer(env={"RNSCA_REQUEST_TIME_LIMIT": "2"}) as live:
+        with socket.create_connection(("127.0.0.1", live.port), timeout=20) as raw:
+            started = time.monotonic()
+            raw.sendall(b"POST /v1/clip/segments HTTP/1.1\r\nHost: 127.0.0.1\r\n"
+                        b"Content-Type: application/json\r\nContent-Length: 100\r\n\r\n"
+                        b'{"window": [0, 0,')  # then nothing more
+            answer = b""
+            while b"\r\n\r\n" not in answer:
+                chunk = raw.recv(65536)
+                if not chunk:
+                    break
+                answer += chunk
+            waited = time.monotonic() - started
+        assert answer.startswith(b"HTTP/1.1 408"), answer[:200]
+        assert b"application/problem+json" in answer
+        assert 1.5 < waited < 10
+        with httpx.Client(base_url=live.url, timeout=30) as client:  # it keeps serving
+            assert client.post("/v1/clip/segments", json={
+                "window": WINDOW, "segments": [[-5, 5, 15, 5]]}).status_code == 200

@@ -6,12 +6,12 @@ import orjson
 import pytest
 
 import rnsca
-from service import Settings
+from service import Settings, create_app
 from service.budget import segment_work
 from service.errors import json_path
 from service.runner import ClipRunner
 from service.schemas import ClipOptions
-from tests.service.conftest import make_client
+from tests.service.conftest import TestClient, make_client
 
 WINDOW = [0, 0, 10, 10]
 
@@ -288,7 +288,8 @@ def test_a_clip_during_warm_up_is_503_not_ready_at_once_then_served(monkeypatch)
     handler = logging.Handler()
     handler.emit = records.append  # type: ignore[method-assign]
     logger = logging.getLogger("rnsca.service")
-    unstarted = make_client(warm_up=True)  # the app (and its logging) is made here
+    # The app (and its logging) is made here; a plain TestClient does not wait for ready.
+    unstarted = TestClient(create_app(Settings(warm_up=True)))
     logger.addHandler(handler)
     with unstarted as client:
         started = time.perf_counter()

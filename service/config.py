@@ -76,6 +76,15 @@ class Settings(BaseSettings):
     """Numba threading layer, applied unless ``NUMBA_THREADING_LAYER`` is set."""
     graceful_shutdown_seconds: PositiveFloat = 60.0
     """On SIGTERM, how long requests in flight may take to finish."""
+    header_timeout_seconds: PositiveFloat = 10.0
+    """Seconds a request head (request line and headers) may take to arrive, on a new
+    connection or the next request of a kept-alive one; past it the connection is closed.
+    The body has the request's time limit (408 past it)."""
+    idle_timeout_seconds: PositiveInt = 5
+    """A kept-alive connection idle this long after a response is closed."""
+    max_connections: PositiveInt = 512
+    """Open connections (and requests in flight) at most, per worker; past it uvicorn
+    answers 503 at once (its own plain-text answer)."""
 
     @field_validator("cors_origins", mode="before")
     @classmethod

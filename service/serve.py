@@ -6,6 +6,7 @@ import uvicorn
 
 from service.config import Settings
 from service.logs import uvicorn_log_config
+from service.protocol import HeadTimeoutProtocol
 
 __all__ = ["serve"]
 
@@ -23,4 +24,8 @@ def serve(settings: Settings | None = None) -> None:
                 log_config=uvicorn_log_config(settings.log_level),
                 log_level=settings.log_level, access_log=False,
                 timeout_graceful_shutdown=int(settings.graceful_shutdown_seconds),
-                server_header=False, proxy_headers=True)
+                server_header=False, proxy_headers=True,
+                # Hostile clients: a deadline for request heads, idle connections closed,
+                # and a cap on connections.
+                http=HeadTimeoutProtocol, timeout_keep_alive=settings.idle_timeout_seconds,
+                limit_concurrency=settings.max_connections)

@@ -394,3 +394,48 @@ def test_the_time_limit_covers_reading_the_body():
         with httpx.Client(base_url=live.url, timeout=30) as client:  # it keeps serving
             assert client.post("/v1/clip/segments", json={
                 "window": WINDOW, "segments": [[-5, 5, 15, 5]]}).status_code == 200
+
+
+def test_silent_and_slow_clients_are_closed_and_connections_capped():
+    """Request heads have a deadline (1 s here), and past 4 connections uvicorn says 503."""
+    import socket
+
+    def closed_within(raw: socket.socket, seconds: float, trickle: bytes = b"") -> float:
+        started = time.monotonic()
+        raw.settimeout(0.3)
+        for byte in trickle or b"\0" * 1000:
+            if trickle:
+                try:
+                    raw.sendall(bytes([byte]))
+                except OSError:
+                    return time.monotonic() - started
+            try:
+                if raw.recv(65536) == b"":
+                    return time.monotonic() - started
+            except TimeoutError:
+                pass
+            except OSError:
+                return time.monotonic() - started
+            if time.monotonic() - started > seconds:
+                break
+        return float("inf")
+
+    with LiveServer(env={"RNSCA_HEADER_TIMEOUT_SECONDS": "1", "RNSCA_MAX_CONNECTIONS": "4"}
+                    ) as live:
+        address = ("127.0.0.1", live.port)
+        with socket.create_connection(address) as silent:
+            assert closed_within(silent, 10) < 5
+        with socket.create_connection(address) as slow:  # one byte every 0.3 s
+            head = b"GET /healthz HTTP/1.1\r\nHost: 127.0.0.1\r\nX-Padding: " + b"a" * 100
+            assert closed_within(slow, 10, trickle=head) < 5
+        idle = [socket.create_connection(address) for _ in range(4)]
+        try:
+            with httpx.Client(base_url=live.url, timeout=10) as client:
+                assert client.get("/healthz").status_code == 503  # the fifth connection
+        finally:
+            for raw in idle:
+                raw.close()
+        time.sleep(0.5)
+        with httpx.Client(base_url=live.url, timeout=10) as client:
+            assert client.get("/healthz").status_code == 200
+        assert "request head did not arrive in time" in live.log()

@@ -51,7 +51,7 @@ import rnsca
 from benchmarks import datasets
 from benchmarks.machine import describe_machine, load_average, source_digest
 from benchmarks.plot_paper import draw_decided, draw_intersections, draw_table2
-from benchmarks.timing import Contender, Policy, time_round_robin
+from benchmarks.timing import Contender, Policy, full_policy, time_round_robin
 from rnsca.backends.numba_cpu import BLOCK_SIZE, SERIAL_BLOCKS
 from rnsca.runtime import configure_process
 
@@ -317,14 +317,6 @@ def evaluate_claims(table2: list[dict], decided: list[dict]) -> list[dict]:
 # --------------------------------------------------------------------------- the run
 
 
-def _full_policy(n: int) -> Policy:
-    if n >= 10_000_000:
-        return Policy(min_sample=0.05, budget=10.0, min_repeats=2, max_repeats=3)
-    if n >= 1_000_000:
-        return Policy(min_sample=0.05, budget=3.0, min_repeats=3, max_repeats=5)
-    return Policy(min_sample=0.05, budget=1.5, min_repeats=3, max_repeats=7)
-
-
 _QUICK_POLICY = Policy(min_sample=0.002, budget=0.01, min_repeats=1, max_repeats=1)
 _SWEEP_POLICY = Policy(min_sample=0.05, budget=1.0, min_repeats=2, max_repeats=5)
 
@@ -358,7 +350,7 @@ def run(quick: bool = False, out_dir: Path = DEFAULT_OUT, max_size: int | None =
     config = build_config(quick, max_size)
     machine = describe_machine(PROJECT_ROOT)
     log(f"paper: Table 2 sizes {config['sizes']}, families at {config['family_n']}")
-    table2 = run_table2(config["sizes"], (lambda n: _QUICK_POLICY) if quick else _full_policy,
+    table2 = run_table2(config["sizes"], (lambda n: _QUICK_POLICY) if quick else full_policy,
                         log=log)
     decided = run_decided(config["family_n"], _QUICK_POLICY if quick else _SWEEP_POLICY, log=log)
     intersections = run_intersections(config["family_n"], log=log)
@@ -386,7 +378,7 @@ def run(quick: bool = False, out_dir: Path = DEFAULT_OUT, max_size: int | None =
             "paper_shallow_claim": list(PAPER_SHALLOW),
             "environment": {name: os.environ.get(name) for name in THREADING_ENV},
             "policies": ({"all": vars(_QUICK_POLICY)} if quick else
-                         {"table2": {str(n): vars(_full_policy(n)) for n in config["sizes"]},
+                         {"table2": {str(n): vars(full_policy(n)) for n in config["sizes"]},
                           "decided": vars(_SWEEP_POLICY)}),
             "timing": ("best (min) of repeats; the contenders of a workload (table2) or the "
                        "values of N of one family and mode (decided) timed round-robin; "

@@ -46,7 +46,7 @@ from benchmarks.machine import describe_machine, load_average, source_digest
 from benchmarks.plot import draw_figure5
 from benchmarks.report import print_geometry_summary, print_summary
 from benchmarks.startup import measure_startup
-from benchmarks.timing import Policy
+from benchmarks.timing import Policy, full_policy
 from rnsca.backends.registry import configure_opencl
 from rnsca.runtime import configure_process
 
@@ -61,14 +61,6 @@ HERE = Path(__file__).resolve().parent
 PROJECT_ROOT = HERE.parent
 DEFAULT_OUT = HERE / "results"
 FIGURE_COPY = HERE / "figure5.png"
-
-
-def _full_policy(n: int) -> Policy:
-    if n >= 10_000_000:
-        return Policy(min_sample=0.05, budget=10.0, min_repeats=2, max_repeats=3)
-    if n >= 1_000_000:
-        return Policy(min_sample=0.05, budget=3.0, min_repeats=3, max_repeats=5)
-    return Policy(min_sample=0.05, budget=1.5, min_repeats=3, max_repeats=7)
 
 
 def _quick_policy(n: int) -> Policy:
@@ -86,7 +78,7 @@ def build_config(quick: bool, sizes: list[int] | None, shapely_10m: str) -> dict
     else:
         uniform = sizes or [*datasets.PAPER_SIZES, *datasets.LARGE_SIZES]
         shaped_n = 1_000_000
-        plan = Plan(policy_for=_full_policy,
+        plan = Plan(policy_for=full_policy,
                     shapely_extrapolate_from=10_000_000 if shapely_10m == "extrapolate" else None)
     sweep_uniform = min(uniform, key=lambda n: abs(n - shaped_n))
     return {"uniform_sizes": sorted(uniform), "shaped_n": shaped_n, "plan": plan,

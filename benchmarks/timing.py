@@ -15,7 +15,7 @@ import tracemalloc
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
-__all__ = ["Policy", "Contender", "time_round_robin", "peak_traced_bytes"]
+__all__ = ["Policy", "Contender", "time_round_robin", "peak_traced_bytes", "full_policy"]
 
 
 @dataclass(frozen=True)
@@ -123,3 +123,12 @@ def peak_traced_bytes(call: Callable[[], object]) -> tuple[int, object]:
     finally:
         tracemalloc.stop()
     return peak - before, result
+
+
+def full_policy(n: int) -> Policy:
+    """Return the timing policy of a full run for an input of `n` segments."""
+    if n >= 10_000_000:
+        return Policy(min_sample=0.05, budget=10.0, min_repeats=2, max_repeats=3)
+    if n >= 1_000_000:
+        return Policy(min_sample=0.05, budget=3.0, min_repeats=3, max_repeats=5)
+    return Policy(min_sample=0.05, budget=1.5, min_repeats=3, max_repeats=7)

@@ -32,7 +32,15 @@ async def _send_problem(send: Send, status: int, slug: str, title: str, detail: 
     await send({"type": "http.response.body", "body": body})
 
 
-class BodyLimitMiddleware:
+class _BodyMiddleware:
+    """A middleware over request bodies, bounded by `max_bytes`."""
+
+    def __init__(self, app: ASGIApp, max_bytes: int) -> None:
+        self.app = app
+        self.max_bytes = max_bytes
+
+
+class BodyLimitMiddleware(_BodyMiddleware):
     """Refuse bodies over `max_bytes` with 413, before the application reads them whole.
 
     A ``Content-Length`` over the limit is refused at once, unread. A body without one
@@ -40,10 +48,6 @@ class BodyLimitMiddleware:
     `BodyTooLargeError` is raised from ``receive`` inside the route, where the service's
     handler answers it (and, should the response not have started otherwise, here).
     """
-
-    def __init__(self, app: ASGIApp, max_bytes: int) -> None:
-        self.app = app
-        self.max_bytes = max_bytes
 
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:  # noqa: D102
         if scope["type"] != "http":
@@ -84,7 +88,7 @@ class BodyLimitMiddleware:
                                 limit=limit)
 
 
-class InflateMiddleware:
+class InflateMiddleware(_BodyMiddleware):
     """Read ``Content-Encoding: gzip`` request bodies, inflated as they arrive, bounded.
 
     The inflated body counts against the same `max_bytes` as a plain one
@@ -93,10 +97,6 @@ class InflateMiddleware:
     to refuse (413). Broken or truncated gzip data is 422; another encoding is 415. The
     application sees a plain body: the encoding and length headers are taken away.
     """
-
-    def __init__(self, app: ASGIApp, max_bytes: int) -> None:
-        self.app = app
-        self.max_bytes = max_bytes
 
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:  # noqa: D102
         if scope["type"] != "http":

@@ -4,7 +4,7 @@ Usage::
 
     python -m benchmarks.run                    # full run of every suite (make bench)
     python -m benchmarks.run --quick            # small sizes only, a smoke test
-    python -m benchmarks.run --suite svg        # one suite: segments, geometry, svg or paper
+    python -m benchmarks.run --suite svg        # one suite: segments, geometry, svg, paper, load
     RNSCA_BENCH_QUICK=1 python -m benchmarks.run
     RNSCA_OPENCL_DEVICE=1:0 python -m benchmarks.run   # OpenCL contenders on that device
 
@@ -34,7 +34,7 @@ from pathlib import Path
 
 import numba
 
-from benchmarks import bench_curves, bench_geometry, bench_svg, datasets, paper
+from benchmarks import bench_curves, bench_geometry, bench_svg, datasets, load, paper
 from benchmarks.bench_segments import (
     Plan,
     backend_unavailable_reason,
@@ -53,7 +53,7 @@ from rnsca.runtime import configure_process
 SCHEMA = "rnsca-bench-segments/1"
 GEOMETRY_SCHEMA = "rnsca-bench-geometry/1"
 SVG_SCHEMA = "rnsca-bench-svg/1"
-SUITES = ("segments", "geometry", "svg", "paper")
+SUITES = ("segments", "geometry", "svg", "paper", "load")
 #: Environment variables that change how Numba's parallel kernels behave under load.
 THREADING_ENV = ("NUMBA_NUM_THREADS", "NUMBA_THREADING_LAYER", "OMP_NUM_THREADS",
                  "OMP_WAIT_POLICY")
@@ -312,6 +312,12 @@ def main(argv: list[str] | None = None) -> int:
         paper_copy = not args.no_figure_copy and args.out.resolve() == paper.DEFAULT_OUT
         paper_result = paper.run(args.quick, args.out, args.max_size, paper_copy, log=_log)
         print(paper.markdown_summary(paper_result))
+    if args.suite in ("all", "load"):
+        if shutil.which("wrk") is None and os.environ.get("CI") != "true" \
+                and args.suite == "all":
+            print("load suite not run: wrk is not installed (Debian: apt-get install wrk)")
+        else:
+            load.main(["--out", str(args.out)] + (["--quick"] if args.quick else []))
     return 0
 
 

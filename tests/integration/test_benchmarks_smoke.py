@@ -258,3 +258,19 @@ def test_thread_scaling_runs_one_process_per_thread_count(tmp_path):
         assert all(row[k] > 0 for k in ("call_seconds", "clip_fresh_seconds", "move_seconds",
                                          "check_seconds", "read_seconds", "copy_seconds"))
     assert rows[0]["speedup_over_1"] == 1.0
+
+
+def test_load_suite_runs_wrk_against_a_real_server(tmp_path):
+    """`python -m benchmarks.load --quick`: every case answered, figures parsed from wrk."""
+    subprocess.run([sys.executable, "-m", "benchmarks.load", "--quick", "--out", str(tmp_path)],
+                   cwd=ROOT, check=True, capture_output=True, timeout=600)
+    (path,) = tmp_path.glob("load-*.json")
+    result = json.loads(path.read_text())
+    assert set(result["cases"]) == {"healthz", "geojson_verified", "geojson", "svg",
+                                    "segments_binary"}
+    for figures in result["cases"].values():
+        assert figures["requests"] > 0 and figures["requests_per_s"] > 0
+        assert figures["non_2xx"] == 0 and figures["socket_errors"] == 0
+        assert set(figures["latency_s"]) == {"p50", "p75", "p90", "p99"}
+    assert {t["key"] for t in result["targets"]} == {
+        "rate_unverified", "rate_verified", "p99_unverified", "p99_verified"}

@@ -1,4 +1,9 @@
-"""Dependencies of the routes, as `Annotated` aliases read back from ``app.state``."""
+"""Dependencies of the routes, as `Annotated` aliases read back from ``app.state``.
+
+They are coroutines on purpose: FastAPI runs a plain ``def`` dependency in its thread
+pool, so three of them cost each request three thread hops (found in the load
+benchmark's profile; see benchmarks/README.md, "Service load").
+"""
 
 from __future__ import annotations
 
@@ -14,17 +19,17 @@ __all__ = ["SettingsDep", "RunnerDep", "MetricsDep", "get_settings", "get_runner
            "get_metrics"]
 
 
-def get_settings(request: Request) -> Settings:
+async def get_settings(request: Request) -> Settings:
     """Return the settings the app was built with."""
     return request.app.state.settings
 
 
-def get_runner(request: Request) -> ClipRunner:
+async def get_runner(request: Request) -> ClipRunner:
     """Return the app's clipping thread pool."""
     return request.app.state.runner
 
 
-def get_metrics(request: Request) -> Metrics:
+async def get_metrics(request: Request) -> Metrics:
     """Return the app's metrics."""
     return request.app.state.metrics
 

@@ -303,6 +303,9 @@ def test_a_clip_during_warm_up_is_503_not_ready_at_once_then_served(monkeypatch)
         while client.get("/readyz").status_code != 200 and time.monotonic() < deadline:
             time.sleep(0.05)
         assert client.post("/v1/clip/segments", json=request).status_code == 200
+        import gc
+
+        assert gc.get_freeze_count() > 0  # start-up's objects are out of the collector's way
     logger.removeHandler(handler)
     steps = [getattr(r, "fields", {}).get("step") for r in records
              if r.getMessage() == "warmed up"]

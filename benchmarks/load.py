@@ -132,9 +132,9 @@ def _free_port() -> int:
         return s.getsockname()[1]
 
 
-def _start_server(workers: int, port: int, log_path: Path) -> subprocess.Popen:
+def _start_server(workers: int, port: int, log_path: Path, log_level: str) -> subprocess.Popen:
     env = {k: v for k, v in os.environ.items() if not k.startswith("RNSCA_")}
-    env.update({"RNSCA_LOG_LEVEL": "warning"})  # one log line per request would be measured
+    env.update({"RNSCA_LOG_LEVEL": log_level})  # info: one JSON line per request
     rnsca = Path(sys.executable).parent / "rnsca"
     command = [str(rnsca)] if rnsca.exists() else [sys.executable, "-m", "rnsca.cli"]
     return subprocess.Popen(command + ["serve", "--host", "127.0.0.1", "--port", str(port),
@@ -158,7 +158,7 @@ def _wait_ready(url: str, process: subprocess.Popen, timeout: float = 900.0) -> 
 
 
 def run_load(seconds: int, connections: int, threads: int, workers: int = 2,
-             cases: list[str] | None = None, log=print) -> dict:
+             cases: list[str] | None = None, log_level: str = "info", log=print) -> dict:
     """Start the server, run wrk on every case; return the figures per case."""
     wrk = shutil.which("wrk")
     if wrk is None:
@@ -168,7 +168,7 @@ def run_load(seconds: int, connections: int, threads: int, workers: int = 2,
     results = {}
     with tempfile.TemporaryDirectory() as scratch:
         folder = Path(scratch)
-        process = _start_server(workers, port, folder / "server.log")
+        process = _start_server(workers, port, folder / "server.log", log_level)
         try:
             _wait_ready(url, process)
             for name in cases or list(CASES):
@@ -230,20 +230,24 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--connections", type=int, default=None)
     parser.add_argument("--threads", type=int, default=2, help="wrk threads")
     parser.add_argument("--workers", type=int, default=2, help="uvicorn worker processes")
+    parser.add_argument("--log-level", default="info",
+                        help="the server's RNSCA_LOG_LEVEL (info, as deployed: a line per "
+                             "request)")
     parser.add_argument("--out", type=Path, default=ROOT / "benchmarks" / "results")
     args = parser.parse_args(argv)
     seconds = args.seconds or (1 if args.quick else 10)
     connections = args.connections or (4 if args.quick else 32)
     print(f"load: wrk, {connections} connections, {seconds} s per case, rnsca serve "
-          f"--workers {args.workers}", flush=True)
-    results = run_load(seconds, connections, args.threads, args.workers)
+          f"--workers {args.workers}, log level {args.log_level}", flush=True)
+    results = run_load(seconds, connections, args.threads, args.workers,
+                       log_level=args.log_level)
     stamp = time.strftime("%Y%m%dT%H%M%SZ", time.gmtime())
     args.out.mkdir(parents=True, exist_ok=True)
     path = args.out / f"load-{stamp}.json"
     path.write_text(json.dumps({
         "created": stamp, "quick": args.quick, "machine": describe_machine(ROOT),
         "seconds": seconds, "connections": connections, "wrk_threads": args.threads,
-        "workers": args.workers, "cases": results,
+        "workers": args.workers, "log_level": args.log_level, "cases": results,
         "targets": evaluate_load_targets(results, connections),
         "load_average_at_end": load_average()}, indent=2))
     print(f"wrote {path}")

@@ -82,7 +82,8 @@ def build_config(quick: bool, sizes: list[int] | None, shapely_10m: str) -> dict
                     shapely_extrapolate_from=10_000_000 if shapely_10m == "extrapolate" else None)
     sweep_uniform = min(uniform, key=lambda n: abs(n - shaped_n))
     return {"uniform_sizes": sorted(uniform), "shaped_n": shaped_n, "plan": plan,
-            "sweep_sets": [f"uniform-{sweep_uniform}", f"long_segments-{shaped_n}"],
+            "sweep_sets": [f"uniform-{sweep_uniform}", f"mostly_outside-{shaped_n}",
+                           f"mostly_inside-{shaped_n}", f"long_segments-{shaped_n}"],
             "startup_warm_runs": 1 if quick else 3, "startup_empty_cache": not quick}
 
 

@@ -125,7 +125,7 @@ N_MAX = 64
 # `n="auto"` bisects (N = 2) unless bisection cannot reach the tolerance within the levels
 # left (then the smallest N that can, at most N_MAX): approx mode refines each boundary
 # crossing like a search, and measured at the default resolution on the four benchmark
-# sets (1M segments each, /work/notes/s8), N = 2 was within 7% of the best fixed N on
+# sets (1M segments each, README "Choosing N"), N = 2 was within 7% of the best fixed N on
 # every set, 3 within 10%, 8 (the rule before) 1.3x to 3.3x slower.
 AUTO_N_BASE = 2
 # The deepest subdivision level one may ask for, and the default (`max_depth`): levels

@@ -106,7 +106,7 @@ class NumbaBackend:
         # then the chunks after the first are moved up in place and the arrays shrunk.
         # Clipping once instead of counting then writing saved about 40% of the call,
         # moving one chunk per thread instead of every block another 10-15% (10M uniform
-        # segments, /work/notes/i15 of session 7, /work/notes/s8).
+        # segments, benchmarks/README.md "Results of the committed run: issue 15").
         out = K.SegmentOutput(
             np.empty((n, 4)), np.empty(n, dtype=np.int64), np.empty((n, 2)),
             np.empty(n_blocks, dtype=np.int64), np.empty(n_blocks, dtype=np.int64),

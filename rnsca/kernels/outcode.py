@@ -330,7 +330,7 @@ def common_end_point(x0, y0, x1, y1, edge, px, py, window):
     in the window, so `snap_into_window` would not move it. Otherwise the caller calls
     `end_point` (double-double cut, snapping: rare). Selects only, so the loop over a
     block's ends vectorizes; a branch on the edge id (random on real data) cost most of
-    the exact clip (/work/notes/i15 of session 7: 177 of 221 ms, 10M segments).
+    the exact clip (177 of 221 ms of compute on 10M uniform segments, 2 threads).
     """
     xmin, ymin, xmax, ymax = window
     cut = edge != NO_EDGE

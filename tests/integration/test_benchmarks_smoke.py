@@ -98,7 +98,7 @@ def test_every_workload_times_every_contender_with_ratios_and_stats(quick_run):
 
 def test_n_sweep_compares_every_fixed_n_with_auto(quick_run):
     _, result, _ = quick_run
-    assert len(result["n_sweep"]) == 2
+    assert len(result["n_sweep"]) == 4  # the four families
     for sweep in result["n_sweep"]:
         assert set(sweep["summary"]) == {"exact", "approx"}
         assert {r["n_param"] for r in sweep["runs"]} == {"auto", 2, 3, 4, 8, 16, 32, 64}

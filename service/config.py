@@ -56,6 +56,10 @@ class Settings(BaseSettings):
     """Requests clipped at once (more wait their turn); kernels are parallel inside each."""
     verify_max_vertices: int = Field(100_000, ge=0)
     """``verify`` defaults to true for inputs of at most this many vertices."""
+    verify_cost_ratio: float = Field(1.0, gt=0)
+    """Verification (``verify`` true or by default) may take this many times the clip's
+    own time; past it a random sample of the inputs is compared, and the answer says so.
+    ``verify: "all"`` compares every input."""
     default_backend: Backend = Backend.NUMBA
     """Backend of requests that name none."""
     opencl_device: str | None = None

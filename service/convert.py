@@ -9,6 +9,9 @@ geometry beyond what the library returns.
 
 from __future__ import annotations
 
+import threading
+import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -100,8 +103,59 @@ def _library_options(options: ClipOptions, settings: Settings) -> dict:
                 resolution=options.resolution)
 
 
-def _verify_wanted(asked: bool | None, vertices: int, settings: Settings) -> bool:
-    return asked if asked is not None else vertices <= settings.verify_max_vertices
+def _verify_wanted(asked: bool | str | None, vertices: int, settings: Settings) -> bool:
+    if asked is None:
+        return vertices <= settings.verify_max_vertices
+    return asked is not False
+
+
+class _VerificationCost:
+    """What verification has cost per input vertex, by endpoint: a running estimate.
+
+    It sizes the sample that keeps a verification within `Settings.verify_cost_ratio` of
+    the clip's time. The first estimates are measured figures of this machine (Shapely's
+    intersection and the Hausdorff checks; paths are flattened 100 times finer than the
+    clip), then each verification updates its kind's (exponential average).
+    """
+
+    def __init__(self) -> None:
+        self._lock = threading.Lock()
+        self._seconds_per_vertex = {"segments": 2e-6, "geojson": 4e-6, "svg": 2e-5}
+
+    def sample(self, kind: str, asked: bool | str | None, clip_seconds: float, inputs: int,
+               vertices: int, ratio: float) -> int | None:
+        """Return how many inputs to compare (None: all of them)."""
+        if asked == "all" or inputs == 0:
+            return None
+        with self._lock:
+            per_vertex = self._seconds_per_vertex[kind]
+        per_input = per_vertex * max(vertices, 1) / inputs
+        affordable = int(clip_seconds * ratio / per_input)
+        return None if affordable >= inputs else max(1, affordable)
+
+    def observe(self, kind: str, seconds: float, vertices: int) -> None:
+        """Fold one verification's cost into its kind's estimate."""
+        if vertices <= 0:
+            return
+        with self._lock:
+            old = self._seconds_per_vertex[kind]
+            self._seconds_per_vertex[kind] = 0.8 * old + 0.2 * (seconds / vertices)
+
+
+_COST = _VerificationCost()
+
+
+def _verify_within_budget(kind: str, asked: bool | str | None, clip_seconds: float,
+                          inputs: int, vertices: int, settings: Settings,
+                          call: Callable[[int | None], Verification]) -> Verification:
+    """Run ``call(sample)`` (a `rnsca.verify`) on all inputs or a sample the budget allows."""
+    sample = _COST.sample(kind, asked, clip_seconds, inputs, vertices,
+                          settings.verify_cost_ratio)
+    started = time.perf_counter()
+    verification = call(sample)
+    checked_vertices = vertices if sample is None else vertices * sample // max(inputs, 1)
+    _COST.observe(kind, time.perf_counter() - started, checked_vertices)
+    return verification
 
 
 def _dict_or_none(value):
@@ -119,6 +173,7 @@ def clip_geojson(body: bytes, settings: Settings) -> Outcome:
     arguments = _library_options(options, settings)
     cap, by_budget = geometry_vertex_cap(options, window, settings.max_vertices,
                                          settings.work_budget)
+    started = time.perf_counter()
     try:
         result = rnsca.clip_geojson(
             request.geojson, window, keep_empty=options.keep_empty, max_vertices=cap,
@@ -139,6 +194,7 @@ def clip_geojson(body: bytes, settings: Settings) -> Outcome:
         if path is not None:  # a JSON path inside the document: make it one in the body
             exc.path = "geojson" + (path if not path or path.startswith("[") else "." + path)
         raise
+    clip_seconds = time.perf_counter() - started
     clipped, stats = result
     verification = None
     approx_unbounded = options.mode is Mode.APPROX and request.approx_bound is None
@@ -146,9 +202,14 @@ def clip_geojson(body: bytes, settings: Settings) -> Outcome:
             request.verify is None and approx_unbounded):
         # The result holds the arrays clipped and their clips, one for one: nothing is
         # read again.
-        verification = rnsca.verify(None, result, window, mode=options.mode,
-                                    approx_bound=request.approx_bound,
-                                    boundary=options.boundary)
+        # Geometries read, of every kind: the last offsets count them (points: rows).
+        inputs = sum(len(offsets[-1]) - 1 if offsets else len(coords)
+                     for _, coords, offsets in result.inputs.values())
+        verification = _verify_within_budget(
+            "geojson", request.verify, clip_seconds, inputs, stats.vertices_in, settings,
+            lambda sample: rnsca.verify(None, result, window, mode=options.mode,
+                                        approx_bound=request.approx_bound,
+                                        boundary=options.boundary, sample=sample))
     payload = {"geojson": clipped, "stats": stats.to_dict(),
                "verification": _dict_or_none(verification)}
     return Outcome(orjson.dumps(payload, option=_JSON), stats)
@@ -158,16 +219,21 @@ def clip_geojson(body: bytes, settings: Settings) -> Outcome:
 
 
 def _clip_segments(array: np.ndarray, window: Window, options: ClipOptions,
-                   verify: bool | None,
+                   verify: bool | str | None,
                    settings: Settings) -> tuple[SegmentClipResult, Verification | None]:
     check_vertices(2 * array.shape[0], settings.max_vertices)
     arguments = _library_options(options, settings)
     segments = as_segments(array)
     check_work(segment_work(segments, window, options), settings.work_budget)
+    started = time.perf_counter()
     result = rnsca.clip_segments(segments, window, **arguments)
+    clip_seconds = time.perf_counter() - started
     verification = None
-    if _verify_wanted(verify, 2 * segments.shape[0], settings):
-        verification = rnsca.verify(segments, result, window)
+    n = segments.shape[0]
+    if _verify_wanted(verify, 2 * n, settings):
+        verification = _verify_within_budget(
+            "segments", verify, clip_seconds, n, 2 * n, settings,
+            lambda sample: rnsca.verify(segments, result, window, sample=sample))
     return result, verification
 
 
@@ -191,7 +257,7 @@ def clip_segments_json(body: bytes, settings: Settings) -> Outcome:
 
 
 def clip_segments_binary(body: bytes, window: Window, options: ClipOptions,
-                         verify: bool | None, settings: Settings) -> Outcome:
+                         verify: bool | str | None, settings: Settings) -> Outcome:
     """Answer ``POST /v1/clip/segments`` with an ``application/octet-stream`` body.
 
     In: little-endian float64 rows ``x0, y0, x1, y1``. Out: the pieces as float64 rows
@@ -260,8 +326,10 @@ def clip_svg(body: bytes, settings: Settings) -> Outcome:
         check_vertices(vertices, settings.max_vertices)
         check_work(vertices * (1 + subdivision_cost(options, window, None)),
                    settings.work_budget)
+        started = time.perf_counter()
         result = rnsca.clip_paths(paths, window, curves=options.curves, fill=options.fill,
                                   **arguments)
+        clip_seconds = time.perf_counter() - started
     except RnscaError as exc:
         if getattr(exc, "path_index", None) is not None:  # `position` is within that path
             exc.path = f"paths[{exc.path_index}]"
@@ -273,7 +341,10 @@ def clip_svg(body: bytes, settings: Settings) -> Outcome:
             and _verify_wanted(request.verify, vertices, settings)):
         # A flattened clip strays from the curves by its own tolerance: compare at it.
         tolerance = arguments.get("tolerance") if options.curves == "flatten" else None
-        verification = rnsca.verify(paths, result, window, tolerance=tolerance)
+        verification = _verify_within_budget(
+            "svg", request.verify, clip_seconds, len(paths), vertices, settings,
+            lambda sample: rnsca.verify(paths, result, window, tolerance=tolerance,
+                                        sample=sample))
     payload = {"paths": written, "stats": result.stats.to_dict(),
                "verification": _dict_or_none(verification)}
     return Outcome(orjson.dumps(payload, option=_JSON), result.stats)

@@ -102,9 +102,13 @@ class SVGOptions(ClipOptions):
         None, description="Clip as filled areas with this fill rule, or as strokes (null).")
 
 
-_VERIFY = Field(None, description="Compare with Shapely's exact intersection. Default: "
-                                  "true for inputs of up to the server's "
-                                  "`verify_max_vertices`.")
+_VERIFY = Field(None, description="Compare with Shapely's exact intersection. true: "
+                                  "within the server's verification budget (as long as the "
+                                  "clip, `verify_cost_ratio`); past it a random sample of "
+                                  "the inputs is compared and `verification` says how many "
+                                  "(`checked` of `inputs`, `sampling`); \"all\": every "
+                                  "input; false: none. Default: true for inputs of up to "
+                                  "the server's `verify_max_vertices`.")
 
 
 def _stats_fields() -> dict[str, Any]:
@@ -140,7 +144,7 @@ class ClipGeoJSONRequest(BaseModel):
     geojson: dict[str, Any] = Field(description="GeoJSON (RFC 7946) Geometry, Feature or "
                                                 "FeatureCollection.")
     options: GeometryOptions = Field(default_factory=GeometryOptions)
-    verify: bool | None = _VERIFY
+    verify: bool | Literal["all"] | None = _VERIFY
     approx_bound: Annotated[float, Field(gt=0)] | None = Field(
         None, description="With verify in approx mode: the largest deviation to accept "
                           "(without it, approx results are not verified by default).")
@@ -169,7 +173,7 @@ class ClipSVGRequest(BaseModel):
     window: WindowBounds
     paths: list[str] = Field(description="Path data strings, e.g. `M 0 0 L 10 10`.")
     options: SVGOptions = Field(default_factory=SVGOptions)
-    verify: bool | None = _VERIFY
+    verify: bool | Literal["all"] | None = _VERIFY
 
 
 class ClipSVGResponse(BaseModel):
@@ -191,7 +195,7 @@ class ClipSegmentsRequest(BaseModel):
     segments: list[tuple[float, float, float, float]] = Field(
         description="Segments as rows `[x0, y0, x1, y1]`; finite.")
     options: ClipOptions = Field(default_factory=ClipOptions)
-    verify: bool | None = _VERIFY
+    verify: bool | Literal["all"] | None = _VERIFY
 
 
 class ClipSegmentsResponse(BaseModel):

@@ -95,6 +95,13 @@ class Verification:
         output geometry taken together); True when there are none.
     invalid_inputs : int
         Input geometries whose polygons are not valid (self-intersecting rings, say).
+    inputs : int
+        Inputs of the clip (segments, geometries or paths).
+    checked : int
+        Inputs compared: all of them, or a random sample (``verify(..., sample=k)``);
+        the other fields then speak for the sample only.
+    sampling : str
+        ``"all"``, or ``"random <k> of <n>, seed <s>"``: uniform, without replacement.
     """
 
     max_deviation: float
@@ -105,6 +112,9 @@ class Verification:
     mode: str
     valid: bool = True
     invalid_inputs: int = 0
+    inputs: int = 0
+    checked: int = 0
+    sampling: str = "all"
 
     def to_dict(self) -> dict[str, Any]:
         """Return the verification as plain JSON-ready values."""
@@ -130,7 +140,8 @@ def approx_leaf_bound(lengths: np.ndarray, result: SegmentClipResult) -> np.ndar
 
 def verify(original: Any, clipped: Any, window: _Windows, *, mode: Mode | str | None = None,
            approx_bound: float | None = None, boundary: Boundary | str = "closed",
-           fill: Fill | str | None = None, tolerance: float | None = None) -> Verification:
+           fill: Fill | str | None = None, tolerance: float | None = None,
+           sample: int | None = None, seed: int = 0) -> Verification:
     """Return how `clipped` compares with Shapely's intersection of `original` and `window`.
 
     Parameters
@@ -180,6 +191,13 @@ def verify(original: Any, clipped: Any, window: _Windows, *, mode: Mode | str | 
         an edge is not displaced along it). The allowed deviation grows by twice it,
         and in exact mode it is ``1e-9 * size + 2 * tolerance``, plus the clip's own
         tolerance for a `PathClipResult` of ``curves="flatten"``.
+    sample : int >= 1, optional
+        Compare only this many inputs, drawn uniformly at random without replacement
+        (all of them when there are no more): verification costs about as much per input
+        as Shapely's clip, often more than the clip itself. `Verification` says how many
+        were checked and how they were chosen.
+    seed : int
+        The random sample's seed (the same seed chooses the same inputs).
 
     Returns
     -------
@@ -220,16 +238,22 @@ def verify(original: Any, clipped: Any, window: _Windows, *, mode: Mode | str | 
     boundary = Boundary(boundary)
     if approx_bound is not None:
         approx_bound = _bound(approx_bound)
+    if sample is not None and (isinstance(sample, bool) or not isinstance(sample, int | np.integer)
+                               or sample < 1):
+        raise InvalidOptionError(f"sample must be an integer >= 1, got {sample!r}")
+    chooser = _Sample(sample, seed)
     if isinstance(clipped, PathClipResult) or (_is_path_data(clipped)
                                                 and _is_path_data(original)):
         # Paths and segments are clipped to one window (`Window.of` refuses a table).
-        return _verify_paths(original, clipped, cast("Window | Iterable[float]", window), mode,
-                             approx_bound, fill, tolerance)
+        return chooser.report(_verify_paths(
+            original, clipped, cast("Window | Iterable[float]", window), mode, approx_bound,
+            fill, tolerance, chooser))
     if isinstance(clipped, SegmentClipResult):
         if boundary is not Boundary.CLOSED:
             raise InvalidOptionError("segments are always clipped with boundary='closed'")
-        return _verify_segments(original, clipped, cast("Window | Iterable[float]", window),
-                                clipped.mode if mode is None else Mode(mode), approx_bound)
+        return chooser.report(_verify_segments(
+            original, clipped, cast("Window | Iterable[float]", window),
+            clipped.mode if mode is None else Mode(mode), approx_bound, chooser))
     mode = Mode.EXACT if mode is None else Mode(mode)
     if mode is Mode.APPROX and approx_bound is None:
         raise InvalidOptionError(
@@ -251,8 +275,47 @@ def verify(original: Any, clipped: Any, window: _Windows, *, mode: Mode | str | 
             "Shapely geometries or "
             f"a GeoJSON dict, got {type(clipped).__name__}")
     bounds = _window_bounds(window, originals.shape[0])
-    return _verify_geometries(originals, delivered, source, bounds, mode, approx_bound,
-                              boundary)
+    rows = chooser.rows(originals.shape[0])
+    if rows is not None:
+        originals, bounds = originals[rows], bounds[rows]
+        delivered, source = chooser.outputs(rows, delivered, source)
+    return chooser.report(_verify_geometries(originals, delivered, source, bounds, mode,
+                                             approx_bound, boundary))
+
+
+class _Sample:
+    """Which inputs a verification compares: all, or a seeded random sample of them."""
+
+    def __init__(self, size: int | None, seed: int) -> None:
+        self.size = size
+        self.seed = seed
+        self.inputs = 0
+        self.chosen: np.ndarray | None = None
+
+    def rows(self, count: int) -> np.ndarray | None:
+        """Return the sorted input rows to compare, or None for all `count` of them."""
+        self.inputs = count
+        if self.size is None or self.size >= count:
+            return None
+        rng = np.random.default_rng(self.seed)
+        self.chosen = np.sort(rng.choice(count, self.size, replace=False))
+        return self.chosen
+
+    @staticmethod
+    def outputs(rows: np.ndarray, delivered: np.ndarray, source: np.ndarray,
+                ) -> tuple[np.ndarray, np.ndarray]:
+        """Return the outputs of the chosen inputs, their sources renumbered 0..len(rows)."""
+        keep = np.isin(source, rows)
+        return delivered[keep], np.searchsorted(rows, source[keep])
+
+    def report(self, verification: Verification) -> Verification:
+        """Return `verification` with how many inputs it compared, and how they were chosen."""
+        if self.chosen is None:
+            return replace(verification, inputs=self.inputs, checked=self.inputs,
+                           sampling="all")
+        return replace(verification, inputs=self.inputs, checked=int(self.chosen.shape[0]),
+                       sampling=f"random {self.chosen.shape[0]} of {self.inputs}, seed "
+                                f"{self.seed}")
 
 
 def _is_path_data(value: object) -> bool:
@@ -275,7 +338,8 @@ def _as_paths(value: object, name: str) -> PathArrays:
 
 def _verify_paths(original: object, clipped: object, window: Window | Iterable[float],
                   mode: Mode | str | None, approx_bound: float | None,
-                  fill: Fill | str | None, tolerance: float | None) -> Verification:
+                  fill: Fill | str | None, tolerance: float | None,
+                  chooser: _Sample) -> Verification:
     """Return the verification of clipped paths (see `verify`)."""
     window = Window.of(window)
     flattened_by = 0.0  # a flatten-mode clip's lines are within its tolerance of the curves
@@ -307,8 +371,15 @@ def _verify_paths(original: object, clipped: object, window: Window | Iterable[f
     # The original is flattened 100 times finer: where a curve crosses an edge at a
     # shallow angle theta, its flattened crossing moves along the edge by up to
     # tolerance / sin(theta), which the allowance (2 * tolerance) would not cover.
-    originals = paths_to_shapely(originals_paths, flat / 100.0, rule)
-    delivered = paths_to_shapely(delivered_paths, flat, rule)
+    rows = chooser.rows(len(originals_paths))
+    if rows is not None:  # flattening is most of the cost: only the chosen paths
+        originals = np.concatenate([paths_to_shapely(originals_paths.path(int(i)),
+                                                     flat / 100.0, rule) for i in rows])
+        delivered = np.concatenate([paths_to_shapely(delivered_paths.path(int(i)), flat, rule)
+                                    for i in rows])
+    else:
+        originals = paths_to_shapely(originals_paths, flat / 100.0, rule)
+        delivered = paths_to_shapely(delivered_paths, flat, rule)
     bounds = _window_bounds(window, originals.shape[0])
     result = _verify_geometries(originals, delivered, np.arange(delivered.shape[0]), bounds,
                                 Mode.APPROX, allowed, Boundary.CLOSED)
@@ -347,7 +418,7 @@ def _unit_scale(window: Window, segments: np.ndarray) -> float:
 
 def _verify_segments(original: npt.ArrayLike, clipped: SegmentClipResult,
                      window: Window | Iterable[float], mode: Mode,
-                     approx_bound: float | None) -> Verification:
+                     approx_bound: float | None, chooser: _Sample) -> Verification:
     window = Window.of(window)
     segments = as_segments(original)
     n = segments.shape[0]
@@ -356,6 +427,15 @@ def _verify_segments(original: npt.ArrayLike, clipped: SegmentClipResult,
         raise InvalidGeometryError(
             f"verify needs the {clipped.stats.segments_in} segments that were clipped, "
             f"got {n}")
+    rows = chooser.rows(n)
+    if rows is not None:
+        keep = np.isin(clipped.source, rows)
+        clipped = replace(clipped, segments=clipped.segments[keep],
+                          source=np.searchsorted(rows, clipped.source[keep]),
+                          t=clipped.t[keep],
+                          stats=replace(clipped.stats, segments_in=int(rows.shape[0])))
+        segments = segments[rows]
+        n = segments.shape[0]
 
     # GEOS loses whole pieces to overflow or underflow far from 1 (from about 1e+-110 on),
     # so Shapely sees tiny and huge windows scaled by a power of two that brings their

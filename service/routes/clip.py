@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import Annotated, Any
+from typing import Annotated, Any, Literal
 
 from fastapi import APIRouter, Query, Request
 from pydantic import BaseModel, ConfigDict, Field, FiniteFloat
@@ -117,7 +117,9 @@ class SegmentQuery(BaseModel):
     resolution: str | None = Field(None, description="Approx mode: a length, or `<k>px`.")
     mode: Mode | None = None
     backend: BackendName | None = None
-    verify: bool | None = None
+    verify: bool | Literal["all"] | None = Field(
+        None, description="true: within the verification budget (a random sample past it); "
+                          "all: every segment; false: none.")
 
 
 @router.post("/segments", response_model=ClipSegmentsResponse,

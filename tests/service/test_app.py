@@ -310,3 +310,32 @@ def test_a_clip_during_warm_up_is_503_not_ready_at_once_then_served(monkeypatch)
     steps = [getattr(r, "fields", {}).get("step") for r in records
              if r.getMessage() == "warmed up"]
     assert "slow_warm_up" in steps and any(s.endswith(".warm_up") for s in steps)
+
+
+def test_verification_within_its_budget_is_a_random_sample_and_all_is_everything():
+    lines = [{"type": "Feature", "properties": {"i": i},
+              "geometry": {"type": "LineString", "coordinates": [[-5, i % 10], [15, i % 10]]}}
+             for i in range(400)]
+    document = {"type": "FeatureCollection", "features": lines}
+    # A tiny budget: verification may take a billionth of the clip's time.
+    with make_client(verify_cost_ratio=1e-9, warm_up=False) as client:
+        r = client.post("/v1/clip/geojson", json={"window": WINDOW, "geojson": document})
+        v = r.json()["verification"]
+        assert r.status_code == 200 and v["passed"]
+        assert v["inputs"] == 400 and v["checked"] == 1
+        assert v["sampling"].startswith("random 1 of 400")
+        r = client.post("/v1/clip/geojson", json={"window": WINDOW, "geojson": document,
+                                                  "verify": "all"})
+        v = r.json()["verification"]
+        assert (v["inputs"], v["checked"], v["sampling"]) == (400, 400, "all")
+        segments = [[-5, i % 10, 15, i % 10] for i in range(300)]
+        r = client.post("/v1/clip/segments", json={"window": WINDOW, "segments": segments})
+        assert r.json()["verification"]["checked"] == 1
+        body = np.array(segments, dtype="<f8").tobytes()
+        r = client.post("/v1/clip/segments", content=body,
+                        params={"xmin": 0, "ymin": 0, "xmax": 10, "ymax": 10, "verify": "all"},
+                        headers={"Content-Type": "application/octet-stream"})
+        assert orjson.loads(r.headers["X-Rnsca-Verification"])["checked"] == 300
+        r = client.post("/v1/clip/svg", json={"window": WINDOW,
+                                              "paths": ["M-5 5 L15 5"] * 50})
+        assert r.json()["verification"]["checked"] == 1

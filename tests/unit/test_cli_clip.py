@@ -119,7 +119,8 @@ def test_clip_verify_reports_the_comparison_with_shapely(runner, source):
     assert result.exit_code == 0, result.output
     assert report_of(result)["verification"] == {
         "max_deviation": 0.0, "false_positives": 0, "ratio": 1.0, "passed": True,
-        "allowed_deviation": 1e-8, "mode": "exact", "valid": True, "invalid_inputs": 0}
+        "allowed_deviation": 1e-8, "mode": "exact", "valid": True, "invalid_inputs": 0,
+        "inputs": 3, "checked": 3, "sampling": "all"}
 
 
 def test_clip_keep_empty_keeps_features_left_empty(runner, source):

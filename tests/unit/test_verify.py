@@ -153,7 +153,8 @@ def test_to_dict_is_json_ready():
     d = json.loads(json.dumps(verify(SEGS, r, W10).to_dict()))
     assert d == {"max_deviation": 0.0, "false_positives": 0, "ratio": 1.0, "passed": True,
                  "allowed_deviation": 1e-8, "mode": "exact", "valid": True,
-                 "invalid_inputs": 0}
+                 "invalid_inputs": 0, "inputs": len(SEGS), "checked": len(SEGS),
+                 "sampling": "all"}
 
 
 def test_approx_leaf_bound_is_the_tolerance_or_one_deepest_leaf():
@@ -184,3 +185,44 @@ def test_segments_refuse_the_interior_boundary():
     r = clip_segments(SEGS, W10)
     with pytest.raises(InvalidOptionError, match="boundary='closed'"):
         verify(SEGS, r, W10, boundary="interior")
+
+
+def test_a_sample_compares_that_many_inputs_chosen_by_the_seed():
+    rng = np.random.default_rng(4)
+    segments = rng.random((2000, 4)) * 20 - 5
+    window = (0.0, 0.0, 10.0, 10.0)
+    result = clip_segments(segments, window)
+    whole = verify(segments, result, window)
+    assert (whole.inputs, whole.checked, whole.sampling) == (2000, 2000, "all")
+    part = verify(segments, result, window, sample=100, seed=3)
+    assert part.passed and (part.inputs, part.checked) == (2000, 100)
+    assert part.sampling == "random 100 of 2000, seed 3"
+    assert verify(segments, result, window, sample=5000).checked == 2000  # more than there are
+    # Every output moved: any sample sees it; the same seed sees the same deviation.
+    moved = dataclasses.replace(result, segments=result.segments + [0.5, 0.0, 0.5, 0.0])
+    first = verify(segments, moved, window, sample=10, seed=1)
+    assert not first.passed
+    assert verify(segments, moved, window, sample=10, seed=1) == first
+
+
+def test_a_sample_of_geometries_and_of_paths():
+    import shapely
+
+    from rnsca import clip, clip_svg
+
+    window = (0.0, 0.0, 10.0, 10.0)
+    lines = shapely.linestrings(np.random.default_rng(2).random((300, 2, 2)) * 20 - 5)
+    v = verify(lines, clip(lines, window), window, sample=30)
+    assert v.passed and (v.inputs, v.checked) == (300, 30)
+    paths = ["M-5 5 L15 5", "M5 -5 C0 5 10 5 5 15", "M-1 -1 L11 11 L-1 11 Z"] * 20
+    clipped, _ = clip_svg(paths, window)
+    v = verify(paths, clipped, window, sample=7)
+    assert v.passed and (v.inputs, v.checked) == (60, 7)
+
+
+@pytest.mark.parametrize("sample", [0, -1, 2.5, True, "3"])
+def test_a_bad_sample_size_is_refused(sample):
+    segments = [[-5.0, 5.0, 15.0, 5.0]]
+    result = clip_segments(segments, (0, 0, 10, 10))
+    with pytest.raises(InvalidOptionError, match="sample must be"):
+        verify(segments, result, (0, 0, 10, 10), sample=sample)

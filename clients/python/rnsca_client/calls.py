@@ -101,7 +101,7 @@ def _post_json(path: str, payload: dict[str, Any], build: Callable[[dict], T]) -
     return Call("POST", path, _reader(build), content=encode_json(payload), headers=_JSON)
 
 
-def clip_geojson(obj: Any, window: Any, *, verify: bool | None, approx_bound: float | None,
+def clip_geojson(obj: Any, window: Any, *, verify: bool | str | None, approx_bound: float | None,
                  options: Mapping[str, Any]) -> Call[GeoJSONResult]:
     """Return the call ``POST /v1/clip/geojson``."""
     payload = {"window": window_bounds(window), "geojson": geojson_document(obj),
@@ -113,7 +113,7 @@ def clip_geojson(obj: Any, window: Any, *, verify: bool | None, approx_bound: fl
     return _post_json("/v1/clip/geojson", payload, GeoJSONResult.from_dict)
 
 
-def clip_svg(paths: str | Sequence[str], window: Any, *, verify: bool | None,
+def clip_svg(paths: str | Sequence[str], window: Any, *, verify: bool | str | None,
              options: Mapping[str, Any]) -> Call[SVGResult]:
     """Return the call ``POST /v1/clip/svg``."""
     payload = {"window": window_bounds(window), "paths": svg_paths(paths),
@@ -123,7 +123,7 @@ def clip_svg(paths: str | Sequence[str], window: Any, *, verify: bool | None,
     return _post_json("/v1/clip/svg", payload, SVGResult.from_dict)
 
 
-def clip_segments(segments: Any, window: Any, *, binary: bool | None, verify: bool | None,
+def clip_segments(segments: Any, window: Any, *, binary: bool | None, verify: bool | str | None,
                   options: Mapping[str, Any]) -> Call[SegmentsResult]:
     """Return the call ``POST /v1/clip/segments``: binary for NumPy input, else JSON."""
     if binary is None:
@@ -146,7 +146,8 @@ def clip_segments(segments: Any, window: Any, *, binary: bool | None, verify: bo
         if not (name == "n" and value == "auto"):  # the binary form's default is auto
             params[name] = str(value)
     if verify is not None:
-        params["verify"] = "true" if verify else "false"
+        params["verify"] = verify if isinstance(verify, str) else (
+            "true" if verify else "false")
     return Call("POST", "/v1/clip/segments", _read_binary_segments,
                 content=segment_rows(segments).tobytes(), params=params,
                 headers={"Content-Type": "application/octet-stream",

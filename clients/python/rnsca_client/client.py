@@ -158,7 +158,7 @@ class Client:
                     return _finish(call, response, attempt)
             time.sleep(wait)
 
-    def clip_geojson(self, obj: Any, window: Any, *, verify: bool | None = None,
+    def clip_geojson(self, obj: Any, window: Any, *, verify: bool | str | None = None,
                      approx_bound: float | None = None, **options: Any) -> GeoJSONResult:
         """Return a GeoJSON Geometry, Feature or FeatureCollection clipped to `window`.
 
@@ -169,8 +169,10 @@ class Client:
             as a Shapely geometry.
         window : sequence of 4 float, or an object with ``bounds``
             ``[xmin, ymin, xmax, ymax]``.
-        verify : bool, optional
-            Compare with Shapely on the server (default: the server decides by size).
+        verify : bool or "all", optional
+            Compare with Shapely on the server (default: the server decides by size):
+            within its verification budget (a random sample past it; the answer's
+            verification says how many were checked), or ``"all"`` for every input.
         approx_bound : float, optional
             In approx mode, the largest deviation that passes verification.
         **options
@@ -191,7 +193,7 @@ class Client:
                                             approx_bound=approx_bound, options=options))
 
     def clip_svg(self, paths: str | Sequence[str], window: Any, *, curves: str | None = None,
-                 fill: str | None = None, verify: bool | None = None,
+                 fill: str | None = None, verify: bool | str | None = None,
                  **options: Any) -> SVGResult:
         """Return SVG path data clipped to `window`, one string per path.
 
@@ -205,8 +207,8 @@ class Client:
             Keep Bézier segments as curves (default) or flatten them to lines.
         fill : {"nonzero", "evenodd"}, optional
             Clip as filled areas with this rule; default: as strokes.
-        verify : bool, optional
-            Compare with Shapely on the server.
+        verify : bool or "all", optional
+            Compare with Shapely on the server (``"all"``: every input, no sample).
         **options
             ``method``, ``n``, ``max_depth``, ``tolerance``, ``mode``, ``backend``.
 
@@ -219,7 +221,7 @@ class Client:
                                         options={**options, "curves": curves, "fill": fill}))
 
     def clip_segments(self, segments: Any, window: Any, *, binary: bool | None = None,
-                      verify: bool | None = None, **options: Any) -> SegmentsResult:
+                      verify: bool | str | None = None, **options: Any) -> SegmentsResult:
         """Return the visible piece of each line segment ``[x0, y0, x1, y1]``.
 
         Parameters
@@ -231,8 +233,8 @@ class Client:
             ``[xmin, ymin, xmax, ymax]``.
         binary : bool, optional
             Force the binary (True, needs NumPy) or the JSON (False) form.
-        verify : bool, optional
-            Compare with Shapely on the server.
+        verify : bool or "all", optional
+            Compare with Shapely on the server (``"all"``: every input, no sample).
         **options
             ``method``, ``n``, ``max_depth``, ``tolerance``, ``mode``, ``backend``.
 
@@ -344,7 +346,7 @@ class AsyncClient:
                     return _finish(call, response, attempt)
             await asyncio.sleep(wait)
 
-    async def clip_geojson(self, obj: Any, window: Any, *, verify: bool | None = None,
+    async def clip_geojson(self, obj: Any, window: Any, *, verify: bool | str | None = None,
                            approx_bound: float | None = None,
                            **options: Any) -> GeoJSONResult:
         """Return a GeoJSON document clipped to `window` (see `Client.clip_geojson`)."""
@@ -353,13 +355,13 @@ class AsyncClient:
 
     async def clip_svg(self, paths: str | Sequence[str], window: Any, *,
                        curves: str | None = None, fill: str | None = None,
-                       verify: bool | None = None, **options: Any) -> SVGResult:
+                       verify: bool | str | None = None, **options: Any) -> SVGResult:
         """Return SVG path data clipped to `window` (see `Client.clip_svg`)."""
         return await self.send(calls.clip_svg(
             paths, window, verify=verify, options={**options, "curves": curves, "fill": fill}))
 
     async def clip_segments(self, segments: Any, window: Any, *, binary: bool | None = None,
-                            verify: bool | None = None, **options: Any) -> SegmentsResult:
+                            verify: bool | str | None = None, **options: Any) -> SegmentsResult:
         """Return the visible piece of each segment (see `Client.clip_segments`)."""
         return await self.send(calls.clip_segments(segments, window, binary=binary,
                                                    verify=verify, options=options))

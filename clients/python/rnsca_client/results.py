@@ -81,6 +81,8 @@ class Verification(_FromDict):
     `passed` says whether the result keeps its mode's promise; `max_deviation` is the
     Hausdorff distance to Shapely's clip, `ratio` the output's length (or area, or
     count) over Shapely's, `false_positives` the output vertices outside the window.
+    `checked` of `inputs` were compared (`sampling`: ``"all"``, or the random sample the
+    server's verification budget allowed).
     """
 
     max_deviation: float
@@ -91,6 +93,9 @@ class Verification(_FromDict):
     mode: str
     valid: bool = True
     invalid_inputs: int = 0
+    inputs: int = 0
+    checked: int = 0
+    sampling: str = "all"
     extra: dict[str, Any] = field(default_factory=dict, repr=False, compare=False)
 
 

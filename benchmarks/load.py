@@ -19,6 +19,9 @@ once per case, each request a fixed POST body set by a Lua script:
     Five short SVG paths (lines and cubics) crossing the window, not verified.
 ``segments_binary``
     100 segments as little-endian float64, window and options in the query.
+``healthz_while_busy``
+    Not wrk: `/healthz` probed one request after another while 50 GeoJSON requests of
+    5.7 MB (200,000 vertices, verified by default) run at once: its p50, p99 and max.
 
 It records requests per second, the latency percentiles wrk reports (50, 75, 90, 99) and
 the errors (non-2xx answers, socket errors) in ``load-<UTC timestamp>.json``; the issue's
@@ -157,9 +160,55 @@ def _wait_ready(url: str, process: subprocess.Popen, timeout: float = 900.0) -> 
     raise RuntimeError(f"rnsca serve not ready within {timeout} s")
 
 
+def health_while_busy(url: str, busy: int, vertices: int) -> dict:
+    """Return `/healthz` latencies (s) while `busy` large GeoJSON requests run at once.
+
+    Each busy request is a FeatureCollection of one LineString per 100 vertices, about
+    28 bytes a vertex (200,000 vertices: 5.7 MB), verification on by default; probes
+    are sent one after another on a connection of their own until all have answered.
+    """
+    import threading
+    from concurrent.futures import ThreadPoolExecutor
+
+    features = [_line(100) for _ in range(max(1, vertices // 100))]
+    body = json.dumps({"window": WINDOW, "geojson": {"type": "FeatureCollection",
+                                                     "features": features}}).encode()
+    done = threading.Event()
+    statuses: list[int] = []
+
+    def big() -> None:
+        with httpx.Client(timeout=600) as client:
+            statuses.append(client.post(url + "/v1/clip/geojson", content=body, headers={
+                "Content-Type": "application/json"}).status_code)
+
+    latencies = []
+    with ThreadPoolExecutor(busy) as pool:
+        futures = [pool.submit(big) for _ in range(busy)]
+        threading.Thread(target=lambda: ([f.result() for f in futures], done.set()),
+                         daemon=True).start()
+        with httpx.Client(timeout=60) as probe:
+            while not done.is_set():
+                started = time.perf_counter()
+                probe.get(url + "/healthz")
+                latencies.append(time.perf_counter() - started)
+                time.sleep(0.01)
+    ordered = sorted(latencies)
+
+    def at(q: float) -> float:
+        return ordered[min(len(ordered) - 1, int(q * len(ordered)))] if ordered else 0.0
+
+    return {"busy_requests": busy, "busy_bytes": len(body), "probes": len(ordered),
+            "latency_s": {"p50": at(0.5), "p99": at(0.99), "max": ordered[-1] if ordered else 0.0},
+            "busy_statuses": {str(code): statuses.count(code) for code in set(statuses)}}
+
+
 def run_load(seconds: int, connections: int, threads: int, workers: int = 2,
-             cases: list[str] | None = None, log_level: str = "info", log=print) -> dict:
-    """Start the server, run wrk on every case; return the figures per case."""
+             cases: list[str] | None = None, log_level: str = "info",
+             busy: tuple[int, int] | None = None, log=print) -> dict:
+    """Start the server, run wrk on every case; return the figures per case.
+
+    `busy` ``(requests, vertices)`` adds ``healthz_while_busy`` (`health_while_busy`).
+    """
     wrk = shutil.which("wrk")
     if wrk is None:
         raise RuntimeError("wrk is not installed (Debian: apt-get install wrk)")
@@ -195,6 +244,14 @@ def run_load(seconds: int, connections: int, threads: int, workers: int = 2,
                     f"{figures['latency_s'].get('p50', 0) * 1e3:7.2f} ms   p99 "
                     f"{figures['latency_s'].get('p99', 0) * 1e3:7.2f} ms   non-2xx "
                     f"{figures['non_2xx']}")
+            if busy is not None:
+                figures = health_while_busy(url, *busy)
+                results["healthz_while_busy"] = figures
+                log(f"  healthz while {busy[0]} requests of {figures['busy_bytes'] / 1e6:.1f} MB "
+                    f"run: p50 {figures['latency_s']['p50'] * 1e3:.1f} ms, p99 "
+                    f"{figures['latency_s']['p99'] * 1e3:.1f} ms, max "
+                    f"{figures['latency_s']['max'] * 1e3:.1f} ms ({figures['probes']} probes); "
+                    f"busy answers {figures['busy_statuses']}")
         finally:
             process.terminate()
             try:
@@ -230,6 +287,12 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--connections", type=int, default=None)
     parser.add_argument("--threads", type=int, default=2, help="wrk threads")
     parser.add_argument("--workers", type=int, default=2, help="uvicorn worker processes")
+    parser.add_argument("--busy", type=int, default=None,
+                        help="large requests at once for healthz_while_busy (default 50; "
+                             "quick: 4)")
+    parser.add_argument("--busy-vertices", type=int, default=None,
+                        help="vertices per large request (default 200,000, about 5.7 MB; "
+                             "quick: 5,000)")
     parser.add_argument("--log-level", default="info",
                         help="the server's RNSCA_LOG_LEVEL (info, as deployed: a line per "
                              "request)")
@@ -239,8 +302,10 @@ def main(argv: list[str] | None = None) -> int:
     connections = args.connections or (4 if args.quick else 32)
     print(f"load: wrk, {connections} connections, {seconds} s per case, rnsca serve "
           f"--workers {args.workers}, log level {args.log_level}", flush=True)
+    busy = (args.busy or (4 if args.quick else 50),
+            args.busy_vertices or (5_000 if args.quick else 200_000))
     results = run_load(seconds, connections, args.threads, args.workers,
-                       log_level=args.log_level)
+                       log_level=args.log_level, busy=busy)
     stamp = time.strftime("%Y%m%dT%H%M%SZ", time.gmtime())
     args.out.mkdir(parents=True, exist_ok=True)
     path = args.out / f"load-{stamp}.json"

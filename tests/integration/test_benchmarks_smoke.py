@@ -266,6 +266,9 @@ def test_load_suite_runs_wrk_against_a_real_server(tmp_path):
                    cwd=ROOT, check=True, capture_output=True, timeout=600)
     (path,) = tmp_path.glob("load-*.json")
     result = json.loads(path.read_text())
+    busy = result["cases"].pop("healthz_while_busy")
+    assert busy["probes"] > 0 and busy["busy_statuses"] == {"200": 4}
+    assert set(busy["latency_s"]) == {"p50", "p99", "max"}
     assert set(result["cases"]) == {"healthz", "geojson_verified", "geojson", "svg",
                                     "segments_binary"}
     for figures in result["cases"].values():

@@ -10,7 +10,7 @@ import sys
 from importlib import metadata
 from pathlib import Path
 
-__all__ = ["describe_machine", "load_average", "source_digest"]
+__all__ = ["describe_machine", "load_average", "source_digest", "run_header"]
 
 _PACKAGES = ("rnsca", "numba", "llvmlite", "numpy", "shapely", "matplotlib")
 
@@ -100,3 +100,15 @@ def describe_machine(project_root: Path) -> dict:
         "load_average_at_start": load_average(),
         "git": _git(project_root),
     }
+
+
+def run_header(schema: int, stamp: str, quick: bool, machine: dict, project_root: Path) -> dict:
+    """Return the keys every suite's JSON starts with: schema, time, machine and load.
+
+    `machine` is `describe_machine` of the run's start; ``rnsca_changed_during_run`` says
+    whether the sources differ now (a run whose figures mix two versions).
+    """
+    digest = source_digest(project_root)
+    return {"schema": schema, "created": stamp, "quick": quick, "machine": machine,
+            "load_average_at_end": load_average(), "rnsca_source_sha256_at_end": digest,
+            "rnsca_changed_during_run": digest != machine["git"]["rnsca_source_sha256"]}

@@ -49,7 +49,7 @@ import numpy as np
 
 import rnsca
 from benchmarks import datasets
-from benchmarks.machine import describe_machine, load_average, source_digest
+from benchmarks.machine import describe_machine, load_average, run_header
 from benchmarks.plot_paper import draw_decided, draw_intersections, draw_table2
 from benchmarks.timing import Contender, Policy, full_policy, time_round_robin
 from rnsca.backends.numba_cpu import BLOCK_SIZE, SERIAL_BLOCKS
@@ -360,13 +360,7 @@ def run(quick: bool = False, out_dir: Path = DEFAULT_OUT, max_size: int | None =
     json_path = out_dir / f"paper-{stamp}.json"
     plots = {key: out_dir / f"paper-{stamp}-{key}.png" for key in PLOTS}
     result = {
-        "schema": SCHEMA,
-        "created": stamp,
-        "quick": quick,
-        "machine": machine,
-        "load_average_at_end": load_average(),
-        "rnsca_changed_during_run": (source_digest(PROJECT_ROOT)
-                                     != machine["git"]["rnsca_source_sha256"]),
+        **run_header(SCHEMA, stamp, quick, machine, PROJECT_ROOT),
         "config": {
             "table2_sizes": config["sizes"],
             "family_n": config["family_n"],

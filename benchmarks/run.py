@@ -42,7 +42,7 @@ from benchmarks.bench_segments import (
     run_n_sweep,
     run_workload,
 )
-from benchmarks.machine import describe_machine, load_average, source_digest
+from benchmarks.machine import describe_machine, load_average, run_header, source_digest
 from benchmarks.plot import draw_figure5
 from benchmarks.report import print_geometry_summary, print_summary
 from benchmarks.startup import measure_startup
@@ -144,14 +144,7 @@ def run(quick: bool, out_dir: Path, sizes: list[int] | None = None,
     json_path = out_dir / f"segments-{stamp}.json"
     png_path = out_dir / f"segments-{stamp}.png"
     result = {
-        "schema": SCHEMA,
-        "created": stamp,
-        "quick": quick,
-        "machine": machine,
-        "load_average_at_end": load_average(),
-        "rnsca_source_sha256_at_end": source_digest(PROJECT_ROOT),
-        "rnsca_changed_during_run": (source_digest(PROJECT_ROOT)
-                                     != machine["git"]["rnsca_source_sha256"]),
+        **run_header(SCHEMA, stamp, quick, machine, PROJECT_ROOT),
         "config": {
             "uniform_sizes": config["uniform_sizes"],
             "shaped_n": config["shaped_n"],

@@ -216,7 +216,8 @@ def _subdivide(x0, y0, x1, y1, whole, length, window, options, st, stack):
     """
     d = direction(x0, y0, x1, y1)
     # ``n="auto"`` bisects every piece of this segment when bisection reaches the tolerance
-    # within max_depth (`auto_n` then returns 2 at every level): decided once, here.
+    # within max_depth (`auto_n` then returns 2 at every level): decided once, here, since
+    # `auto_n`'s power (or ldexp) per piece cost ~10% of approx mode (1M uniform, 1 thread).
     bisect = length <= options.tol * 2.0 ** options.max_depth
     # The merged interval and its end points.
     lo_t = math.inf

@@ -113,9 +113,9 @@ class _VerificationCost:
     """What verification has cost per input vertex, by endpoint: a running estimate.
 
     It sizes the sample that keeps a verification within `Settings.verify_cost_ratio` of
-    the clip's time. The first estimates are measured figures of this machine (Shapely's
-    intersection and the Hausdorff checks; paths are flattened 100 times finer than the
-    clip), then each verification updates its kind's (exponential average).
+    the clip's time. The first values are rough starting guesses (paths cost more: they
+    are flattened 100 times finer than the clip); each verification then corrects its
+    kind's estimate (exponential average), so a few requests bring it to this machine's.
     """
 
     def __init__(self) -> None:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 from typing import Annotated, Literal
 
 from pydantic import Field, PositiveFloat, PositiveInt, field_validator, model_validator
@@ -76,6 +77,9 @@ class Settings(BaseSettings):
     """Level of the JSON log lines (one per request at ``info``)."""
     warm_up: bool = True
     """Compile (or load from the cache) the kernels before `/readyz` answers 200."""
+    warm_up_processes: int = Field(default_factory=lambda: os.cpu_count() or 1, ge=0)
+    """On a cold kernel cache, compile in this many child processes at once (default: one
+    per core; 0: in the worker itself). Each endpoint is served once its kernels are."""
     threading_layer: ThreadingLayer = "threadsafe"
     """Numba threading layer, applied unless ``NUMBA_THREADING_LAYER`` is set."""
     graceful_shutdown_seconds: PositiveFloat = 60.0

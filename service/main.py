@@ -17,10 +17,9 @@ from starlette.middleware.cors import CORSMiddleware
 from starlette.middleware.gzip import GZipMiddleware
 
 import rnsca
-from rnsca.backends.registry import available_backends, configure_opencl, get_backend
+from rnsca.backends.registry import configure_opencl
 from rnsca.runtime import configure_process
 from service.config import Settings
-from service.convert import warm_up_svg
 from service.errors import install_handlers
 from service.logs import configure_logging
 from service.metrics import Metrics
@@ -28,6 +27,7 @@ from service.middleware import AccessMiddleware, BodyLimitMiddleware, InflateMid
 from service.routes import api_router
 from service.runner import ClipRunner
 from service.schemas import REQUEST_MODELS
+from service.warmup import ENDPOINT_STEPS, steps_for
 
 __all__ = ["create_app"]
 
@@ -62,8 +62,8 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     @asynccontextmanager
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
         if settings.warm_up:
-            backends = [get_backend(kind) for kind in available_backends()]
-            warming = asyncio.create_task(runner.start(backends, (warm_up_svg,)))
+            warming = asyncio.create_task(runner.start(
+                steps_for(), ENDPOINT_STEPS, settings.warm_up_processes))
         else:
             warming = None
             runner.ready.set()

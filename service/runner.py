@@ -16,16 +16,18 @@ from __future__ import annotations
 import asyncio
 import gc
 import logging
+import multiprocessing
 import os
 import threading
 import time
-from collections.abc import Callable, Iterable
-from concurrent.futures import ThreadPoolExecutor
+from collections.abc import Callable, Mapping, Sequence
+from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor, as_completed
 from contextlib import nullcontext
 from typing import Any, TypeVar
 
 from rnsca.runtime import numba_threads_started
 from service.errors import NotReadyError, RequestTimeoutError, TimeLimitError
+from service.warmup import COLD_SECONDS, Step, compile_step, step_lock
 
 __all__ = ["ClipRunner"]
 
@@ -58,6 +60,10 @@ class ClipRunner:
         self.threading_layer: str | None = None
         self.warm_up_seconds: float | None = None
         self.failure: str | None = None
+        # Warm-up's progress: the steps done, and the endpoints served before `ready`.
+        self._done: set[str] = set()
+        self._endpoint_steps: dict[str, set[str]] = {}
+        self.served: frozenset[str] = frozenset()
         # One call at a time until the loaded threading layer is known to be thread-safe.
         self._serial: threading.Lock | None = threading.Lock()
         self._settled = False
@@ -75,26 +81,31 @@ class ClipRunner:
             return
         numba.config.THREADING_LAYER = layer
 
-    def warm_up(self, backends: Iterable[object],
-                extra: Iterable[Callable[[], object]] = ()) -> None:
-        """Compile (or load) the kernels: `backends`, then each warm-up function of `extra`.
+    def warm_up(self, steps: Sequence[Step], endpoints: Mapping[str, Sequence[str]],
+                processes: int = 0) -> None:
+        """Run each warm-up step; serve each endpoint of `endpoints` once its steps are done.
 
-        Then settle how calls may overlap. Runs in a pool thread at start-up; sets
-        `ready` when done.
+        Runs in a pool thread at start-up. The first step runs here; if it shows the
+        kernel cache is cold (`service.warmup.COLD_SECONDS`), the others are compiled in
+        up to `processes` child processes and each is loaded here as its child finishes
+        (see `service.warmup`). Then settles how calls may overlap, and sets `ready`.
         """
         started = time.perf_counter()
-        steps = [(f"{type(engine).__name__}.warm_up", engine.warm_up) for engine in backends
-                 if hasattr(engine, "warm_up")]
-        steps += [(getattr(function, "__name__", repr(function)), function)
-                  for function in extra]
-        for name, step in steps:
-            # One line before and one after each step: a cold start compiles for minutes,
-            # and the log says what it is doing.
-            _log.info("warming up", extra={"fields": {"step": name}})
-            step_started = time.perf_counter()
-            step()
-            _log.info("warmed up", extra={"fields": {
-                "step": name, "seconds": round(time.perf_counter() - step_started, 3)}})
+        self._endpoint_steps = {name: set(needs) for name, needs in endpoints.items()}
+        self._serve_ready_endpoints()
+        pending = list(steps)
+        if pending:
+            first = pending.pop(0)
+            seconds = self._run_step(first)
+            cold = seconds > COLD_SECONDS and not _jit_disabled()
+            if cold and processes > 0 and pending:
+                _log.info("the kernel cache is cold: compiling in child processes",
+                          extra={"fields": {"processes": min(processes, len(pending)),
+                                            "steps": [s.name for s in pending]}})
+                self._compile_in_children(pending, processes)
+                pending = []
+        for step in pending:
+            self._run_step(step)
         self.settle()
         # What start-up and warm-up made lives as long as the process: out of the cyclic
         # collector's sight, its full collections stop walking it (they were the long
@@ -106,6 +117,47 @@ class ClipRunner:
         _log.info("kernels ready", extra={"fields": {
             "warm_up_seconds": round(self.warm_up_seconds, 3),
             "threading_layer": self.threading_layer, "serialized": self.serialized}})
+
+    def _run_step(self, step: Step) -> float:
+        """Run `step` here under its lock, log it, serve what it completes; return seconds."""
+        # One line before and one after each step: a cold start compiles for minutes,
+        # and the log says what it is doing.
+        _log.info("warming up", extra={"fields": {"step": step.name}})
+        with step_lock(step.name), self._serial or nullcontext():
+            step_started = time.perf_counter()
+            step.run()
+            seconds = time.perf_counter() - step_started
+        if not self._settled:  # the first step has run a parallel kernel: which layer?
+            self.settle()
+        _log.info("warmed up", extra={"fields": {"step": step.name,
+                                                 "seconds": round(seconds, 3)}})
+        self._done.add(step.name)
+        self._serve_ready_endpoints()
+        return seconds
+
+    def _compile_in_children(self, steps: Sequence[Step], processes: int) -> None:
+        """Compile `steps` in child processes; load each here as soon as its child is done."""
+        context = multiprocessing.get_context("spawn")
+        with ProcessPoolExecutor(max_workers=min(processes, len(steps)),
+                                 mp_context=context) as pool:
+            futures = {pool.submit(compile_step, step.name): step for step in steps}
+            for future in as_completed(futures):
+                if (error := future.exception()) is not None:  # compiled here instead
+                    _log.warning("compiling in a child process failed",
+                                 extra={"fields": {"step": futures[future].name,
+                                                   "error": repr(error)}})
+                self._run_step(futures[future])
+
+    def _serve_ready_endpoints(self) -> None:
+        for name, needs in self._endpoint_steps.items():
+            if name not in self.served and needs <= self._done:
+                # A new set, not changed in place: the event loop reads it meanwhile.
+                self.served = self.served | {name}
+                _log.info("serving", extra={"fields": {"endpoint": name}})
+
+    def endpoint_ready(self, endpoint: str) -> bool:
+        """Whether requests to `endpoint` are served (its kernels are warm, or all are)."""
+        return self.ready.is_set() or endpoint in self.served
 
     def settle(self) -> None:
         """Read the threading layer that runs; serialize calls unless it is thread-safe."""
@@ -124,14 +176,16 @@ class ClipRunner:
         self._serial = None if self.threading_layer in THREAD_SAFE_LAYERS else self._serial
         self._settled = True
 
-    async def start(self, backends: Iterable[object],
-                    extra: Iterable[Callable[[], object]] = ()) -> None:
+    async def start(self, steps: Sequence[Step], endpoints: Mapping[str, Sequence[str]],
+                    processes: int = 0) -> None:
         """Warm up in the pool, off the event loop (so `/healthz` answers meanwhile)."""
         loop = asyncio.get_running_loop()
         self.warming = True
         try:
-            await loop.run_in_executor(self._executor(), self._call, self.warm_up,
-                                       (backends, extra))
+            # Not through `_call`: each step takes the serializing lock itself, so the
+            # endpoints served early are not held up behind the whole warm-up.
+            await loop.run_in_executor(self._executor(), self.warm_up, steps, endpoints,
+                                       processes)
         except Exception as exc:  # reported by /readyz; the process keeps answering
             self.failure = f"{type(exc).__name__}: {exc}"
             _log.error("warming up the kernels failed", exc_info=exc)
@@ -154,19 +208,23 @@ class ClipRunner:
         return body, self.time_limit - (time.monotonic() - started)
 
     async def run(self, function: Callable[..., _T], *args: Any,
-                  time_left: float | None = None) -> _T:
+                  time_left: float | None = None, endpoint: str | None = None) -> _T:
         """Return ``function(*args)`` run in the pool; raise `TimeLimitError` past the limit.
 
         `time_left` is what is left of the request's limit after reading its body
         (`read_body`); by default the whole limit.
 
-        While the kernels warm up, raise `NotReadyError` (503, ``Retry-After``) at once:
-        a request would otherwise wait behind the compilation and time out.
+        While the kernels of `endpoint` (all of them, if None) warm up, raise
+        `NotReadyError` (503, ``Retry-After``) at once: a request would otherwise wait
+        behind the compilation and time out.
         """
-        if self.warming and not self.ready.is_set():
+        if self.warming and not (self.ready.is_set() if endpoint is None
+                                 else self.endpoint_ready(endpoint)):
             raise NotReadyError(
-                "the server is compiling or loading its kernels (see /readyz); retry shortly",
-                headers={"Retry-After": "2"})
+                f"the server is compiling or loading the kernels "
+                f"{'it needs' if endpoint is None else 'of ' + endpoint} (see /readyz); "
+                "retry shortly", headers={"Retry-After": "2"},
+                served=sorted(self.served))
         loop = asyncio.get_running_loop()
         future = loop.run_in_executor(self._executor(), self._call, function, args)
         try:
@@ -199,3 +257,9 @@ class ClipRunner:
         pool, self._pool = self._pool, None
         if pool is not None:
             pool.shutdown(wait=True, cancel_futures=False)
+
+
+def _jit_disabled() -> bool:
+    import numba
+
+    return bool(numba.config.DISABLE_JIT)

@@ -294,13 +294,18 @@ class NumbaBackend:
 
     def warm_up(self) -> None:
         """Compile (or load from the cache) the kernels, so the first real call is fast."""
-        window = Window(0.0, 0.0, 1.0, 1.0)
-        for n in (1, BLOCK_SIZE * (SERIAL_BLOCKS + 1)):  # both drivers
-            segments = np.tile([[-1.0, 0.5, 2.0, 0.5]], (n, 1))
-            for method in Method:
-                self.clip_segments(segments, window, SegmentOptions.resolve(window, method=method))
+        warm_up_segments(self)
         warm_up_geometry(self)
         warm_up_paths(self)
+
+
+def warm_up_segments(backend: ClipBackend) -> None:
+    """Clip segments on `backend` with every method, through both drivers of the Numba one."""
+    window = Window(0.0, 0.0, 1.0, 1.0)
+    for n in (1, BLOCK_SIZE * (SERIAL_BLOCKS + 1)):  # the serial and the parallel driver
+        segments = np.tile([[-1.0, 0.5, 2.0, 0.5]], (n, 1))
+        for method in Method:
+            backend.clip_segments(segments, window, SegmentOptions.resolve(window, method=method))
 
 
 def warm_up_paths(backend: ClipBackend) -> None:
@@ -355,20 +360,38 @@ def polygon_geometry(geometry_polygons: np.ndarray) -> np.ndarray:
 
 
 def warm_up_geometry(backend: ClipBackend) -> None:
-    """Clip lines and polygons on `backend`: one square ring across the window, 2D and 3D.
+    """Clip lines and polygons on `backend`: `warm_up_lines`, then `warm_up_polygons`."""
+    warm_up_lines(backend)
+    warm_up_polygons(backend)
 
-    Every kernel specialisation a geometry clip uses is compiled (or loaded) by it.
-    """
+
+def _warm_up_rings() -> tuple[list[np.ndarray], np.ndarray, np.ndarray, WindowTable,
+                              SegmentOptions]:
+    """Return one square ring across the unit window, 2D and 3D, and what clips it."""
     ring = [[-1.0, 0.25], [2.0, 0.25], [2.0, 0.75], [-1.0, 0.75], [-1.0, 0.25]]
-    offsets = np.array([0, 5], dtype=np.int64)
-    one = np.array([0, 1], dtype=np.int64)
-    windows = WindowTable.of(Window(0.0, 0.0, 1.0, 1.0), 1)
-    options = SegmentOptions.resolve(Window(0.0, 0.0, 1.0, 1.0))
-    for coords in (np.array(ring), np.array([[x, y, 0.0] for x, y in ring])):
+    coords = [np.array(ring), np.array([[x, y, 0.0] for x, y in ring])]
+    window = Window(0.0, 0.0, 1.0, 1.0)
+    return (coords, np.array([0, 5], dtype=np.int64), np.array([0, 1], dtype=np.int64),
+            WindowTable.of(window, 1), SegmentOptions.resolve(window))
+
+
+def warm_up_lines(backend: ClipBackend) -> None:
+    """Clip lines on `backend` (a square ring as a line, 2D and 3D, edge runs kept or not).
+
+    Every kernel specialisation a line clip uses is compiled (or loaded) by it.
+    """
+    coords_2d_3d, offsets, one, windows, options = _warm_up_rings()
+    for coords in coords_2d_3d:
         for kind, levels in ((GeometryKind.LINESTRING, (offsets,)),
                              (GeometryKind.MULTILINESTRING, (offsets, one))):
             for drop in (False, True):
                 backend.clip_lines(Ragged.of(kind, coords, levels), windows, options, drop)
+
+
+def warm_up_polygons(backend: ClipBackend) -> None:
+    """Clip a polygon on `backend` (a square across the window, 2D and 3D)."""
+    coords_2d_3d, offsets, one, windows, options = _warm_up_rings()
+    for coords in coords_2d_3d:
         backend.clip_polygons(Ragged.of(GeometryKind.POLYGON, coords, (offsets, one)),
                               windows, options)
 

@@ -83,7 +83,7 @@ async def clip_geojson(request: Request, settings: SettingsDep, runner: RunnerDe
     """
     body, time_left = await _read_json(request, runner)
     return _respond(await runner.run(convert.clip_geojson, body, settings,
-                                     time_left=time_left), metrics)
+                                     time_left=time_left, endpoint="geojson"), metrics)
 
 
 @router.post("/svg", response_model=ClipSVGResponse,
@@ -93,8 +93,8 @@ async def clip_svg(request: Request, settings: SettingsDep, runner: RunnerDep,
                    metrics: MetricsDep) -> Response:
     """Return each path's data clipped to the window (curves kept or flattened)."""
     body, time_left = await _read_json(request, runner)
-    return _respond(await runner.run(convert.clip_svg, body, settings, time_left=time_left),
-                    metrics)
+    return _respond(await runner.run(convert.clip_svg, body, settings, time_left=time_left,
+                                     endpoint="svg"), metrics)
 
 
 class SegmentQuery(BaseModel):
@@ -149,11 +149,12 @@ async def clip_segments(request: Request, query: Annotated[SegmentQuery, Query()
             if v is not None} | _query_resolution(query.resolution), strict=False)
         body, time_left = await runner.read_body(request)
         outcome = await runner.run(convert.clip_segments_binary, body, window, options,
-                                   query.verify, settings, time_left=time_left)
+                                   query.verify, settings, time_left=time_left,
+                                   endpoint="segments")
     else:
         body, time_left = await _read_json(request, runner)
         outcome = await runner.run(convert.clip_segments_json, body, settings,
-                                   time_left=time_left)
+                                   time_left=time_left, endpoint="segments")
     return _respond(outcome, metrics)
 
 

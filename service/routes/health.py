@@ -25,10 +25,17 @@ async def healthz() -> Response:
             responses={503: {"model": Problem, "description": "Kernels not ready yet",
                              "content": {"application/problem+json": {}}}})
 async def readyz(runner: RunnerDep) -> Response:
-    """Answer 200 once the kernels are compiled or loaded from the cache, else 503."""
+    """Answer 200 once the kernels are compiled or loaded from the cache, else 503.
+
+    During warm-up each clipping endpoint is served as soon as its own kernels are
+    ready: the 503 lists them (``served``: ``segments``, ``geojson``, ``svg``).
+    """
     if runner.failure is not None:
         raise NotReadyError(f"warming up the kernels failed: {runner.failure}")
     if not runner.ready.is_set():
-        raise NotReadyError("the kernels are being compiled or loaded from the cache",
-                            headers={"Retry-After": "2"})
+        served = sorted(runner.served)
+        raise NotReadyError(
+            "the kernels are being compiled or loaded from the cache"
+            + (f"; served meanwhile: {', '.join(served)}" if served else ""),
+            headers={"Retry-After": "2"}, served=served)
     return Response(orjson.dumps({"status": "ready"}), media_type="application/json")

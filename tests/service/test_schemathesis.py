@@ -10,7 +10,7 @@ import schemathesis
 from hypothesis import HealthCheck, settings
 
 from service import Settings, create_app
-from service.convert import warm_up_svg
+from service.warmup import ENDPOINT_STEPS, steps_for
 
 app = create_app(Settings(warm_up=False, verify_max_vertices=50, max_vertices=10_000,
                           max_body_bytes=2**20))
@@ -20,10 +20,7 @@ schema = schemathesis.openapi.from_asgi("/openapi.json", app)
 @pytest.fixture(scope="module", autouse=True)
 def _compiled():
     """Compile the kernels first: a cold compile inside a request would time it out."""
-    from rnsca.backends.registry import available_backends, get_backend
-
-    app.state.runner.warm_up([get_backend(k) for k in available_backends()],
-                             (warm_up_svg,))
+    app.state.runner.warm_up(steps_for(), ENDPOINT_STEPS)
 
 
 @pytest.mark.filterwarnings("ignore::DeprecationWarning")

@@ -1,0 +1,148 @@
+"""Warm-up: the kernels each endpoint needs, compiled (or loaded) before it is served.
+
+A cold start compiles for minutes on a small machine (measured: about 27 s for the
+segment kernels, well over a minute for lines and polygons, which share the segment core
+but link it again), and a warm one loads everything from Numba's disk cache in seconds.
+So warm-up is a list of steps (`Step`), and each endpoint is served as soon as the steps it
+needs are done (`ENDPOINT_STEPS`): segments first, the cheapest.
+
+When the first step shows the cache is cold (it took longer than `COLD_SECONDS`), the
+remaining steps are compiled in child processes, one per core (`compile_step`), each
+writing Numba's disk cache; this process then loads each step as its child finishes.
+Compiling is single-threaded (Numba holds one compiler lock per process), so this is
+how a cold start uses more than one core. Each step is compiled under a file lock
+(`step_lock`): the workers of ``rnsca serve --workers N`` share the cache, and a step one
+of them compiles is loaded, not compiled again, by the others.
+"""
+
+from __future__ import annotations
+
+import fcntl
+import hashlib
+import os
+import tempfile
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass
+from pathlib import Path
+
+import rnsca
+from rnsca.backends.numba_cpu import (
+    warm_up_lines,
+    warm_up_paths,
+    warm_up_polygons,
+    warm_up_segments,
+)
+from rnsca.backends.registry import available_backends, get_backend
+from rnsca.options import Backend
+from rnsca.runtime import configure_process
+
+__all__ = ["COLD_SECONDS", "ENDPOINT_STEPS", "STEPS", "Step", "compile_step", "step_lock",
+           "steps_for"]
+
+#: A first step that takes longer than this (seconds) means the kernel cache is cold.
+COLD_SECONDS = 3.0
+
+
+@dataclass(frozen=True)
+class Step:
+    """One unit of warm-up: a function that runs kernels so they are compiled or loaded.
+
+    `needs` are steps whose kernels this one calls as well: a child process compiling
+    this step waits for them first (under their locks), then loads them.
+    """
+
+    name: str
+    run: Callable[[], object]
+    needs: tuple[str, ...] = ()
+
+
+def _segments() -> None:
+    warm_up_segments(get_backend(Backend.NUMBA))
+
+
+def _lines() -> None:
+    warm_up_lines(get_backend(Backend.NUMBA))
+
+
+def _polygons() -> None:
+    warm_up_polygons(get_backend(Backend.NUMBA))
+
+
+def _geojson() -> None:
+    """Clip a small FeatureCollection, 2D then 3D: the GeoJSON reader's and writer's kernels."""
+    for z in ([], [0.0]):
+        ring = [[-1.0, 0.25, *z], [2.0, 0.25, *z], [2.0, 0.75, *z], [-1.0, 0.75, *z],
+                [-1.0, 0.25, *z]]
+        geometries = [{"type": "Point", "coordinates": [0.5, 0.5, *z]},
+                      {"type": "LineString", "coordinates": ring},
+                      {"type": "Polygon", "coordinates": [ring]}]
+        rnsca.clip_geojson({"type": "FeatureCollection", "features": [
+            {"type": "Feature", "properties": {}, "geometry": g} for g in geometries]},
+            (0.0, 0.0, 1.0, 1.0))
+
+
+def _svg() -> None:
+    # The service's own SVG calls (every curve handling and fill rule), then the paths
+    # kernels as the backend's warm-up runs them.
+    from service.convert import warm_up_svg
+
+    warm_up_paths(get_backend(Backend.NUMBA))
+    warm_up_svg()
+
+
+def _opencl() -> None:
+    get_backend(Backend.OPENCL).warm_up()
+
+
+#: Every step, in the order they are done: segments first (the cheapest, so the first
+#: endpoint is served soonest), the OpenCL backend last (no endpoint waits for it).
+STEPS = (Step("segments", _segments), Step("lines", _lines, ("segments",)),
+         Step("polygons", _polygons, ("segments",)),
+         Step("geojson", _geojson, ("lines", "polygons")),
+         Step("svg", _svg, ("segments",)), Step("opencl", _opencl))
+
+#: The steps each clipping endpoint waits for (by the name `ClipRunner.run` is given).
+ENDPOINT_STEPS = {"segments": ("segments",), "geojson": ("lines", "polygons", "geojson"),
+                  "svg": ("svg",)}
+
+
+def steps_for(backends: list[Backend] | None = None) -> tuple[Step, ...]:
+    """Return the steps to run here: all but OpenCL's when that backend is not available."""
+    present = available_backends() if backends is None else backends
+    return tuple(s for s in STEPS if s.name != "opencl" or Backend.OPENCL in present)
+
+
+def _lock_folder() -> Path:
+    # One folder per installed copy of rnsca: two checkouts do not wait for each other.
+    key = hashlib.sha1(os.path.dirname(rnsca.__file__).encode()).hexdigest()[:12]
+    folder = Path(tempfile.gettempdir()) / f"rnsca-warm-up-{key}"
+    folder.mkdir(exist_ok=True)
+    return folder
+
+
+@contextmanager
+def step_lock(name: str) -> Iterator[None]:
+    """Hold the machine-wide lock of step `name` (an advisory file lock) inside the block."""
+    with open(_lock_folder() / f"{name}.lock", "a") as handle:
+        fcntl.flock(handle, fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            fcntl.flock(handle, fcntl.LOCK_UN)
+
+
+def compile_step(name: str) -> str:
+    """Compile step `name` into Numba's disk cache, in a child process; return `name`.
+
+    The steps it needs are done first, each under its lock (loaded, if another process
+    compiled them), so that no two processes compile the same kernels at once.
+    """
+    configure_process()
+    by_name = {s.name: s for s in STEPS}
+    for needed in by_name[name].needs:
+        with step_lock(needed):
+            by_name[needed].run()
+    with step_lock(name):
+        by_name[name].run()
+    return name

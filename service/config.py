@@ -51,6 +51,10 @@ class Settings(BaseSettings):
     work_budget: PositiveInt = 500_000_000
     """Largest estimated work of one request, in fragments evaluated (about 20 ns each on
     one core, see `service.budget`); more gives 422 before any clipping."""
+    memory_budget_bytes: PositiveInt = 2 * 2**30
+    """Memory the clip requests in flight may use, all workers together (each worker
+    takes its share); a request's need is estimated from its body (`service.admission`).
+    Past it: 503 with Retry-After; a request that needs more than a worker's share: 413."""
     request_time_limit: PositiveFloat = 30.0
     """Seconds a request may wait for and use a clipping thread; past it: 503."""
     clip_threads: PositiveInt = 2

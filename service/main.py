@@ -19,6 +19,7 @@ from starlette.middleware.gzip import GZipMiddleware
 import rnsca
 from rnsca.backends.registry import configure_opencl
 from rnsca.runtime import configure_process
+from service.admission import AdmissionMiddleware, MemoryBudget
 from service.config import Settings
 from service.errors import install_handlers
 from service.logs import configure_logging
@@ -58,6 +59,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     runner = ClipRunner(settings.clip_threads, settings.request_time_limit)
     runner.prepare(settings.threading_layer)
     metrics = Metrics()
+    memory = MemoryBudget(settings.memory_budget_bytes // settings.workers)
 
     @asynccontextmanager
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
@@ -84,6 +86,8 @@ def create_app(settings: Settings | None = None) -> FastAPI:
                             "X-Rnsca-Verification"]))
     middleware.append(Middleware(BodyLimitMiddleware, max_bytes=settings.max_body_bytes))
     middleware.append(Middleware(InflateMiddleware, max_bytes=settings.max_body_bytes))
+    # Innermost: it sees bodies inflated, and the route's thread holds its reservation.
+    middleware.append(Middleware(AdmissionMiddleware, budget=memory))
 
     app = FastAPI(title="rnsca", version=rnsca.__version__, description=_DESCRIPTION,
                   lifespan=lifespan, middleware=middleware, docs_url="/docs",
@@ -91,6 +95,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.state.settings = settings
     app.state.runner = runner
     app.state.metrics = metrics
+    app.state.memory = memory
     install_handlers(app)
     app.include_router(api_router)
     app.openapi = lambda: _openapi(app)  # type: ignore[method-assign]  # as FastAPI documents

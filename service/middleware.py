@@ -17,18 +17,25 @@ from service.errors import (
 from service.logs import ACCESS_LOGGER
 from service.metrics import Metrics
 
-__all__ = ["BodyLimitMiddleware", "InflateMiddleware", "AccessMiddleware"]
+__all__ = ["BodyLimitMiddleware", "InflateMiddleware", "AccessMiddleware", "send_problem"]
 
 _access = logging.getLogger(ACCESS_LOGGER)
 
 
-async def _send_problem(send: Send, status: int, slug: str, title: str, detail: str,
-                        instance: str, **extensions: object) -> None:
+async def send_problem(send: Send, status: int, slug: str, title: str, detail: str,
+                       instance: str, headers: dict | None = None,
+                       **extensions: object) -> None:
+    """Answer with a problem document from pure ASGI middleware, and close the connection.
+
+    The body is left unread: closing the connection is the only way to be done with it.
+    """
     body = problem_bytes(status, slug, title, detail, instance=instance, **extensions)
+    extra = [(name.lower().encode("latin-1"), str(value).encode("latin-1"))
+             for name, value in (headers or {}).items() if name.lower() != "connection"]
     await send({"type": "http.response.start", "status": status,
                 "headers": [(b"content-type", b"application/problem+json"),
                             (b"content-length", str(len(body)).encode()),
-                            (b"connection", b"close")]})
+                            (b"connection", b"close"), *extra]})
     await send({"type": "http.response.body", "body": body})
 
 
@@ -55,7 +62,7 @@ class BodyLimitMiddleware(_BodyMiddleware):
         limit = self.max_bytes
         for name, value in scope["headers"]:
             if name == b"content-length" and value.isdigit() and int(value) > limit:
-                return await _send_problem(
+                return await send_problem(
                     send, 413, BodyTooLargeError.slug, BodyTooLargeError.title,
                     f"the body has {int(value)} bytes, more than this server's limit of "
                     f"{limit}", scope["path"], limit=limit)
@@ -84,7 +91,7 @@ class BodyLimitMiddleware(_BodyMiddleware):
         except BodyTooLargeError as exc:
             if started:
                 raise
-            await _send_problem(send, 413, exc.slug, exc.title, exc.detail, scope["path"],
+            await send_problem(send, 413, exc.slug, exc.title, exc.detail, scope["path"],
                                 limit=limit)
 
 
@@ -109,7 +116,7 @@ class InflateMiddleware(_BodyMiddleware):
             return await self.app(scope, receive, send)
         if encoding not in (b"gzip", b"x-gzip"):
             # Answered here: outside the application, its exception handlers cannot.
-            return await _send_problem(
+            return await send_problem(
                 send, 415, UnsupportedMediaTypeError.slug, UnsupportedMediaTypeError.title,
                 f"request bodies may be sent with Content-Encoding gzip (or none), got "
                 f"{encoding.decode('latin-1')!r}", scope["path"])

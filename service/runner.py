@@ -26,6 +26,7 @@ from contextlib import nullcontext
 from typing import Any, TypeVar
 
 from rnsca.runtime import numba_threads_started
+from service.admission import current_reservation
 from service.errors import NotReadyError, RequestTimeoutError, TimeLimitError
 from service.warmup import COLD_SECONDS, Step, compile_step, step_lock
 
@@ -226,7 +227,13 @@ class ClipRunner:
                 "retry shortly", headers={"Retry-After": "2"},
                 served=sorted(self.served))
         loop = asyncio.get_running_loop()
-        future = loop.run_in_executor(self._executor(), self._call, function, args)
+        # The request's memory stays reserved until the thread is done with it, even
+        # if the request is answered first (past its time limit).
+        reservation = current_reservation.get()
+        if reservation is not None:
+            reservation.hold()
+        future = loop.run_in_executor(self._executor(), self._call, function, args,
+                                      reservation)
         try:
             return await asyncio.wait_for(
                 future, self.time_limit if time_left is None else max(time_left, 0.001))
@@ -236,13 +243,17 @@ class ClipRunner:
                 "(the server is busy); retry later",
                 headers={"Retry-After": str(max(1, round(self.time_limit / 2)))}) from None
 
-    def _call(self, function, args):
-        with self._serial or nullcontext():
-            try:
-                return function(*args)
-            finally:
-                if not self._settled:
-                    self.settle()
+    def _call(self, function, args, reservation=None):
+        try:
+            with self._serial or nullcontext():
+                try:
+                    return function(*args)
+                finally:
+                    if not self._settled:
+                        self.settle()
+        finally:
+            if reservation is not None:
+                reservation.release()
 
     def _executor(self) -> ThreadPoolExecutor:
         # Made on first use, so an app whose lifespan ends and starts again (test clients

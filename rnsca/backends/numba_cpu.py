@@ -24,6 +24,8 @@ from rnsca.backends.base import (
     Polylines,
     SegmentPieces,
 )
+from rnsca.constants import MAX_FLATTENED_POINTS
+from rnsca.errors import LimitExceededError
 from rnsca.kernels import bezier as BZ
 from rnsca.kernels import counters as C
 from rnsca.kernels import polygons as PG
@@ -350,7 +352,13 @@ def polyline_layout(paths: PathArrays, segment_points: np.ndarray,
     ends[has_line] = paths.controls[sub[1:][has_line] - 1, 3]
     closes &= (ends != paths.start).any(axis=1)
     points_per_line = segment_points[sub[1:]] - segment_points[sub[:-1]] + has_line + closes
-    return np.flatnonzero(has_line), closes, exclusive_sum(points_per_line[has_line])
+    line_offsets = exclusive_sum(points_per_line[has_line])
+    if line_offsets[-1] > MAX_FLATTENED_POINTS:
+        raise LimitExceededError(
+            f"flattening these paths within the tolerance asked for gives "
+            f"{int(line_offsets[-1])} points, more than the limit of {MAX_FLATTENED_POINTS}: "
+            "use a larger tolerance")
+    return np.flatnonzero(has_line), closes, line_offsets
 
 
 def polygon_geometry(geometry_polygons: np.ndarray) -> np.ndarray:

@@ -277,3 +277,18 @@ def test_load_suite_runs_wrk_against_a_real_server(tmp_path):
         assert set(figures["latency_s"]) == {"p50", "p75", "p90", "p99"}
     assert {t["key"] for t in result["targets"]} == {
         "rate_unverified", "rate_verified", "p99_unverified", "p99_verified"}
+
+
+def test_memory_suite_measures_every_kind_against_the_admission_table(tmp_path):
+    """`python -m benchmarks.memory`: one fresh process per kind, the table's coverage."""
+    subprocess.run([sys.executable, "-m", "benchmarks.memory", "--vertices", "20000",
+                    "--out", str(tmp_path)], cwd=ROOT, check=True, capture_output=True,
+                   timeout=600)
+    (path,) = tmp_path.glob("memory-*.json")
+    result = json.loads(path.read_text())
+    assert [r["kind"] for r in result["rows"]] == [
+        "geojson_lines", "geojson_polygons", "svg", "segments_json", "segments_binary"]
+    for row in result["rows"]:
+        assert row["body_bytes"] > 0 and row["peak_growth_bytes"] >= 0 and row["seconds"] > 0
+    assert set(result["admission_table"]) == {"geojson/json", "svg/json", "segments/json",
+                                              "segments/binary"}

@@ -212,3 +212,17 @@ def test_flatten_paths_names_the_backends_it_runs_on():
         rnsca.flatten_paths(paths, 0.1, backend="numpy")
     with pytest.raises(InvalidOptionError, match="'numba', 'opencl'.*'numpy'"):
         clip_paths(paths, (0, 0, 1, 1), backend="numpy")
+
+
+def test_flattening_into_more_points_than_the_limit_is_a_clear_error_not_memory_error():
+    from rnsca.clip_svg import flatten_paths
+    from rnsca.constants import MAX_FLATTENED_POINTS
+    from rnsca.errors import LimitExceededError
+    from rnsca.kernels.bezier import flatten_steps
+
+    curve = parse_paths(["M0 0C 0 1e6 1e6 -1e6 1e6 0"])
+    per_curve = int(flatten_steps(curve.controls, curve.degree, 1e-9)[0])
+    copies = MAX_FLATTENED_POINTS // per_curve + 1  # just past the limit
+    with pytest.raises(LimitExceededError, match="more than the limit"):
+        flatten_paths(parse_paths(["M0 0C 0 1e6 1e6 -1e6 1e6 0"] * copies), 1e-9)
+    assert len(flatten_paths(curve, 1e-9).coords) == per_curve + 1  # one curve is fine

@@ -329,15 +329,15 @@ def _growth(values: list[float], warm_in: int) -> dict:
     """Return a series' baseline and its growth after the warm-in (minutes are 1-based).
 
     The baseline is the median of minutes `warm_in` and `warm_in` + 1; "later" is every
-    minute after `warm_in`. The trend is a least-squares line through minutes `warm_in`
-    .. end: its slope per minute, and the growth it implies over that span relative to
-    the baseline.
+    minute after `warm_in`, and the tail the last five of them (fewer in a short run).
+    The trend is a least-squares line through minutes `warm_in` .. end: its slope per
+    minute, and the growth it implies over that span relative to the baseline.
     """
     baseline = statistics.median(values[warm_in - 1:warm_in + 1])
     later = values[warm_in:]
     minutes = np.arange(warm_in, len(values) + 1, dtype=float)
     slope = float(np.polyfit(minutes, np.asarray(values[warm_in - 1:], float), 1)[0])
-    tail = statistics.median(values[-5:])
+    tail = statistics.median(values[max(warm_in, len(values) - 5):])
 
     def ratio(v: float) -> float:
         return v / baseline - 1.0 if baseline else 0.0
@@ -406,7 +406,7 @@ def _log_summary(log_path: Path) -> dict:
     with log_path.open("rb") as log:
         for raw in log:
             lines += 1
-            if b'"level": "error"' in raw or b'"level":"error"' in raw or b"Traceback" in raw:
+            if b'"level":"error"' in raw or b'"level":"critical"' in raw or b"Traceback" in raw:
                 errors += 1
                 if len(first) < 5:
                     first.append(raw.decode(errors="replace")[:500])

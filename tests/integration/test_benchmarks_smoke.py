@@ -314,3 +314,28 @@ def test_soak_runs_minutes_of_mixed_load_and_judges_growth(tmp_path):
             "trend_growth"} <= verdict["rss"].keys()
     assert verdict["answers"]["5xx"] == 0
     assert result["server_log"]["lines"] > 0
+
+
+def _minute(rss_mib: float, p99_ms: float) -> dict:
+    answers = {"ok": 100, "expected_4xx": 10, "bad_sent": 10, "5xx": 0, "unexpected": 0}
+    return {"rss_bytes": rss_mib * 2**20, "rss_peak_bytes": rss_mib * 2**20,
+            "rss_workers_bytes": rss_mib * 2**19, "latency_s": {"p99": p99_ms / 1e3},
+            "answers": answers, "socket_errors": 0}
+
+
+def test_soak_verdict_fails_on_steady_memory_growth_and_passes_on_noise():
+    from benchmarks.soak import evaluate_soak
+
+    # 1 MiB a minute on 500 MiB: 5% over minutes 6-30 would pass, so 3 MiB a minute.
+    leaking = [_minute(500 + 3 * i, 50) for i in range(30)]
+    verdict = evaluate_soak(leaking, warm_in=5)
+    met = {c["key"]: c["met"] for c in verdict["criteria"]}
+    assert not verdict["passed"]
+    assert not met["rss_max_growth"] and not met["rss_trend_growth"]
+    assert met["p99_trend_growth"] and met["no_5xx"]
+    assert verdict["rss"]["baseline"] == (512 + 515) / 2 * 2**20
+    # One slow minute (someone else's build) is reported, not decisive.
+    noisy = [_minute(500, 200 if i == 20 else 50) for i in range(30)]
+    verdict = evaluate_soak(noisy, warm_in=5)
+    met = {c["key"]: c["met"] for c in verdict["criteria"]}
+    assert verdict["passed"] and not met["p99_max_growth"]

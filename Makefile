@@ -7,7 +7,7 @@ SERVE_STAMP := $(VENV)/.installed-service
 HOST ?= 127.0.0.1
 PORT ?= 8000
 
-.PHONY: serve test check bench paper compare lint clean
+.PHONY: serve test check bench paper compare soak lint clean
 
 # The client SDK (clients/python, package rnsca-client) is installed beside rnsca so that
 # `make test` tests it against live servers.
@@ -65,6 +65,13 @@ paper: $(STAMP)
 compare: $(STAMP)
 	@test -n "$(BASE)" || { echo "usage: make compare BASE=../base"; exit 2; }
 	$(PY) -m benchmarks.compare --base $(BASE)
+
+# Soak (issue 16; not in CI, not in `make bench`): MINUTES minutes of mixed load with wrk
+# on loopback against `rnsca serve --workers 2`, RSS and p99 per minute; fails if either
+# grows over 10% after the first 5 minutes (benchmarks/README.md).
+MINUTES ?= 30
+soak: $(STAMP)
+	$(PY) -m benchmarks.soak --minutes $(MINUTES)
 
 clean:
 	rm -rf $(VENV) .pytest_cache .hypothesis .ruff_cache .mypy_cache .import_linter_cache

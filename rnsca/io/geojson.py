@@ -544,11 +544,8 @@ class _Reader:
         ring_sizes = sizes[n_points + n_parts:]
         ring_offsets = exclusive_sum(ring_sizes)
         ring_coords = coords[point_sizes.sum() + part_sizes.sum():]
-        firsts, lasts = ring_coords[ring_offsets[:-1]], ring_coords[ring_offsets[1:] - 1]
-        if (part_sizes < 2).any() or (ring_sizes < 4).any() or not (
-                # A ring's ends are equal with Z or both without (NaN).
-                np.array_equal(firsts, lasts, equal_nan=True) if partial_z
-                else (firsts == lasts).all()):
+        if (part_sizes < 2).any() or (ring_sizes < 4).any() or not _rings_closed(
+                ring_coords, ring_offsets, partial_z):
             _Validator(max_vertices).document(document)
             raise AssertionError("GeoJSON reader and validator disagree on line or ring sizes")
         n_point_coords = int(point_sizes.sum())
@@ -578,6 +575,17 @@ class _Reader:
             for geometry in np.flatnonzero(not_plain[first[1:]] != not_plain[first[:-1]]):
                 sources[geometry] = None
         return self.sources
+
+
+def _rings_closed(coords: np.ndarray, ring_offsets: np.ndarray, partial_z: bool) -> bool:
+    """Return whether every ring's first and last positions are equal (rings not empty).
+
+    With `partial_z`, in x, y and Z or in x and y with both Z NaN (both 2D).
+    """
+    firsts, lasts = coords[ring_offsets[:-1]], coords[ring_offsets[1:] - 1]
+    if partial_z:
+        return np.array_equal(firsts, lasts, equal_nan=True)
+    return bool((firsts == lasts).all())
 
 
 #: About how many positions are converted per step: the objects of a chunk stay in cache

@@ -605,10 +605,10 @@ _PACK_LISTS_ONLY = _PACK_STRICT | ormsgpack.OPT_PASSTHROUGH_TUPLE
 
 
 def _coordinates(arrays: list, sizes: np.ndarray) -> tuple | None:
-    """Return the positions of `arrays` (lists of positions), which arrays are plain, and
-    whether some position lacks the Z others have.
+    """Return the positions of `arrays`, which arrays are plain, and whether Z is partial.
 
-    `sizes` holds the length of each array. The positions are float64 (n, 2), or (n, 3)
+    `arrays` are lists of positions; Z is partial when some position lacks the Z others
+    have. `sizes` holds the length of each array. The positions are float64 (n, 2), or (n, 3)
     if any has three or more numbers (Z NaN for those with two); an array is plain if it
     is a list of lists of floats of the document's dimension (see `read_positions`).
     Returns None if any check fails: then `_Validator` names the problem, or, for numbers

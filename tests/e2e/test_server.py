@@ -84,6 +84,19 @@ def test_clip_geojson_keeps_properties_and_verifies(client):
     assert body["stats"]["segments_in"] == 5 and body["verification"]["passed"] is True
 
 
+def test_clip_geojson_mixing_2d_and_3d_positions(client):
+    from tests.service.test_app import MIXED_DIMENSIONS, MIXED_DIMENSIONS_CLIPPED
+
+    for verify in (True, False):
+        r = client.post("/v1/clip/geojson", json={
+            "window": WINDOW, "geojson": MIXED_DIMENSIONS, "verify": verify})
+        assert r.status_code == 200, r.text
+        body = r.json()
+        assert [f["geometry"] for f in body["geojson"]["features"]] == \
+            MIXED_DIMENSIONS_CLIPPED
+        assert (body["verification"] or {"passed": not verify})["passed"] is verify
+
+
 def test_clip_segments_json(client):
     r = client.post("/v1/clip/segments", json={
         "window": WINDOW, "segments": [[-5, 5, 15, 5], [20, 20, 30, 30]],

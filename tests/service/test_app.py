@@ -103,6 +103,43 @@ def test_approx_geojson_is_verified_only_with_a_bound(client):
     assert r.json()["verification"]["passed"] is True
 
 
+MIXED_DIMENSIONS = {"type": "FeatureCollection", "features": [
+    {"type": "Feature", "id": 1, "properties": {"name": "road"},
+     "geometry": {"type": "LineString",
+                  "coordinates": [[-5, 5], [5, 5, 1], [15, 5, 3], [15, 8]]}},
+    {"type": "Feature", "id": 2, "properties": {},
+     "geometry": {"type": "Polygon", "coordinates": [
+         [[-5, -5, 1], [5, -5], [5, 5, 2], [-5, 5, 2], [-5, -5, 1]]]}},
+    {"type": "Feature", "id": 3, "properties": {},
+     "geometry": {"type": "MultiPoint", "coordinates": [[1, 1], [2, 2, 5], [20, 20, 1]]}},
+]}
+#: Each position in the dimension it came in; a cut point or corner with Z only where
+#: every Z it is computed from is known (a NaN would come out as null: JSON has none).
+MIXED_DIMENSIONS_CLIPPED = [
+    {"type": "LineString", "coordinates": [[0.0, 5.0], [5.0, 5.0, 1.0], [10.0, 5.0, 2.0]]},
+    {"type": "Polygon", "coordinates": [
+        [[5.0, 0.0], [5.0, 5.0, 2.0], [0.0, 5.0, 2.0], [0.0, 0.0], [5.0, 0.0]]]},
+    {"type": "MultiPoint", "coordinates": [[1.0, 1.0], [2.0, 2.0, 5.0]]},
+]
+
+
+@pytest.mark.parametrize("verify", [True, False, "all"])
+def test_a_collection_mixing_2d_and_3d_positions_keeps_each_positions_dimension(
+        client, verify):
+    r = client.post("/v1/clip/geojson", json={"window": WINDOW, "geojson": MIXED_DIMENSIONS,
+                                              "verify": verify})
+    assert r.status_code == 200, r.text
+    body = r.json()
+    assert [f["geometry"] for f in body["geojson"]["features"]] == MIXED_DIMENSIONS_CLIPPED
+    assert [f["id"] for f in body["geojson"]["features"]] == [1, 2, 3]
+    assert body["stats"]["vertices_in"] == 12
+    if verify is False:
+        assert body["verification"] is None
+    else:
+        assert body["verification"]["passed"] is True
+        assert body["verification"]["checked"] == body["verification"]["inputs"] == 3
+
+
 def test_polygons_refuse_approx_mode_with_422(client):
     square = {"type": "Polygon", "coordinates": [[[-1, -1], [5, -1], [5, 5], [-1, 5],
                                                   [-1, -1]]]}

@@ -14,6 +14,7 @@ import numpy as np
 import orjson
 import pytest
 
+from tests.cases import MIXED_DIMENSIONS, MIXED_DIMENSIONS_CLIPPED
 from tests.e2e.server import LiveServer
 
 pytestmark = pytest.mark.e2e
@@ -85,8 +86,6 @@ def test_clip_geojson_keeps_properties_and_verifies(client):
 
 
 def test_clip_geojson_mixing_2d_and_3d_positions(client):
-    from tests.service.test_app import MIXED_DIMENSIONS, MIXED_DIMENSIONS_CLIPPED
-
     for verify in (True, False):
         r = client.post("/v1/clip/geojson", json={
             "window": WINDOW, "geojson": MIXED_DIMENSIONS, "verify": verify})

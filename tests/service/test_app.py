@@ -11,6 +11,7 @@ from service.budget import segment_work
 from service.errors import json_path
 from service.runner import ClipRunner
 from service.schemas import ClipOptions
+from tests.cases import MIXED_DIMENSIONS, MIXED_DIMENSIONS_CLIPPED
 from tests.service.conftest import TestClient, make_client
 
 WINDOW = [0, 0, 10, 10]
@@ -101,26 +102,6 @@ def test_approx_geojson_is_verified_only_with_a_bound(client):
     assert r.status_code == 422 and "approx_bound" in r.json()["detail"]
     r = client.post("/v1/clip/geojson", json={**body, "verify": True, "approx_bound": 1e-6})
     assert r.json()["verification"]["passed"] is True
-
-
-MIXED_DIMENSIONS = {"type": "FeatureCollection", "features": [
-    {"type": "Feature", "id": 1, "properties": {"name": "road"},
-     "geometry": {"type": "LineString",
-                  "coordinates": [[-5, 5], [5, 5, 1], [15, 5, 3], [15, 8]]}},
-    {"type": "Feature", "id": 2, "properties": {},
-     "geometry": {"type": "Polygon", "coordinates": [
-         [[-5, -5, 1], [5, -5], [5, 5, 2], [-5, 5, 2], [-5, -5, 1]]]}},
-    {"type": "Feature", "id": 3, "properties": {},
-     "geometry": {"type": "MultiPoint", "coordinates": [[1, 1], [2, 2, 5], [20, 20, 1]]}},
-]}
-#: Each position in the dimension it came in; a cut point or corner with Z only where
-#: every Z it is computed from is known (a NaN would come out as null: JSON has none).
-MIXED_DIMENSIONS_CLIPPED = [
-    {"type": "LineString", "coordinates": [[0.0, 5.0], [5.0, 5.0, 1.0], [10.0, 5.0, 2.0]]},
-    {"type": "Polygon", "coordinates": [
-        [[5.0, 0.0], [5.0, 5.0, 2.0], [0.0, 5.0, 2.0], [0.0, 0.0], [5.0, 0.0]]]},
-    {"type": "MultiPoint", "coordinates": [[1.0, 1.0], [2.0, 2.0, 5.0]]},
-]
 
 
 @pytest.mark.parametrize("verify", [True, False, "all"])

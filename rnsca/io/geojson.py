@@ -1080,11 +1080,16 @@ def _positions(coords: np.ndarray, arrays: bool, partial_z: bool) -> Sequence:
     """Return `coords` as the writer indexes them: an array, or a list per position.
 
     With `partial_z`, an (n, 3) `coords` gives a list whose positions with a NaN Z have
-    two numbers (`arrays`: a view of row ``i`` each, ``coords[i, :2]`` for those).
+    two numbers (`arrays`: an array of 3 or 2 numbers each).
     """
     if not (partial_z and coords.shape[1] == 3):
         return coords if arrays else coords.tolist()
-    values = list(coords) if arrays else coords.tolist()
-    for row in np.flatnonzero(np.isnan(coords[:, 2])).tolist():
-        values[row] = values[row][:2]
-    return values
+    # Each position's list (or view) made once, in C, and placed through an object array:
+    # a Python loop over the positions to shorten them cost as much as all the rest.
+    missing = np.isnan(coords[:, 2])
+    values = np.empty(coords.shape[0], dtype=object)
+    for rows, width in ((~missing, 3), (missing, 2)):
+        kept = coords[rows, :width]
+        values[rows] = np.fromiter(kept if arrays else kept.tolist(), dtype=object,
+                                   count=kept.shape[0])
+    return values.tolist()

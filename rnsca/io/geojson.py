@@ -1076,7 +1076,7 @@ def _union(box, other, partial_z=False):
     return np.minimum(box[0], other[0]), np.maximum(box[1], other[1])
 
 
-def _positions(coords: np.ndarray, arrays: bool, partial_z: bool) -> Sequence:
+def _positions(coords: np.ndarray, arrays: bool, partial_z: bool) -> np.ndarray | list:
     """Return `coords` as the writer indexes them: an array, or a list per position.
 
     With `partial_z`, an (n, 3) `coords` gives a list whose positions with a NaN Z have

@@ -21,6 +21,7 @@ from rnsca import ClipStats, InvalidGeometryError, InvalidOptionError, InvalidWi
 from rnsca.clip_geojson import clip_geojson, combine_stats
 from rnsca.io.geojson import dumps, from_geojson
 from rnsca.ragged import clip_ragged
+from tests.cases import MIXED_DIMENSIONS, MIXED_DIMENSIONS_CLIPPED
 
 TOL = 1e-9
 WINDOW = (25.31, 30.17, 70.73, 80.91)
@@ -475,6 +476,11 @@ def test_a_window_inside_a_polygon_takes_z_only_from_a_3d_shell():
     alone, _ = clip_geojson(feature({"type": "Polygon", "coordinates": [ring_3d]}),
                             (0, 0, 10, 10))
     assert out["features"][0]["geometry"] == alone["geometry"]
+
+
+def test_every_backend_writes_the_mixed_case_alike(backend):
+    out, _ = clip_geojson(MIXED_DIMENSIONS, (0, 0, 10, 10), backend=backend)
+    assert [f["geometry"] for f in out["features"]] == MIXED_DIMENSIONS_CLIPPED
 
 
 def test_points_keep_their_own_dimension():

@@ -286,7 +286,7 @@ def to_geojson(layout: GeoJSONLayout, points: tuple | None = None, lines: tuple 
         False (default): coordinates are nested lists of floats. True: each coordinate
         array (a position, or a line's or ring's positions) is a NumPy view of the
         ``coords`` given, which skips building millions of small lists; serialize with
-        `dumps`. Where some Z is NaN, each position is a view of its own (of 2 or 3
+        `dumps`. Where some Z is NaN, each position is an array of its own (of 2 or 3
         numbers) and a line's or ring's positions a list of them.
 
     Returns
@@ -901,18 +901,18 @@ class _Writer:
         starts: list[np.ndarray] = []
         # Positions whose Z is NaN (2D ones of a document that mixes dimensions, and what
         # was computed from them) are written with two numbers: a test per array here,
-        # and a row at a time only in an array that has one.
-        self.partial_z = any(coords.shape[1] == 3 and np.isnan(coords[:, 2]).any()
+        # and the slower writing of positions one by one only where there is one.
+        self.missing_z = any(coords.shape[1] == 3 and np.isnan(coords[:, 2]).any()
                              for coords, _ in ragged)
         for (coords, (innermost, *_)), flags, rows in zip(ragged, reuse, bounds, strict=True):
             if flags is None:
-                self.values.append(_positions(coords, arrays, self.partial_z))
+                self.values.append(_positions(coords, arrays, self.missing_z))
                 starts.append(innermost)
                 continue
             edges = np.bincount(rows[:-1][flags], minlength=coords.shape[0] + 1) \
                 - np.bincount(rows[1:][flags], minlength=coords.shape[0] + 1)
             convert = np.cumsum(edges[:-1]) == 0
-            self.values.append(_positions(coords[convert], False, self.partial_z))
+            self.values.append(_positions(coords[convert], False, self.missing_z))
             starts.append(np.concatenate(([0], np.cumsum(convert)))[innermost])
         self.offsets = [[level.tolist() for level in offsets] for _, offsets in ragged]
         self.starts = [level.tolist() for level in starts]
@@ -943,7 +943,7 @@ class _Writer:
             if out is not None:
                 features.append(out)
                 self.feature_source.append(index)
-                box = _union(box, feature_box, self.partial_z)
+                box = _union(box, feature_box, self.missing_z)
         return self.replace(doc, "features", features, box)
 
     def feature(self, feature: dict, keep: bool,
@@ -974,7 +974,7 @@ class _Writer:
                     members.append(out)
                 if not member_empty:
                     empty = False
-                    box = _union(box, member_box, self.partial_z)
+                    box = _union(box, member_box, self.missing_z)
             if empty and not keep:
                 return None, None, True
             return self.replace(geometry, "geometries", members, box), box, empty
@@ -995,7 +995,7 @@ class _Writer:
             box = None
             if want:
                 rows = self.coords[index][lo:hi]
-                if self.partial_z:  # Z over the positions that have one (NaN if none)
+                if self.missing_z:  # Z over the positions that have one (NaN if none)
                     box = (np.fmin.reduce(rows, axis=0), np.fmax.reduce(rows, axis=0))
                 else:
                     box = (rows.min(axis=0), rows.max(axis=0))
@@ -1049,7 +1049,7 @@ class _Writer:
         And if some position it covers has Z (in a document that mixes dimensions).
         """
         dim = 3 if self.dim == 3 and isinstance(old, _ARRAY) and len(old) == 6 else 2
-        if dim == 3 and self.partial_z and np.isnan(box[0][2]):
+        if dim == 3 and self.missing_z and np.isnan(box[0][2]):
             dim = 2
         return box[0][:dim].tolist() + box[1][:dim].tolist()
 
@@ -1062,27 +1062,27 @@ def _split(items: Sequence, offsets: list) -> list:
     return [items[lo:hi] for lo, hi in zip(offsets[:-1], offsets[1:], strict=True)]
 
 
-def _union(box, other, partial_z=False):
+def _union(box, other, missing_z=False):
     """Return the bbox covering both (either may be None for nothing).
 
-    With `partial_z`, a NaN (a Z range over no position) is ignored beside a number.
+    With `missing_z`, a NaN (a Z range over no position) is ignored beside a number.
     """
     if box is None:
         return other
     if other is None:
         return box
-    if partial_z:
+    if missing_z:
         return np.fmin(box[0], other[0]), np.fmax(box[1], other[1])
     return np.minimum(box[0], other[0]), np.maximum(box[1], other[1])
 
 
-def _positions(coords: np.ndarray, arrays: bool, partial_z: bool) -> np.ndarray | list:
+def _positions(coords: np.ndarray, arrays: bool, missing_z: bool) -> np.ndarray | list:
     """Return `coords` as the writer indexes them: an array, or a list per position.
 
-    With `partial_z`, an (n, 3) `coords` gives a list whose positions with a NaN Z have
+    With `missing_z`, an (n, 3) `coords` gives a list whose positions with a NaN Z have
     two numbers (`arrays`: an array of 3 or 2 numbers each).
     """
-    if not (partial_z and coords.shape[1] == 3):
+    if not (missing_z and coords.shape[1] == 3):
         return coords if arrays else coords.tolist()
     # Each position's list (or view) made once, in C, and placed through an object array:
     # a Python loop over the positions to shorten them cost as much as all the rest.

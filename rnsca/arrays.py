@@ -162,24 +162,32 @@ class Ragged:
     ----------
     kind : GeometryKind
     coords : ndarray of float64, shape (n, 2) or (n, 3)
-        C-contiguous; finite (an all-NaN row is an empty POINT, as Shapely writes it).
+        C-contiguous; finite (an all-NaN row is an empty POINT, as Shapely writes it),
+        except Z with `partial_z`.
     offsets : tuple of ndarray of int64
         Innermost level first, ``kind.depth`` arrays.
+    partial_z : bool
+        Whether a Z may be NaN, for a position that has none (a 2D position among 3D
+        ones, as a GeoJSON document may mix them). Clipping propagates it: a new vertex
+        whose Z is computed from a NaN one has a NaN Z. X and Y must still be finite, and
+        Z not infinite.
     """
 
     kind: GeometryKind
     coords: np.ndarray
     offsets: tuple
+    partial_z: bool = False
 
     @classmethod
     def of(cls, geometry_type: GeometryKind | shapely.GeometryType | str,
            coords: npt.ArrayLike, offsets: Sequence[npt.ArrayLike], *,
-           check_finite: bool = True) -> Ragged:
+           check_finite: bool = True, partial_z: bool = False) -> Ragged:
         """Return a validated `Ragged` from the triple ``shapely.to_ragged_array`` gives.
 
         With ``check_finite=False`` the caller takes over the finiteness check (it must
         call `check_finite` itself, or check as it reads the coordinates): the line
-        clip does it in its first pass over the coordinates.
+        clip does it in its first pass over the coordinates. `partial_z` is the
+        attribute: NaN Z allowed.
 
         Raises
         ------
@@ -211,7 +219,7 @@ class Ragged:
             level = _offsets(array, f"offsets[{depth}]", length)
             levels.append(level)
             length = level.shape[0] - 1
-        ragged = cls(kind, xy, tuple(levels))
+        ragged = cls(kind, xy, tuple(levels), bool(partial_z))
         if check_finite:
             ragged.check_finite()
         ragged._check_shapes()
@@ -270,8 +278,13 @@ class Ragged:
         raise UnsupportedGeometryError(f"{self.kind.value} has no parts or polygons")
 
     def to_shapely(self) -> np.ndarray:
-        """Return the geometries as a Shapely array."""
-        return shapely.from_ragged_array(self.kind.shapely_type, self.coords, self.offsets)
+        """Return the geometries as a Shapely array.
+
+        With `partial_z` they are 2D: Shapely has no position without Z among 3D ones
+        (GEOS would carry the NaN into its results).
+        """
+        coords = np.ascontiguousarray(self.coords[:, :2]) if self.partial_z else self.coords
+        return shapely.from_ragged_array(self.kind.shapely_type, coords, self.offsets)
 
     def geometry_of_coordinate(self, index: int) -> int:
         """Return the index of the geometry that holds coordinate row `index`."""
@@ -283,16 +296,19 @@ class Ragged:
     def check_finite(self) -> None:
         """Raise `InvalidGeometryError` naming the first non-finite coordinate, if any.
 
-        An all-NaN row of a POINT array is an empty point, not an error.
+        An all-NaN row of a POINT array is an empty point, not an error; so is a NaN Z
+        with `partial_z`.
         """
         if all_finite(self.coords):
             return
         finite = np.isfinite(self.coords)
+        if self.partial_z and self.has_z:
+            finite[:, 2] |= np.isnan(self.coords[:, 2])  # a position without Z
         rows = ~finite.all(axis=1)
         if self.kind is GeometryKind.POINT:
             rows &= ~np.isnan(self.coords).all(axis=1)  # an empty point
-            if not rows.any():
-                return
+        if not rows.any():
+            return
         bad = int(np.argmax(rows))
         raise geometry_error(self.geometry_of_coordinate(bad),
                              f" has a non-finite coordinate (coords[{bad}] = "

@@ -69,7 +69,10 @@ def clip_geojson(obj: dict | str | bytes | bytearray | memoryview,
     """Return a GeoJSON object clipped to a rectangular window, and the stats of the clip.
 
     Every geometry is clipped as ``shapely.intersection`` with the window would, keeping
-    its dimension (see `rnsca.clip_ragged`). The document keeps its shape: Features keep
+    its dimension (see `rnsca.clip_ragged`). Each position is written with the number of
+    coordinates it came with, in a document that mixes 2D and 3D positions too: a new
+    one (a cut point, a window corner) has Z only if every Z it is computed from is
+    known (see `rnsca.io.geojson`). The document keeps its shape: Features keep
     ``properties``, ``id`` and foreign members, ``bbox`` is recomputed where there was one,
     and each geometry takes the type of what is left (a LineString cut in two becomes a
     MultiLineString; a single part stays single; Multi* types stay Multi*). Members the
@@ -141,8 +144,10 @@ def clip_geojson(obj: dict | str | bytes | bytearray | memoryview,
             continue
         inputs[kind] = getattr(layout, kind)
         geometry_type, coords, offsets = inputs[kind]
+        # A document that mixes 2D and 3D positions has NaN Z for the 2D ones: clipping
+        # carries it to every vertex computed from them, written back as 2D.
         outputs[kind] = clip_ragged(geometry_type, coords, offsets, window, keep_empty=True,
-                                    **options)
+                                    partial_z=layout.partial_z, **options)
     stats = [result.stats for result in outputs.values()]
     if not stats:
         # Nothing to clip: still check the options, and report zero counts.

@@ -124,7 +124,8 @@ def clip_ragged(geometry_type: shapely.GeometryType | GeometryKind | str, coords
                 n: SupportsIndex | str = "auto", max_depth: SupportsIndex | None = None,
                 tolerance: float | None = None, mode: Mode | str = "exact",
                 backend: Backend | str = "numba",
-                resolution: float | str | None = None) -> RaggedClipResult:
+                resolution: float | str | None = None,
+                partial_z: bool = False) -> RaggedClipResult:
     """Return the geometries of a ragged array clipped to a rectangular window.
 
     The columnar fast path: the triple ``shapely.to_ragged_array`` returns (and GeoArrow
@@ -162,6 +163,13 @@ def clip_ragged(geometry_type: shapely.GeometryType | GeometryKind | str, coords
     backend : {"numba", "opencl"}
         OpenCL: the run pruning of lines and rings and the clip of their undecided
         segments on the device; chains and polygons assembled on the host (Numba).
+    partial_z : bool
+        False (default): every coordinate must be finite. True: a Z may be NaN, for a
+        position without one (a 2D position among 3D ones, as GeoJSON allows). It
+        propagates: an input vertex keeps its NaN, and a new vertex whose Z is computed
+        from a NaN (a cut point on a segment with such an end, a corner interpolated
+        from one, the corners of a window covered by a shell that has one) gets NaN.
+        X and Y must still be finite, Z not infinite.
 
     Returns
     -------
@@ -186,7 +194,8 @@ def clip_ragged(geometry_type: shapely.GeometryType | GeometryKind | str, coords
     """
     kind = GeometryKind.of(geometry_type)
     # Lines are checked for non-finite coordinates by the clip's first pass over them.
-    ragged = Ragged.of(kind, coords, offsets, check_finite=kind.dimension != 1)
+    ragged = Ragged.of(kind, coords, offsets, check_finite=kind.dimension != 1,
+                       partial_z=partial_z)
     windows = WindowTable.of(window, ragged.count)
     options, side, engine = resolve_geometry_options(
         windows, ragged.kind.dimension, boundary=boundary, method=method, n=n,

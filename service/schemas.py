@@ -141,8 +141,12 @@ class ClipGeoJSONRequest(BaseModel):
         {"window": [0, 0, 10, 10], "geojson": _LINE}]})
 
     window: WindowBounds
-    geojson: dict[str, Any] = Field(description="GeoJSON (RFC 7946) Geometry, Feature or "
-                                                "FeatureCollection.")
+    geojson: dict[str, Any] = Field(
+        description="GeoJSON (RFC 7946) Geometry, Feature or FeatureCollection. Positions "
+                    "have 2 or 3 numbers (more are checked, then dropped), and one document "
+                    "may mix both: each position is answered with the dimension it came "
+                    "in, and a new one (a cut point, a window corner) has Z only where "
+                    "every Z it is computed from is known.")
     options: GeometryOptions = Field(default_factory=GeometryOptions)
     verify: bool | Literal["all"] | None = _VERIFY
     approx_bound: Annotated[float, Field(gt=0)] | None = Field(

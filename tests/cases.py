@@ -1,5 +1,7 @@
 """Named adversarial segments with their literal expected piece, shared by the tests.
 
+At the end, a GeoJSON document mixing 2D and 3D positions and what clipping it gives.
+
 Each `Case` is one segment, a window and what every method must return for it in exact
 mode: the one piece ``[x0, y0, x1, y1]`` (in the segment's own direction), or ``None``
 when the segment yields no piece. The expected pieces were worked out by hand, or, for
@@ -210,3 +212,27 @@ EXTREMELY_LONG_SEGMENT_THROUGH_TINY_WINDOW = _case(
     "extremely_long_segment_through_tiny_window", MILLI,
     (-1e12, -3e11, 1e12, 300000000000.0015),
     (0.0, 0.000762939453125, 0.0007902018229166647, 0.001), "2e15 windows long")
+
+
+# --- GeoJSON mixing 2D and 3D positions (RFC 7946 allows either in any position) -------------
+
+#: A FeatureCollection whose line, polygon and points mix 2D and 3D positions; clip it to
+#: `W10`.
+MIXED_DIMENSIONS = {"type": "FeatureCollection", "features": [
+    {"type": "Feature", "id": 1, "properties": {"name": "road"},
+     "geometry": {"type": "LineString",
+                  "coordinates": [[-5, 5], [5, 5, 1], [15, 5, 3], [15, 8]]}},
+    {"type": "Feature", "id": 2, "properties": {},
+     "geometry": {"type": "Polygon", "coordinates": [
+         [[-5, -5, 1], [5, -5], [5, 5, 2], [-5, 5, 2], [-5, -5, 1]]]}},
+    {"type": "Feature", "id": 3, "properties": {},
+     "geometry": {"type": "MultiPoint", "coordinates": [[1, 1], [2, 2, 5], [20, 20, 1]]}},
+]}
+#: Each position in the dimension it came in; a cut point or corner with Z only where
+#: every Z it is computed from is known (a NaN would come out as null: JSON has none).
+MIXED_DIMENSIONS_CLIPPED = [
+    {"type": "LineString", "coordinates": [[0.0, 5.0], [5.0, 5.0, 1.0], [10.0, 5.0, 2.0]]},
+    {"type": "Polygon", "coordinates": [
+        [[5.0, 0.0], [5.0, 5.0, 2.0], [0.0, 5.0, 2.0], [0.0, 0.0], [5.0, 0.0]]]},
+    {"type": "MultiPoint", "coordinates": [[1.0, 1.0], [2.0, 2.0, 5.0]]},
+]

@@ -22,13 +22,20 @@ Rules (where RFC 7946 leaves a choice, the choice is stated):
 - Arrays may be lists or tuples (``shapely.geometry.mapping`` gives tuples); numbers are
   int or float (NumPy scalars are accepted in dicts), never bool, and must be finite.
 - A position has 2 or more numbers; a position with 3 or more is 3D. Numbers after the
-  third (RFC 7946 says not to use them) are validated, then dropped. One document is
-  either all 2D or all 3D: a position whose dimension differs from the document's first
-  position is an error, since filling in a missing Z would invent data.
+  third (RFC 7946 says not to use them) are validated, then dropped.
+- A document may mix 2D and 3D positions (RFC 7946 allows either in any position). It is
+  read as 3D when any position is 3D, with Z = NaN for the positions that came with 2
+  numbers (`GeoJSONLayout.partial_z`): a missing Z is never filled in, which would
+  invent data. Each position is written back with the dimension it came in, and a new
+  position (a cut point, a window corner) is 3D only if every Z it is computed from
+  is known: NaN propagates through the interpolation, and a position whose Z is NaN
+  is written with 2 numbers (JSON has no NaN). A document of one dimension is read and
+  written as before, 2D as (n, 2) arrays.
 - An empty ``coordinates`` array is an empty geometry (RFC 7946, 3.1). Inside a
   MultiPoint, MultiLineString or MultiPolygon an empty member is read as nothing, so it
   is not written back. A LineString needs 2 or more positions, a ring 4 or more with the
-  first and last positions equal (in x, y and, in a 3D document, z).
+  first and last positions equal: in x, y and z, or in x and y with both 2D (a 2D end
+  and a 3D end are not equal).
 - A Feature must have a ``geometry`` member; its value may be null. GeometryCollections
   nest at most `MAX_COLLECTION_DEPTH` levels.
 """
@@ -53,7 +60,13 @@ from rnsca.errors import (
     LimitExceededError,
     ParseError,
 )
-from rnsca.io.msgpack_decode import REFUSED, read_positions, same_geometries
+from rnsca.io.msgpack_decode import (
+    HAS_Z,
+    PARTIAL_Z,
+    REFUSED,
+    read_positions,
+    same_geometries,
+)
 
 __all__ = [
     "GEOMETRY_TYPES",
@@ -114,13 +127,18 @@ class GeoJSONLayout:
         ``(GeometryType.MULTIPOLYGON, coords, (ring_offsets, polygon_offsets,
         geometry_offsets))``: Polygon and MultiPolygon.
     has_z : bool
-        Whether positions are 3D; then every ``coords`` has shape (n, 3), else (n, 2).
+        Whether some position is 3D; then every ``coords`` has shape (n, 3), else (n, 2).
     sources : tuple of three lists, or None
         For each geometry of `points`, `lines` and `polygons`, the input's own
         ``coordinates`` member where it holds exactly the positions read (lists of
         floats, as many per position as the document's dimension, no empty member),
         else None; None for all when the document was read by the slow validator.
         `to_geojson` writes a geometry its arrays leave unchanged with this member.
+    partial_z : bool
+        Whether the document mixes 2D and 3D positions: then `has_z` is true and the Z
+        of each position that came with two numbers is NaN (so is any Z computed from
+        it, for example by `rnsca.clip_ragged` with ``partial_z=True``), and
+        `to_geojson` writes a position whose Z is NaN with two numbers.
 
     Notes
     -----
@@ -133,6 +151,7 @@ class GeoJSONLayout:
     polygons: tuple
     has_z: bool
     sources: tuple | None = None
+    partial_z: bool = False
 
     @property
     def vertex_count(self) -> int:
@@ -267,7 +286,8 @@ def to_geojson(layout: GeoJSONLayout, points: tuple | None = None, lines: tuple 
         False (default): coordinates are nested lists of floats. True: each coordinate
         array (a position, or a line's or ring's positions) is a NumPy view of the
         ``coords`` given, which skips building millions of small lists; serialize with
-        `dumps`.
+        `dumps`. Where some Z is NaN, each position is an array of its own (of 2 or 3
+        numbers) and a line's or ring's positions a list of them.
 
     Returns
     -------
@@ -277,8 +297,10 @@ def to_geojson(layout: GeoJSONLayout, points: tuple | None = None, lines: tuple 
         members; shared with the input, not copied). A geometry gets the type of what
         it holds: a LineString holding two parts becomes a MultiLineString, a Polygon
         holding two polygons a MultiPolygon; Multi* types stay Multi*. A ``bbox`` is
-        recomputed where the input had one (6 numbers if it had 6 and the document is
-        3D, else 4) and left out where the geometry is empty. Rings are written as
+        recomputed where the input had one (6 numbers if it had 6, the document is 3D
+        and some position it covers has Z, else 4) and left out where the geometry is
+        empty. A position whose Z is NaN is written with 2 numbers (see the module
+        docstring on documents that mix 2D and 3D positions). Rings are written as
         given. With lists (``arrays=False``), a geometry the arrays hold exactly as the
         layout does (same parts, same coordinates) keeps the input's own
         ``coordinates`` member, shared and not copied, where that member is what would
@@ -509,11 +531,11 @@ class _Reader:
             # (a NumPy scalar): the validator names the problem or vouches for the data.
             validator = _Validator(max_vertices)
             validator.document(document)
-            coords = _checked_coordinates(list(chain.from_iterable(arrays)),
-                                          validator.dim or 2)
+            coords = _checked_coordinates(list(chain.from_iterable(arrays)), validator.dim)
+            partial_z = validator.partial_z
             sources = None
         else:
-            coords, plain = read
+            coords, plain, partial_z = read
             sources = self.plain_sources(plain)
         n_points = len(self.point_arrays)
         n_parts = len(self.line_parts)
@@ -522,8 +544,8 @@ class _Reader:
         ring_sizes = sizes[n_points + n_parts:]
         ring_offsets = exclusive_sum(ring_sizes)
         ring_coords = coords[point_sizes.sum() + part_sizes.sum():]
-        if (part_sizes < 2).any() or (ring_sizes < 4).any() or not (
-                ring_coords[ring_offsets[:-1]] == ring_coords[ring_offsets[1:] - 1]).all():
+        if (part_sizes < 2).any() or (ring_sizes < 4).any() or not _rings_closed(
+                ring_coords, ring_offsets, partial_z):
             _Validator(max_vertices).document(document)
             raise AssertionError("GeoJSON reader and validator disagree on line or ring sizes")
         n_point_coords = int(point_sizes.sum())
@@ -534,7 +556,8 @@ class _Reader:
         polygons = (_RAGGED_TYPE[_POLYGONS], ring_coords,
                     (ring_offsets, exclusive_sum(self.ring_counts),
                      exclusive_sum(self.polygon_counts)))
-        return GeoJSONLayout(document, points, lines, polygons, coords.shape[1] == 3, sources)
+        return GeoJSONLayout(document, points, lines, polygons, coords.shape[1] == 3, sources,
+                             partial_z)
 
     def plain_sources(self, plain: np.ndarray) -> tuple:
         """Return `sources`, with None for each geometry that has an array not `plain`.
@@ -554,6 +577,17 @@ class _Reader:
         return self.sources
 
 
+def _rings_closed(coords: np.ndarray, ring_offsets: np.ndarray, partial_z: bool) -> bool:
+    """Return whether every ring's first and last positions are equal (rings not empty).
+
+    With `partial_z`, in x, y and Z or in x and y with both Z NaN (both 2D).
+    """
+    firsts, lasts = coords[ring_offsets[:-1]], coords[ring_offsets[1:] - 1]
+    if partial_z:
+        return np.array_equal(firsts, lasts, equal_nan=True)
+    return bool((firsts == lasts).all())
+
+
 #: About how many positions are converted per step: the objects of a chunk stay in cache
 #: from packing them to reading them.
 _CHUNK = 1 << 15
@@ -571,23 +605,36 @@ _PACK_LISTS_ONLY = _PACK_STRICT | ormsgpack.OPT_PASSTHROUGH_TUPLE
 
 
 def _coordinates(arrays: list, sizes: np.ndarray) -> tuple | None:
-    """Return the positions of `arrays` (lists of positions), and which arrays are plain.
+    """Return the positions of `arrays`, which arrays are plain, and whether Z is partial.
 
-    `sizes` holds the length of each array. The positions are float64 (n, 2) or (n, 3);
-    an array is plain if it is a list of lists of floats of the document's dimension
-    (see `read_positions`). Returns None if any check fails: then `_Validator` names the
-    problem, or, for numbers of a type only it takes (NumPy scalars), vouches for the
-    data.
+    `arrays` are lists of positions; Z is partial when some position lacks the Z others
+    have. `sizes` holds the length of each array. The positions are float64 (n, 2), or (n, 3)
+    if any has three or more numbers (Z NaN for those with two); an array is plain if it
+    is a list of lists of floats of the document's dimension (see `read_positions`).
+    Returns None if any check fails: then `_Validator` names the problem, or, for numbers
+    of a type only it takes (NumPy scalars), vouches for the data.
     """
     starts = exclusive_sum(sizes)
     total = int(starts[-1])
-    plain = np.zeros(len(arrays), dtype=bool)
     if total == 0:
-        return np.empty((0, 2), dtype=np.float64), plain
+        return np.empty((0, 2), dtype=np.float64), np.zeros(len(arrays), dtype=bool), False
     first: Any = next(chain.from_iterable(arrays), None)
     if type(first) not in _ARRAY_TYPES or len(first) < 2:
         return None
-    out = np.empty((total, 3 if len(first) >= 3 else 2), dtype=np.float64)
+    # The first position guesses the dimension: one pass for a document of one dimension;
+    # a 2D guess that meets a 3D position reads everything again in 3D.
+    read = _read_chunks(arrays, sizes, starts, 3 if len(first) >= 3 else 2)
+    if read is HAS_Z:
+        read = _read_chunks(arrays, sizes, starts, 3)
+    return read
+
+
+def _read_chunks(arrays: list, sizes: np.ndarray, starts: np.ndarray, dim: int) -> Any:
+    """Return `_coordinates`' triple read in `dim`, `HAS_Z` (2D only), or None if refused."""
+    total = int(starts[-1])
+    out = np.empty((total, dim), dtype=np.float64)
+    plain = np.zeros(len(arrays), dtype=bool)
+    partial_z = False
     cuts = np.searchsorted(starts, np.arange(_CHUNK, total, _CHUNK), side="right")
     bounds = np.unique(np.concatenate(([0], cuts, [len(arrays)]))).tolist()
     for lo, hi in zip(bounds[:-1], bounds[1:], strict=True):
@@ -601,19 +648,27 @@ def _coordinates(arrays: list, sizes: np.ndarray) -> tuple | None:
             except TypeError:
                 return None
             has_tuples = True
-        if read_positions(np.frombuffer(packed, dtype=np.uint8), sizes[lo:hi],
-                          out[starts[lo]:starts[hi]], plain[lo:hi]) == REFUSED:
+        result = read_positions(np.frombuffer(packed, dtype=np.uint8), sizes[lo:hi],
+                                out[starts[lo]:starts[hi]], plain[lo:hi])
+        if result == REFUSED:
             return None
+        if result == HAS_Z:
+            return HAS_Z
+        partial_z |= result == PARTIAL_Z
         if has_tuples:
             plain[lo:hi] = False
-    return out, plain
+    return out, plain, partial_z
 
 
 def _checked_coordinates(positions: list, dim: int) -> np.ndarray:
-    """Return positions the validator has accepted as a float64 (n, dim) array."""
+    """Return positions the validator has accepted as a float64 (n, dim) array.
+
+    In 3D, a position of two numbers gets Z = NaN.
+    """
     out = np.empty((len(positions), dim), dtype=np.float64)
     for row, position in enumerate(positions):
-        out[row] = [float(value) for value in position[:dim]]
+        values = [float(value) for value in position[:dim]]
+        out[row] = values if len(values) == dim else values + [math.nan]
     return out
 
 
@@ -623,7 +678,17 @@ class _Validator:
     def __init__(self, max_vertices: int | None) -> None:
         self.max_vertices = max_vertices
         self.count = 0
-        self.dim: int | None = None  # of the first position met
+        self.dims_seen: set[int] = set()  # 2 and 3: the dimensions of the positions met
+
+    @property
+    def dim(self) -> int:
+        """Return the document's dimension: 3 if any position met has Z, else 2."""
+        return 3 if 3 in self.dims_seen else 2
+
+    @property
+    def partial_z(self) -> bool:
+        """Return whether both 2D and 3D positions were met."""
+        return len(self.dims_seen) == 2
 
     def document(self, doc: object) -> None:
         if not isinstance(doc, dict):
@@ -706,8 +771,9 @@ class _Validator:
                 _fail(ring_path, f"a polygon ring needs at least 4 positions, got {len(ring)}")
             for j, position in enumerate(ring):
                 self.position(position, f"{ring_path}[{j}]")
-            first = [float(v) for v in ring[0][:self.dim]]
-            last = [float(v) for v in ring[-1][:self.dim]]
+            # Equal in x, y and Z, or both without Z: a 2D end and a 3D end differ.
+            first = [float(v) for v in ring[0][:3]]
+            last = [float(v) for v in ring[-1][:3]]
             if first != last:
                 _fail(ring_path, f"polygon ring is not closed: its first position {first} "
                                  f"differs from its last {last}")
@@ -727,12 +793,7 @@ class _Validator:
                 finite = False
             if not finite:
                 _fail(f"{path}[{i}]", f"expected a finite number, got {value!r}")
-        dim = 3 if len(position) >= 3 else 2
-        if self.dim is None:
-            self.dim = dim
-        elif dim != self.dim:
-            _fail(path, f"a {dim}D position in a document whose first position is "
-                        f"{self.dim}D; 2D and 3D positions cannot be mixed")
+        self.dims_seen.add(3 if len(position) >= 3 else 2)
         self.count += 1
         if self.max_vertices is not None and self.count > self.max_vertices:
             raise LimitExceededError(
@@ -838,15 +899,20 @@ class _Writer:
         # `values` holds the others, and `starts` the innermost offsets into it.
         self.values: list = []
         starts: list[np.ndarray] = []
+        # Positions whose Z is NaN (2D ones of a document that mixes dimensions, and what
+        # was computed from them) are written with two numbers: a test per array here,
+        # and the slower writing of positions one by one only where there is one.
+        self.missing_z = any(coords.shape[1] == 3 and np.isnan(coords[:, 2]).any()
+                             for coords, _ in ragged)
         for (coords, (innermost, *_)), flags, rows in zip(ragged, reuse, bounds, strict=True):
             if flags is None:
-                self.values.append(coords if arrays else coords.tolist())
+                self.values.append(_positions(coords, arrays, self.missing_z))
                 starts.append(innermost)
                 continue
             edges = np.bincount(rows[:-1][flags], minlength=coords.shape[0] + 1) \
                 - np.bincount(rows[1:][flags], minlength=coords.shape[0] + 1)
             convert = np.cumsum(edges[:-1]) == 0
-            self.values.append(coords[convert].tolist())
+            self.values.append(_positions(coords[convert], False, self.missing_z))
             starts.append(np.concatenate(([0], np.cumsum(convert)))[innermost])
         self.offsets = [[level.tolist() for level in offsets] for _, offsets in ragged]
         self.starts = [level.tolist() for level in starts]
@@ -877,7 +943,7 @@ class _Writer:
             if out is not None:
                 features.append(out)
                 self.feature_source.append(index)
-                box = _union(box, feature_box)
+                box = _union(box, feature_box, self.missing_z)
         return self.replace(doc, "features", features, box)
 
     def feature(self, feature: dict, keep: bool,
@@ -908,7 +974,7 @@ class _Writer:
                     members.append(out)
                 if not member_empty:
                     empty = False
-                    box = _union(box, member_box)
+                    box = _union(box, member_box, self.missing_z)
             if empty and not keep:
                 return None, None, True
             return self.replace(geometry, "geometries", members, box), box, empty
@@ -929,7 +995,10 @@ class _Writer:
             box = None
             if want:
                 rows = self.coords[index][lo:hi]
-                box = (rows.min(axis=0), rows.max(axis=0))
+                if self.missing_z:  # Z over the positions that have one (NaN if none)
+                    box = (np.fmin.reduce(rows, axis=0), np.fmax.reduce(rows, axis=0))
+                else:
+                    box = (rows.min(axis=0), rows.max(axis=0))
         out = dict(geometry)  # members keep their order when set again
         out["type"] = kind
         out["coordinates"] = coordinates
@@ -975,8 +1044,13 @@ class _Writer:
             out["bbox"] = self.bbox(box, out["bbox"])
 
     def bbox(self, box: tuple, old: object) -> list:
-        """Return ``[min..., max...]``, 3D only if the document and the old bbox are."""
+        """Return ``[min..., max...]``, 3D only if the document and the old bbox are.
+
+        And if some position it covers has Z (in a document that mixes dimensions).
+        """
         dim = 3 if self.dim == 3 and isinstance(old, _ARRAY) and len(old) == 6 else 2
+        if dim == 3 and self.missing_z and np.isnan(box[0][2]):
+            dim = 2
         return box[0][:dim].tolist() + box[1][:dim].tolist()
 
 
@@ -988,10 +1062,34 @@ def _split(items: Sequence, offsets: list) -> list:
     return [items[lo:hi] for lo, hi in zip(offsets[:-1], offsets[1:], strict=True)]
 
 
-def _union(box, other):
-    """Return the bbox covering both (either may be None for nothing)."""
+def _union(box, other, missing_z=False):
+    """Return the bbox covering both (either may be None for nothing).
+
+    With `missing_z`, a NaN (a Z range over no position) is ignored beside a number.
+    """
     if box is None:
         return other
     if other is None:
         return box
+    if missing_z:
+        return np.fmin(box[0], other[0]), np.fmax(box[1], other[1])
     return np.minimum(box[0], other[0]), np.maximum(box[1], other[1])
+
+
+def _positions(coords: np.ndarray, arrays: bool, missing_z: bool) -> np.ndarray | list:
+    """Return `coords` as the writer indexes them: an array, or a list per position.
+
+    With `missing_z`, an (n, 3) `coords` gives a list whose positions with a NaN Z have
+    two numbers (`arrays`: an array of 3 or 2 numbers each).
+    """
+    if not (missing_z and coords.shape[1] == 3):
+        return coords if arrays else coords.tolist()
+    # Each position's list (or view) made once, in C, and placed through an object array:
+    # a Python loop over the positions to shorten them cost as much as all the rest.
+    missing = np.isnan(coords[:, 2])
+    values = np.empty(coords.shape[0], dtype=object)
+    for rows, width in ((~missing, 3), (missing, 2)):
+        kept = coords[rows, :width]
+        values[rows] = np.fromiter(kept if arrays else kept.tolist(), dtype=object,
+                                   count=kept.shape[0])
+    return values.tolist()

@@ -17,13 +17,19 @@ import numpy as np
 
 from rnsca.kernels.jit import inlined, scalar
 
-__all__ = ["MIXED", "PLAIN", "REFUSED", "read_positions", "same_geometries"]
+__all__ = ["HAS_Z", "MIXED", "PARTIAL_Z", "PLAIN", "REFUSED", "read_positions",
+           "same_geometries"]
 
 #: `read_positions` results: every position read, and every array of positions is
-#: `PLAIN` (only float64 numbers, exactly as many as the document's dimension) or not.
-PLAIN, MIXED = 0, 1
+#: `PLAIN` (only float64 numbers, exactly as many as the document's dimension) or not
+#: (`MIXED`); `PARTIAL_Z`: not all plain either, and some position read in 3D had only
+#: two numbers (its Z is NaN).
+PLAIN, MIXED, PARTIAL_Z = 0, 1, 2
 #: `read_positions` result: something the reader does not take (see its docstring).
 REFUSED = -1
+#: `read_positions` result when reading 2D: a position of three or more numbers, where
+#: reading stopped; the document has Z, read it again in 3D.
+HAS_Z = -2
 
 # MessagePack type tags (first byte of an object).
 _FIXARRAY, _ARRAY16, _ARRAY32 = 0x90, 0xDC, 0xDD
@@ -104,7 +110,8 @@ def read_positions(data, sizes, out, plain):
     sizes : int64 array
         The number of positions of each array.
     out : float64 array, shape (sum(sizes), dim)
-        Filled with the positions (dim 2 or 3).
+        Filled with the positions (dim 2 or 3). In 3D, a position of two numbers gets
+        Z = NaN (a 2D position in a document that mixes 2D and 3D ones).
     plain : bool array, shape (len(sizes),)
         Set to whether each array holds only float64 numbers, `dim` per position.
 
@@ -112,11 +119,13 @@ def read_positions(data, sizes, out, plain):
     -------
     int
         `PLAIN` if every array is plain, `MIXED` if all were read but some are not,
+        `PARTIAL_Z` if, besides, a position read in 3D had two numbers. `HAS_Z` (2D
+        only) at the first position of three or more numbers: read again in 3D.
         `REFUSED` (``out`` and ``plain`` partly written) if anything is not as asked: a
         length other than `sizes` says, an object that is not an array or a number (nil,
         a boolean, a string, a map, ...), a non-finite number, a position of fewer than
-        `dim` numbers, or of more in a 2D document (in a 3D one numbers after the third
-        are checked, then dropped), or bytes left over or missing.
+        two numbers (in 3D, numbers after the third are checked, then dropped), or bytes
+        left over or missing.
     """
     dim = out.shape[1]
     end = data.shape[0]
@@ -128,6 +137,7 @@ def read_positions(data, sizes, out, plain):
         return REFUSED
     row = 0
     result = PLAIN
+    partial_z = False
     for k in range(sizes.shape[0]):
         length, at = _array_length(data, at)
         if length != sizes[k] or row + length > out.shape[0]:
@@ -135,8 +145,16 @@ def read_positions(data, sizes, out, plain):
         array_plain = True
         for _ in range(length):
             numbers, at = _array_length(data, at)
-            if numbers < dim or (dim == 2 and numbers > 2):
-                return REFUSED
+            # One comparison on the common path: a position of the document's dimension.
+            if numbers != dim:
+                if numbers < 2:  # also -1: not an array
+                    return REFUSED
+                if dim == 2:
+                    return HAS_Z
+                array_plain = False
+                if numbers == 2:
+                    out[row, 2] = np.nan
+                    partial_z = True
             for axis in range(numbers):
                 if at + 9 <= end and data[at] == _FLOAT64:
                     bits64[0] = _unsigned(data, at + 1, 8)
@@ -151,15 +169,13 @@ def read_positions(data, sizes, out, plain):
                     return REFUSED
                 if axis < dim:
                     out[row, axis] = value
-            if numbers != dim:
-                array_plain = False
             row += 1
         plain[k] = array_plain
         if not array_plain:
             result = MIXED
     if at != data.shape[0] or row != out.shape[0]:
         return REFUSED
-    return result
+    return PARTIAL_Z if partial_z else result
 
 
 @scalar

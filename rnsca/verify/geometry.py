@@ -553,7 +553,8 @@ def _ragged_originals(original: object) -> np.ndarray:
     if _is_geometry_like(original):
         return _geometry_array(original, "original")
     if isinstance(original, (tuple, list)) and len(original) == 3:
-        return Ragged.of(*original).to_shapely()
+        # Z is not compared: a NaN one (a position without Z) is taken, and dropped.
+        return Ragged.of(*original, partial_z=True).to_shapely()
     raise UnsupportedGeometryError(
         "a RaggedClipResult is compared with the (geometry_type, coords, offsets) triple "
         f"that was clipped, a Ragged or Shapely geometries, got {type(original).__name__}")
@@ -566,8 +567,15 @@ def _ragged_outputs(result: RaggedClipResult, count: int) -> tuple[np.ndarray, n
     if stats_count != count or (source.size and (source.min() < 0 or source.max() >= count)):
         raise InvalidGeometryError(
             f"verify needs the {stats_count} geometries that were clipped, got {count}")
-    geometries = shapely.from_ragged_array(result.geometry_type, result.coords, result.offsets)
+    # In 2D: Z is not compared, and may be NaN (`clip_ragged(partial_z=True)`).
+    geometries = shapely.from_ragged_array(result.geometry_type, _xy(result.coords),
+                                           result.offsets)
     return geometries, source
+
+
+def _xy(coords: np.ndarray) -> np.ndarray:
+    """Return x and y of (n, 2) or (n, 3) coordinates, C-contiguous as Shapely takes them."""
+    return coords if coords.shape[1] == 2 else np.ascontiguousarray(coords[:, :2])
 
 
 def _geojson_geometries(obj: object, name: str) -> tuple[np.ndarray, bool]:
@@ -603,9 +611,42 @@ def _shape(geometry: object, path: str) -> shapely.Geometry | None:
         return None
     try:
         return shape(geometry)
-    except (KeyError, TypeError, ValueError, AttributeError, IndexError,
+    except ValueError:
+        # Shapely reads a geometry's positions into one array, so it refuses 2D and 3D
+        # positions mixed (RFC 7946 allows them). Z is not compared: read x and y only.
+        try:
+            return shape(_xy_only(geometry))
+        except (KeyError, TypeError, ValueError, AttributeError, IndexError,
+                shapely.errors.GEOSException) as exc:
+            raise ParseError(f"{path} is not a GeoJSON geometry: {exc}") from None
+    except (KeyError, TypeError, AttributeError, IndexError,
             shapely.errors.GEOSException) as exc:
         raise ParseError(f"{path} is not a GeoJSON geometry: {exc}") from None
+
+
+def _xy_only(geometry: object) -> object:
+    """Return a GeoJSON geometry with every position cut to its first two numbers.
+
+    Anything that is not a geometry as expected comes back as it was, for `shape` to
+    refuse.
+    """
+    if not isinstance(geometry, dict):
+        return geometry
+    if geometry.get("type") == "GeometryCollection":
+        members = geometry.get("geometries")
+        if isinstance(members, (list, tuple)):
+            return {**geometry, "geometries": [_xy_only(member) for member in members]}
+        return geometry
+    return {**geometry, "coordinates": _xy_positions(geometry.get("coordinates"))}
+
+
+def _xy_positions(value: object) -> object:
+    """Return nested coordinate arrays with each position (an array of numbers) cut to 2."""
+    if not isinstance(value, (list, tuple)) or not value:
+        return value
+    if not isinstance(value[0], (list, tuple)):
+        return value[:2]  # a position
+    return [_xy_positions(item) for item in value]
 
 
 def _geojson_result_pairs(
@@ -617,8 +658,11 @@ def _geojson_result_pairs(
     originals, delivered = [], []
     for kind, clipped in result.outputs.items():
         geometry_type, coords, offsets = result.inputs[kind]
-        originals.append(to_shapely(geometry_type, coords, offsets))
-        delivered.append(clipped.to_shapely())
+        # In 2D: Z is not compared, and a document that mixes 2D and 3D positions has
+        # NaN for the missing ones, which Shapely need not see.
+        originals.append(to_shapely(geometry_type, _xy(coords), offsets))
+        delivered.append(to_shapely(clipped.geometry_type, _xy(clipped.coords),
+                                    clipped.offsets))
     if not originals:
         nothing = np.empty(0, dtype=object)
         return nothing, nothing, np.empty(0, dtype=np.int64)

@@ -14,6 +14,7 @@ from shapely.geometry import LineString, Polygon, box, mapping
 import rnsca
 import rnsca_client
 from rnsca_client import AsyncClient, Client
+from tests.cases import MIXED_DIMENSIONS, MIXED_DIMENSIONS_CLIPPED
 from tests.client.conftest import MAX_VERTICES
 
 pytestmark = pytest.mark.e2e
@@ -94,6 +95,15 @@ def test_feature_collection_gives_a_list_of_shapely_geometries(client):
     assert [g.geom_type for g in geoms] == ["Polygon", "LineString", "LineString"]
     assert geoms[2].is_empty and geoms[1].length == pytest.approx(10 * 2**0.5)
     assert [f["properties"]["i"] for f in result.geojson["features"]] == [0, 1, 2]
+
+
+def test_a_document_mixing_2d_and_3d_positions_comes_back_in_kind(client):
+    result = client.clip_geojson(MIXED_DIMENSIONS, rnsca.Window(*WINDOW))
+    assert [f["geometry"] for f in result.geojson["features"]] == MIXED_DIMENSIONS_CLIPPED
+    line, polygon, points = result.to_shapely()
+    assert shapely.has_z(line) and shapely.get_coordinates(line, include_z=True)[:, 2] \
+        .tolist()[1:] == [1.0, 2.0]
+    assert polygon.area == 25.0 and len(points.geoms) == 2
 
 
 def test_geojson_options_reach_the_server(client):

@@ -14,6 +14,7 @@ import numpy as np
 import orjson
 import pytest
 
+from tests.cases import MIXED_DIMENSIONS, MIXED_DIMENSIONS_CLIPPED
 from tests.e2e.server import LiveServer
 
 pytestmark = pytest.mark.e2e
@@ -82,6 +83,20 @@ def test_clip_geojson_keeps_properties_and_verifies(client):
     assert body["geojson"]["geometry"]["coordinates"] == [
         [[0.0, 1.0], [5.0, 1.0], [5.0, 10.0]], [[8.0, 10.0], [8.0, 5.0], [10.0, 5.0]]]
     assert body["stats"]["segments_in"] == 5 and body["verification"]["passed"] is True
+
+
+def test_clip_geojson_mixing_2d_and_3d_positions(client):
+    for verify in (True, False):
+        r = client.post("/v1/clip/geojson", json={
+            "window": WINDOW, "geojson": MIXED_DIMENSIONS, "verify": verify})
+        assert r.status_code == 200, r.text
+        body = r.json()
+        assert [f["geometry"] for f in body["geojson"]["features"]] == \
+            MIXED_DIMENSIONS_CLIPPED
+        if verify:
+            assert body["verification"]["passed"] is True
+        else:
+            assert body["verification"] is None
 
 
 def test_clip_segments_json(client):

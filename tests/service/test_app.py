@@ -11,6 +11,7 @@ from service.budget import segment_work
 from service.errors import json_path
 from service.runner import ClipRunner
 from service.schemas import ClipOptions
+from tests.cases import MIXED_DIMENSIONS, MIXED_DIMENSIONS_CLIPPED
 from tests.service.conftest import TestClient, make_client
 
 WINDOW = [0, 0, 10, 10]
@@ -101,6 +102,23 @@ def test_approx_geojson_is_verified_only_with_a_bound(client):
     assert r.status_code == 422 and "approx_bound" in r.json()["detail"]
     r = client.post("/v1/clip/geojson", json={**body, "verify": True, "approx_bound": 1e-6})
     assert r.json()["verification"]["passed"] is True
+
+
+@pytest.mark.parametrize("verify", [True, False, "all"])
+def test_a_collection_mixing_2d_and_3d_positions_keeps_each_positions_dimension(
+        client, verify):
+    r = client.post("/v1/clip/geojson", json={"window": WINDOW, "geojson": MIXED_DIMENSIONS,
+                                              "verify": verify})
+    assert r.status_code == 200, r.text
+    body = r.json()
+    assert [f["geometry"] for f in body["geojson"]["features"]] == MIXED_DIMENSIONS_CLIPPED
+    assert [f["id"] for f in body["geojson"]["features"]] == [1, 2, 3]
+    assert body["stats"]["vertices_in"] == 12
+    if verify is False:
+        assert body["verification"] is None
+    else:
+        assert body["verification"]["passed"] is True
+        assert body["verification"]["checked"] == body["verification"]["inputs"] == 3
 
 
 def test_polygons_refuse_approx_mode_with_422(client):

@@ -10,6 +10,7 @@ from typer.testing import CliRunner
 
 import rnsca
 from rnsca.cli import app
+from tests.cases import MIXED_DIMENSIONS, MIXED_DIMENSIONS_CLIPPED
 
 WINDOW = ["--window", "0,0,10,10"]
 
@@ -121,6 +122,17 @@ def test_clip_verify_reports_the_comparison_with_shapely(runner, source):
         "max_deviation": 0.0, "false_positives": 0, "ratio": 1.0, "passed": True,
         "allowed_deviation": 1e-8, "mode": "exact", "valid": True, "invalid_inputs": 0,
         "inputs": 3, "checked": 3, "sampling": "all"}
+
+
+def test_clip_writes_each_position_of_a_mixed_2d_3d_document_in_its_dimension(
+        runner, tmp_path):
+    path = tmp_path / "mixed.geojson"
+    path.write_bytes(orjson.dumps(MIXED_DIMENSIONS))
+    result = run(runner, str(path), *WINDOW, "--verify")
+    assert result.exit_code == 0, result.output
+    assert [f["geometry"] for f in json.loads(result.stdout)["features"]] == \
+        MIXED_DIMENSIONS_CLIPPED
+    assert report_of(result)["verification"]["passed"] is True
 
 
 def test_clip_keep_empty_keeps_features_left_empty(runner, source):

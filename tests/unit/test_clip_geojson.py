@@ -8,6 +8,7 @@ Shapely's result has no lower-dimensional leftovers to discard (``same_dimension
 discards them anyway).
 """
 
+import copy
 import math
 
 import numpy as np
@@ -20,6 +21,7 @@ from rnsca import ClipStats, InvalidGeometryError, InvalidOptionError, InvalidWi
 from rnsca.clip_geojson import clip_geojson, combine_stats
 from rnsca.io.geojson import dumps, from_geojson
 from rnsca.ragged import clip_ragged
+from tests.cases import MIXED_DIMENSIONS, MIXED_DIMENSIONS_CLIPPED
 
 TOL = 1e-9
 WINDOW = (25.31, 30.17, 70.73, 80.91)
@@ -413,3 +415,155 @@ def test_verify_reads_the_results_arrays_not_the_documents():
     result.outputs["lines"].coords[0] = [0.0, 40.0]
     v = rnsca.verify(None, result, WINDOW)
     assert not v.passed and v.false_positives == 1
+
+
+# --------------------------------------------------------------------------- 2D and 3D mixed
+# RFC 7946 allows 2 or 3 numbers in any position. Each position comes out with the number
+# it came in with; a new one (cut point, window corner) has Z only if every Z it is
+# computed from is known.
+
+MIXED_LINE = {"type": "LineString", "coordinates": [[-5, 5], [5, 5, 1], [15, 5, 3], [15, 8]]}
+MIXED_RING = [[-5, -5, 1], [5, -5], [5, 5, 2], [-5, 5, 2], [-5, -5, 1]]
+
+
+def xy_only(geometry):
+    """Return a GeoJSON geometry with every position cut to x and y (for ``shape``)."""
+    def cut(value):
+        if value and not isinstance(value[0], (list, tuple)):
+            return list(value[:2])
+        return [cut(item) for item in value]
+    if geometry["type"] == "GeometryCollection":
+        return {**geometry, "geometries": [xy_only(g) for g in geometry["geometries"]]}
+    return {**geometry, "coordinates": cut(geometry["coordinates"])}
+
+
+def positions(coordinates):
+    """Yield every position of a coordinates member."""
+    if coordinates and isinstance(coordinates[0], (int, float)):
+        yield coordinates
+        return
+    for item in coordinates:
+        yield from positions(item)
+
+
+def test_a_cut_point_has_z_only_between_two_3d_positions():
+    out, _ = clip_geojson(collection(feature(MIXED_LINE)), (0, 0, 10, 10))
+    assert out["features"][0]["geometry"] == {
+        "type": "LineString", "coordinates": [[0.0, 5.0], [5.0, 5.0, 1.0], [10.0, 5.0, 2.0]]}
+
+
+def test_a_polygon_corner_has_z_only_when_both_ends_it_is_interpolated_between_have():
+    # (5, 0) cuts the edge from the 2D (5, -5); the corner (0, 0) lies between the
+    # exit (0, 5, 2) and that entry, so it has no Z either.
+    out, _ = clip_geojson(collection(feature({"type": "Polygon", "coordinates": [MIXED_RING]}),
+                                     feature({"type": "Point", "coordinates": [1, 1]})),
+                          (0, 0, 10, 10))
+    assert out["features"][0]["geometry"] == {"type": "Polygon", "coordinates": [
+        [[5.0, 0.0], [5.0, 5.0, 2.0], [0.0, 5.0, 2.0], [0.0, 0.0], [5.0, 0.0]]]}
+    assert out["features"][1]["geometry"] == {"type": "Point", "coordinates": [1.0, 1.0]}
+
+
+def test_a_window_inside_a_polygon_takes_z_only_from_a_3d_shell():
+    ring_3d = [[-5, -5, 4], [15, -5, 4], [15, 15, 8], [-5, 15, 8], [-5, -5, 4]]
+    ring_2d = [[-5, -5], [15, -5], [15, 15], [-5, 15], [-5, -5]]
+    mixed = [[-5, -5, 4], [15, -5], [15, 15, 8], [-5, 15, 8], [-5, -5, 4]]
+    doc = collection(*(feature({"type": "Polygon", "coordinates": [ring]})
+                       for ring in (ring_3d, ring_2d, mixed)))
+    out, _ = clip_geojson(doc, (0, 0, 10, 10))
+    dims = [{len(p) for p in positions(f["geometry"]["coordinates"])}
+            for f in out["features"]]
+    assert dims == [{3}, {2}, {2}]  # the shell's mean Z: known only for the 3D one
+    alone, _ = clip_geojson(feature({"type": "Polygon", "coordinates": [ring_3d]}),
+                            (0, 0, 10, 10))
+    assert out["features"][0]["geometry"] == alone["geometry"]
+
+
+def test_every_backend_writes_the_mixed_case_alike(backend):
+    out, _ = clip_geojson(MIXED_DIMENSIONS, (0, 0, 10, 10), backend=backend)
+    assert [f["geometry"] for f in out["features"]] == MIXED_DIMENSIONS_CLIPPED
+
+
+def test_points_keep_their_own_dimension():
+    doc = collection(feature({"type": "MultiPoint", "coordinates": [[1, 1], [2, 2, 5],
+                                                                   [20, 20, 1], [3, 3]]}))
+    out, _ = clip_geojson(doc, (0, 0, 10, 10))
+    assert out["features"][0]["geometry"]["coordinates"] == [[1.0, 1.0], [2.0, 2.0, 5.0],
+                                                             [3.0, 3.0]]
+
+
+def test_geometries_of_one_dimension_clip_as_in_a_document_of_their_own(rng):
+    shapes = [star_with_hole(rng) for _ in range(5)]
+    shapes += [shapely.LineString(random_walk(rng, 50)) for _ in range(5)]
+    flat = [mapping(g) for g in shapes]
+    raised = [mapping(shapely.force_3d(g, 7.5)) for g in shapes]
+    mixed = collection(*(feature(g) for pair in zip(flat, raised, strict=True) for g in pair))
+    out, _ = clip_geojson(mixed, WINDOW, keep_empty=True)
+    flat_out, _ = clip_geojson(collection(*map(feature, flat)), WINDOW, keep_empty=True)
+    raised_out, _ = clip_geojson(collection(*map(feature, raised)), WINDOW, keep_empty=True)
+    assert out["features"][0::2] == flat_out["features"]
+    assert out["features"][1::2] == raised_out["features"]
+
+
+def test_a_mixed_document_matches_shapely_in_2d(rng):
+    geometries = []
+    for k in range(40):
+        g = mapping(star_with_hole(rng) if k % 2 else shapely.LineString(random_walk(rng, 80)))
+        coordinates = orjson.loads(orjson.dumps(g["coordinates"]))
+        for position in positions(coordinates):
+            if rng.random() < 0.5:
+                position.append(float(rng.uniform(-10, 10)))
+        if g["type"] == "Polygon":  # ring ends of one dimension, and equal
+            for ring in coordinates:
+                ring[-1] = list(ring[0])
+        geometries.append({"type": g["type"], "coordinates": coordinates})
+    doc = collection(*map(feature, geometries))
+    assert from_geojson(doc).partial_z
+    result = clip_geojson(doc, WINDOW, keep_empty=True)
+    for original, out in zip(geometries, result.document["features"], strict=True):
+        assert_matches_shapely(xy_only(out["geometry"]) if out["geometry"]["coordinates"]
+                               else None, xy_only(original))
+        for position in positions(out["geometry"]["coordinates"]):
+            assert len(position) in (2, 3) and all(math.isfinite(v) for v in position)
+    import rnsca
+
+    assert rnsca.verify(None, result, WINDOW).passed
+    assert rnsca.verify(doc, result.document, WINDOW).passed  # two documents, no arrays
+
+
+def test_a_mixed_document_is_written_back_as_it_came():
+    doc = copy.deepcopy(collection(
+        feature(MIXED_LINE), feature({"type": "Polygon", "coordinates": [MIXED_RING]}),
+        feature({"type": "MultiPoint", "coordinates": [[1, 2], [3, 4, 5]]})))
+    for f in doc["features"]:  # floats, as they are written back
+        for position in positions(f["geometry"]["coordinates"]):
+            position[:] = map(float, position)
+    everything = (-100, -100, 100, 100)
+    out, _ = clip_geojson(doc, everything)
+    assert out == doc
+    fast, _ = clip_geojson(doc, everything, arrays=True)
+    assert dumps(fast) == orjson.dumps(doc)
+
+
+def test_list_and_array_output_of_a_mixed_document_serialize_alike():
+    doc = collection(
+        feature(MIXED_LINE), feature({"type": "Polygon", "coordinates": [MIXED_RING]}),
+        feature({"type": "MultiPoint", "coordinates": [[1, 2], [3, 4, 5]]}),
+        feature({"type": "LineString", "coordinates": [[1, 1, 1], [2, 2, 2]]}))
+    listed, _ = clip_geojson(doc, (0, 0, 10, 10))
+    fast, _ = clip_geojson(doc, (0, 0, 10, 10), arrays=True)
+    text = dumps(fast)
+    assert text == orjson.dumps(listed)
+    assert b"null" not in text and b"NaN" not in text
+
+
+def test_a_bbox_has_z_only_over_positions_that_have_it():
+    doc = collection(
+        feature({"type": "LineString", "coordinates": [[1, 1], [2, 2]]},
+                bbox=[1, 1, 0, 2, 2, 0]),
+        feature({"type": "LineString", "coordinates": [[3, 3, 7], [4, 4], [5, 5, 9]]},
+                bbox=[3, 3, 7, 5, 5, 9]),
+        bbox=[1, 1, 7, 5, 5, 9])
+    out, _ = clip_geojson(doc, (0, 0, 10, 10))
+    assert out["features"][0]["bbox"] == [1.0, 1.0, 2.0, 2.0]
+    assert out["features"][1]["bbox"] == [3.0, 3.0, 7.0, 5.0, 5.0, 9.0]
+    assert out["bbox"] == [1.0, 1.0, 7.0, 5.0, 5.0, 9.0]

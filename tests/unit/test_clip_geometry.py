@@ -393,6 +393,44 @@ def test_non_finite_coordinate_raises_naming_the_geometry(wkt, bad):
     assert isinstance(info.value, ValueError)
 
 
+@pytest.mark.parametrize("wkt", ["LINESTRING Z (1 1 1, 2 2 2)",
+                                 "POLYGON Z ((1 1 1, 4 1 1, 4 4 1, 1 1 1))",
+                                 "MULTIPOINT Z ((1 1 1), (2 2 2))"])
+def test_nan_z_is_taken_only_with_partial_z_and_infinite_z_never(wkt):
+    geometries = [shapely.from_wkt(wkt)] * 3
+    kind, coords, offsets = shapely.to_ragged_array(geometries)
+    per = coords.shape[0] // 3
+    coords = coords.copy()
+    coords[per + 1, 2] = math.nan
+    with pytest.raises(InvalidGeometryError, match=r"geometry 1\b"):
+        clip_ragged(kind, coords, offsets, W)
+    result = clip_ragged(kind, coords, offsets, W, partial_z=True)
+    np.testing.assert_array_equal(result.coords, coords)  # all inside: as they came
+    for bad in (math.inf, -math.inf):
+        coords[per + 1, 2] = bad
+        with pytest.raises(InvalidGeometryError, match=r"geometry 1\b"):
+            clip_ragged(kind, coords, offsets, W, partial_z=True)
+    coords[per + 1, 2] = 0.0
+    coords[per + 1, 0] = math.nan
+    with pytest.raises(InvalidGeometryError, match=r"geometry 1\b"):
+        clip_ragged(kind, coords, offsets, W, partial_z=True)
+
+
+def test_a_nan_z_spreads_to_the_vertices_computed_from_it():
+    coords = np.array([[-5.0, 5.0, math.nan], [5.0, 5.0, 1.0], [15.0, 5.0, 3.0],
+                       [15.0, 8.0, math.nan]])
+    line = clip_ragged("LINESTRING", coords, (np.array([0, 4]),), W, partial_z=True)
+    np.testing.assert_array_equal(line.coords, [[0, 5, math.nan], [5, 5, 1], [10, 5, 2]])
+    ring = np.array([[-5.0, -5.0, 1.0], [5.0, -5.0, math.nan], [5.0, 5.0, 2.0],
+                     [-5.0, 5.0, 2.0], [-5.0, -5.0, 1.0]])
+    polygon = clip_ragged("POLYGON", ring, (np.array([0, 5]), np.array([0, 1])), W,
+                          partial_z=True)
+    np.testing.assert_array_equal(polygon.coords, [[5, 0, math.nan], [5, 5, 2], [0, 5, 2],
+                                                   [0, 0, math.nan], [5, 0, math.nan]])
+    assert rnsca.verify((GeometryType.POLYGON, ring, (np.array([0, 5]), np.array([0, 1]))),
+                        polygon, W).passed
+
+
 def test_non_finite_coordinate_in_a_shapely_array_raises_naming_the_geometry():
     geometries = np.array([shapely.from_wkt("LINESTRING (1 1, 2 2)"),
                            shapely.from_wkt(f"LINESTRING (1 1, {math.inf} 2)")])

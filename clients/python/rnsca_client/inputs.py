@@ -128,12 +128,22 @@ def encode_json(payload: dict[str, Any]) -> bytes:
 
 
 def geometry_from_geojson(geometry: dict[str, Any] | None):
-    """Return a GeoJSON geometry dict as a Shapely geometry (None stays None)."""
+    """Return a GeoJSON geometry dict as a Shapely geometry (None stays None).
+
+    A geometry that mixes 2D and 3D positions (the server answers each position in the
+    dimension it came in) is 3D, with Z NaN where a position has none, as GEOS reads it.
+    """
     try:
+        import shapely
         import shapely.geometry
     except ImportError:
         raise ImportError("Shapely is needed for Shapely results: "
                           "pip install 'rnsca-client[shapely]'") from None
     if geometry is None:
         return None
-    return shapely.geometry.shape(geometry)
+    try:
+        return shapely.geometry.shape(geometry)
+    except ValueError:
+        # `shape` reads a part's positions into one array, which refuses 2 and 3 numbers
+        # mixed; GEOS's own GeoJSON reader takes them.
+        return shapely.from_geojson(json.dumps(geometry))

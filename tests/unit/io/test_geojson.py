@@ -3,6 +3,7 @@
 import copy
 import enum
 import gc
+import math
 import struct
 
 import numpy as np
@@ -296,13 +297,44 @@ def test_the_issue_example_path():
     assert "features[12].geometry.coordinates[0][3]" in message
 
 
-def test_mixing_2d_and_3d_names_the_first_position_that_differs():
+def test_a_document_mixing_2d_and_3d_is_read_in_3d_with_nan_z_where_missing():
     doc = collection(feature(line([0, 0, 1], [1, 1, 1])),
-                     feature({"type": "Point", "coordinates": [5, 5, 5]}),
+                     feature({"type": "Point", "coordinates": [5, 5]}),
                      feature(line([0, 0, 2], [1, 1])))
+    layout = from_geojson(doc)
+    assert layout.has_z and layout.partial_z
+    np.testing.assert_array_equal(layout.points[1], [[5, 5, np.nan]])
+    np.testing.assert_array_equal(layout.lines[1],
+                                  [[0, 0, 1], [1, 1, 1], [0, 0, 2], [1, 1, np.nan]])
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_a_document_of_one_dimension_is_not_partial(dim):
+    position = [1.5, 2.5, 3.5][:dim]
+    layout = from_geojson(feature({"type": "MultiPoint", "coordinates": [position] * 3}))
+    assert layout.has_z == (dim == 3) and not layout.partial_z
+    assert layout.points[1].shape == (3, dim)
+
+
+@pytest.mark.parametrize("ends, closed", [
+    (([0, 0, 1], [0, 0, 1]), True),
+    (([0, 0], [0, 0]), True),
+    (([0, 0, 1], [0, 0]), False),
+    (([0, 0], [0, 0, 1]), False),
+    (([0, 0, 1], [0, 0, 2]), False),
+])
+def test_a_ring_of_a_mixed_document_is_closed_only_by_ends_of_one_dimension(ends, closed):
+    first, last = ends
+    ring = [first, [4, 0, 5], [4, 4], last]
+    doc = collection(feature({"type": "Polygon", "coordinates": [ring]}),
+                     feature({"type": "Point", "coordinates": [1, 1, 1]}))
+    if closed:
+        rings = from_geojson(doc).polygons[1]
+        np.testing.assert_array_equal(rings[0], rings[3])  # NaN equal to NaN here
+        return
     path, message = error_path(doc)
-    assert path == "features[2].geometry.coordinates[1]"
-    assert "a 2D position in a document whose first position is 3D" in message
+    assert path == "features[0].geometry.coordinates[0]"
+    assert "polygon ring is not closed" in message
 
 
 def test_the_first_problem_in_document_order_is_reported():
@@ -576,7 +608,6 @@ def test_a_bad_number_in_a_large_document_is_named(make_lines, value, reason, pl
 
 @pytest.mark.parametrize("value, path_end, reason", [
     ([1.5], "", "a position needs at least 2 numbers, got 1"),
-    ([1.5, 2.5, 3.5], "", "a 3D position in a document whose first position is 2D"),
     ("xy", "", "expected a position (an array of 2 or 3 numbers), got string 'xy'"),
     (5.0, "", "expected a position"),
 ])
@@ -639,9 +670,12 @@ def test_bulk_reading_takes_lists_of_ints_and_floats_and_nothing_else():
         result = geojson_module._coordinates(list(arrays), sizes)
         if result is None:
             return None
-        coords, plain = result
+        coords, plain, partial_z = result
         dim = coords.shape[1]
-        assert coords.tolist() == [list(map(float, p[:dim])) for a in arrays for p in a]
+        expected = [[float(v) for v in p[:dim]] + [math.nan] * (dim - len(p))
+                    for a in arrays for p in a]
+        np.testing.assert_array_equal(coords, np.array(expected).reshape(-1, dim))
+        assert partial_z == any(len(p) < dim for a in arrays for p in a)
         return plain.tolist()
 
     floats = [[0.5 + k, -1.5 * k] for k in range(2500)]
@@ -651,7 +685,8 @@ def test_bulk_reading_takes_lists_of_ints_and_floats_and_nothing_else():
     assert read(floats, [[k, 1.5] for k in range(-70_000, 70_000, 7)]) == [True, False]
     assert read(floats, [[k, 0.5] for k in INTS + BIG_INTS], floats) == [True, False, True]
     assert read([[1.5, 2.5]], [(1.5, 2.5)]) == [False, False]  # tuples: the chunk is not plain
-    assert read(floats, [[1.5, 2.5, 3.5]]) is None  # 2D then 3D
+    assert read(floats, [[1.5, 2.5, 3.5]]) == [False, True]  # 2D then 3D: read again in 3D
+    assert read([[1.5, 2.5, 3.5]], floats) == [True, False]  # 3D then 2D
     for value in (True, None, "1", np.float64(1.5), np.int64(1), 2 ** 64, -(2 ** 63) - 1,
                   float("nan"), float("inf"), [1], {}, Tag.HALF, b"12345678"):
         assert read([*floats[:1500], [1.5, value], *floats[1500:]]) is None, value
@@ -696,22 +731,45 @@ def test_random_corruptions_of_a_large_document_are_judged_like_the_validator(
 
 
 @pytest.mark.parametrize("first, rest", [(3, 2), (2, 3)])
-def test_a_whole_chunk_of_another_dimension_is_named(make_lines, first, rest):
-    doc, _ = make_lines(first)
+def test_a_whole_chunk_of_another_dimension_is_read_with_nan_z_for_the_2d_positions(
+        make_lines, first, rest):
+    doc, coords = make_lines(first)
+    _, others = make_lines(rest)
     for k in range(41, LINES):  # the second and third chunks
-        doc["features"][k] = feature(line(*make_lines(rest)[1][:LINE_LENGTH].tolist()))
-    found, message = error_path(doc)
-    assert found == "features[41].geometry.coordinates[0]"
-    assert f"a {rest}D position in a document whose first position is {first}D" in message
+        doc["features"][k] = feature(line(*others[k * LINE_LENGTH:(k + 1) * LINE_LENGTH]
+                                          .tolist()))
+    expected = np.full((LINES * LINE_LENGTH, 3), np.nan)
+    expected[:41 * LINE_LENGTH, :first] = coords[:41 * LINE_LENGTH]
+    expected[41 * LINE_LENGTH:, :rest] = others[41 * LINE_LENGTH:]
+    layout = from_geojson(doc)
+    assert layout.partial_z
+    np.testing.assert_array_equal(layout.lines[1], expected)
 
 
-def test_a_2d_position_late_in_a_large_3d_document_is_named(make_lines):
-    doc, _ = make_lines(3)
-    position, path = position_at(doc, PLACES[6])
-    del position[2]
-    found, message = error_path(doc)
-    assert found == path
-    assert "a 2D position in a document whose first position is 3D" in message
+@pytest.mark.parametrize("place", PLACES)
+@pytest.mark.parametrize("dim", [2, 3])
+def test_one_position_of_the_other_dimension_anywhere_in_a_large_document_is_read(
+        make_lines, place, dim):
+    """A 3D position late in a 2D document makes the reader read again in 3D; a 2D one in
+    a 3D document gets Z NaN in one pass. The slow validator reads the same."""
+    doc, coords = make_lines(dim)
+    position, _ = position_at(doc, place)
+    expected = np.full((coords.shape[0], 3), np.nan)
+    expected[:, :dim] = coords
+    if dim == 2:
+        position.append(7.25)
+        expected[place, 2] = 7.25
+    else:
+        del position[2]
+        expected[place, 2] = np.nan
+    layout = from_geojson(doc)
+    assert layout.has_z and layout.partial_z
+    np.testing.assert_array_equal(layout.lines[1], expected)
+    validator = geojson_module._Validator(None)
+    validator.document(doc)
+    assert validator.dim == 3 and validator.partial_z
+    positions = [p for f in doc["features"] for p in f["geometry"]["coordinates"]]
+    np.testing.assert_array_equal(geojson_module._checked_coordinates(positions, 3), expected)
 
 
 # --------------------------------------------------------------------------- writing

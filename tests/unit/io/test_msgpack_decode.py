@@ -17,7 +17,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from rnsca.io.msgpack_decode import MIXED, PLAIN, REFUSED, read_positions
+from rnsca.io.msgpack_decode import HAS_Z, MIXED, PARTIAL_Z, PLAIN, REFUSED, read_positions
 
 
 def read(data: bytes, sizes, dim: int):
@@ -66,13 +66,25 @@ def test_plain_arrays_hold_only_float64_numbers_of_the_dimension():
     (b"\x91\x91\x92\x01\x80", [1], 2),  # a map
     (b"\x91\x91\x92\x01\xcb\x7f\xf8\x00\x00\x00\x00\x00\x00", [1], 2),  # NaN
     (b"\x91\x91\x92\x01\xca\x7f\x80\x00\x00", [1], 2),  # float32 infinity
-    (b"\x91\x91\x93\x01\x02\x03", [1], 2),  # 3 numbers in 2D
-    (b"\x91\x91\x92\x01\x02", [1], 3),  # 2 numbers in 3D
+    (b"\x91\x91\x91\x01", [1], 3),  # 1 number in 3D
+    (b"\x91\x91\x93\x01\x02\xc0", [1], 3),  # nil as Z
     (b"\x91\x92\x92\x01\x02", [1], 2),  # two positions said, one read
     (b"\x92\x91\x92\x01\x02", [1], 2),  # two arrays said, one given
 ])
 def test_what_is_not_as_asked_is_refused(data, sizes, dim):
     assert read(data, sizes, dim)[0] == REFUSED
+
+
+def test_three_numbers_in_2d_stop_the_read_to_read_again_in_3d():
+    data = ormsgpack.packb([[[0.5, 1.5], [2.5, 3.5]], [[1.0, 2.0, 3.0], "not read"]])
+    assert read(data, [2, 2], 2)[0] == HAS_Z
+
+
+def test_two_numbers_in_3d_are_a_position_without_z():
+    data = ormsgpack.packb([[[0.5, 1.5, 2.5]], [[1.0, 2.0], [3.0, 4.0, 5.0]]])
+    result, out, plain = read(data, [1, 2], 3)
+    assert result == PARTIAL_Z and plain.tolist() == [True, False]
+    np.testing.assert_array_equal(out, [[0.5, 1.5, 2.5], [1.0, 2.0, np.nan], [3.0, 4.0, 5.0]])
 
 
 def test_numbers_after_z_are_checked_then_dropped():
@@ -135,7 +147,7 @@ def test_corrupted_bytes_are_read_as_ormsgpack_reads_them_or_refused(arrays, cut
     expected = None if value is None else positions_of(value, 2)
     if expected is not None and [len(a) for a in value] != sizes:
         expected = None
-    if result == REFUSED:
+    if result in (REFUSED, HAS_Z):  # HAS_Z: a position of 3 or more numbers in 2D
         assert expected is None
     else:
         assert expected is not None

@@ -30,7 +30,7 @@ from pathlib import Path
 
 import httpx
 
-from benchmarks.load import _free_port
+from benchmarks.load import _free_port, stop_server
 from benchmarks.machine import describe_machine, run_header
 
 __all__ = ["PROBES", "measure_start", "main"]
@@ -93,8 +93,7 @@ def measure_start(cache: Path, workers: int, timeout: float, log_path: Path) -> 
                         pass
                 time.sleep(0.25)
     finally:
-        process.terminate()
-        process.wait(60)
+        stop_server(process)
     steps = []
     for line in log_path.read_text(errors="replace").splitlines():
         try:

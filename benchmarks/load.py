@@ -48,7 +48,7 @@ import numpy as np
 
 from benchmarks.machine import describe_machine, load_average
 
-__all__ = ["CASES", "run_load", "parse_wrk", "main"]
+__all__ = ["CASES", "run_load", "parse_wrk", "stop_server", "main"]
 
 ROOT = Path(__file__).resolve().parent.parent
 WINDOW = [0.0, 0.0, 10.0, 10.0]
@@ -266,12 +266,17 @@ def run_load(seconds: int, connections: int, threads: int, workers: int = 2,
                     f"{figures['latency_s']['max'] * 1e3:.1f} ms ({figures['probes']} probes); "
                     f"busy answers {figures['busy_statuses']}")
         finally:
-            process.terminate()
-            try:
-                process.wait(30)
-            except subprocess.TimeoutExpired:
-                process.kill()
+            stop_server(process)
     return results
+
+
+def stop_server(process: subprocess.Popen) -> None:
+    """Stop ``rnsca serve`` as SIGTERM asks (requests in flight finish); kill it past 30 s."""
+    process.terminate()
+    try:
+        process.wait(30)
+    except subprocess.TimeoutExpired:
+        process.kill()
 
 
 def evaluate_load_targets(results: dict, connections: int) -> list[dict]:

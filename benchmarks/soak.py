@@ -72,6 +72,7 @@ from benchmarks.load import (
     _start_server,
     _wait_ready,
     parse_wrk,
+    stop_server,
 )
 from benchmarks.machine import describe_machine, load_average, run_header
 
@@ -503,11 +504,7 @@ def run_soak(minutes: int, minute_seconds: int, connections: int, threads: int,
                 if process.poll() is not None:
                     raise RuntimeError(f"rnsca serve exited with {process.returncode}")
         finally:
-            process.terminate()
-            try:
-                process.wait(30)
-            except subprocess.TimeoutExpired:
-                process.kill()
+            stop_server(process)
         return results, _log_summary(server_log)
 
 

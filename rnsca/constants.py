@@ -132,11 +132,6 @@ AUTO_N_BASE = 2
 # 0..32, so a piece at the deepest level is at most 2**-32 of its segment (N >= 2). The
 # per-level counters (N_LEVELS) and the stacks below are sized by it.
 MAX_DEPTH_LIMIT = 32
-# Flattening paths writes at most this many points (2 GiB of float64 pairs): a tolerance
-# far below the curves' size (or coordinates far beyond the window a verification's
-# tolerance is taken from) would otherwise ask for tens of gigabytes (measured: a
-# verification of 52,000 wandering cubic paths asked for 59 GiB) and fail with MemoryError.
-MAX_FLATTENED_POINTS = 2**27
 
 # --- The counter row (rnsca/kernels/counters.py; read by rnsca.stats) -------------------
 # Each kernel block fills one int64 row; the rows are summed, except DEEPEST and

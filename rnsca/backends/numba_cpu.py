@@ -24,7 +24,6 @@ from rnsca.backends.base import (
     Polylines,
     SegmentPieces,
 )
-from rnsca.constants import MAX_FLATTENED_POINTS
 from rnsca.errors import LimitExceededError
 from rnsca.kernels import bezier as BZ
 from rnsca.kernels import counters as C
@@ -44,6 +43,11 @@ __all__ = ["DevicePaths", "DevicePolygons", "NumbaBackend"]
 BLOCK_SIZE = 2048
 # Inputs of at most this many blocks run on the calling thread (see the serial driver).
 SERIAL_BLOCKS = 4
+# Flattening paths writes at most this many points (2 GiB of float64 pairs): a tolerance
+# far below the curves' size (or coordinates far beyond the window a verification's
+# tolerance is taken from) would otherwise ask for tens of gigabytes (measured: a
+# verification of 52,000 wandering cubic paths asked for 59 GiB) and fail with MemoryError.
+MAX_FLATTENED_POINTS = 2**27
 _CAPABILITIES = Capabilities(Backend.NUMBA)
 _NO_INDEX = np.empty(0, dtype=np.int64)
 # Subpaths per block of the parallel path kernel: enough work per block to pay for its

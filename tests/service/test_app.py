@@ -118,7 +118,11 @@ def test_a_collection_mixing_2d_and_3d_positions_keeps_each_positions_dimension(
         assert body["verification"] is None
     else:
         assert body["verification"]["passed"] is True
-        assert body["verification"]["checked"] == body["verification"]["inputs"] == 3
+        assert body["verification"]["inputs"] == 3
+        # true: within the verification budget (a sample, if the running cost estimate
+        # says so); all: every input.
+        checked = body["verification"]["checked"]
+        assert checked == 3 if verify == "all" else 1 <= checked <= 3
 
 
 def test_polygons_refuse_approx_mode_with_422(client):

@@ -215,8 +215,8 @@ def test_flatten_paths_names_the_backends_it_runs_on():
 
 
 def test_flattening_into_more_points_than_the_limit_is_a_clear_error_not_memory_error():
+    from rnsca.backends.numba_cpu import MAX_FLATTENED_POINTS
     from rnsca.clip_svg import flatten_paths
-    from rnsca.constants import MAX_FLATTENED_POINTS
     from rnsca.errors import LimitExceededError
     from rnsca.kernels.bezier import flatten_steps
 

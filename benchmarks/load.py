@@ -146,18 +146,28 @@ def _start_server(workers: int, port: int, log_path: Path, log_level: str) -> su
                             stderr=subprocess.STDOUT)
 
 
-def _wait_ready(url: str, process: subprocess.Popen, timeout: float = 900.0) -> None:
+def _wait_ready(url: str, process: subprocess.Popen, timeout: float = 900.0,
+                in_a_row: int = 20) -> None:
+    """Return once `in_a_row` ``/readyz`` probes, each on a new connection, answer 200.
+
+    One 200 comes from whichever worker accepted that connection: another may still be
+    loading its kernels and answer 503 ``not-ready``. Each new connection goes to a worker
+    the kernel picks, so 20 in a row make it very likely that every worker is ready.
+    """
     deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
+    ready = 0
+    while ready < in_a_row:
+        if time.monotonic() > deadline:
+            raise RuntimeError(f"rnsca serve not ready within {timeout} s")
         if process.poll() is not None:
             raise RuntimeError(f"rnsca serve exited with {process.returncode}")
         try:
-            if httpx.get(url + "/readyz", timeout=2).status_code == 200:
-                return
+            ok = httpx.get(url + "/readyz", timeout=10).status_code == 200
         except httpx.TransportError:
-            pass
-        time.sleep(0.2)
-    raise RuntimeError(f"rnsca serve not ready within {timeout} s")
+            ok = False
+        ready = ready + 1 if ok else 0
+        if not ok:
+            time.sleep(0.2)
 
 
 def health_while_busy(url: str, busy: int, vertices: int) -> dict:

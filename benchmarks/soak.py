@@ -252,28 +252,6 @@ def process_tree_rss(root: int) -> dict:
             "processes": processes}
 
 
-def _wait_workers_ready(url: str, process: subprocess.Popen, in_a_row: int = 20,
-                        timeout: float = 900.0) -> None:
-    """Return once `in_a_row` ``/readyz`` probes, each on a new connection, answer 200.
-
-    `benchmarks.load`'s wait returns on the first 200, which comes from whichever worker
-    accepted that connection: the other may still be loading its kernels and answer 503
-    ``not-ready``. Each new connection goes to a worker the kernel picks, so 20 in a row
-    make it very likely that both are ready; `_check_mix` then proves it on real requests.
-    """
-    _wait_ready(url, process, timeout)
-    deadline = time.monotonic() + timeout
-    ready = 0
-    while ready < in_a_row:
-        if time.monotonic() > deadline:
-            raise RuntimeError(f"rnsca serve: workers not all ready within {timeout} s")
-        if process.poll() is not None:
-            raise RuntimeError(f"rnsca serve exited with {process.returncode}")
-        ready = ready + 1 if httpx.get(url + "/readyz", timeout=10).status_code == 200 else 0
-        if not ready:
-            time.sleep(0.5)
-
-
 def _check_mix(url: str, mix: dict) -> None:
     """Raise RuntimeError unless every request of the mix gets its expected status.
 
@@ -480,7 +458,7 @@ def run_soak(minutes: int, minute_seconds: int, connections: int, threads: int,
         server_log = folder / "server.log"
         process = _start_server(workers, port, server_log, log_level)
         try:
-            _wait_workers_ready(url, process)
+            _wait_ready(url, process)
             _check_mix(url, MIX)
             script = folder / "soak.lua"
             script.write_text(_lua(MIX, folder))

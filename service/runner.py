@@ -120,21 +120,29 @@ class ClipRunner:
             "threading_layer": self.threading_layer, "serialized": self.serialized}})
 
     def _run_step(self, step: Step) -> float:
-        """Run `step` here under its lock, log it, serve what it completes; return seconds."""
+        """Run `step` here under its lock, log it, serve what it completes.
+
+        Returns the seconds it took, waiting for its lock included.
+        """
         # One line before and one after each step: a cold start compiles for minutes,
         # and the log says what it is doing.
         _log.info("warming up", extra={"fields": {"step": step.name}})
+        asked = time.perf_counter()
         with step_lock(step.name), self._serial or nullcontext():
             step_started = time.perf_counter()
             step.run()
             seconds = time.perf_counter() - step_started
         if not self._settled:  # the first step has run a parallel kernel: which layer?
             self.settle()
+        waited = step_started - asked
         _log.info("warmed up", extra={"fields": {"step": step.name,
-                                                 "seconds": round(seconds, 3)}})
+                                                 "seconds": round(seconds, 3),
+                                                 "waited_seconds": round(waited, 3)}})
         self._done.add(step.name)
         self._serve_ready_endpoints()
-        return seconds
+        # A long wait for the step's lock means another process was compiling it: the
+        # cache is cold for this worker too.
+        return seconds + waited
 
     def _compile_in_children(self, steps: Sequence[Step], processes: int) -> None:
         """Compile `steps` in child processes; load each here as soon as its child is done."""

@@ -26,6 +26,9 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
+import orjson
+
 import rnsca
 from rnsca.backends.numba_cpu import (
     warm_up_lines,
@@ -57,8 +60,51 @@ class Step:
     needs: tuple[str, ...] = ()
 
 
+def _requests(kind: str) -> None:
+    """Answer small requests of `kind` as the service does (checks, verification included).
+
+    The backends' warm-up calls the kernels directly; a request also runs the input checks
+    and the verification, whose kernels must not be compiled by a request either: a
+    compile holds the process's compiler lock, and a request waiting for it would time out.
+    """
+    from rnsca.window import Window
+    from service import convert
+    from service.config import Settings
+    from service.schemas import ClipOptions
+
+    settings = Settings(warm_up=False)
+    window = [0.0, 0.0, 1.0, 1.0]
+    for verify in (True, False):
+        if kind == "segments":
+            convert.clip_segments_json(orjson.dumps({
+                "window": window, "segments": [[-1.0, 0.5, 2.0, 0.5]], "verify": verify}),
+                settings)
+            convert.clip_segments_binary(np.array([[-1.0, 0.5, 2.0, 0.5]]).tobytes(),
+                                         Window(*window), ClipOptions(), verify, settings)
+        elif kind == "geojson":
+            for z in ([], [0.5]):
+                convert.clip_geojson(orjson.dumps({"window": window, "verify": verify,
+                                                   "geojson": _collection(z)}), settings)
+        else:
+            convert.clip_svg(orjson.dumps({"window": window, "verify": verify, "paths": [
+                "M -1 0.5 C 0 2 1 -1 2 0.5 Z", "M -1 0.25 L 2 0.25 A 1 1 0 0 1 0 0"]}),
+                settings)
+
+
+def _collection(z: list[float]) -> dict:
+    """Return a FeatureCollection of a point, a line and a polygon across the unit window."""
+    ring = [[-1.0, 0.25, *z], [2.0, 0.25, *z], [2.0, 0.75, *z], [-1.0, 0.75, *z],
+            [-1.0, 0.25, *z]]
+    geometries = [{"type": "Point", "coordinates": [0.5, 0.5, *z]},
+                  {"type": "LineString", "coordinates": ring},
+                  {"type": "Polygon", "coordinates": [ring]}]
+    return {"type": "FeatureCollection", "features": [
+        {"type": "Feature", "properties": {}, "geometry": g} for g in geometries]}
+
+
 def _segments() -> None:
     warm_up_segments(get_backend(Backend.NUMBA))
+    _requests("segments")
 
 
 def _lines() -> None:
@@ -70,16 +116,14 @@ def _polygons() -> None:
 
 
 def _geojson() -> None:
-    """Clip a small FeatureCollection, 2D then 3D: the GeoJSON reader's and writer's kernels."""
+    """Clip small FeatureCollections (2D, 3D, mixed): the reader's and writer's kernels."""
     for z in ([], [0.0]):
-        ring = [[-1.0, 0.25, *z], [2.0, 0.25, *z], [2.0, 0.75, *z], [-1.0, 0.75, *z],
-                [-1.0, 0.25, *z]]
-        geometries = [{"type": "Point", "coordinates": [0.5, 0.5, *z]},
-                      {"type": "LineString", "coordinates": ring},
-                      {"type": "Polygon", "coordinates": [ring]}]
-        rnsca.clip_geojson({"type": "FeatureCollection", "features": [
-            {"type": "Feature", "properties": {}, "geometry": g} for g in geometries]},
-            (0.0, 0.0, 1.0, 1.0))
+        rnsca.clip_geojson(_collection(z), (0.0, 0.0, 1.0, 1.0))
+    mixed = _collection([0.0])
+    mixed["features"].append({"type": "Feature", "properties": {}, "geometry": {
+        "type": "LineString", "coordinates": [[-1.0, 0.5], [2.0, 0.5]]}})
+    rnsca.clip_geojson(mixed, (0.0, 0.0, 1.0, 1.0))
+    _requests("geojson")
 
 
 def _svg() -> None:
@@ -89,6 +133,7 @@ def _svg() -> None:
 
     warm_up_paths(get_backend(Backend.NUMBA))
     warm_up_svg()
+    _requests("svg")
 
 
 def _opencl() -> None:

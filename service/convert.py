@@ -44,11 +44,11 @@ from service.errors import (
 )
 from service.schemas import (
     BackendName,
-    ClipGeoJSONRequest,
     ClipOptions,
     ClipSegmentsRequest,
     ClipSVGRequest,
 )
+from service.slices import parse_geojson_request
 
 __all__ = ["Outcome", "clip_geojson", "clip_svg", "clip_segments_json",
            "clip_segments_binary", "warm_up_svg", "backend_report",
@@ -167,7 +167,7 @@ def _dict_or_none(value):
 
 def clip_geojson(body: bytes, settings: Settings) -> Outcome:
     """Answer ``POST /v1/clip/geojson``."""
-    request = ClipGeoJSONRequest.model_validate_json(body)
+    request = parse_geojson_request(body)  # a large body a slice of features at a time
     window = Window(*request.window)
     options = request.options
     arguments = _library_options(options, settings)

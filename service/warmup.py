@@ -68,7 +68,7 @@ def _requests(kind: str) -> None:
     compile holds the process's compiler lock, and a request waiting for it would time out.
     """
     from rnsca.window import Window
-    from service import convert
+    from service import convert, slices
     from service.config import Settings
     from service.schemas import ClipOptions
 
@@ -83,8 +83,10 @@ def _requests(kind: str) -> None:
                                          Window(*window), ClipOptions(), verify, settings)
         elif kind == "geojson":
             for z in ([], [0.5]):
-                convert.clip_geojson(orjson.dumps({"window": window, "verify": verify,
-                                                   "geojson": _collection(z)}), settings)
+                body = orjson.dumps({"window": window, "verify": verify,
+                                     "geojson": _collection(z)})
+                convert.clip_geojson(body, settings)
+                slices.parse_sliced(body)  # large bodies' scan, whatever this one's size
         else:
             convert.clip_svg(orjson.dumps({"window": window, "verify": verify, "paths": [
                 "M -1 0.5 C 0 2 1 -1 2 0.5 Z", "M -1 0.25 L 2 0.25 A 1 1 0 0 1 0 0"]}),

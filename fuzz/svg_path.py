@@ -173,6 +173,9 @@ def _reference_subpaths(d: str) -> list[dict]:
             continue
         assert current is not None, "svgelements: a drawing command before any moveto"
         if isinstance(segment, Close):
+            if current["closed"]:   # "ZZ": SVG starts a subpath after Z; it closes at once
+                current = {"start": current["start"], "closed": True, "items": []}
+                subpaths.append(current)
             current["closed"] = True
             continue
         if current["closed"]:   # after Z: a new subpath at the closed one's start

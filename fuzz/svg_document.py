@@ -13,10 +13,10 @@ An input is the bytes of a document. A finding is any of:
 
 Reference
 ---------
-The standard library's DOM, ``xml.dom.minidom`` (its own builder on expat, with
-namespace processing: tag names stay as written, ``xmlns`` declarations are
-attributes). rnsca builds an ElementTree itself from expat's events, without namespace
-processing. Both sit on expat, so the XML grammar is not what is
+The standard library's DOM, ``xml.dom.minidom`` as its ``expatbuilder`` builds it
+without namespace processing (as rnsca reads: names stay as written, ``xmlns``
+declarations are attributes, and a name may hold any number of colons). rnsca builds an
+ElementTree itself from expat's events. Both sit on expat, so the XML grammar is not what is
 compared: the tree built from it is (tags, attributes in order, text, tails, comments,
 processing instructions). Where rnsca refuses on purpose, the reference may accept: an
 entity declaration (rnsca refuses every one, against entity expansion and external
@@ -26,7 +26,7 @@ entities), a reference to an undeclared entity, and nesting deeper than
 
 from __future__ import annotations
 
-from xml.dom import Node, minidom
+from xml.dom import Node, expatbuilder
 from xml.parsers import expat
 
 import rnsca
@@ -55,8 +55,11 @@ _DELIBERATE = ("entity declarations are not accepted", "undeclared entity",
 
 
 def _reference_tree(data: bytes) -> tuple:
-    """Return the DOM's tree of `data` as `_shape` gives rnsca's; raises if it refuses."""
-    document = minidom.parseString(data)
+    """Return the DOM's tree of `data` as `_shape` gives rnsca's; raises if it refuses.
+
+    Raises ``ExpatError`` for a document that is not well-formed.
+    """
+    document = expatbuilder.parseString(data, namespaces=False)
     (root,) = [node for node in document.childNodes if node.nodeType == Node.ELEMENT_NODE]
     return _dom_shape(root, None)
 

@@ -21,6 +21,7 @@ smallest set that reaches the same coverage (libFuzzer's ``-merge=1``), in
 from __future__ import annotations
 
 import argparse
+import hashlib
 import importlib
 import os
 import re
@@ -97,8 +98,27 @@ def _child(target: str, flags: list[str]) -> None:
         except Exception:   # noqa: BLE001 -- libFuzzer runs it again and reports it
             pass
     print(f"fuzz.run: {target} set up in {time.perf_counter() - started:.1f} s", flush=True)
-    atheris.Setup([sys.argv[0], *flags], module.test_one_input)
+    atheris.Setup([sys.argv[0], *flags], _keeping_findings(target, module.test_one_input))
     atheris.Fuzz()
+
+
+def _keeping_findings(target: str, test_one_input):
+    """Return `test_one_input`, writing an input that raises to the findings first.
+
+    libFuzzer writes the input of a crash too, but not when its timer's SIGALRM ends the
+    process while the crash is being reported (seen with the app's threads running).
+    """
+    findings = WORK / "findings" / target
+
+    def test(data: bytes) -> None:
+        try:
+            test_one_input(data)
+        except BaseException:
+            findings.mkdir(parents=True, exist_ok=True)
+            (findings / f"raised-{hashlib.sha1(data).hexdigest()}").write_bytes(data)
+            raise
+
+    return test
 
 
 def _run_child(target: str, arguments: list[str], log: Path) -> int:

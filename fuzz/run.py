@@ -201,15 +201,17 @@ def fuzz(targets: list[str], seconds: int) -> int:
             left = seconds - int(time.perf_counter() - started)
             timeouts = [p for p in new if p.name.startswith("timeout-")]
             if status == 0 or not new or len(timeouts) < len(new) or \
-                    _reproducible_timeouts(target, timeouts) or left < 10:
+                    _reproducible_timeouts(target, timeouts):
                 break
             (findings / "slowed").mkdir(exist_ok=True)
             for path in timeouts:
                 path.rename(findings / "slowed" / path.name)
             print(f"fuzz.run: {target}: timeout did not reproduce (a busy machine); "
                   f"set aside, {left} s left", flush=True)
-            round_ += 1
             status = 0
+            if left < 10:
+                break
+            round_ += 1
         if status != 0:
             failed.append(target)
             lines = log.read_text(errors="replace").splitlines()

@@ -24,7 +24,10 @@ number), as SVG requires; arc flags are single characters. The reference shares 
 with rnsca's tokenizer (a hand-written state machine compiled by Numba).
 
 Geometry: ``svgelements.Path`` (an independent pure-Python SVG library) interprets
-relative commands, ``H``/``V``, the reflections of ``S``/``T`` and ``Z``. Its arcs are
+relative commands, ``H``/``V``, the reflections of ``S``/``T`` and ``Z``. Two of its
+readings differ from SVG and are corrected here: it reflects control points across
+command families (an ``S`` after a ``Q``), and it stops at a number with a trailing dot
+(``2.``) that ends a command's arguments, so it is given ``2.0`` instead. Its arcs are
 compared by what SVG 2's implementation notes define: an arc whose ends coincide draws
 nothing, one with a zero radius is a line, any other is a chain of cubics from its
 start to its end whose points lie on the ellipse (radii scaled up when too small to
@@ -169,7 +172,7 @@ def _reference_subpaths(d: str) -> list[dict]:
     arcs = iter(reference_arcs(d))
     subpaths: list[dict] = []
     current: dict | None = None
-    for segment in Path(d):
+    for segment in Path(_for_svgelements(d)):
         if isinstance(segment, Move):
             current = {"start": _point(segment.end), "closed": False, "items": []}
             subpaths.append(current)
@@ -204,6 +207,26 @@ def _reference_subpaths(d: str) -> list[dict]:
         else:
             raise AssertionError(f"svgelements: unexpected segment {segment!r}")
     return subpaths
+
+
+def _for_svgelements(d: str) -> str:
+    """Return valid path data `d` with ``0`` after each number's trailing dot.
+
+    svgelements stops reading, silently, at a number such as ``2.`` that ends its
+    command's arguments (``"L1 2.M5 5"`` loses the moveto), though SVG's grammar allows
+    the form. Each number is atomic, so the added digit changes no other token.
+    """
+    match = PATH.fullmatch(d)
+    assert match is not None
+    out, last = [], 0
+    for start, end in match.spans("n"):
+        text = d[start:end]
+        mantissa = regex.match(r"[+-]?[0-9]+\.(?![0-9])", text)
+        if mantissa:
+            out.append(d[last:start + mantissa.end()] + "0")
+            last = start + mantissa.end()
+    out.append(d[last:])
+    return "".join(out)
 
 
 def _reflection(previous: tuple, degree: int, current: tuple) -> tuple:

@@ -319,6 +319,19 @@ def _check_arc(cubics: list[np.ndarray], start, end, numbers, tolerance: float,
                                      f"{along:.6g} is outside the sweep {delta:.6g}")
 
 
+def _tolerance(*points) -> float:
+    """Return the rounding both readers may differ by near `points`: 1e-12 of their size.
+
+    Local, not the path's: a path may hold 1e120 and 6 (``"M0 1e120 L6 6 A..."``).
+    """
+    return 1e-12 * max(1.0, float(np.abs(np.asarray(points, dtype=np.float64)).max()))
+
+
+def _near(a, b) -> bool:
+    """Return whether two points (or point lists) agree within `_tolerance`."""
+    return bool(np.allclose(a, b, rtol=0, atol=_tolerance(a, b)))
+
+
 def _compare_geometry(d: str, paths) -> None:
     """Compare the one path of `paths` (rnsca) with svgelements' reading of `d`."""
     expected = _reference_subpaths(d)
@@ -327,12 +340,9 @@ def _compare_geometry(d: str, paths) -> None:
     where = f"path {d!r}"
     assert len(expected) == len(closed), (
         f"{where}: {len(closed)} subpaths, svgelements {len(expected)}")
-    scale = max([1.0] + [abs(v) for v in controls.ravel().tolist()]
-                + [abs(v) for v in starts.ravel().tolist()])
-    tolerance = 1e-12 * scale
     for s, subpath in enumerate(expected):
         here = f"{where}, subpath {s}"
-        assert np.allclose(starts[s], subpath["start"], rtol=0, atol=tolerance), (
+        assert _near(starts[s], subpath["start"]), (
             f"{here}: starts at {starts[s].tolist()}, svgelements {subpath['start']}")
         assert bool(closed[s]) == subpath["closed"], f"{here}: closed {closed[s]}"
         ours = [controls[k, :degree[k] + 1] for k in range(offsets[s], offsets[s + 1])]
@@ -349,14 +359,13 @@ def _compare_geometry(d: str, paths) -> None:
                     while k < len(ours) and len(ours[k]) == 4:
                         cubics.append(ours[k])
                         k += 1
-                        if np.allclose(ours[k - 1][-1], end, rtol=0, atol=tolerance):
+                        if _near(ours[k - 1][-1], end):
                             break
-                    _check_arc(cubics, start, end, numbers, tolerance, here)
+                    _check_arc(cubics, start, end, numbers, _tolerance(start, end), here)
                     continue
             assert k < len(ours), f"{here}: missing segment {item}"
             got = ours[k]
-            assert len(got) == item[0] + 1 and np.allclose(
-                got, item[1], rtol=0, atol=tolerance), (
+            assert len(got) == item[0] + 1 and _near(got, item[1]), (
                 f"{here}, segment {k}: {got.tolist()}, svgelements degree {item[0]} "
                 f"{item[1]}")
             k += 1

@@ -288,7 +288,10 @@ def _check_arc(cubics: list[np.ndarray], start, end, numbers, tolerance: float,
     assert cubics, f"{where}: an arc drew no segment"
     assert np.allclose(cubics[0][0], start, rtol=0, atol=tolerance), f"{where}: arc start"
     assert np.allclose(cubics[-1][-1], end, rtol=0, atol=tolerance), f"{where}: arc end"
-    cx, cy, rx, ry, cos, sin, theta1, delta = _ellipse(start, end, numbers)
+    try:
+        cx, cy, rx, ry, cos, sin, theta1, delta = _ellipse(start, end, numbers)
+    except (OverflowError, ZeroDivisionError):
+        return   # the notes' formulas square the radii: beyond about 1e77 they overflow
     if not all(map(math.isfinite, (cx, cy, rx, ry, theta1, delta))) or min(rx, ry) < TINY:
         return
     # Radial error allowed: rnsca's cubics stay within 1e-9 * max(rx, ry) of the

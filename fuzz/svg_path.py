@@ -42,6 +42,9 @@ Where the references cannot judge
   reflections past float64's range, arcs whose squared radii overflow), and its
   geometry is not compared; nor is it with a non-zero magnitude below `TINY` (squares
   underflow in both readers' arc maths).
+- Arcs whose ellipse the reference's own floating-point formulas cannot place: radii
+  beyond about 1e77 (their squares overflow) or more than 1e6 times one another (the
+  coordinates cannot resolve the minor radius); only their ends are checked.
 """
 
 from __future__ import annotations
@@ -257,9 +260,13 @@ def _ellipse(start, end, numbers):
     x1, y1 = cos * dx + sin * dy, -sin * dx + cos * dy
     scale = (x1 / rx) ** 2 + (y1 / ry) ** 2
     if scale > 1:
+        # F.6.6.3: radii scaled up to just reach; the centre is then the chord's midpoint
+        # (the formula below would give it only up to cancellation in its numerator).
         rx, ry = rx * math.sqrt(scale), ry * math.sqrt(scale)
-    numerator = max(0.0, (rx * ry) ** 2 - (rx * y1) ** 2 - (ry * x1) ** 2)
-    root = math.sqrt(numerator / ((rx * y1) ** 2 + (ry * x1) ** 2))
+        root = 0.0
+    else:
+        numerator = max(0.0, (rx * ry) ** 2 - (rx * y1) ** 2 - (ry * x1) ** 2)
+        root = math.sqrt(numerator / ((rx * y1) ** 2 + (ry * x1) ** 2))
     if large_arc == sweep:
         root = -root
     cx1, cy1 = root * rx * y1 / ry, -root * ry * x1 / rx
@@ -293,6 +300,10 @@ def _check_arc(cubics: list[np.ndarray], start, end, numbers, tolerance: float,
     except (OverflowError, ZeroDivisionError):
         return   # the notes' formulas square the radii: beyond about 1e77 they overflow
     if not all(map(math.isfinite, (cx, cy, rx, ry, theta1, delta))) or min(rx, ry) < TINY:
+        return
+    if max(rx, ry) > 1e6 * min(rx, ry):
+        # A thin ellipse: float64 coordinates of the size of the major radius cannot
+        # resolve the minor one, so no point of it is "on" it to a radial test.
         return
     # Radial error allowed: rnsca's cubics stay within 1e-9 * max(rx, ry) of the
     # ellipse; rounding of the centre adds eps-sized multiples of the coordinates.

@@ -346,6 +346,23 @@ def _near(a, b) -> bool:
     return bool(np.allclose(a, b, rtol=0, atol=_tolerance(a, b)))
 
 
+def _arc_end(ours: list, k: int, end) -> int:
+    """Return the index of the cubic that ends the arc whose first cubic is ``ours[k]``.
+
+    rnsca ends an arc's last cubic at the arc's end exactly: the first cubic from `k`
+    that ends there. Failing that (the readers added a relative end differently), the
+    first that ends near it (`_near`); `k` if the run of cubics has neither.
+    """
+    run = k
+    while run < len(ours) and len(ours[run]) == 4:
+        run += 1
+    for test in (lambda p: tuple(p) == tuple(end), lambda p: _near(p, end)):
+        for j in range(k, run):
+            if test(ours[j][-1]):
+                return j
+    return k
+
+
 def _compare_geometry(d: str, paths) -> None:
     """Compare the one path of `paths` (rnsca) with svgelements' reading of `d`."""
     expected = _reference_subpaths(d)
@@ -369,12 +386,9 @@ def _compare_geometry(d: str, paths) -> None:
                 if numbers[0] == 0 or numbers[1] == 0:
                     item = (1, [start, end])  # a line
                 else:
-                    cubics = []
-                    while k < len(ours) and len(ours[k]) == 4:
-                        cubics.append(ours[k])
-                        k += 1
-                        if _near(ours[k - 1][-1], end):
-                            break
+                    last = _arc_end(ours, k, end)
+                    cubics = ours[k:last + 1]
+                    k = last + 1
                     _check_arc(cubics, start, end, numbers, _tolerance(start, end), here)
                     continue
             assert k < len(ours), f"{here}: missing segment {item}"

@@ -7,7 +7,7 @@ SERVE_STAMP := $(VENV)/.installed-service
 HOST ?= 127.0.0.1
 PORT ?= 8000
 
-.PHONY: serve test check bench paper compare soak lint clean
+.PHONY: serve test check bench paper compare soak lint fuzz clean
 
 # The client SDK (clients/python, package rnsca-client) is installed beside rnsca so that
 # `make test` tests it against live servers.
@@ -51,6 +51,14 @@ test: $(STAMP) lint
 	$(PY) -m pytest -n 2 -q
 	NUMBA_DISABLE_JIT=1 $(PY) -m pytest -n 2 -q tests/unit -k "not slow"
 
+# Coverage-guided fuzzing (atheris) of the SVG path reader, the SVG document reader, the
+# GeoJSON reader with its MessagePack decoder, and the binary segment endpoint, each for
+# FUZZ_SECONDS in its own process with Numba's bounds checks on (fuzz/README.md). Exits
+# non-zero on any crash, hang (over 1 s per input) or disagreement with a reference.
+FUZZ_SECONDS ?= 600
+fuzz: $(STAMP)
+	$(PY) -m fuzz.run --seconds $(FUZZ_SECONDS)
+
 bench: $(STAMP)
 	$(PY) -m benchmarks.run
 
@@ -74,4 +82,4 @@ soak: $(STAMP)
 	$(PY) -m benchmarks.soak --minutes $(MINUTES)
 
 clean:
-	rm -rf $(VENV) .pytest_cache .hypothesis .ruff_cache .mypy_cache .import_linter_cache
+	rm -rf $(VENV) .fuzz .pytest_cache .hypothesis .ruff_cache .mypy_cache .import_linter_cache

@@ -47,7 +47,8 @@ def unit_scale(window: Window, *arrays: np.ndarray) -> float:
         return 1.0
     largest = max([abs(b) for b in window.bounds]
                   + [float(np.abs(a).max(initial=0.0)) for a in arrays])
-    exponent = max(exponent, math.frexp(largest)[1] - 1000)
+    # At most 2**1000: a subnormal window would need 2**1074, not a float64.
+    exponent = max(exponent, math.frexp(largest)[1] - 1000, -1000)
     return math.ldexp(1.0, -exponent)
 
 

@@ -454,18 +454,26 @@ def _arc_pieces(rx, ry, delta, tolerance):
     """Return how many cubic pieces keep the arc within `tolerance` (each <= 90 degrees).
 
     The cubics approximate the unit circle within `arc_error` of the piece angle; the
-    affine map to the ellipse stretches distances by at most max(rx, ry).
+    affine map to the ellipse stretches distances by at most max(rx, ry). The test is
+    made on the unit circle, against the tolerance relative to that radius: so it holds
+    for radii whose absolute tolerance would underflow (1e-320) or that overflowed when
+    scaled up to reach the end (infinite: then the arc's points do too, and the caller
+    reports them), and the count stays bounded (found by fuzzing: both gave counts
+    beyond any array, or no end).
     """
     radius = max(rx, ry)
-    tol = tolerance.absolute if tolerance.absolute > 0.0 else tolerance.relative * radius
-    tol = max(tol, _MIN_RELATIVE_TOLERANCE * radius)
+    if tolerance.absolute > 0.0:
+        relative = tolerance.absolute / radius    # 0 for an infinite radius
+    else:
+        relative = tolerance.relative
+    relative = max(relative, _MIN_RELATIVE_TOLERANCE)
     sweep = abs(delta)
     n = max(1, int(math.ceil(sweep / _QUARTER)))
     # arc_error(a) <= a**6 / 47198 for a <= 90 degrees, so this n is nearly right;
     # the loop corrects the estimate upwards.
-    estimate = int(math.ceil(sweep / (47198.0 * tol / radius) ** (1.0 / 6.0)))
+    estimate = int(math.ceil(sweep / (47198.0 * relative) ** (1.0 / 6.0)))
     n = max(n, estimate - 1)
-    while radius * arc_error(sweep / n) > tol:
+    while arc_error(sweep / n) > relative:
         n += 1
     return n
 

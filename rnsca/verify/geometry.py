@@ -44,6 +44,10 @@ EXACT_RELATIVE_TOLERANCE = 1e-9
 # GEOS computes wrong intersections from about 1e+-110 on; windows up to 2**300 (1e90)
 # are compared unscaled.
 _LARGEST_UNSCALED_EXPONENT = 300
+# Tiny windows are scaled up by at most 2**1000: 2**1074 would bring a subnormal window
+# to 1, but no float64 is that large (found by fuzzing: OverflowError, or inf for
+# geometries).
+_LARGEST_SCALE_EXPONENT = 1000
 
 _POINT, _LINESTRING, _LINEARRING, _POLYGON = (
     int(shapely.GeometryType.POINT), int(shapely.GeometryType.LINESTRING),
@@ -406,13 +410,15 @@ def _unit_scale(window: Window, segments: np.ndarray) -> float:
     1 to 2**300 are left alone. Larger ones are scaled down the same way (there,
     coordinates below 2**-1074 of the new unit flush to zero, which is why it is not
     done where it is not needed). The scale is made smaller if needed so that no scaled
-    coordinate exceeds about 2**1000.
+    coordinate exceeds about 2**1000, and is at most 2**`_LARGEST_SCALE_EXPONENT` (a
+    float64: a window of subnormal size becomes about 2**-74, still far from where GEOS
+    fails).
     """
     exponent = math.frexp(window.size)[1]
     if 0 < exponent <= _LARGEST_UNSCALED_EXPONENT:
         return 1.0
     largest = max(float(np.abs(segments).max(initial=0.0)), *map(abs, window.bounds))
-    exponent = max(exponent, math.frexp(largest)[1] - 1000)
+    exponent = max(exponent, math.frexp(largest)[1] - 1000, -_LARGEST_SCALE_EXPONENT)
     return math.ldexp(1.0, -exponent)
 
 
@@ -773,7 +779,8 @@ def _unit_scales(bounds: np.ndarray, originals: np.ndarray, delivered: np.ndarra
     """Return, per input, the power of two by which Shapely should see it.
 
     The rule of `_unit_scale`: windows from 1 to 2**300 are left alone, smaller and
-    larger ones scaled to a size in [0.5, 1), less if a coordinate would exceed 2**1000.
+    larger ones scaled to a size in [0.5, 1), less if a coordinate would exceed 2**1000,
+    and by at most 2**`_LARGEST_SCALE_EXPONENT`.
     """
     sizes = np.maximum(bounds[:, 2] - bounds[:, 0], bounds[:, 3] - bounds[:, 1])
     exponents = np.frexp(sizes)[1].astype(np.int64)
@@ -785,7 +792,8 @@ def _unit_scales(bounds: np.ndarray, originals: np.ndarray, delivered: np.ndarra
             for geoms, owner in ((originals, np.arange(bounds.shape[0])), (delivered, source)):
                 extent = np.nan_to_num(np.abs(shapely.bounds(geoms)), nan=0.0, posinf=0.0)
                 np.maximum.at(largest, owner, extent.max(axis=1, initial=0.0))
-        exponents = np.maximum(exponents, np.frexp(largest)[1] - 1000)
+        exponents = np.maximum(np.maximum(exponents, np.frexp(largest)[1] - 1000),
+                               -_LARGEST_SCALE_EXPONENT)
         scales[scaled] = np.ldexp(1.0, -exponents[scaled])
     return scales
 

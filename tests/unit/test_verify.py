@@ -121,6 +121,18 @@ def test_verify_works_at_magnitudes_where_geos_alone_fails(window, segs):
     assert v.passed and v.ratio == pytest.approx(1.0) and v.max_deviation <= v.allowed_deviation
 
 
+@pytest.mark.parametrize("window, segs", [
+    ((0.0, 0.0, 5e-324, 5e-324), [[-1e-323, 0.0, 1e-323, 5e-324]]),
+    ((-1e-320, -1e-320, 1e-320, 1e-320), [[-2e-320, 0.0, 2e-320, 5e-321]]),
+])
+def test_verify_works_for_windows_of_subnormal_size(window, segs):
+    # Found by fuzzing the segment endpoint: the power of two that would bring such a
+    # window to size 1 is beyond float64 (OverflowError).
+    r = clip_segments(segs, window)
+    v = verify(segs, r, window)
+    assert v.passed and v.max_deviation == 0.0
+
+
 def test_verify_detects_a_wrong_piece_at_1e300():
     window = (-1e300, -1e300, 1e300, 1e300)
     segs = [[-2e300, 0.0, 2e300, 0.0]]

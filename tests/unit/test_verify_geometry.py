@@ -392,3 +392,12 @@ def test_to_dict_is_json_ready_with_the_geometry_fields():
     d = json.loads(json.dumps(v.to_dict()))
     assert d["valid"] is True and d["invalid_inputs"] == 0 and d["passed"] is False
     assert d["max_deviation"] == 2.0
+
+
+def test_verify_works_for_a_window_of_subnormal_size():
+    # Found by fuzzing: the power of two that would bring such a window to size 1 is
+    # beyond float64 (infinite coordinates for Shapely).
+    window = (0.0, 0.0, 5e-324, 5e-324)
+    line = shapely.LineString([(-1e-323, 0.0), (1e-323, 5e-324)])
+    v = verify(line, shapely.LineString([(0.0, 0.0), (5e-324, 5e-324)]), window)
+    assert v.passed and v.max_deviation == 0.0

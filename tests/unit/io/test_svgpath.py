@@ -327,6 +327,21 @@ def test_arc_radii_too_small_are_scaled_up_to_reach_the_end():
     assert np.round(p.controls[:, 3], 12).tolist() == [[2, -1], [4, 0]]
 
 
+def test_arc_of_subnormal_radii_is_a_few_cubics_on_its_circle():
+    # Found by fuzzing: the absolute tolerance (4 ulps of the radius) underflowed to 0,
+    # so the piece count had no end (a count beyond any array).
+    p = parse_path("M0 0 A1e-320 1e-320 0 0 1 1e-320 0")
+    assert 1 <= len(p.degree) <= 8 and (p.degree == 3).all()
+    assert p.controls[-1, 3].tolist() == [1e-320, 0.0]
+
+
+def test_arc_whose_scaled_radius_overflows_is_an_invalid_geometry():
+    # Found by fuzzing: ry = 1e-100 must grow by 4e100 to reach the end, and rx = 1e300
+    # with it: the half ellipse reaches x = 4e400. Was a piece count beyond any array.
+    with pytest.raises(InvalidGeometryError, match="finite"):
+        parse_path("M0 0 A1e300 1e-100 0 0 1 6 6")
+
+
 def test_arc_negative_radii_count_as_positive():
     assert parse_path("M0 0A-3 -2 0 0 1 4 1") == parse_path("M0 0A3 2 0 0 1 4 1")
 

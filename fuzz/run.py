@@ -101,7 +101,9 @@ def _child(target: str, flags: list[str]) -> None:
         except Exception:   # noqa: BLE001 -- libFuzzer runs it again and reports it
             pass
     print(f"fuzz.run: {target} set up in {time.perf_counter() - started:.1f} s", flush=True)
-    atheris.Setup([sys.argv[0], *flags], _keeping_findings(target, module.test_one_input))
+    # libFuzzer reruns argv[0] for -merge=1: the wrapper `_run_child` wrote.
+    atheris.Setup([str(_wrapper(target)), *flags],
+                  _keeping_findings(target, module.test_one_input))
     atheris.Fuzz()
 
 
@@ -124,12 +126,25 @@ def _keeping_findings(target: str, test_one_input):
     return test
 
 
+def _wrapper(target: str) -> Path:
+    """Return the path of the script that starts a child process of `target`."""
+    return WORK / "bin" / target
+
+
 def _run_child(target: str, arguments: list[str], log: Path) -> int:
-    """Run `target` in a new process with libFuzzer `arguments`; return its status."""
+    """Run `target` in a new process with libFuzzer `arguments`; return its status.
+
+    The process is started through a small script (`_wrapper`), which libFuzzer also
+    runs for the inner processes of a merge (it reruns its own ``argv[0]``).
+    """
     (WORK / "findings" / target).mkdir(parents=True, exist_ok=True)
     log.parent.mkdir(parents=True, exist_ok=True)
-    command = [sys.executable, "-m", "fuzz.run", "--child", target, "--", *arguments,
-               *libfuzzer_flags(target, _max_len(target))]
+    wrapper = _wrapper(target)
+    wrapper.parent.mkdir(parents=True, exist_ok=True)
+    wrapper.write_text(f'#!/bin/sh\nexec "{sys.executable}" -m fuzz.run --child {target} '
+                       f'-- "$@"\n')
+    wrapper.chmod(0o755)
+    command = [str(wrapper), *arguments, *libfuzzer_flags(target, _max_len(target))]
     with log.open("w") as out:
         out.write(" ".join(command) + "\n")
         out.flush()
@@ -235,8 +250,8 @@ def merge(targets: list[str]) -> int:
         with tempfile.TemporaryDirectory() as merged:
             status = _run_child(target, ["-merge=1", merged, str(committed), str(found)],
                                 WORK / "logs" / f"{target}-merge.log")
-            if status != 0:
-                print(f"fuzz.run: merging {target} failed (status {status})")
+            if status != 0 or not any(Path(merged).iterdir()):
+                print(f"fuzz.run: merging {target} failed (status {status}); corpus kept")
                 return 1
             shutil.rmtree(committed)
             shutil.copytree(merged, committed)

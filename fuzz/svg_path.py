@@ -72,8 +72,10 @@ TINY = 2.0 ** -500
 
 # --------------------------------------------------------------------------- grammar
 
+# Every repetition is possessive (never gives back what it matched): the grammar never
+# needs to, and with backtracking partial matching took seconds on long paths.
 _WSP = r"[\t\n\f\r ]"
-_SEP = rf"(?:{_WSP}+,?{_WSP}*|,{_WSP}*)?"   # comma_wsp?
+_SEP = rf"(?:{_WSP}++,?+{_WSP}*+|,{_WSP}*+)?+"   # comma_wsp?
 # Atomic: a number is read greedily and never given back ("12" is not "1" then "2").
 _NUM = r"(?P<n>(?>[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?))"
 _FLAG = r"(?P<f>[01])"
@@ -86,7 +88,7 @@ def _items(*fields: str) -> str:
 
 def _sequence(item: str) -> str:
     """Return the pattern of one or more groups (implicit repetition of a command)."""
-    return rf"{item}(?:{_SEP}{item})*"
+    return rf"{item}(?:{_SEP}{item})*+"
 
 
 _PAIR = _items(_NUM, _NUM)
@@ -97,11 +99,12 @@ _ARGUMENTS = {
     "Aa": _sequence(_items(_NUM, _NUM, _NUM, _FLAG, _FLAG, _PAIR)),
 }
 _DRAWTO = "|".join([r"(?P<c>[Zz])"] + [
-    rf"(?P<c>[{letters}]){_WSP}*{arguments}"
+    rf"(?P<c>[{letters}]){_WSP}*+{arguments}"
     for letters, arguments in _ARGUMENTS.items() if letters != "Mm"])
-_MOVETO = rf"(?P<c>[Mm]){_WSP}*{_ARGUMENTS['Mm']}"
+_MOVETO = rf"(?P<c>[Mm]){_WSP}*+{_ARGUMENTS['Mm']}"
 #: A whole path: empty or whitespace only, or a moveto and any commands after it.
-PATH = regex.compile(rf"{_WSP}*(?:{_MOVETO}(?:{_WSP}*(?:{_MOVETO}|{_DRAWTO}))*{_WSP}*)?")
+PATH = regex.compile(
+    rf"{_WSP}*+(?:{_MOVETO}(?:{_WSP}*+(?:{_MOVETO}|{_DRAWTO}))*+{_WSP}*+)?+")
 
 _GROUP_SIZE = {"M": 2, "L": 2, "T": 2, "H": 1, "V": 1, "S": 4, "Q": 4, "C": 6, "A": 7,
                "Z": 0}

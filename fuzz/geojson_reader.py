@@ -40,7 +40,7 @@ import ormsgpack
 
 from rnsca.errors import InvalidGeometryError, ParseError
 from rnsca.io.geojson import GEOMETRY_TYPES, MAX_COLLECTION_DEPTH, from_geojson
-from rnsca.io.msgpack_decode import MIXED, PLAIN, REFUSED, read_positions
+from rnsca.io.msgpack_decode import HAS_Z, MIXED, PARTIAL_Z, PLAIN, REFUSED, read_positions
 
 __all__ = ["MAX_LEN", "setup", "test_one_input", "reference_layout", "reference_positions"]
 
@@ -187,11 +187,10 @@ class _Walk:
                 finite = False
             if not finite:
                 raise Refused(f"{path}[{i}]")
+        # A document may mix 2D and 3D positions: each keeps its own (numbers after the
+        # third dropped); `reference_layout` reads a document with any 3D one as 3D.
         dim = 2 if len(position) == 2 else 3
-        if self.dim is None:
-            self.dim = dim
-        elif dim != self.dim:
-            raise Refused(path)
+        self.dim = max(self.dim or 2, dim)
         return [float(value) for value in position[:dim]]
 
 
@@ -219,6 +218,8 @@ def reference_layout(doc) -> tuple[bool, list[tuple]]:
 
         for geometry in geometries:
             add(geometry, depth - 1)
+        # A 2D position of a 3D document: Z unknown (NaN), as rnsca reads it.
+        coords = [c + [math.nan] * (dim - len(c)) for c in coords]
         array = np.array(coords, dtype=np.float64).reshape(-1, dim)
         return array, tuple(np.array(level, dtype=np.int64) for level in levels)
 
@@ -228,7 +229,7 @@ def reference_layout(doc) -> tuple[bool, list[tuple]]:
 
 def _same(a: np.ndarray, b: np.ndarray) -> bool:
     """Return whether two float arrays are equal bit for bit (the sign of zero too)."""
-    return a.shape == b.shape and np.array_equal(a, b) and np.array_equal(
+    return a.shape == b.shape and np.array_equal(a, b, equal_nan=True) and np.array_equal(
         np.signbit(a), np.signbit(b))
 
 
@@ -326,12 +327,14 @@ def reference_positions(data: bytes, sizes: list[int], dim: int):
             return None
         flag = True
         for position in array:
-            if not isinstance(position, list) or len(position) < dim or (
-                    dim == 2 and len(position) > 2):
+            if not isinstance(position, list) or len(position) < 2:
                 return None
             if any(isinstance(n, list) or not math.isfinite(n[0]) for n in position):
                 return None
-            positions.append([n[0] for n in position[:dim]])
+            # 2D: a position of 3 or more numbers means "read again in 3D" (HAS_Z); 3D:
+            # one of 2 numbers gets Z NaN.
+            numbers = [n[0] for n in position[:dim]]
+            positions.append(numbers + [math.nan] * (dim - len(numbers)))
             flag &= len(position) == dim and all(n[1] for n in position)
         plain.append(flag)
     return positions, plain
@@ -366,6 +369,18 @@ def _check_messagepack(data: bytes) -> None:
     plain = np.zeros(len(sizes), dtype=bool)
     result = read_positions(np.frombuffer(body, dtype=np.uint8),
                             np.array(sizes, dtype=np.int64), out, plain)
+    if result == HAS_Z:
+        # 2D met a position of 3 or more numbers: the reader reads it all again in 3D.
+        assert dim == 2, "HAS_Z in 3D"
+        has_long = any(isinstance(p, list) and len(p) >= 3
+                       for a in (decoded if mine is not None else []) if isinstance(a, list)
+                       for p in a)
+        assert mine is None or has_long, "HAS_Z without a position of 3 numbers"
+        dim = 3
+        expected = reference_positions(body, sizes, dim)
+        out = np.full((sum(sizes), dim), np.nan)
+        result = read_positions(np.frombuffer(body, dtype=np.uint8),
+                                np.array(sizes, dtype=np.int64), out, plain)
     if expected is None:
         assert result == REFUSED, f"read_positions read what the reference refuses: {result}"
         return
@@ -374,7 +389,8 @@ def _check_messagepack(data: bytes) -> None:
     assert _same(out, np.array(positions, dtype=np.float64).reshape(-1, dim)), (
         f"positions {out.tolist()} != {positions}")
     assert plain.tolist() == flags, f"plain {plain.tolist()} != {flags}"
-    assert result == (PLAIN if all(flags) else MIXED), result
+    partial = any(math.isnan(p[-1]) for p in positions) if dim == 3 else False
+    assert result == (PARTIAL_Z if partial else PLAIN if all(flags) else MIXED), result
 
 
 def _equal_values(a, b) -> bool:

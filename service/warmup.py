@@ -82,9 +82,9 @@ def _requests(kind: str) -> None:
             convert.clip_segments_binary(np.array([[-1.0, 0.5, 2.0, 0.5]]).tobytes(),
                                          Window(*window), ClipOptions(), verify, settings)
         elif kind == "geojson":
-            for z in ([], [0.5]):
+            for document in (_collection([]), _collection([0.5]), _mixed_collection()):
                 body = orjson.dumps({"window": window, "verify": verify,
-                                     "geojson": _collection(z)})
+                                     "geojson": document})
                 convert.clip_geojson(body, settings)
                 slices.parse_sliced(body)  # large bodies' scan, whatever this one's size
         else:
@@ -117,14 +117,16 @@ def _polygons() -> None:
     warm_up_polygons(get_backend(Backend.NUMBA))
 
 
-def _geojson() -> None:
-    """Clip small FeatureCollections (2D, 3D, mixed): the reader's and writer's kernels."""
-    for z in ([], [0.0]):
-        rnsca.clip_geojson(_collection(z), (0.0, 0.0, 1.0, 1.0))
+def _mixed_collection() -> dict:
+    """Return `_collection` in 3D with a 2D line added (a document mixing both)."""
     mixed = _collection([0.0])
     mixed["features"].append({"type": "Feature", "properties": {}, "geometry": {
         "type": "LineString", "coordinates": [[-1.0, 0.5], [2.0, 0.5]]}})
-    rnsca.clip_geojson(mixed, (0.0, 0.0, 1.0, 1.0))
+    return mixed
+
+
+def _geojson() -> None:
+    """Answer small GeoJSON requests (2D, 3D, mixed): the reader's and writer's kernels."""
     _requests("geojson")
 
 

@@ -21,7 +21,14 @@ import os
 import threading
 import time
 from collections.abc import Callable, Mapping, Sequence
-from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor, as_completed
+from concurrent.futures import (
+    FIRST_COMPLETED,
+    Future,
+    ProcessPoolExecutor,
+    ThreadPoolExecutor,
+    wait,
+)
+from concurrent.futures import TimeoutError as FutureTimeout
 from contextlib import nullcontext
 from typing import Any, TypeVar
 
@@ -88,25 +95,33 @@ class ClipRunner:
                 processes: int = 0) -> None:
         """Run each warm-up step; serve each endpoint of `endpoints` once its steps are done.
 
-        Runs in a pool thread at start-up. The first step runs here; if it shows the
-        kernel cache is cold (`service.warmup.COLD_SECONDS`), the others are compiled in
-        up to `processes` child processes and each is loaded here as its child finishes
-        (see `service.warmup`). Then settles how calls may overlap, and sets `ready`.
+        Runs in a pool thread at start-up. The first step runs in a thread of its own; if
+        it is not done within `service.warmup.COLD_SECONDS`, the kernel cache is cold, and
+        the other steps are compiled meanwhile in up to `processes` child processes, each
+        loaded here as its child finishes (see `service.warmup`). Then settles how calls
+        may overlap, and sets `ready`.
         """
         started = time.perf_counter()
         self._endpoint_steps = {name: set(needs) for name, needs in endpoints.items()}
         self._serve_ready_endpoints()
         pending = list(steps)
         if pending:
-            first = pending.pop(0)
-            seconds = self._run_step(first)
-            cold = seconds > COLD_SECONDS and not _jit_disabled()
-            if cold and processes > 0 and pending:
-                _log.info("the kernel cache is cold: compiling in child processes",
-                          extra={"fields": {"processes": min(processes, len(pending)),
-                                            "steps": [s.name for s in pending]}})
-                self._compile_in_children(pending, processes)
-                pending = []
+            with ThreadPoolExecutor(1, thread_name_prefix="rnsca-warm-up") as alone:
+                first = alone.submit(self._run_step, pending.pop(0))
+                try:
+                    first.result(timeout=COLD_SECONDS)
+                    cold = False
+                except FutureTimeout:  # still compiling (or waiting for another worker)
+                    cold = not _jit_disabled()
+                if cold and processes > 0 and pending:
+                    # The children start now, beside the first step: on a cold start the
+                    # other cores would otherwise idle through it (measured: 17 s).
+                    _log.info("the kernel cache is cold: compiling in child processes",
+                              extra={"fields": {"processes": min(processes, len(pending)),
+                                                "steps": [s.name for s in pending]}})
+                    self._compile_in_children(pending, processes, first)
+                    pending = []
+                first.result()
         for step in pending:
             self._run_step(step)
         self.settle()
@@ -152,18 +167,51 @@ class ClipRunner:
         # cache is cold for this worker too.
         return seconds + waited
 
-    def _compile_in_children(self, steps: Sequence[Step], processes: int) -> None:
-        """Compile `steps` in child processes; load each here as soon as its child is done."""
+    def _compile_in_children(self, steps: Sequence[Step], processes: int,
+                             first: Future) -> None:
+        """Compile `steps` in child processes; load each here as soon as its child is done.
+
+        At most `processes` children run at once, each on the first of `steps` (in order)
+        whose `needs` are compiled: a child never sits waiting for another's lock while a
+        step it could compile is left. Loading waits for `first` (the step running here),
+        so one step at a time is run and recorded in this process.
+        """
+        names = {step.name for step in steps}
+        compiled = {need for step in steps for need in step.needs if need not in names}
+        waiting = list(steps)
+        running: dict[Future, Step] = {}
+        finished_steps: list[Step] = []
         context = multiprocessing.get_context("spawn")
         with ProcessPoolExecutor(max_workers=min(processes, len(steps)),
                                  mp_context=context) as pool:
-            futures = {pool.submit(compile_step, step.name): step for step in steps}
-            for future in as_completed(futures):
-                if (error := future.exception()) is not None:  # compiled here instead
-                    _log.warning("compiling in a child process failed",
-                                 extra={"fields": {"step": futures[future].name,
-                                                   "error": repr(error)}})
-                self._run_step(futures[future])
+
+            def start_ready() -> None:
+                while waiting and len(running) < processes:
+                    ready = next((s for s in waiting if set(s.needs) <= compiled), None)
+                    if ready is None:
+                        return
+                    waiting.remove(ready)
+                    running[pool.submit(compile_step, ready.name)] = ready
+
+            start_ready()
+            while running:
+                done, _ = wait([*running, *([] if first.done() else [first])],
+                               return_when=FIRST_COMPLETED)
+                for future in done - {first}:
+                    step = running.pop(future)
+                    if (error := future.exception()) is not None:  # compiled here instead
+                        _log.warning("compiling in a child process failed",
+                                     extra={"fields": {"step": step.name,
+                                                       "error": repr(error)}})
+                    compiled.add(step.name)
+                    finished_steps.append(step)
+                start_ready()
+                if first.done():
+                    while finished_steps:
+                        self._run_step(finished_steps.pop(0))
+            wait([first])
+            for step in finished_steps:
+                self._run_step(step)
 
     def _serve_ready_endpoints(self) -> None:
         for name, needs in self._endpoint_steps.items():

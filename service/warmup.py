@@ -6,13 +6,16 @@ but link it again), and a warm one loads everything from Numba's disk cache in s
 So warm-up is a list of steps (`Step`), and each endpoint is served as soon as the steps it
 needs are done (`ENDPOINT_STEPS`): segments first, the cheapest.
 
-When the first step shows the cache is cold (it took longer than `COLD_SECONDS`), the
-remaining steps are compiled in child processes, one per core (`compile_step`), each
-writing Numba's disk cache; this process then loads each step as its child finishes.
+When the first step is not done within `COLD_SECONDS`, the cache is cold: the remaining
+steps are then compiled meanwhile in child processes, one per core (`compile_step`),
+each writing Numba's disk cache; this process loads each step as its child finishes.
 Compiling is single-threaded (Numba holds one compiler lock per process), so this is
-how a cold start uses more than one core. Each step is compiled under a file lock
-(`step_lock`): the workers of ``rnsca serve --workers N`` share the cache, and a step one
-of them compiles is loaded, not compiled again, by the others.
+how a cold start uses more than one core. The steps share a few small kernels (the
+segment clips the line clip's baselines call), which two processes may then both
+compile: seconds, against the 17 s the other core would otherwise idle through the
+first step. Each step is compiled under a file lock (`step_lock`): the workers of
+``rnsca serve --workers N`` share the cache, and a step one of them compiles is
+loaded, not compiled again, by the others.
 """
 
 from __future__ import annotations
@@ -43,7 +46,7 @@ from rnsca.runtime import configure_process
 __all__ = ["COLD_SECONDS", "ENDPOINT_STEPS", "STEPS", "Step", "compile_step", "step_lock",
            "steps_for"]
 
-#: A first step that takes longer than this (seconds) means the kernel cache is cold.
+#: A first step not done within this many seconds means the kernel cache is cold.
 COLD_SECONDS = 3.0
 
 
@@ -145,11 +148,12 @@ def _opencl() -> None:
 
 
 #: Every step, in the order they are done: segments first (the cheapest, so the first
-#: endpoint is served soonest), the OpenCL backend last (no endpoint waits for it).
-STEPS = (Step("segments", _segments), Step("lines", _lines, ("segments",)),
-         Step("polygons", _polygons, ("segments",)),
-         Step("geojson", _geojson, ("lines", "polygons")),
-         Step("svg", _svg, ("segments",)), Step("opencl", _opencl))
+#: endpoint is served soonest), the OpenCL backend last (no endpoint waits for it). On a
+#: cold start the child processes take them in this order too, a step once the steps it
+#: `needs` are compiled (`ClipRunner.warm_up`).
+STEPS = (Step("segments", _segments), Step("lines", _lines), Step("polygons", _polygons),
+         Step("geojson", _geojson, ("lines", "polygons")), Step("svg", _svg),
+         Step("opencl", _opencl))
 
 #: The steps each clipping endpoint waits for (by the name `ClipRunner.run` is given).
 ENDPOINT_STEPS = {"segments": ("segments",), "geojson": ("lines", "polygons", "geojson"),

@@ -541,9 +541,9 @@ def write(kind, with_moveto, subpath_offsets, closed, path_offsets, seg_value_of
     no_out = np.empty(0, dtype=np.uint8)
     sizes = np.zeros(n + 1, dtype=np.int64)
     for p in prange(n):
-        sizes[p + 1] = _write_path(p, False, no_out, 0, layout)
+        sizes[p + 1] = _write_path(np.int64(p), False, no_out, 0, layout)
     bounds = np.cumsum(sizes)
     out = np.empty(bounds[n], dtype=np.uint8)
     for p in prange(n):
-        _write_path(p, True, out, bounds[p], layout)
+        _write_path(np.int64(p), True, out, bounds[p], layout)
     return out, bounds

@@ -36,16 +36,58 @@ and calls such a helper only to split a walk's loops and for the ring-by-ring fa
 ``borrowing`` functions would count references again, silently slower, or
 ``allocating`` ones fail to compile under a ``borrowing`` caller).
 
+Every preset compiles one specialisation per argument *type*, not per constant: a call
+from another kernel with a constant argument (``f(..., False, ...)``) would by default
+compile a separate copy for each constant value (Numba types a constant as a literal),
+and the service's cold start paid for each (measured: the line clip's core compiled
+three times, 10 s each, on this 2-core machine). `_OneSpecialisation` unliterals the
+argument types of such calls. A kernel that needs a literal (dead branches pruned by a
+constant, a tuple indexed by one) cannot be written with these presets; none is.
+
+Where a hot function's flags should fold away, ``borrowing_per_constant`` keeps Numba's
+default: the line clip's core (`polylines.clip_chains`), called with ``write`` and
+``break_at_boundary`` constant by the line clip and by the polygon clip, one copy each
+(with one copy taking them as arguments, the lines benchmark was 5-9% slower in three
+`benchmarks.compare` runs; a cold start compiles the two copies in two processes at once
+anyway). Inlining it into two wrappers instead cost 15-19 s of compiling per copy
+against 9-10 s. A small hot helper is ``inlined`` instead (`midpoint._search`).
+
 Nothing here changes the process: how idle OpenMP threads wait is the application's
 choice (`rnsca.runtime.prefer_passive_openmp_wait`).
 """
 
 import numba
+from numba.core import types
+from numba.core.registry import CPUDispatcher
 
-__all__ = ["scalar", "parallel", "borrowing", "inlined", "allocating"]
+__all__ = ["scalar", "parallel", "borrowing", "borrowing_per_constant", "inlined",
+           "allocating"]
 
-scalar = numba.njit(cache=True, nogil=True, error_model="numpy")
-parallel = numba.njit(cache=True, nogil=True, parallel=True, error_model="numpy")
-borrowing = numba.njit(cache=True, nogil=True, error_model="numpy", _nrt=False)
-inlined = numba.njit(cache=True, nogil=True, error_model="numpy", inline="always")
-allocating = numba.njit(cache=True, nogil=True, error_model="numpy", _nrt=True)
+
+class _OneSpecialisation(CPUDispatcher):
+    """A CPU dispatcher that compiles calls from other kernels for unliteral types."""
+
+    def get_call_template(self, args, kws):
+        args = tuple(types.unliteral(a) for a in args)
+        kws = {k: types.unliteral(v) for k, v in kws.items()}
+        return super().get_call_template(args, kws)
+
+
+def _preset(**options):
+    decorate = numba.njit(cache=True, nogil=True, error_model="numpy", **options)
+
+    def preset(function):
+        dispatcher = decorate(function)
+        if type(dispatcher) is CPUDispatcher:  # not under NUMBA_DISABLE_JIT
+            dispatcher.__class__ = _OneSpecialisation
+        return dispatcher
+
+    return preset
+
+
+scalar = _preset()
+parallel = _preset(parallel=True)
+borrowing = _preset(_nrt=False)
+inlined = _preset(inline="always")
+allocating = _preset(_nrt=True)
+borrowing_per_constant = numba.njit(cache=True, nogil=True, error_model="numpy", _nrt=False)

@@ -30,7 +30,7 @@ from rnsca.kernels.outcode import (
 from rnsca.kernels.records import Fragment
 
 
-@scalar
+@inlined  # into each `_piece_end`, itself inlined: `toward_end` folds (see `_piece_end`)
 def _search(x0, y0, x1, y1, c0, c1, length, toward_end, window, options, st):
     """Return (bracket, level): the final bracket of one search, a `Fragment`, and its depth.
 
@@ -150,7 +150,9 @@ def _piece_end(x0, y0, x1, y1, c0, c1, length, toward_end, window, options, st):
     The end itself (P1, or P0) when its outcode (`c1`, or `c0`) is zero; else the end
     that `_search` brackets and `_leaf` decides. Not `ok` when that leaf holds nothing
     visible. The other parameters are those of `midpoint_segment` and `_search`.
-    Inlined, so each call site searches with `toward_end` a constant, as written out.
+    Inlined, and `_search` into it, so each call site searches with `toward_end` a
+    constant, as written out (a compiled `_search` called with it as an argument: 13%
+    slower on the approx benchmark, `benchmarks.compare`).
     """
     if toward_end and c1 == 0:
         return True, 1.0, x1, y1

@@ -793,9 +793,10 @@ def _cut_rings(line, ring_offsets, r_begin, r_end, cut, options, decisions, scra
         else:
             # Rings are short: their runs are coded from the vertices, and their chains
             # written as decided (no chunk codes, no plan).
+            # The positions as int64, never literals: one copy of `clip_chains` for rings.
             v_ch, c_ch, at_first, at_last, _ = clip_chains(
-                line, first, last, cut, True, options, chains, True, v_ch, c_ch, scratch.block,
-                scratch.no_plan)
+                line, first, last, cut, True, options, chains, True, np.int64(v_ch),
+                np.int64(c_ch), scratch.block, scratch.no_plan)
         starts[c_ch] = v_ch
         n_chains = c_ch - c0
         if last > first and area == 0.0:
@@ -1254,8 +1255,9 @@ def clip_polygon_blocks(line, polygons, options, block_size, plan, counts, out, 
     the caller's).
     """
     for blk in prange(counters.shape[0]):
-        _polygon_block(blk, line, polygons, options, block_size, plan, counts, out, counters,
-                       decisions)
+        # int64, as the serial driver passes it: one specialisation of the block, not two
+        _polygon_block(np.int64(blk), line, polygons, options, block_size, plan, counts, out,
+                       counters, decisions)
 
 
 @scalar

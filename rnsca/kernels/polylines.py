@@ -52,7 +52,7 @@ from rnsca.constants import (
     RUN_STACK_CAPACITY,
 )
 from rnsca.kernels import counters as C
-from rnsca.kernels.jit import borrowing, inlined, parallel, scalar
+from rnsca.kernels.jit import borrowing, borrowing_per_constant, inlined, parallel, scalar
 from rnsca.kernels.outcode import outcode
 from rnsca.kernels.records import Window, window_of
 from rnsca.kernels.segments import (
@@ -559,7 +559,7 @@ def _vertex_run_codes(xy, a, b, window, strict):
     return any_, every
 
 
-@borrowing
+@borrowing_per_constant  # each caller's flags fold away (see `rnsca.kernels.jit`)
 def clip_chains(line, first, last, cut, break_at_boundary, options, out, write, v, c, block,
                 part):
     """Clip the line through vertices ``line.xy[first..last]`` into chains.
@@ -786,7 +786,8 @@ def _line_pass(block_size, line, lines, options, drop_edge_runs, write, chunks, 
                counters):
     """Run `_line_block` over every block, one prange iteration each."""
     for blk in prange(counters.shape[0]):
-        _line_block(blk, block_size, line, lines, options, drop_edge_runs, write, chunks,
+        # int64, as the serial pass passes it: one specialisation of the block, not two
+        _line_block(np.int64(blk), block_size, line, lines, options, drop_edge_runs, write, chunks,
                     counts, out, counters)
 
 
@@ -958,7 +959,7 @@ def assemble_line_blocks(line, part_offsets, windows, part_window, drop_edge_run
     n_parts = part_offsets.shape[0] - 1
     n_blocks = -(-n_parts // block_size)
     for blk in prange(n_blocks):
-        _assemble_block(blk, line, part_offsets, windows, part_window, drop_edge_runs,
+        _assemble_block(np.int64(blk), line, part_offsets, windows, part_window, drop_edge_runs,
                         block_size, write, decisions, counts, out)
 
 

@@ -546,7 +546,8 @@ def clip_segment_blocks(segments, window, options, block_size, n_chunks, out):
     out : SegmentOutput
     """
     for chunk in prange(n_chunks):
-        _clip_chunk(chunk, n_chunks, segments, window, options, block_size, out)
+        # int64, as the serial driver passes it: one specialisation, not two
+        _clip_chunk(np.int64(chunk), n_chunks, segments, window, options, block_size, out)
 
 
 @scalar

@@ -31,3 +31,17 @@ def test_allocating_functions_allocate_under_a_borrowing_caller():
     zeros = jit.allocating(lambda n: np.zeros(n).shape[0])
     caller = jit.borrowing(lambda n: zeros(n) + 1)
     assert caller(3) == 4
+
+
+@pytest.mark.skipif(numba.config.DISABLE_JIT, reason="the presets are plain Python then")
+@pytest.mark.parametrize("preset", ["scalar", "borrowing", "allocating"])
+def test_constants_passed_by_kernels_share_one_specialisation(preset):
+    # Numba types a constant argument as a literal and, by default, compiles a callee
+    # once per constant value: the line clip's core was compiled three times in a cold
+    # start. The presets compile one specialisation per argument type.
+    step = getattr(jit, preset)(lambda forward, x, k: x + k if forward else x - k)
+    caller = jit.scalar(lambda x: step(True, x, 1) * 10 + step(False, x, 2))
+    assert caller(5) == 63
+    assert len(step.overloads) == 1
+    (signature,) = step.overloads
+    assert signature == (numba.types.boolean, numba.types.int64, numba.types.int64)

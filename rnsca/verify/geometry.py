@@ -866,8 +866,11 @@ def _expected_parts(parts: np.ndarray, index: np.ndarray, bounds: np.ndarray, di
         if invalid.any():
             parts = parts.copy()
             parts[invalid] = shapely.make_valid(parts[invalid])
-    if dim == 1 and boundary is Boundary.INTERIOR:
-        # clip_by_rect takes one rectangle per call.
+    if dim == 1 and boundary is Boundary.CLOSED:
+        return _clip_lines_by_segment(parts, index, bounds)
+    if dim == 1:
+        # clip_by_rect takes one rectangle per call. It walks each line once (GEOS's
+        # RectangleIntersection): no noding, so a self-crossing line costs no more.
         clipped = np.empty(parts.shape[0], dtype=object)
         clipped[:] = [shapely.clip_by_rect(part, *rect)
                       for part, rect in zip(parts, bounds[index], strict=True)]
@@ -876,6 +879,75 @@ def _expected_parts(parts: np.ndarray, index: np.ndarray, bounds: np.ndarray, di
     pieces, piece_index = _atomic_parts(clipped)
     keep = _dimensions(pieces) == dim
     return _grouped(pieces[keep], index[piece_index[keep]])
+
+
+def _clip_lines_by_segment(parts: np.ndarray, index: np.ndarray,
+                           bounds: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Return Shapely's intersection of line parts with their windows, taken segment by segment.
+
+    ``intersection(line, box)`` nodes the line with itself (GEOS's overlay), so a line
+    that crosses itself k times costs time and memory in k, up to n**2 / 2 for n
+    vertices: measured, 5.6 s and 700 MB for one line of 2,000 random vertices, whose
+    answer has 830,000 parts. The intersection of each segment with the box is the same
+    point set, and a segment cannot cross itself. A segment with both ends in the closed
+    window lies in it whole (the window is convex) and one with both ends beyond the same
+    edge lies outside: only the others are asked of GEOS, which keeps an end inside the
+    window exactly. Pieces that meet end to start are joined again, so that a correct
+    clip compares equal as a whole. Returns the lines, grouped by input index.
+    """
+    coords, part = shapely.get_coordinates(parts, return_index=True)
+    # A repeated vertex makes a segment of no length (the overlay drops it too).
+    repeated = np.zeros(coords.shape[0], dtype=bool)
+    repeated[1:] = (part[1:] == part[:-1]) & (coords[1:] == coords[:-1]).all(axis=1)
+    coords, part = coords[~repeated], part[~repeated]
+    first = np.flatnonzero(part[1:] == part[:-1])  # segment k runs from vertex first[k]
+    start, end, owner = coords[first], coords[first + 1], part[first]
+    xmin, ymin, xmax, ymax = bounds[index[owner]].T
+
+    def inside(p: np.ndarray) -> np.ndarray:
+        return (p[:, 0] >= xmin) & (p[:, 0] <= xmax) & (p[:, 1] >= ymin) & (p[:, 1] <= ymax)
+
+    whole = inside(start) & inside(end)
+    beyond = (((start[:, 0] < xmin) & (end[:, 0] < xmin))
+              | ((start[:, 0] > xmax) & (end[:, 0] > xmax))
+              | ((start[:, 1] < ymin) & (end[:, 1] < ymin))
+              | ((start[:, 1] > ymax) & (end[:, 1] > ymax)))
+    asked = np.flatnonzero(~whole & ~beyond)
+    kept = whole.copy()
+    piece_start, piece_end = start.copy(), end.copy()
+    if asked.size:
+        clipped = shapely.intersection(
+            shapely.linestrings(np.stack([start[asked], end[asked]], axis=1)),
+            shapely.box(xmin[asked], ymin[asked], xmax[asked], ymax[asked]))
+        # A segment meets the convex window in one segment, a point (no piece) or nothing.
+        line = ((shapely.get_type_id(clipped) == _LINESTRING)
+                & (shapely.get_num_coordinates(clipped) >= 2))
+        xy = shapely.get_coordinates(clipped[line]).reshape(-1, 2, 2)
+        rows = asked[line]
+        # In the segment's direction, for the joining below.
+        backwards = ((xy[:, 1] - xy[:, 0]) * (end[rows] - start[rows])).sum(axis=1) < 0
+        xy[backwards] = xy[backwards, ::-1]
+        piece_start[rows], piece_end[rows] = xy[:, 0], xy[:, 1]
+        kept[rows] = True
+    k = np.flatnonzero(kept)
+    piece_start, piece_end, owner = piece_start[k], piece_end[k], owner[k]
+    # A new line where the previous piece is of another part, of a segment not next to
+    # this one, or ends elsewhere than this one starts.
+    opens = np.ones(k.shape[0], dtype=bool)
+    opens[1:] = ((owner[1:] != owner[:-1]) | (k[1:] != k[:-1] + 1)
+                 | (piece_start[1:] != piece_end[:-1]).any(axis=1))
+    # Each line is its first piece's start, then every piece's end.
+    end_at = np.arange(k.shape[0]) + np.cumsum(opens)
+    vertices = np.empty((end_at[-1] + 1 if k.size else 0, 2))
+    line_of = np.empty(vertices.shape[0], dtype=np.int64)
+    line_id = np.cumsum(opens) - 1
+    vertices[end_at] = piece_end
+    vertices[end_at[opens] - 1] = piece_start[opens]
+    line_of[end_at] = line_id
+    line_of[end_at[opens] - 1] = line_id[opens]
+    lines = shapely.linestrings(vertices, indices=line_of) if k.size \
+        else np.empty(0, dtype=object)
+    return _grouped(np.asarray(lines, dtype=object), index[owner[opens]])
 
 
 def _collect(parts: np.ndarray, index: np.ndarray, count: int, dim: int) -> np.ndarray:

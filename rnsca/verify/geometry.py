@@ -13,7 +13,6 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable
 from dataclasses import asdict, dataclass, replace
-from functools import cached_property
 from typing import Any, TypeAlias, cast
 
 import numpy as np
@@ -34,6 +33,7 @@ from rnsca.errors import (
 from rnsca.io.svgpath import parse_paths
 from rnsca.options import Boundary, Method, Mode
 from rnsca.ragged import RaggedClipResult, to_shapely
+from rnsca.verify.hausdorff import hausdorff
 from rnsca.verify.paths import paths_to_shapely
 from rnsca.window import Window, WindowTable
 
@@ -993,7 +993,7 @@ def _deviation(a: np.ndarray, b: np.ndarray, dim: int, sizes: np.ndarray) -> np.
         if dim == 2:
             # Between the boundaries, as GEOS measures polygons.
             measured_a, measured_b = shapely.boundary(measured_a), shapely.boundary(measured_b)
-        deviation[both] = _hausdorff(measured_a, measured_b, dim > 0,
+        deviation[both] = hausdorff(measured_a, measured_b, dim > 0,
                                      EXACT_RELATIVE_TOLERANCE * sizes[both])
     alone = has_a ^ has_b
     if alone.any():
@@ -1001,205 +1001,6 @@ def _deviation(a: np.ndarray, b: np.ndarray, dim: int, sizes: np.ndarray) -> np.
         extent = np.hypot(box[:, 2] - box[:, 0], box[:, 3] - box[:, 1])
         deviation[alone] = np.where(extent > 0, extent, sizes[alone])
     return deviation
-
-
-def _hausdorff(a: np.ndarray, b: np.ndarray, lineal: bool, radius: np.ndarray) -> np.ndarray:
-    """Return the Hausdorff distance between aligned point sets or (multi)line strings.
-
-    GEOS's discrete Hausdorff distance measures only from vertices, so it misses a gap
-    inside a straight stretch (two pieces with a hole between them against one piece:
-    every vertex of each lies on the other). Lines are therefore also sampled midway
-    between consecutive positions along them of their own vertices and of the points
-    where the other side's vertices project, which finds such a gap's middle exactly.
-    A stretch between the projections of the two ends of one segment of the other side
-    needs no sample: each of its points is within the larger of the two ends' distances
-    of that segment. Nearest segments come from exact vertex matches first (a clip
-    copies most vertices), then from a spatial index searched within `radius` of each
-    point (where a correct clip puts every vertex), then in growing circles.
-    """
-    deviation = np.zeros(a.shape[0])
-    with np.errstate(invalid="ignore"):  # a NaN output vertex gives a NaN deviation
-        sides = _Linework(a), _Linework(b)
-        for source, target in (sides, sides[::-1]):
-            _directed_hausdorff(source, target, lineal, radius, deviation)
-    return deviation
-
-
-def _directed_hausdorff(source: _Linework, target: _Linework, lineal: bool,
-                        radius: np.ndarray, deviation: np.ndarray) -> None:
-    """Raise `deviation` to the distances from points of `source` to `target`, per owner."""
-    owner = source.vertex_owner
-    distance, segment, position = target.nearest(source.vertices, owner, radius[owner])
-    np.maximum.at(deviation, owner, distance)
-    if not lineal or not owner.size:
-        return
-    # Stretches of the target between the projections of a source segment's ends
-    # (on one part of the target: positions at a part's end and at the next one's
-    # start are equal, the points are not).
-    joined = np.flatnonzero(source.joined)
-    part = target.part[segment[joined]]
-    same = part == target.part[segment[joined + 1]]
-    spanned = _interval_keys(part[same], position[joined[same]],
-                             position[joined[same] + 1])
-    # Positions along the target: its vertices, and where the source's project.
-    along = np.concatenate([target.vertex_along, position])
-    segment = np.concatenate([target.vertex_segment, segment])
-    owner = np.concatenate([target.vertex_owner, owner])
-    # Ties sorted by segment: a stretch then starts in the segment of its lower end.
-    order = np.lexsort((segment, along, owner))
-    along, segment, owner = along[order], segment[order], owner[order]
-    gap = (owner[1:] == owner[:-1]) & (along[1:] > along[:-1])
-    middle = 0.5 * (along[1:] + along[:-1])[gap]
-    holder = target.segment_at(segment[:-1][gap], middle)
-    sampled = ~np.isin(_interval_keys(target.part[holder], along[:-1][gap],
-                                      along[1:][gap]), spanned)
-    if sampled.any():
-        owner = owner[1:][gap][sampled]
-        samples = target.point_at(holder[sampled], middle[sampled])
-        distance, _, _ = source.nearest(samples, owner, radius[owner])
-        np.maximum.at(deviation, owner, distance)
-
-
-def _keys(group: np.ndarray, first: np.ndarray, second: np.ndarray) -> np.ndarray:
-    """Return (group, first, second) rows as opaque values that compare by their bytes."""
-    rows = np.empty(group.shape[0], dtype=[("group", "<i8"), ("first", "<f8"),
-                                           ("second", "<f8")])
-    rows["group"] = group
-    rows["first"] = first + 0.0  # -0.0 becomes 0.0: equal values, equal bytes
-    rows["second"] = second + 0.0
-    return rows.view("V24")
-
-
-def _interval_keys(group: np.ndarray, one: np.ndarray, other: np.ndarray) -> np.ndarray:
-    return _keys(group, np.minimum(one, other), np.maximum(one, other))
-
-
-class _Linework:
-    """The segments of an array of point sets or (multi)line strings, spatially indexed.
-
-    Consecutive vertices of a part make a segment; a part of one vertex (a point) is a
-    segment of zero length. ``along`` positions run along each geometry's parts in
-    order, restarting at 0 for each geometry.
-    """
-
-    def __init__(self, geometries: np.ndarray) -> None:
-        parts, part_owner = shapely.get_parts(geometries, return_index=True)
-        coords, part = shapely.get_coordinates(parts, return_index=True)
-        count = coords.shape[0]
-        owner = part_owner[part]
-        joined = np.zeros(count, dtype=bool)  # vertex k and k + 1 are in the same part
-        joined[:-1] = part[1:] == part[:-1]
-        single = ~joined & np.r_[True, ~joined[:-1]]  # a part of one vertex
-        step = np.zeros(count)
-        step[1:] = np.where(joined[:-1], np.hypot(*(coords[1:] - coords[:-1]).T), 0.0)
-        along = np.cumsum(step)
-        first = np.r_[True, owner[1:] != owner[:-1]] if count else np.zeros(0, dtype=bool)
-        along -= np.maximum.accumulate(np.where(first, along, 0.0))
-
-        starts = np.flatnonzero(joined | single)
-        ends = np.where(joined[starts], starts + 1, starts)
-        self.vertices, self.vertex_owner, self.vertex_along = coords, owner, along
-        self.joined = joined
-        self.starts = starts
-        self.start, self.end = coords[starts], coords[ends]
-        self.owner = owner[starts]
-        self.part = part[starts]
-        self.along = along[starts]
-        self.length = along[ends] - along[starts]
-        # The segment a vertex starts, or for a part's last vertex the one it ends.
-        self.vertex_segment = np.searchsorted(starts, np.arange(count), side="right") - 1
-        self.box = shapely.bounds(geometries)
-
-    @cached_property
-    def tree(self) -> shapely.STRtree:
-        """Return a spatial index of the segments (built when a point is not a vertex)."""
-        return shapely.STRtree(shapely.linestrings(np.stack([self.start, self.end], 1)))
-
-    def nearest(self, points: np.ndarray, owner: np.ndarray,
-                radius: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Return, per point, the distance to its owner's segments, the nearest and where.
-
-        Returns ``(distance, segment, along)``: the nearest point to ``points[i]`` lies on
-        ``segment[i]`` at position ``along[i]``. A non-finite point gets a NaN distance.
-        """
-        count = points.shape[0]
-        distance = np.full(count, np.nan)
-        segment = np.zeros(count, dtype=np.int64)
-        along = np.zeros(count)
-        # A point equal to one of its owner's vertices is on it.
-        keys = _keys(owner, points[:, 0], points[:, 1])
-        mine = _keys(self.vertex_owner, self.vertices[:, 0], self.vertices[:, 1])
-        unique, inverse = np.unique(np.concatenate([mine, keys]), return_inverse=True)
-        vertex_of = np.full(unique.shape[0], -1)
-        vertex_of[inverse[:mine.shape[0]]] = np.arange(mine.shape[0])
-        vertex = vertex_of[inverse[mine.shape[0]:]]
-        on_vertex = vertex >= 0
-        distance[on_vertex] = 0.0
-        segment[on_vertex] = self.vertex_segment[vertex[on_vertex]]
-        along[on_vertex] = self.vertex_along[vertex[on_vertex]]
-
-        # The farthest corner of the owner's bounding box: every segment lies within it.
-        box = self.box[owner]
-        reach = np.hypot(np.maximum(np.abs(points[:, 0] - box[:, 0]),
-                                    np.abs(points[:, 0] - box[:, 2])),
-                         np.maximum(np.abs(points[:, 1] - box[:, 1]),
-                                    np.abs(points[:, 1] - box[:, 3])))
-        reach = reach * (1 + 1e-9) + np.finfo(float).tiny
-        todo = np.flatnonzero(~on_vertex & np.isfinite(points).all(axis=1))
-        radius = np.minimum(np.maximum(radius, np.finfo(float).tiny), reach)
-        geometries = shapely.points(points[todo])
-        where = np.full(count, -1)
-        where[todo] = np.arange(todo.shape[0])
-        while todo.size:
-            last = radius[todo] >= reach[todo]
-            hit, seg = self.tree.query(geometries[where[todo]], predicate="dwithin",
-                                       distance=radius[todo])
-            point = todo[hit]
-            keep = self.owner[seg] == owner[point]
-            point, seg = point[keep], seg[keep]
-            d, t = _point_segment(points[point], self.start[seg], self.end[seg])
-            order = np.lexsort((d, point))
-            best = order[np.r_[True, point[order][1:] != point[order][:-1]]] if order.size \
-                else order
-            point, seg = point[best], seg[best]
-            distance[point], segment[point] = d[best], seg
-            along[point] = self.along[seg] + t[best] * self.length[seg]
-            # A point not found within its owner's reach has no segment to be near.
-            todo = todo[np.isnan(distance[todo]) & ~last]
-            radius[todo] = np.minimum(radius[todo] * 16.0, reach[todo])
-        return distance, segment, along
-
-    def segment_at(self, segment: np.ndarray, along: np.ndarray) -> np.ndarray:
-        """Return the segment holding each position `along`, searching on from `segment`."""
-        segment = segment.copy()
-        last = self.start.shape[0] - 1
-        while True:
-            nxt = np.minimum(segment + 1, last)
-            beyond = ((along > self.along[segment] + self.length[segment]) & (segment < last)
-                      & (self.owner[nxt] == self.owner[segment]))
-            if not beyond.any():
-                return segment
-            segment[beyond] += 1
-
-    def point_at(self, segment: np.ndarray, along: np.ndarray) -> np.ndarray:
-        """Return the points at positions `along`, each on the given segment."""
-        length = self.length[segment]
-        with np.errstate(invalid="ignore", divide="ignore"):
-            t = np.where(length > 0, (along - self.along[segment]) / length, 0.0)
-        t = np.clip(t, 0.0, 1.0)[:, None]
-        return self.start[segment] + t * (self.end[segment] - self.start[segment])
-
-
-def _point_segment(points: np.ndarray, start: np.ndarray,
-                   end: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Return the distance from each point to its segment, and the nearest point's t."""
-    direction = end - start
-    squared = (direction ** 2).sum(axis=1)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        t = np.where(squared > 0, ((points - start) * direction).sum(axis=1) / squared, 0.0)
-    t = np.clip(t, 0.0, 1.0)
-    nearest = start + t[:, None] * direction
-    return np.hypot(*(points - nearest).T), t
 
 
 def _count_outside(parts_and_piece: tuple[np.ndarray, np.ndarray], source: np.ndarray,

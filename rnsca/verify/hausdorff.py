@@ -7,6 +7,7 @@ nearest segments in NumPy from a spatial index.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from functools import cached_property
 
 import numpy as np
@@ -22,7 +23,8 @@ _FIRST_QUERY = 1 << 10
 _LARGEST_QUERY = 1 << 16
 
 
-def hausdorff(a: np.ndarray, b: np.ndarray, lineal: bool, radius: np.ndarray) -> np.ndarray:
+def hausdorff(a: np.ndarray, b: np.ndarray, lineal: bool, radius: np.ndarray,
+              check_time: Callable[[], None] | None = None) -> np.ndarray:
     """Return the Hausdorff distance between aligned point sets or (multi)line strings.
 
     GEOS's discrete Hausdorff distance measures only from vertices, so it misses a gap
@@ -35,20 +37,24 @@ def hausdorff(a: np.ndarray, b: np.ndarray, lineal: bool, radius: np.ndarray) ->
     of that segment. Nearest segments come from exact vertex matches first (a clip
     copies most vertices), then from a spatial index searched within `radius` of each
     point (where a correct clip puts every vertex), then in growing circles.
+    `check_time`, if given, is called before each search of the index: what it raises
+    ends the measurement (a time limit).
     """
     deviation = np.zeros(a.shape[0])
     with np.errstate(invalid="ignore"):  # a NaN output vertex gives a NaN deviation
         sides = _Linework(a), _Linework(b)
         for source, target in (sides, sides[::-1]):
-            _directed_hausdorff(source, target, lineal, radius, deviation)
+            _directed_hausdorff(source, target, lineal, radius, deviation, check_time)
     return deviation
 
 
 def _directed_hausdorff(source: _Linework, target: _Linework, lineal: bool,
-                        radius: np.ndarray, deviation: np.ndarray) -> None:
+                        radius: np.ndarray, deviation: np.ndarray,
+                        check_time: Callable[[], None] | None) -> None:
     """Raise `deviation` to the distances from points of `source` to `target`, per owner."""
     owner = source.vertex_owner
-    distance, segment, position = target.nearest(source.vertices, owner, radius[owner])
+    distance, segment, position = target.nearest(source.vertices, owner, radius[owner],
+                                                 check_time)
     np.maximum.at(deviation, owner, distance)
     if not lineal or not owner.size:
         return
@@ -75,7 +81,7 @@ def _directed_hausdorff(source: _Linework, target: _Linework, lineal: bool,
     if sampled.any():
         owner = owner[1:][gap][sampled]
         samples = target.point_at(holder[sampled], middle[sampled])
-        distance, _, _ = source.nearest(samples, owner, radius[owner])
+        distance, _, _ = source.nearest(samples, owner, radius[owner], check_time)
         np.maximum.at(deviation, owner, distance)
 
 
@@ -169,8 +175,9 @@ class _Linework:
         boxes[~np.isfinite(np.column_stack([lo, hi])).all(axis=1)] = None
         return boxes
 
-    def nearest(self, points: np.ndarray, owner: np.ndarray,
-                radius: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def nearest(self, points: np.ndarray, owner: np.ndarray, radius: np.ndarray,
+                check_time: Callable[[], None] | None = None,
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Return, per point, the distance to its owner's segments, the nearest and where.
 
         Returns ``(distance, segment, along)``: the nearest point to ``points[i]`` lies on
@@ -205,6 +212,8 @@ class _Linework:
         radius = np.minimum(np.maximum(radius, np.finfo(float).tiny), reach)
         size = _FIRST_QUERY
         while todo.size:
+            if check_time is not None:
+                check_time()
             batch, todo = todo[:size], todo[size:]
             # Every segment within the radius has its box in the point's (widened by the
             # rounding of its corners): if one is found there, the nearest is among them.

@@ -153,18 +153,16 @@ _COST = _VerificationCost()
 
 def _verify_within_budget(kind: str, asked: bool | str | None, clip_seconds: float,
                           inputs: int, vertices: int, settings: Settings,
-                          deadline: float | None,
+                          deadline: float,
                           call: Callable[..., Verification]) -> Verification:
     """Return ``call(sample=, time_limit=, max_crossings=)`` (a `rnsca.verify`).
 
     On all inputs or the sample the budget allows, stopping in time to write the answer
-    before `deadline` (a `time.monotonic` value; None: the request's time limit from
-    now), and skipping what GEOS would take too long to node.
+    before `deadline` (a `time.monotonic` value), and skipping what GEOS would take too
+    long to node.
     """
     sample = _COST.sample(kind, asked, clip_seconds, inputs, vertices,
                           settings.verify_cost_ratio)
-    if deadline is None:
-        deadline = time.monotonic() + settings.request_time_limit
     time_limit = deadline - time.monotonic() - _ANSWER_SHARE * settings.request_time_limit
     started = time.perf_counter()
     verification = call(sample=sample, time_limit=max(time_limit, 0.0),
@@ -172,6 +170,11 @@ def _verify_within_budget(kind: str, asked: bool | str | None, clip_seconds: flo
     _COST.observe(kind, time.perf_counter() - started,
                   vertices * verification.checked // max(inputs, 1))
     return verification
+
+
+def _due(deadline: float | None, settings: Settings) -> float:
+    """Return `deadline`, or for a call without one the request's time limit from now."""
+    return time.monotonic() + settings.request_time_limit if deadline is None else deadline
 
 
 def _dict_or_none(value):
@@ -183,6 +186,7 @@ def _dict_or_none(value):
 
 def clip_geojson(body: bytes, settings: Settings, deadline: float | None = None) -> Outcome:
     """Answer ``POST /v1/clip/geojson`` by `deadline` (`time.monotonic`; see `clip_svg`)."""
+    deadline = _due(deadline, settings)
     request = parse_geojson_request(body)  # a large body a slice of features at a time
     window = Window(*request.window)
     options = request.options
@@ -236,7 +240,7 @@ def clip_geojson(body: bytes, settings: Settings, deadline: float | None = None)
 
 
 def _clip_segments(array: np.ndarray, window: Window, options: ClipOptions,
-                   verify: bool | str | None, settings: Settings, deadline: float | None,
+                   verify: bool | str | None, settings: Settings, deadline: float,
                    ) -> tuple[SegmentClipResult, Verification | None]:
     check_vertices(2 * array.shape[0], settings.max_vertices)
     arguments = _library_options(options, settings)
@@ -257,6 +261,7 @@ def _clip_segments(array: np.ndarray, window: Window, options: ClipOptions,
 def clip_segments_json(body: bytes, settings: Settings,
                        deadline: float | None = None) -> Outcome:
     """Answer ``POST /v1/clip/segments`` with a JSON body, by `deadline` (see `clip_svg`)."""
+    deadline = _due(deadline, settings)
     request = ClipSegmentsRequest.model_validate_json(body)
     window = Window(*request.window)
     array = np.array(request.segments, dtype=np.float64).reshape(-1, 4)
@@ -279,12 +284,12 @@ def clip_segments_binary(body: bytes, window: Window, options: ClipOptions,
                          deadline: float | None = None) -> Outcome:
     """Answer ``POST /v1/clip/segments`` with an ``application/octet-stream`` body.
 
-    By `deadline` (see `clip_svg`).
     In: little-endian float64 rows ``x0, y0, x1, y1``. Out: the pieces as float64 rows
     of 4, then their source indices as int64, then their parameter intervals as float64
     rows of 2, all little-endian; the header ``X-Rnsca-Pieces`` gives the number m of
     pieces (so the parts are 32 m, 8 m and 16 m bytes), ``X-Rnsca-Stats`` and
-    ``X-Rnsca-Verification`` carry the stats and the verification as JSON.
+    ``X-Rnsca-Verification`` carry the stats and the verification as JSON. Answered by
+    `deadline` (see `clip_svg`).
     """
     if len(body) % SEGMENT_BYTES:
         raise InvalidBodyError(
@@ -292,7 +297,8 @@ def clip_segments_binary(body: bytes, window: Window, options: ClipOptions,
             "segments as rows of four little-endian float64 (x0, y0, x1, y1)")
     # A writable copy: a read-only array would make Numba compile another specialization.
     array = np.frombuffer(bytearray(body), dtype="<f8").reshape(-1, 4)
-    result, verification = _clip_segments(array, window, options, verify, settings, deadline)
+    result, verification = _clip_segments(array, window, options, verify, settings,
+                                           _due(deadline, settings))
     content = b"".join((result.segments.astype("<f8", copy=False).tobytes(),
                         result.source.astype("<i8", copy=False).tobytes(),
                         result.t.astype("<f8", copy=False).tobytes()))
@@ -336,8 +342,9 @@ def clip_svg(body: bytes, settings: Settings, deadline: float | None = None) -> 
     """Answer ``POST /v1/clip/svg``: parse once, budget, clip, write, verify the arrays.
 
     `deadline` is when the answer is due (a `time.monotonic` value; None: the request's
-    time limit from now): verification stops in time to write it.
+    time limit from the call): verification stops in time to write it.
     """
+    deadline = _due(deadline, settings)
     request = ClipSVGRequest.model_validate_json(body)
     window = Window(*request.window)
     arguments = _library_options(request.options, settings)

@@ -420,7 +420,7 @@ class _Coverage:
             f"random {chosen} of {self.inputs}, seed {self.seed}")
         notes = []
         if self.timed_out:
-            notes.append(f"stopped at the time limit of {self.time_limit:g} s: "
+            notes.append(f"stopped at the time limit of {self.time_limit:.3g} s: "
                          f"{chosen - self.compared - self.skipped} of the {chosen} inputs "
                          "chosen were not compared")
         if self.skipped:

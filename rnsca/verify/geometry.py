@@ -570,14 +570,14 @@ def _verify_paths(original: object, clipped: object, window: Window | Iterable[f
         delivered, delivered_crossings = paths_to_shapely(
             select_paths(delivered_paths, which), flat, rule, chooser.max_crossings)
         skipped = (originals == None) | (delivered == None)  # noqa: E711
-        kept = np.flatnonzero(~skipped)
+        built = np.flatnonzero(~skipped)
         compared = _Compared.blank(which.shape[0])
-        found = _compare_geometries(originals[kept], delivered[kept], np.arange(kept.shape[0]),
-                                    _window_bounds(window, kept.shape[0]), Mode.APPROX,
+        found = _compare_geometries(originals[built], delivered[built], np.arange(built.shape[0]),
+                                    _window_bounds(window, built.shape[0]), Mode.APPROX,
                                     allowed, Boundary.CLOSED, chooser)
         for f in fields(_Compared):
-            getattr(compared, f.name)[kept] = getattr(found, f.name)
-        # Too costly to flatten into a region, or (once a region) to make valid.
+            getattr(compared, f.name)[built] = getattr(found, f.name)
+        # Too costly to build a region of, or (once built) to make valid.
         compared.skipped |= skipped
         compared.crossings[:] = np.maximum(compared.crossings,
                                            np.maximum(crossings, delivered_crossings))

@@ -64,7 +64,14 @@ class Settings(BaseSettings):
     verify_cost_ratio: float = Field(1.0, gt=0)
     """Verification (``verify`` true or by default) may take this many times the clip's
     own time; past it a random sample of the inputs is compared, and the answer says so.
-    ``verify: "all"`` compares every input."""
+    ``verify: "all"`` compares every input, within the request's time limit: comparing
+    stops in time to answer (`request_time_limit`), and the answer says how many were
+    compared."""
+    verify_max_crossings: int = Field(1000, ge=0)
+    """An input whose comparison would make GEOS node an outline crossing itself more
+    than about this many times (an invalid polygon, a filled path) is not compared, and
+    the answer counts it in ``skipped``: GEOS cannot be interrupted, and its time grows
+    faster than the square of the crossings (``make_valid``: 0.3 s for 800)."""
     default_backend: Backend = Backend.NUMBA
     """Backend of requests that name none."""
     opencl_device: str | None = None

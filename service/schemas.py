@@ -107,8 +107,16 @@ _VERIFY = Field(None, description="Compare with Shapely's exact intersection. tr
                                   "clip, `verify_cost_ratio`); past it a random sample of "
                                   "the inputs is compared and `verification` says how many "
                                   "(`checked` of `inputs`, `sampling`); \"all\": every "
-                                  "input; false: none. Default: true for inputs of up to "
-                                  "the server's `verify_max_vertices`.")
+                                  "input, as far as the request's time limit allows: "
+                                  "comparing stops in time to answer, and `verification` "
+                                  "says so (`timed_out`, `checked`, `note`); false: none. "
+                                  "Either way an input GEOS would take too long to compare "
+                                  "(an outline crossing itself more than the server's "
+                                  "`verify_max_crossings` times) is counted in `skipped`, "
+                                  "and `passed` is null (no verdict) when some inputs were "
+                                  "not compared and none of those compared failed. "
+                                  "Default: true for inputs of up to the server's "
+                                  "`verify_max_vertices`.")
 
 
 def _stats_fields() -> dict[str, Any]:

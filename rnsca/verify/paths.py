@@ -13,15 +13,17 @@ import shapely
 
 from rnsca.arrays import PathArrays
 from rnsca.clip_svg import Fill, flatten_paths
+from rnsca.verify.cost import estimated_crossings
 
-__all__ = ["paths_to_shapely", "filled_region", "winding_numbers"]
+__all__ = ["paths_to_shapely", "select_paths", "filled_region", "winding_numbers"]
 
 # Points x edges evaluated at once by `winding_numbers` (memory bound for big inputs).
 _WINDING_CHUNK = 1 << 22
 
 
-def paths_to_shapely(paths: PathArrays, tolerance: float, fill: Fill | None) -> np.ndarray:
-    """Return one Shapely geometry per path: its strokes, or its filled region.
+def paths_to_shapely(paths: PathArrays, tolerance: float, fill: Fill | None,
+                     max_crossings: float | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Return one Shapely geometry per path (its strokes, or its filled region), and cost.
 
     Parameters
     ----------
@@ -31,8 +33,25 @@ def paths_to_shapely(paths: PathArrays, tolerance: float, fill: Fill | None) -> 
     fill : Fill or None
         None: each path as a MultiLineString of its subpaths (empty if none). A fill
         rule: the region painted under it, a (Multi)Polygon, every subpath closed.
+    max_crossings : float, optional
+        With a fill rule: a path whose flattened outlines cross one another more than
+        about this many times (`rnsca.verify.cost`) is not built; its geometry is None.
+
+    Returns
+    -------
+    geometries : ndarray of object, shape (n,)
+    crossings : ndarray of float64, shape (n,)
+        The estimated crossings of each path's outlines; 0 where not estimated (strokes,
+        or no `max_crossings`).
     """
     coords, line_offsets, line_path = flatten_paths(paths, tolerance, close=fill is not None)
+    crossings = np.zeros(len(paths))
+    if fill is not None and max_crossings is not None:
+        edge_path = np.repeat(line_path, np.diff(line_offsets) - 1)
+        ends = np.ones(coords.shape[0], dtype=bool)  # the last vertex of each polyline
+        ends[line_offsets[1:] - 1] = False
+        crossings = estimated_crossings(coords[ends], coords[np.roll(ends, 1)], edge_path,
+                                        len(paths))
     lines = np.empty(line_path.shape[0], dtype=object)
     for j in range(line_path.shape[0]):
         lines[j] = coords[line_offsets[j]:line_offsets[j + 1]]
@@ -42,9 +61,30 @@ def paths_to_shapely(paths: PathArrays, tolerance: float, fill: Fill | None) -> 
         if fill is None:
             out[i] = shapely.multilinestrings([shapely.linestrings(p) for p in parts]) \
                 if parts else shapely.MultiLineString()
-        else:
+        elif max_crossings is None or crossings[i] <= max_crossings:
             out[i] = filled_region(parts, fill)
-    return out
+    return out, crossings
+
+
+def select_paths(paths: PathArrays, rows: np.ndarray) -> PathArrays:
+    """Return paths `rows` (indices, in that order) of `paths` as a `PathArrays`."""
+    first, last = paths.path_offsets[rows], paths.path_offsets[rows + 1]
+    subpaths = _ranges(first, last)
+    segments = _ranges(paths.subpath_offsets[subpaths], paths.subpath_offsets[subpaths + 1])
+    # Copied from checked arrays: the layout holds by construction.
+    return PathArrays.from_kernel(
+        controls=paths.controls[segments], degree=paths.degree[segments],
+        subpath_offsets=np.concatenate([[0], np.cumsum(np.diff(paths.subpath_offsets)[subpaths])]),
+        closed=paths.closed[subpaths], start=paths.start[subpaths],
+        path_offsets=np.concatenate([[0], np.cumsum(last - first)]))
+
+
+def _ranges(first: np.ndarray, stop: np.ndarray) -> np.ndarray:
+    """Return ``first[0]..stop[0]-1, first[1]..stop[1]-1, ...`` concatenated (int64)."""
+    sizes = stop - first
+    offset = np.arange(int(sizes.sum()), dtype=np.int64) - np.repeat(np.cumsum(sizes) - sizes,
+                                                                      sizes)
+    return np.repeat(first, sizes).astype(np.int64) + offset
 
 
 def filled_region(rings: list[np.ndarray], fill: Fill) -> shapely.MultiPolygon:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import time
 from typing import Annotated, Any, Literal
 
 from fastapi import APIRouter, Query, Request
@@ -65,6 +66,11 @@ async def _read_json(request: Request, runner: ClipRunner) -> tuple[bytes, float
     return await runner.read_body(request)
 
 
+def _deadline(time_left: float) -> float:
+    """Return when the answer is due, as a `time.monotonic` value (for verification)."""
+    return time.monotonic() + time_left
+
+
 def _respond(outcome: convert.Outcome, metrics: Metrics) -> Response:
     if outcome.stats is not None:
         metrics.observe_clip(outcome.stats)
@@ -83,7 +89,8 @@ async def clip_geojson(request: Request, settings: SettingsDep, runner: RunnerDe
     """
     body, time_left = await _read_json(request, runner)
     return _respond(await runner.run(convert.clip_geojson, body, settings,
-                                     time_left=time_left, endpoint="geojson"), metrics)
+                                     _deadline(time_left), time_left=time_left,
+                                     endpoint="geojson"), metrics)
 
 
 @router.post("/svg", response_model=ClipSVGResponse,
@@ -93,8 +100,8 @@ async def clip_svg(request: Request, settings: SettingsDep, runner: RunnerDep,
                    metrics: MetricsDep) -> Response:
     """Return each path's data clipped to the window (curves kept or flattened)."""
     body, time_left = await _read_json(request, runner)
-    return _respond(await runner.run(convert.clip_svg, body, settings, time_left=time_left,
-                                     endpoint="svg"), metrics)
+    return _respond(await runner.run(convert.clip_svg, body, settings, _deadline(time_left),
+                                     time_left=time_left, endpoint="svg"), metrics)
 
 
 class SegmentQuery(BaseModel):
@@ -119,7 +126,8 @@ class SegmentQuery(BaseModel):
     backend: BackendName | None = None
     verify: bool | Literal["all"] | None = Field(
         None, description="true: within the verification budget (a random sample past it); "
-                          "all: every segment; false: none.")
+                          "all: every segment, as far as the request's time limit allows "
+                          "(X-Rnsca-Verification says how many); false: none.")
 
 
 @router.post("/segments", response_model=ClipSegmentsResponse,
@@ -149,12 +157,13 @@ async def clip_segments(request: Request, query: Annotated[SegmentQuery, Query()
             if v is not None} | _query_resolution(query.resolution), strict=False)
         body, time_left = await runner.read_body(request)
         outcome = await runner.run(convert.clip_segments_binary, body, window, options,
-                                   query.verify, settings, time_left=time_left,
-                                   endpoint="segments")
+                                   query.verify, settings, _deadline(time_left),
+                                   time_left=time_left, endpoint="segments")
     else:
         body, time_left = await _read_json(request, runner)
         outcome = await runner.run(convert.clip_segments_json, body, settings,
-                                   time_left=time_left, endpoint="segments")
+                                   _deadline(time_left), time_left=time_left,
+                                   endpoint="segments")
     return _respond(outcome, metrics)
 
 

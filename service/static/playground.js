@@ -568,11 +568,15 @@ function showVerification(v, format, body) {
   box.dataset.passed = String(v.passed);
   const rows = [["max deviation", v.max_deviation], ["allowed deviation", v.allowed_deviation],
                 ["false positives", v.false_positives], ["ratio to Shapely", v.ratio],
-                ["valid output", v.valid], ["mode", v.mode]];
-  box.innerHTML = `<p class="verdict ${v.passed ? "passed" : "failed"}">${v.passed ? "✓ passed" : "✗ failed"}</p>` +
+                ["valid output", v.valid], ["mode", v.mode],
+                ["inputs compared", `${v.checked} of ${v.inputs}`]];
+  // null: not every input chosen was compared (time limit, or too costly), none failed.
+  const [verdict, text] = v.passed === null ? ["undecided", "? no verdict"]
+    : v.passed ? ["passed", "✓ passed"] : ["failed", "✗ failed"];
+  box.innerHTML = `<p class="verdict ${verdict}">${text}</p>` +
     "<table>" + rows.map(([k, value]) => `<tr><td>${k}</td><td>${escapeHtml(
       typeof value === "number" && !Number.isInteger(value) ? value.toPrecision(6) : String(value))}</td></tr>`).join("") +
-    "</table>";
+    "</table>" + (v.note ? `<p class="note">${escapeHtml(v.note)}</p>` : "");
 }
 
 function clearResult() {

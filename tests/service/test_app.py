@@ -81,9 +81,9 @@ def test_a_request_over_the_time_limit_is_503_and_the_server_goes_on(monkeypatch
 
     original = convert.clip_segments_json
 
-    def slow(body, settings):
+    def slow(*args):
         time.sleep(0.5)
-        return original(body, settings)
+        return original(*args)
 
     monkeypatch.setattr(convert, "clip_segments_json", slow)
     with make_client(request_time_limit=0.1, graceful_shutdown_seconds=1,
@@ -378,3 +378,49 @@ def test_verification_within_its_budget_is_a_random_sample_and_all_is_everything
         r = client.post("/v1/clip/svg", json={"window": WINDOW,
                                               "paths": ["M-5 5 L15 5"] * 50})
         assert r.json()["verification"]["checked"] == 1
+
+
+def random_lines(count: int, vertices: int, seed: int = 0) -> dict:
+    """A FeatureCollection of lines of random vertices across the window (each crossing
+    itself about vertices**2 / 10 times)."""
+    rng = np.random.default_rng(seed)
+    return {"type": "FeatureCollection", "features": [
+        {"type": "Feature", "properties": {"i": i}, "geometry": {
+            "type": "LineString", "coordinates": rng.uniform(-2, 12, (vertices, 2)).tolist()}}
+        for i in range(count)]}
+
+
+def test_verify_all_stops_at_the_time_limit_and_the_answer_says_what_it_compared():
+    # 21 MB of lines of 2,000 random vertices: GEOS's overlay of each with the window
+    # would node 400,000 crossings (past 12 GB in all); compared segment by segment they
+    # take about 15 s here, and the server has 5.
+    document = random_lines(250, 2000)
+    with make_client(request_time_limit=5, warm_up=False) as client:
+        r = client.post("/v1/clip/geojson", json={"window": WINDOW, "verify": "all",
+                                                  "geojson": document})
+    assert r.status_code == 200, r.text
+    body = r.json()
+    assert len(body["geojson"]["features"]) == 250
+    v = body["verification"]
+    assert (v["inputs"], v["sampling"], v["skipped"], v["timed_out"]) == (250, "all", 0, True)
+    assert v["checked"] < 250 and v["passed"] is None and v["false_positives"] == 0
+    assert v["note"].startswith("stopped at the time limit of ")
+    assert v["note"].endswith(f": {250 - v['checked']} of the 250 inputs chosen were not "
+                              "compared")
+
+
+def test_an_input_too_costly_to_verify_is_skipped_and_the_answer_says_so():
+    knot = np.random.default_rng(5).uniform(-2, 12, (40, 2)).tolist()  # ~200 crossings
+    polygons = [[[*knot, knot[0]]], [[[-5, -5], [5, -5], [5, 5], [-5, 5], [-5, -5]]]]
+    document = {"type": "FeatureCollection", "features": [
+        {"type": "Feature", "properties": {}, "geometry": {"type": "Polygon",
+                                                           "coordinates": rings}}
+        for rings in polygons]}
+    with make_client(verify_max_crossings=50, warm_up=False) as client:
+        r = client.post("/v1/clip/geojson", json={"window": WINDOW, "verify": "all",
+                                                  "geojson": document})
+    assert r.status_code == 200, r.text
+    v = r.json()["verification"]
+    assert (v["inputs"], v["checked"], v["skipped"], v["timed_out"], v["passed"]) == (
+        2, 1, 1, False, None)
+    assert "max_crossings is 50" in v["note"]

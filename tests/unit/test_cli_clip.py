@@ -121,7 +121,8 @@ def test_clip_verify_reports_the_comparison_with_shapely(runner, source):
     assert report_of(result)["verification"] == {
         "max_deviation": 0.0, "false_positives": 0, "ratio": 1.0, "passed": True,
         "allowed_deviation": 1e-8, "mode": "exact", "valid": True, "invalid_inputs": 0,
-        "inputs": 3, "checked": 3, "sampling": "all"}
+        "inputs": 3, "checked": 3, "sampling": "all", "skipped": 0, "timed_out": False,
+        "note": ""}
 
 
 def test_clip_writes_each_position_of_a_mixed_2d_3d_document_in_its_dimension(

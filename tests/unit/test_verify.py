@@ -166,7 +166,7 @@ def test_to_dict_is_json_ready():
     assert d == {"max_deviation": 0.0, "false_positives": 0, "ratio": 1.0, "passed": True,
                  "allowed_deviation": 1e-8, "mode": "exact", "valid": True,
                  "invalid_inputs": 0, "inputs": len(SEGS), "checked": len(SEGS),
-                 "sampling": "all"}
+                 "sampling": "all", "skipped": 0, "timed_out": False, "note": ""}
 
 
 def test_approx_leaf_bound_is_the_tolerance_or_one_deepest_leaf():

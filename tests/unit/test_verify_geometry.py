@@ -18,6 +18,7 @@ from rnsca import (
     InvalidWindowError,
     ParseError,
     UnsupportedGeometryError,
+    clip,
     clip_ragged,
     verify,
 )
@@ -45,6 +46,29 @@ def test_line_leaving_and_reentering_compares_with_both_parts():
     ours = wkt("MULTILINESTRING ((0 2, 5 2, 5 10), (8 10, 8 2, 10 2))")
     v = verify(REENTERING, ours, W10)
     assert v.passed and v.max_deviation == 0.0 and v.ratio == 1.0
+
+
+def test_line_crossing_itself_is_compared_segment_by_segment(monkeypatch):
+    # 300 random vertices across the window: the line crosses itself ~10,000 times, and
+    # GEOS's overlay of the whole line with the box would node it at every crossing.
+    line = shapely.LineString(np.random.default_rng(3).uniform(-2, 12, (300, 2)))
+    ours = clip(line, W10)
+    asked, intersection = [], shapely.intersection
+
+    def recording(a, b, **kwargs):
+        asked.append(shapely.get_num_coordinates(a))
+        return intersection(a, b, **kwargs)
+
+    monkeypatch.setattr(shapely, "intersection", recording)
+    v = verify(line, ours, W10)
+    assert v.passed and math.isclose(v.ratio, 1.0, rel_tol=1e-12)
+    assert asked and max(np.max(n) for n in asked) == 2  # only segments went to GEOS
+
+
+def test_line_run_back_over_itself_counts_both_ways():
+    # The whole line's overlay would count the overlap once (ratio 2).
+    v = verify(wkt("LINESTRING (-5 5, 5 5, 2 5)"), wkt("LINESTRING (0 5, 5 5, 2 5)"), W10)
+    assert v.passed and v.ratio == 1.0
 
 
 def test_polygon_with_a_hole_passes_whatever_its_ring_order_and_start():

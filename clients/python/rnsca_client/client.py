@@ -172,7 +172,8 @@ class Client:
         verify : bool or "all", optional
             Compare with Shapely on the server (default: the server decides by size):
             within its verification budget (a random sample past it; the answer's
-            verification says how many were checked), or ``"all"`` for every input.
+            verification says how many were checked), or ``"all"`` for every input
+            the request's time limit allows (``timed_out`` says it stopped).
         approx_bound : float, optional
             In approx mode, the largest deviation that passes verification.
         **options
@@ -208,7 +209,8 @@ class Client:
         fill : {"nonzero", "evenodd"}, optional
             Clip as filled areas with this rule; default: as strokes.
         verify : bool or "all", optional
-            Compare with Shapely on the server (``"all"``: every input, no sample).
+            Compare with Shapely on the server (``"all"``: every input, no sample, within
+            the request's time limit).
         **options
             ``method``, ``n``, ``max_depth``, ``tolerance``, ``mode``, ``backend``.
 
@@ -234,7 +236,8 @@ class Client:
         binary : bool, optional
             Force the binary (True, needs NumPy) or the JSON (False) form.
         verify : bool or "all", optional
-            Compare with Shapely on the server (``"all"``: every input, no sample).
+            Compare with Shapely on the server (``"all"``: every input, no sample, within
+            the request's time limit).
         **options
             ``method``, ``n``, ``max_depth``, ``tolerance``, ``mode``, ``backend``.
 

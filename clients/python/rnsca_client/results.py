@@ -82,13 +82,15 @@ class Verification(_FromDict):
     Hausdorff distance to Shapely's clip, `ratio` the output's length (or area, or
     count) over Shapely's, `false_positives` the output vertices outside the window.
     `checked` of `inputs` were compared (`sampling`: ``"all"``, or the random sample the
-    server's verification budget allowed).
+    server's verification budget allowed). Comparing stops at the request's time limit
+    (`timed_out`), and inputs too costly for GEOS are `skipped`; `note` says what was
+    left. `passed` is then None (no verdict) unless a compared input failed.
     """
 
     max_deviation: float
     false_positives: int
     ratio: float
-    passed: bool
+    passed: bool | None
     allowed_deviation: float
     mode: str
     valid: bool = True
@@ -96,6 +98,9 @@ class Verification(_FromDict):
     inputs: int = 0
     checked: int = 0
     sampling: str = "all"
+    skipped: int = 0
+    timed_out: bool = False
+    note: str = ""
     extra: dict[str, Any] = field(default_factory=dict, repr=False, compare=False)
 
 

@@ -1,8 +1,8 @@
 """Warm-up: the kernels each endpoint needs, compiled (or loaded) before it is served.
 
-A cold start compiles for minutes on a small machine (measured: about 27 s for the
-segment kernels, well over a minute for lines and polygons, which share the segment core
-but link it again), and a warm one loads everything from Numba's disk cache in seconds.
+A cold start compiles for minutes of CPU time on a small machine (measured on one core:
+about 17 s for the segment kernels, 30 s for lines, 60 s for polygons, 37 s for SVG), and
+a warm one loads everything from Numba's disk cache in seconds.
 So warm-up is a list of steps (`Step`), and each endpoint is served as soon as the steps it
 needs are done (`ENDPOINT_STEPS`): segments first, the cheapest.
 

@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import orjson
+import pyarrow as pa
 
 import rnsca
 from rnsca.backends.registry import available_backends, get_backend, opencl_report
@@ -25,6 +26,7 @@ from rnsca.errors import (
     LimitExceededError,
     RnscaError,
 )
+from rnsca.io.geoarrow import find_geometry_column, read_geoarrow, write_geoarrow
 from rnsca.options import Mode
 from rnsca.stats import ClipStats
 from rnsca.verify import Verification
@@ -47,15 +49,18 @@ from service.schemas import (
     ClipOptions,
     ClipSegmentsRequest,
     ClipSVGRequest,
+    GeometryOptions,
 )
 from service.slices import parse_geojson_request
 
 __all__ = ["Outcome", "clip_geojson", "clip_svg", "clip_segments_json",
-           "clip_segments_binary", "warm_up_svg", "backend_report",
-           "SEGMENT_BYTES"]
+           "clip_segments_binary", "clip_geoarrow", "warm_up_svg", "backend_report",
+           "SEGMENT_BYTES", "ARROW_STREAM"]
 
 #: One binary segment: four little-endian float64.
 SEGMENT_BYTES = 32
+#: The media type of an Arrow IPC stream (``POST /v1/clip/geoarrow``, in and out).
+ARROW_STREAM = "application/vnd.apache.arrow.stream"
 _JSON = orjson.OPT_SERIALIZE_NUMPY
 
 
@@ -126,7 +131,8 @@ class _VerificationCost:
 
     def __init__(self) -> None:
         self._lock = threading.Lock()
-        self._seconds_per_vertex = {"segments": 2e-6, "geojson": 4e-6, "svg": 2e-5}
+        self._seconds_per_vertex = {"segments": 2e-6, "geojson": 4e-6, "geoarrow": 4e-6,
+                                    "svg": 2e-5}
 
     def sample(self, kind: str, asked: bool | str | None, clip_seconds: float, inputs: int,
                vertices: int, ratio: float) -> int | None:
@@ -234,6 +240,96 @@ def clip_geojson(body: bytes, settings: Settings, deadline: float | None = None)
     payload = {"geojson": clipped, "stats": stats.to_dict(),
                "verification": _dict_or_none(verification)}
     return Outcome(orjson.dumps(payload, option=_JSON), stats)
+
+
+# --- GeoArrow ------------------------------------------------------------------------
+
+
+def _read_arrow_stream(body: bytes) -> pa.Table:
+    """Return the table an Arrow IPC stream holds, its buffers checked against its offsets."""
+    try:
+        table = pa.ipc.open_stream(pa.py_buffer(body)).read_all()
+        # Offsets past their child, decreasing or out of range would be read as they
+        # are by the clip: a full validation refuses them here.
+        table.validate(full=True)
+    except pa.ArrowException as exc:
+        raise InvalidBodyError(f"the body is not a valid Arrow IPC stream ({exc}); send "
+                               f"{ARROW_STREAM}, e.g. from pyarrow.ipc.new_stream") from None
+    return table
+
+
+def _arrow_stream(table: pa.Table) -> bytes:
+    sink = pa.BufferOutputStream()
+    with pa.ipc.new_stream(sink, table.schema) as writer:
+        writer.write_table(table)
+    return sink.getvalue().to_pybytes()
+
+
+def clip_geoarrow(body: bytes, window: Window, options: GeometryOptions, column: str | None,
+                  verify: bool | str | None, settings: Settings,
+                  deadline: float | None = None) -> Outcome:
+    """Answer ``POST /v1/clip/geoarrow``: an Arrow IPC stream in and out.
+
+    The geometry column (`rnsca.io.geoarrow.find_geometry_column`, or `column`) is read
+    into ragged arrays, clipped, and written back in its encoding; the other columns are
+    kept as they are. A row whose geometry is clipped away, is empty or null is dropped
+    unless ``options.keep_empty`` (then it holds an empty geometry, or stays null), as
+    the GeoJSON endpoint drops features. The headers ``X-Rnsca-Stats`` and
+    ``X-Rnsca-Verification`` carry the stats and the verification as JSON, ``X-Rnsca-Rows``
+    the number of rows. Answered by `deadline` (see `clip_svg`).
+    """
+    deadline = _due(deadline, settings)
+    table = _read_arrow_stream(body)
+    index = find_geometry_column(table.schema, column)
+    field = table.schema.field(index)
+    read = read_geoarrow(table.column(index), field)
+    vertices = read.coords.shape[0]
+    cap, by_budget = geometry_vertex_cap(options, window, settings.max_vertices,
+                                         settings.work_budget)
+    if vertices > cap:
+        if by_budget:
+            raise WorkOverBudgetError(
+                f"{vertices} vertices: with these options a vertex may cost up to "
+                f"{1 + subdivision_cost(options, window, None)} fragments, so the work "
+                f"budget of {settings.work_budget} allows {cap}; lower max_depth or n, or "
+                "use exact mode with no tolerance", budget=settings.work_budget)
+        raise TooManyVerticesError(f"{vertices} vertices, more than this server's "
+                                   f"max_vertices of {cap}", limit=cap)
+    arguments = _library_options(options, settings)
+    started = time.perf_counter()
+    try:
+        result = rnsca.clip_ragged(
+            read.kind, read.coords, read.offsets, window, keep_empty=options.keep_empty,
+            boundary=options.boundary, check_validity=options.check_validity,
+            partial_z=read.partial_z, **arguments)
+    except InvalidGeometryError as exc:
+        if exc.geometry is None:
+            raise
+        # The library counts the geometries read; the caller knows rows.
+        row = int(read.rows[exc.geometry])
+        error = InvalidGeometryError(f"column {field.name!r}, row {row}: "
+                                     f"{exc.detail or exc}")
+        error.path = f"{field.name}[{row}]"
+        raise error from None
+    clip_seconds = time.perf_counter() - started
+    verification = None
+    if _verify_wanted(verify, vertices, settings) and options.mode is not Mode.APPROX:
+        geometries = len(read.rows)
+        verification = _verify_within_budget(
+            "geoarrow", verify, clip_seconds, geometries, vertices, settings, deadline,
+            lambda **limits: rnsca.verify((read.kind.shapely_type, read.coords, read.offsets),
+                                          result, window, boundary=options.boundary,
+                                          **limits))
+    array, out_field = write_geoarrow(read, result.geometry_type, result.coords,
+                                      result.offsets, result.source)
+    table = table.set_column(index, out_field, array)
+    if not options.keep_empty:
+        table = table.take(pa.array(read.rows[result.source]))
+    headers = {"X-Rnsca-Rows": str(table.num_rows),
+               "X-Rnsca-Stats": orjson.dumps(result.stats.to_dict()).decode()}
+    if verification is not None:
+        headers["X-Rnsca-Verification"] = orjson.dumps(verification.to_dict()).decode()
+    return Outcome(_arrow_stream(table), result.stats, ARROW_STREAM, headers)
 
 
 # --- Segments ------------------------------------------------------------------------

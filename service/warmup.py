@@ -157,6 +157,7 @@ STEPS = (Step("segments", _segments), Step("lines", _lines), Step("polygons", _p
 
 #: The steps each clipping endpoint waits for (by the name `ClipRunner.run` is given).
 ENDPOINT_STEPS = {"segments": ("segments",), "geojson": ("lines", "polygons", "geojson"),
+                  "geoarrow": ("lines", "polygons"),
                   "svg": ("svg",)}
 
 

@@ -9,7 +9,7 @@ from fastapi import APIRouter, Query, Request
 from pydantic import BaseModel, ConfigDict, Field, FiniteFloat
 from starlette.responses import Response
 
-from rnsca.options import Method, Mode
+from rnsca.options import Boundary, Method, Mode
 from rnsca.window import Window
 from service import convert
 from service.deps import MetricsDep, RunnerDep, SettingsDep
@@ -25,6 +25,7 @@ from service.schemas import (
     ClipSegmentsResponse,
     ClipSVGRequest,
     ClipSVGResponse,
+    GeometryOptions,
     Problem,
 )
 
@@ -189,3 +190,65 @@ def _query_window(query: SegmentQuery) -> Window:
             "loc": ("query", name), "msg": "Field required (the window of a binary request)",
             "type": "missing"} for name in missing])
     return Window(*given)
+
+
+class GeoArrowQuery(SegmentQuery):
+    """Window and options of ``POST /v1/clip/geoarrow`` (the body is the Arrow stream)."""
+
+    boundary: Boundary | None = Field(None, description="As in the GeoJSON options.")
+    keep_empty: bool | None = Field(
+        None, description="Keep rows whose geometry is clipped away, empty or null (an "
+                          "empty geometry; null stays null) instead of dropping them.")
+    check_validity: bool | None = None
+    column: str | None = Field(
+        None, description="The geometry column (default: the one tagged geoarrow.*, else a "
+                          "binary column named `geometry`, read as WKB).")
+
+
+_ARROW_BODY = {"requestBody": {"required": True, "content": {convert.ARROW_STREAM: {
+    "schema": {"type": "string", "format": "binary",
+               "description": "An Arrow IPC stream with one GeoArrow geometry column."}}}}}
+
+
+@router.post("/geoarrow", responses={
+    **_ERRORS, 200: {"content": {convert.ARROW_STREAM: {
+        "schema": {"type": "string", "format": "binary"}}},
+        "description": "The table, its geometry column clipped (an Arrow IPC stream)"}},
+    openapi_extra=_ARROW_BODY, response_class=Response,
+    summary="Clip the geometry column of an Arrow table (GeoArrow)")
+async def clip_geoarrow(request: Request, query: Annotated[GeoArrowQuery, Query()],
+                        settings: SettingsDep, runner: RunnerDep,
+                        metrics: MetricsDep) -> Response:
+    """Return the table with its geometry column clipped to the window.
+
+    The body is an Arrow IPC stream (`application/vnd.apache.arrow.stream`) whose
+    geometry column is GeoArrow: `geoarrow.point`, `linestring`, `polygon`,
+    `multipoint`, `multilinestring` or `multipolygon` (coordinates separated or
+    interleaved, xy or xyz), `geoarrow.wkb` or `geoarrow.wkt`, named by the field's
+    `ARROW:extension:name`; a binary column named `geometry` without it is read as WKB.
+    The window (`xmin, ymin, xmax, ymax`) and options are query parameters, as for
+    binary segments, with `boundary`, `keep_empty`, `check_validity` and `column`.
+
+    The answer is an Arrow IPC stream of the same columns and encoding: lines and
+    polygons come back as multilinestrings and multipolygons (a cut may leave several
+    parts), WKB and WKT values keep a single kind left in one part. Other columns are
+    passed through; rows whose geometry is clipped away (or empty, or null) are dropped
+    unless `keep_empty`. Headers: `X-Rnsca-Rows` (rows out), `X-Rnsca-Stats` and
+    `X-Rnsca-Verification` (JSON; verification by default up to the server's
+    `verify_max_vertices`, never in approx mode).
+    """
+    media = _media_type(request)
+    if media != convert.ARROW_STREAM:
+        raise UnsupportedMediaTypeError(
+            f"send the body as {convert.ARROW_STREAM}, got {media or 'no Content-Type'}")
+    window = _query_window(query)
+    options = GeometryOptions.model_validate({
+        k: v for k, v in query.model_dump(
+            include={"method", "n", "max_depth", "tolerance", "mode", "backend", "boundary",
+                     "keep_empty", "check_validity"}).items()
+        if v is not None} | _query_resolution(query.resolution), strict=False)
+    body, time_left = await runner.read_body(request)
+    outcome = await runner.run(convert.clip_geoarrow, body, window, options, query.column,
+                               query.verify, settings, _deadline(time_left),
+                               time_left=time_left, endpoint="geoarrow")
+    return _respond(outcome, metrics)

@@ -406,8 +406,15 @@ def write_geoarrow(read: GeoArrowColumn, geometry_type: shapely.GeometryType | G
         return _write_serialized(read, kind, coords, offsets, source, rows)
     out_kind = _CLIPPED_KIND[read.kind]
     offsets = tuple(np.asarray(o, dtype=np.int64) for o in offsets)
-    if kind is not out_kind:  # one part each: the level of parts is one per geometry
-        offsets = (*offsets, np.arange(len(rows) + 1, dtype=np.int64))
+    if kind is not out_kind:
+        # At most one part each: an empty single geometry becomes a multi of no parts
+        # (not one empty part), so its repeated part offset goes.
+        parts = offsets[-1]
+        nonempty = parts[1:] > parts[:-1]
+        geometry_offsets = np.zeros(len(rows) + 1, dtype=np.int64)
+        np.cumsum(nonempty, out=geometry_offsets[1:])
+        offsets = (*offsets[:-1], np.concatenate([parts[:1], parts[1:][nonempty]]),
+                   geometry_offsets)
     mask = pa.array(read.null) if read.null.any() else None
     if out_kind is GeometryKind.POINT:
         full = np.full((read.row_count, coords.shape[1]), np.nan)

@@ -89,7 +89,7 @@ class GeoArrowColumn:
     ----------
     kind : GeometryKind
         The kind of `coords` and `offsets` (for WKB and WKT: what Shapely's
-        ``to_ragged_array`` made of the values, single kinds widened to multi).
+        ``to_ragged_array`` made of the values, a mix of single and multi as multi).
     coords : ndarray of float64, shape (n, 2) or (n, 3)
         The present geometries' vertices; a view of the Arrow buffer where it allows one.
     offsets : tuple of ndarray of int
@@ -296,9 +296,7 @@ def _read_coords(values: pa.Array, field: pa.Field,
         arrays = [values.field(i) for i in range(len(dims))]
         if any(a.null_count for a in arrays):
             raise ParseError(f"column {field.name!r}: null coordinates")
-        coords = np.column_stack([_doubles(a, field) for a in arrays]) if len(values) else \
-            np.empty((0, len(dims)))
-        return coords, CoordLayout.SEPARATED
+        return np.column_stack([_doubles(a, field) for a in arrays]), CoordLayout.SEPARATED
     if pa.types.is_fixed_size_list(values.type):
         dims = values.type.value_field.name
         size = values.type.list_size

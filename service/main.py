@@ -48,7 +48,9 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     --------
     >>> app = create_app(Settings(warm_up=False))
     >>> sorted(p for p in app.openapi()["paths"] if p.startswith("/v1"))
-    ['/v1/capabilities', '/v1/clip/geojson', '/v1/clip/segments', '/v1/clip/svg']
+    ... # doctest: +NORMALIZE_WHITESPACE
+    ['/v1/capabilities', '/v1/clip/geoarrow', '/v1/clip/geojson', '/v1/clip/segments',
+     '/v1/clip/svg']
     """
     settings = settings or Settings()
     configure_logging(settings.log_level)

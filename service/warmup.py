@@ -156,9 +156,8 @@ STEPS = (Step("segments", _segments), Step("lines", _lines), Step("polygons", _p
          Step("opencl", _opencl))
 
 #: The steps each clipping endpoint waits for (by the name `ClipRunner.run` is given).
-ENDPOINT_STEPS = {"segments": ("segments",), "geojson": ("lines", "polygons", "geojson"),
-                  "geoarrow": ("lines", "polygons"),
-                  "svg": ("svg",)}
+ENDPOINT_STEPS = {"segments": ("segments",), "geoarrow": ("lines", "polygons"),
+                  "geojson": ("lines", "polygons", "geojson"), "svg": ("svg",)}
 
 
 def steps_for(backends: list[Backend] | None = None) -> tuple[Step, ...]:

@@ -332,7 +332,7 @@ def test_during_warm_up_each_endpoint_is_served_once_its_kernels_are(monkeypatch
         assert time.perf_counter() - started < 5  # not after the 30 s time limit
         ready = client.get("/readyz")
         assert ready.status_code == 503
-        assert ready.json()["served"] == ["geojson", "segments"]
+        assert ready.json()["served"] == ["geoarrow", "geojson", "segments"]
         release.set()
         while client.get("/readyz").status_code != 200:
             assert time.monotonic() < deadline
@@ -348,7 +348,7 @@ def test_during_warm_up_each_endpoint_is_served_once_its_kernels_are(monkeypatch
     assert {"lines", "polygons", "geojson", "svg"} <= set(steps_logged)
     served = [getattr(r, "fields", {}).get("endpoint") for r in records
               if r.getMessage() == "serving"]
-    assert served == ["segments", "geojson", "svg"]
+    assert served == ["segments", "geoarrow", "geojson", "svg"]
 
 
 def test_verification_within_its_budget_is_a_random_sample_and_all_is_everything():

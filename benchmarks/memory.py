@@ -40,17 +40,23 @@ WINDOW = [0.0, 0.0, 10.0, 10.0]
 #: kind: (endpoint, media type of the admission table)
 KINDS = {"geojson_lines": ("geojson", "json"), "geojson_polygons": ("geojson", "json"),
          "svg": ("svg", "json"), "segments_json": ("segments", "json"),
-         "segments_binary": ("segments", "binary")}
+         "segments_binary": ("segments", "binary"),
+         "geoarrow_lines": ("geoarrow", "arrow"), "geoarrow_polygons": ("geoarrow", "arrow"),
+         "geoarrow_wkb": ("geoarrow", "arrow")}
 
 
 def make_body(kind: str, vertices: int, verify: bool | str | None) -> bytes:
     """Return a request body of `kind` with about `vertices` vertices, crossing the window.
 
     Lines wander (a random walk), so they cross the window edges now and then as real
-    lines do; polygons are 50-vertex circles; paths are cubic Béziers.
+    lines do; polygons are 50-vertex circles; paths are cubic Béziers. GeoArrow bodies are
+    Arrow IPC streams of an id column and lines (interleaved coordinates), polygons
+    (separated) or lines as WKB.
     """
     rng = np.random.default_rng(1)
     extra = {} if verify is None else {"verify": verify}
+    if kind.startswith("geoarrow"):
+        return _geoarrow_body(kind, vertices, rng)
     if kind in ("geojson_lines", "geojson_polygons"):
         features = []
         for _ in range(max(1, vertices // (100 if kind == "geojson_lines" else 50))):
@@ -80,6 +86,45 @@ def make_body(kind: str, vertices: int, verify: bool | str | None) -> bytes:
     return segments.tobytes()
 
 
+def _geoarrow_body(kind: str, vertices: int, rng: np.random.Generator) -> bytes:
+    import pyarrow as pa
+    import shapely
+
+    if kind == "geoarrow_polygons":
+        count = max(1, vertices // 50)
+        t = np.linspace(0, 2 * np.pi, 50)
+        c, r = rng.uniform(-5, 15, (count, 1, 2)), rng.uniform(0.5, 3, (count, 1, 1))
+        rings = c + r * np.stack([np.cos(t), np.sin(t)], -1)
+        rings[:, -1] = rings[:, 0]
+        xy = rings.reshape(-1, 2)
+        vertex = pa.StructArray.from_arrays([pa.array(xy[:, 0]), pa.array(xy[:, 1])],
+                                            names=["x", "y"])
+        ring = pa.ListArray.from_arrays(pa.array(np.arange(count + 1, dtype=np.int32) * 50),
+                                        vertex)
+        column = pa.ListArray.from_arrays(pa.array(np.arange(count + 1, dtype=np.int32)), ring)
+        extension = "geoarrow.polygon"
+    else:
+        count = max(1, vertices // 100)
+        walks = rng.uniform(-5, 15, (count, 1, 2)) + np.cumsum(
+            rng.normal(0, 0.3, (count, 100, 2)), 1)
+        offsets = np.arange(count + 1, dtype=np.int32) * 100
+        if kind == "geoarrow_wkb":
+            lines = shapely.from_ragged_array(shapely.GeometryType.LINESTRING,
+                                              walks.reshape(-1, 2), (offsets,))
+            column, extension = pa.array(shapely.to_wkb(lines), pa.binary()), "geoarrow.wkb"
+        else:
+            vertex = pa.FixedSizeListArray.from_arrays(pa.array(walks.reshape(-1)), 2)
+            column = pa.ListArray.from_arrays(pa.array(offsets), vertex)
+            extension = "geoarrow.linestring"
+    field = pa.field("geometry", column.type, metadata={"ARROW:extension:name": extension})
+    table = pa.Table.from_arrays([pa.array(np.arange(count)), column], schema=pa.schema(
+        [pa.field("id", pa.int64()), field]))
+    sink = pa.BufferOutputStream()
+    with pa.ipc.new_stream(sink, table.schema) as writer:
+        writer.write_table(table)
+    return sink.getvalue().to_pybytes()
+
+
 _CHILD = r"""
 import resource, sys, time
 from rnsca.runtime import configure_process
@@ -87,7 +132,7 @@ configure_process()
 from rnsca.window import Window
 from service import convert
 from service.config import Settings
-from service.schemas import ClipOptions
+from service.schemas import ClipOptions, GeometryOptions
 kind, verify, path = sys.argv[1], sys.argv[2], sys.argv[3]
 verify = {"none": None, "all": "all"}[verify]
 settings = Settings(max_vertices=10**9, work_budget=10**13, max_body_bytes=2**40)
@@ -95,6 +140,9 @@ def call(body):
     if kind == "segments_binary":
         return convert.clip_segments_binary(body, Window(*%(window)r), ClipOptions(), verify,
                                             settings)
+    if kind.startswith("geoarrow"):
+        return convert.clip_geoarrow(body, Window(*%(window)r), GeometryOptions(), None,
+                                     verify, settings)
     function = {"geojson_lines": convert.clip_geojson, "geojson_polygons": convert.clip_geojson,
                 "svg": convert.clip_svg, "segments_json": convert.clip_segments_json}[kind]
     return function(body, settings)

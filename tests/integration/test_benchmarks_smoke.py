@@ -287,11 +287,12 @@ def test_memory_suite_measures_every_kind_against_the_admission_table(tmp_path):
     (path,) = tmp_path.glob("memory-*.json")
     result = json.loads(path.read_text())
     assert [r["kind"] for r in result["rows"]] == [
-        "geojson_lines", "geojson_polygons", "svg", "segments_json", "segments_binary"]
+        "geojson_lines", "geojson_polygons", "svg", "segments_json", "segments_binary",
+        "geoarrow_lines", "geoarrow_polygons", "geoarrow_wkb"]
     for row in result["rows"]:
         assert row["body_bytes"] > 0 and row["peak_growth_bytes"] >= 0 and row["seconds"] > 0
     assert set(result["admission_table"]) == {"geojson/json", "svg/json", "segments/json",
-                                              "segments/binary"}
+                                              "segments/binary", "geoarrow/arrow"}
 
 
 def test_soak_runs_minutes_of_mixed_load_and_judges_growth(tmp_path):

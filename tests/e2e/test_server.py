@@ -127,6 +127,40 @@ def test_clip_segments_binary_in_and_out(client):
     assert orjson.loads(r.headers["x-rnsca-verification"])["passed"] is True
 
 
+def test_clip_geoarrow_stream_in_and_out(client):
+    """An Arrow IPC stream of ids and GeoArrow polygons (interleaved) in, the same out."""
+    import shapely
+
+    from tests.geoarrow_tables import ARROW_STREAM, decode, from_stream, table, to_stream
+
+    polygons = [shapely.box(-5, -5, 5, 5), shapely.box(20, 20, 30, 30),
+                shapely.box(1, 1, 2, 2)]
+    r = client.post("/v1/clip/geoarrow",
+                    content=to_stream(table(polygons, "polygon", "interleaved", False)),
+                    params={"xmin": 0, "ymin": 0, "xmax": 10, "ymax": 10},
+                    headers={"Content-Type": ARROW_STREAM})
+    assert r.status_code == 200 and r.headers["content-type"] == ARROW_STREAM, r.text
+    got = from_stream(r.content)
+    assert got.column("id").to_pylist() == [0, 2] and r.headers["x-rnsca-rows"] == "2"
+    assert got.column("name").to_pylist() == ["row 0", "row 2"]
+    clipped = decode(got.column("geometry"), got.schema.field("geometry"))
+    expected = shapely.intersection(np.array(polygons)[[0, 2]], shapely.box(0, 0, 10, 10))
+    assert shapely.equals(np.array(clipped), expected).all()
+    assert orjson.loads(r.headers["x-rnsca-verification"])["passed"] is True
+    # Not an Arrow stream: a problem naming it, and the server goes on serving.
+    bad = client.post("/v1/clip/geoarrow", content=b"not arrow",
+                      params={"xmin": 0, "ymin": 0, "xmax": 10, "ymax": 10},
+                      headers={"Content-Type": ARROW_STREAM})
+    assert_problem(bad, 422, "invalid-body")
+    nan = shapely.LineString([(0, 0), (np.nan, 1)])
+    bad = client.post("/v1/clip/geoarrow",
+                      content=to_stream(table([nan], "linestring", "separated", False)),
+                      params={"xmin": 0, "ymin": 0, "xmax": 10, "ymax": 10},
+                      headers={"Content-Type": ARROW_STREAM})
+    assert_problem(bad, 422, "invalid-geometry")
+    assert client.get("/healthz").status_code == 200
+
+
 def test_clip_svg_clips_keeps_curves_and_verifies(client):
     assert client.get("/v1/capabilities").json()["svg"] is True
     r = client.post("/v1/clip/svg", json={"window": WINDOW,

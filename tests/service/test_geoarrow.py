@@ -165,3 +165,21 @@ def test_the_openapi_description_names_the_media_type(client):
     assert ARROW_STREAM in operation["requestBody"]["content"]
     assert ARROW_STREAM in operation["responses"]["200"]["content"]
     assert {p["name"] for p in operation["parameters"]} >= {"xmin", "keep_empty", "column"}
+
+
+def test_the_readme_example_runs_as_written(client, monkeypatch):
+    import pathlib
+
+    import httpx
+
+    text = (pathlib.Path(__file__).parents[2] / "README.md").read_text()
+    start = text.index("import httpx, pyarrow as pa, shapely")
+    code = text[start:text.index("```", start)]
+    monkeypatch.setattr(httpx, "post", lambda url, **kw: client.post(
+        url.removeprefix("http://localhost:8000"), **kw))
+    scope: dict = {}
+    exec(code, scope)  # noqa: S102 - our own README
+    clipped = scope["clipped"]
+    assert clipped.column("name").to_pylist() == ["road"]
+    assert clipped.column("geometry").to_pylist() == [
+        [[[0.0, 1.0], [5.0, 1.0], [5.0, 10.0]], [[8.0, 10.0], [8.0, 5.0], [10.0, 5.0]]]]

@@ -111,6 +111,8 @@ class GeoArrowColumn:
     single : ndarray of bool or None
         WKB and WKT: whether each geometry was a single kind (POINT, LINESTRING,
         POLYGON), so that a clip left in one part is written as that kind again.
+    large_offsets : bool
+        Native: the lists are ``large_list`` (int64 offsets), and are written so again.
     """
 
     kind: GeometryKind
@@ -124,6 +126,7 @@ class GeoArrowColumn:
     coord_layout: CoordLayout | None = None
     partial_z: bool = False
     single: np.ndarray | None = None
+    large_offsets: bool = False
 
     @property
     def has_z(self) -> bool:
@@ -231,6 +234,7 @@ def read_geoarrow(column: pa.Array | pa.ChunkedArray, field: pa.Field) -> GeoArr
     present = column if column.null_count == 0 else column.drop_null()  # compacts them
     offsets = []
     values = present
+    large = pa.types.is_large_list(values.type)
     for level in range(levels):
         if not (pa.types.is_list(values.type) or pa.types.is_large_list(values.type)):
             raise ParseError(f"column {field.name!r}: {name} needs {levels} levels of lists "
@@ -256,7 +260,7 @@ def read_geoarrow(column: pa.Array | pa.ChunkedArray, field: pa.Field) -> GeoArr
             rows = rows[~empty]
             coords = np.ascontiguousarray(coords[~empty])
     return GeoArrowColumn(kind, coords, tuple(reversed(offsets)), rows, len(column), null,
-                          field, GeoArrowEncoding.NATIVE, layout)
+                          field, GeoArrowEncoding.NATIVE, layout, large_offsets=large)
 
 
 def _null_mask(column: pa.Array) -> np.ndarray:
@@ -430,7 +434,7 @@ def write_geoarrow(read: GeoArrowColumn, geometry_type: shapely.GeometryType | G
         for depth, level_offsets in enumerate(levels):
             outermost = depth == len(levels) - 1
             storage = _list_array(level_offsets, storage, names[len(names) - 1 - depth],
-                                  mask if outermost else None)
+                                  mask if outermost else None, read.large_offsets)
     metadata = dict(read.field.metadata or {})
     metadata[_EXTENSION_NAME] = b"geoarrow." + out_kind.name.lower().encode()
     field = pa.field(read.field.name, storage.type, read.field.nullable, metadata)
@@ -449,8 +453,10 @@ def _coords_array(coords: np.ndarray, read: GeoArrowColumn, mask) -> pa.Array:
         fields=[pa.field(d, pa.float64(), nullable=False) for d in dims], mask=mask)
 
 
-def _list_array(offsets: np.ndarray, values: pa.Array, child: str, mask) -> pa.Array:
-    large = offsets[-1] > np.iinfo(np.int32).max
+def _list_array(offsets: np.ndarray, values: pa.Array, child: str, mask,
+                large: bool) -> pa.Array:
+    # int32 offsets as the input had them, unless the clip's output outgrows them.
+    large = large or offsets[-1] > np.iinfo(np.int32).max
     offset_type = np.int64 if large else np.int32
     list_type = (pa.large_list if large else pa.list_)(pa.field(child, values.type,
                                                                 nullable=False))

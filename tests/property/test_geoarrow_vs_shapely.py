@@ -67,9 +67,10 @@ def _check(case, kind: str, encoding: str, keep_empty: bool) -> None:
 
 
 @pytest.mark.parametrize("encoding", ENCODINGS)
+@pytest.mark.parametrize("z", [False, True], ids=["2d", "3d"])
 @pytest.mark.parametrize("keep_empty", [False, True])
 @pytest.mark.parametrize("kind", ["point", "multipoint", "linestring", "multilinestring",
                                   "polygon", "multipolygon"])
 @given(data=st.data())
-def test_each_kind_and_encoding_equals_shapely(kind, encoding, keep_empty, data):
-    _check(data.draw(cases(kind, z=None), label="case"), kind, encoding, keep_empty)
+def test_each_kind_and_encoding_equals_shapely(kind, encoding, keep_empty, z, data):
+    _check(data.draw(cases(kind, z=z), label="case"), kind, encoding, keep_empty)

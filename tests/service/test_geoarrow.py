@@ -183,3 +183,14 @@ def test_the_readme_example_runs_as_written(client, monkeypatch):
     assert clipped.column("name").to_pylist() == ["road"]
     assert clipped.column("geometry").to_pylist() == [
         [[[0.0, 1.0], [5.0, 1.0], [5.0, 10.0]], [[8.0, 10.0], [8.0, 5.0], [10.0, 5.0]]]]
+
+
+def test_a_stream_of_several_batches_is_one_table(client):
+    t = table([ZIGZAG, AWAY, ZIGZAG], "linestring", "interleaved", False)
+    sink = pa.BufferOutputStream()
+    with pa.ipc.new_stream(sink, t.schema) as writer:
+        for batch in t.to_batches(max_chunksize=1):
+            writer.write_batch(batch)
+    r = post(client, sink.getvalue().to_pybytes())
+    assert r.status_code == 200, r.text
+    assert from_stream(r.content).column("id").to_pylist() == [0, 2]

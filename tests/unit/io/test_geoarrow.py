@@ -185,3 +185,16 @@ def test_empty_column_reads_as_empty_arrays():
     read = read_geoarrow(column, field)
     assert read.coords.shape == (0, 2) and read.rows.shape == (0,)
     assert np.array_equal(read.offsets[-1], [0])
+
+
+def test_large_lists_are_read_and_written_as_large_lists():
+    vertex = pa.struct([pa.field("x", pa.float64()), pa.field("y", pa.float64())])
+    storage = pa.large_list(pa.field("vertices", vertex))
+    column = pa.array([[{"x": -5.0, "y": 1.0}, {"x": 15.0, "y": 1.0}]], storage)
+    read = read_geoarrow(column, _field("g", storage, "geoarrow.linestring"))
+    assert read.large_offsets
+    result = clip_ragged(read.kind, read.coords, read.offsets, (0, 0, 10, 10))
+    array, _ = write_geoarrow(read, result.geometry_type, result.coords, result.offsets,
+                              result.source)
+    assert pa.types.is_large_list(array.type) and pa.types.is_large_list(array.type.value_type)
+    assert array.to_pylist() == [[[{"x": 0.0, "y": 1.0}, {"x": 10.0, "y": 1.0}]]]

@@ -18,8 +18,10 @@ column's name `WKB_COLUMN_NAME` (a WKB column as GeoParquet and GDAL write it).
 from __future__ import annotations
 
 import json
+from collections.abc import Callable
 from dataclasses import dataclass
 from enum import Enum
+from typing import Any
 
 import numpy as np
 import pyarrow as pa
@@ -371,7 +373,7 @@ def _read_serialized(column: pa.Array, field: pa.Field,
                           single=single)
 
 
-def _parses(parse, value) -> bool:
+def _parses(parse: Callable[[Any], Any], value: Any) -> bool:
     try:
         parse(value)
     except shapely.errors.ShapelyError:
@@ -441,7 +443,8 @@ def write_geoarrow(read: GeoArrowColumn, geometry_type: shapely.GeometryType | G
     return storage, field
 
 
-def _coords_array(coords: np.ndarray, read: GeoArrowColumn, mask) -> pa.Array:
+def _coords_array(coords: np.ndarray, read: GeoArrowColumn,
+                  mask: pa.Array | None) -> pa.Array:
     dims = "xyz"[:coords.shape[1]]
     if read.coord_layout is CoordLayout.INTERLEAVED:
         # The flat C-contiguous rows are the child buffer as they are.
@@ -453,7 +456,7 @@ def _coords_array(coords: np.ndarray, read: GeoArrowColumn, mask) -> pa.Array:
         fields=[pa.field(d, pa.float64(), nullable=False) for d in dims], mask=mask)
 
 
-def _list_array(offsets: np.ndarray, values: pa.Array, child: str, mask,
+def _list_array(offsets: np.ndarray, values: pa.Array, child: str, mask: pa.Array | None,
                 large: bool) -> pa.Array:
     # int32 offsets as the input had them, unless the clip's output outgrows them.
     large = large or offsets[-1] > np.iinfo(np.int32).max
@@ -475,6 +478,7 @@ def _write_serialized(read: GeoArrowColumn, kind: GeometryKind, coords: np.ndarr
     if kind is GeometryKind.POINT:
         geometries[np.isnan(coords[:, :2]).any(axis=1)] = shapely.from_wkt("POINT EMPTY")
     # A single geometry left in one part is written as its own kind again.
+    assert read.single is not None  # read from WKB or WKT
     single = read.single[source] & (shapely.get_num_geometries(geometries) == 1)
     geometries[single] = shapely.get_geometry(geometries[single], 0)
     values = np.full(read.row_count, None, dtype=object)

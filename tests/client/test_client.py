@@ -16,6 +16,7 @@ import rnsca_client
 from rnsca_client import AsyncClient, Client
 from tests.cases import MIXED_DIMENSIONS, MIXED_DIMENSIONS_CLIPPED
 from tests.client.conftest import MAX_VERTICES
+from tests.geoarrow_tables import decode, table, to_stream
 
 pytestmark = pytest.mark.e2e
 
@@ -186,6 +187,29 @@ def test_clip_segments_binary_options_and_empty_input(client):
 # --- connection handling ------------------------------------------------------------------
 
 
+def test_clip_geoarrow_table_in_table_out(client):
+    lines = [LineString([(-5, 1), (15, 1)]), LineString([(20, 20), (30, 30)])]
+    sent = table(lines, "linestring", "interleaved", False)
+    result = client.clip_geoarrow(sent, WINDOW, keep_empty=True, verify=True)
+    assert result.rows == len(result) == 2 and result.verification.passed
+    got = result.table()
+    assert got.column("name").to_pylist() == ["row 0", "row 1"]
+    clipped = decode(got.column("geometry"), got.schema.field("geometry"))
+    assert clipped[0].equals(shapely.MultiLineString([[(0, 1), (10, 1)]]))
+    assert clipped[1].is_empty
+    assert client.clip_geoarrow(to_stream(sent), WINDOW).rows == 1  # bytes go as they are
+
+
+def test_clip_geoarrow_refuses_unknown_options_and_inputs_before_sending(client):
+    with pytest.raises(rnsca_client.InvalidInputError, match="keep_emtpy"):
+        client.clip_geoarrow(b"", WINDOW, keep_emtpy=True)
+    with pytest.raises(rnsca_client.InvalidInputError, match="Arrow IPC stream"):
+        client.clip_geoarrow([1, 2], WINDOW)
+    with pytest.raises(rnsca_client.InvalidRequestError) as info:
+        client.clip_geoarrow(b"not arrow", WINDOW)
+    assert info.value.kind == "invalid-body"
+
+
 def test_context_manager_closes_and_an_injected_client_stays_open(server):
     with Client(server.url) as c:
         c.health()
@@ -217,18 +241,21 @@ def test_async_client_every_method(server):
         async with AsyncClient(server.url, retries=None) as client:
             health, ready, caps = await asyncio.gather(
                 client.health(), client.ready(), client.capabilities())
-            geo, svg, binary, listed = await asyncio.gather(
+            geo, svg, binary, listed, arrow = await asyncio.gather(
                 client.clip_geojson(HOLED, WINDOW),
                 client.clip_svg("M -5 5 L 15 5", WINDOW),
                 client.clip_segments(crossing_segments(30), WINDOW),
-                client.clip_segments([[-5, 5, 15, 5]], WINDOW))
+                client.clip_segments([[-5, 5, 15, 5]], WINDOW),
+                client.clip_geoarrow(table([HOLED], "polygon", "separated", False),
+                                     WINDOW))
             await client.wait_until_ready(timeout=5)
             with pytest.raises(rnsca_client.InvalidRequestError) as info:
                 await client.clip_geojson(ROAD, (0, 0, 0, 10))
         assert client._http.is_closed
-        return health, ready, caps, geo, svg, binary, listed, info.value
+        return health, ready, caps, geo, svg, binary, listed, arrow, info.value
 
-    health, ready, caps, geo, svg, binary, listed, error = asyncio.run(run())
+    health, ready, caps, geo, svg, binary, listed, arrow, error = asyncio.run(run())
+    assert arrow.rows == 1 and arrow.verification.passed
     assert health.status == "ok" and ready and "numba" in caps.available_backends
     assert geo.verification.passed and isinstance(geo.to_shapely(), Polygon)
     assert svg.paths == list(rnsca.clip_svg(["M -5 5 L 15 5"], WINDOW)[0])

@@ -32,6 +32,7 @@ from rnsca_client.results import (
     Backend,
     Capabilities,
     ClipStats,
+    GeoArrowResult,
     GeoJSONResult,
     Health,
     Limits,
@@ -45,7 +46,7 @@ __version__ = "0.1.0"
 
 __all__ = [
     "Client", "AsyncClient", "Retry", "DEFAULT_URL", "DEFAULT_TIMEOUT", "DEFAULT_RETRY",
-    "GeoJSONResult", "SVGResult", "SegmentsResult", "ClipStats", "Verification",
+    "GeoJSONResult", "SVGResult", "SegmentsResult", "GeoArrowResult", "ClipStats", "Verification",
     "Capabilities", "Backend", "Limits", "Health",
     "RnscaClientError", "InvalidInputError", "ResponseFormatError", "TransportError",
     "ConnectError", "RequestTimeoutError", "ApiError", "BadRequestError", "NotFoundError",

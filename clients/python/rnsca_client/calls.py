@@ -16,6 +16,7 @@ import httpx
 
 from rnsca_client.errors import InvalidInputError, ResponseFormatError, api_error
 from rnsca_client.inputs import (
+    arrow_stream,
     encode_json,
     geojson_document,
     is_numpy_array,
@@ -26,6 +27,7 @@ from rnsca_client.inputs import (
 from rnsca_client.results import (
     Capabilities,
     ClipStats,
+    GeoArrowResult,
     GeoJSONResult,
     Health,
     SegmentsResult,
@@ -152,6 +154,55 @@ def clip_segments(segments: Any, window: Any, *, binary: bool | None, verify: bo
                 content=segment_rows(segments).tobytes(), params=params,
                 headers={"Content-Type": "application/octet-stream",
                          "Accept": "application/octet-stream"})
+
+
+#: The media type of ``POST /v1/clip/geoarrow``'s body and answer.
+ARROW_STREAM = "application/vnd.apache.arrow.stream"
+#: Options the GeoArrow endpoint takes as query parameters.
+GEOARROW_OPTIONS = (*BINARY_OPTIONS, "resolution", "boundary", "keep_empty",
+                    "check_validity")
+
+
+def clip_geoarrow(table: Any, window: Any, *, column: str | None,
+                  verify: bool | str | None, options: Mapping[str, Any]
+                  ) -> Call[GeoArrowResult]:
+    """Return the call ``POST /v1/clip/geoarrow``: an Arrow IPC stream in and out.
+
+    `table` is the stream's bytes, or a ``pyarrow.Table`` or ``RecordBatch`` (written
+    as a stream here, with pyarrow).
+    """
+    unknown = sorted(set(options) - set(GEOARROW_OPTIONS))
+    if unknown:
+        raise InvalidInputError(
+            f"unknown option(s) {', '.join(unknown)} for GeoArrow; accepted: "
+            f"{', '.join(GEOARROW_OPTIONS)}")
+    params = dict(zip(("xmin", "ymin", "xmax", "ymax"),
+                      (repr(b) for b in window_bounds(window)), strict=True))
+    for name, value in _options(options).items():
+        if not (name == "n" and value == "auto"):
+            params[name] = ("true" if value else "false") if isinstance(value, bool) \
+                else str(value)
+    if column is not None:
+        params["column"] = column
+    if verify is not None:
+        params["verify"] = verify if isinstance(verify, str) else (
+            "true" if verify else "false")
+    return Call("POST", "/v1/clip/geoarrow", _read_geoarrow, content=arrow_stream(table),
+                params=params, headers={"Content-Type": ARROW_STREAM, "Accept": ARROW_STREAM})
+
+
+def _read_geoarrow(response: httpx.Response) -> GeoArrowResult:
+    headers = response.headers
+    try:
+        rows = int(headers["x-rnsca-rows"])
+        stats = ClipStats.from_dict(json.loads(headers["x-rnsca-stats"]))
+        verified = headers.get("x-rnsca-verification")
+        verification = None if verified is None else Verification.from_dict(
+            json.loads(verified))
+    except (KeyError, ValueError, TypeError) as exc:
+        raise ResponseFormatError(
+            f"the GeoArrow answer lacks a readable header ({exc})") from None
+    return GeoArrowResult(response.content, rows, stats, verification)
 
 
 def _read_binary_segments(response: httpx.Response) -> SegmentsResult:

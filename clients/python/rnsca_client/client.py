@@ -18,7 +18,14 @@ from rnsca_client.errors import (
     TransportError,
     retry_after_seconds,
 )
-from rnsca_client.results import Capabilities, GeoJSONResult, Health, SegmentsResult, SVGResult
+from rnsca_client.results import (
+    Capabilities,
+    GeoArrowResult,
+    GeoJSONResult,
+    Health,
+    SegmentsResult,
+    SVGResult,
+)
 from rnsca_client.retry import Retry
 
 __all__ = ["Client", "AsyncClient", "DEFAULT_TIMEOUT", "DEFAULT_URL", "DEFAULT_RETRY"]
@@ -250,6 +257,34 @@ class Client:
         return self.send(calls.clip_segments(segments, window, binary=binary, verify=verify,
                                              options=options))
 
+    def clip_geoarrow(self, table: Any, window: Any, *, column: str | None = None,
+                      verify: bool | str | None = None, **options: Any) -> GeoArrowResult:
+        """Return a table with its GeoArrow geometry column clipped to `window`.
+
+        Parameters
+        ----------
+        table : bytes, pyarrow.Table or pyarrow.RecordBatch
+            An Arrow IPC stream, or a table to send as one (needs pyarrow), with a
+            GeoArrow geometry column (native, WKB or WKT; see the server's README).
+        window : sequence of 4 float
+            ``[xmin, ymin, xmax, ymax]``.
+        column : str, optional
+            The geometry column, where several are tagged.
+        verify : bool or "all", optional
+            Compare with Shapely on the server.
+        **options
+            ``method``, ``n``, ``max_depth``, ``tolerance``, ``mode``, ``backend``,
+            ``resolution``, ``boundary``, ``keep_empty``, ``check_validity``.
+
+        Returns
+        -------
+        GeoArrowResult
+            ``stream`` (the answer's bytes; ``table()`` reads it), ``rows``, ``stats``,
+            ``verification``.
+        """
+        return self.send(calls.clip_geoarrow(table, window, column=column, verify=verify,
+                                             options=options))
+
     def capabilities(self) -> Capabilities:
         """Return the server's methods, modes, backends (and why one is missing), limits."""
         return self.send(calls.capabilities())
@@ -367,6 +402,13 @@ class AsyncClient:
                             verify: bool | str | None = None, **options: Any) -> SegmentsResult:
         """Return the visible piece of each segment (see `Client.clip_segments`)."""
         return await self.send(calls.clip_segments(segments, window, binary=binary,
+                                                   verify=verify, options=options))
+
+    async def clip_geoarrow(self, table: Any, window: Any, *, column: str | None = None,
+                            verify: bool | str | None = None,
+                            **options: Any) -> GeoArrowResult:
+        """Return a table with its geometry column clipped (see `Client.clip_geoarrow`)."""
+        return await self.send(calls.clip_geoarrow(table, window, column=column,
                                                    verify=verify, options=options))
 
     async def capabilities(self) -> Capabilities:

@@ -12,7 +12,7 @@ from typing import Any
 
 from rnsca_client.errors import InvalidInputError
 
-__all__ = ["window_bounds", "geojson_document", "svg_paths", "segment_rows",
+__all__ = ["window_bounds", "arrow_stream", "geojson_document", "svg_paths", "segment_rows",
            "geometry_from_geojson", "is_numpy_array", "encode_json"]
 
 
@@ -147,3 +147,19 @@ def geometry_from_geojson(geometry: dict[str, Any] | None):
         # `shape` reads a part's positions into one array, which refuses 2 and 3 numbers
         # mixed; GEOS's own GeoJSON reader takes them.
         return shapely.from_geojson(json.dumps(geometry))
+
+
+def arrow_stream(table: Any) -> bytes:
+    """Return an Arrow IPC stream: `table` itself if bytes, else a pyarrow table written."""
+    if isinstance(table, (bytes, bytearray, memoryview)):
+        return bytes(table)
+    if type(table).__module__.split(".")[0] != "pyarrow":
+        raise InvalidInputError(
+            "send GeoArrow as the bytes of an Arrow IPC stream or a pyarrow Table or "
+            f"RecordBatch, not {type(table).__name__}")
+    import pyarrow as pa
+
+    sink = pa.BufferOutputStream()
+    with pa.ipc.new_stream(sink, table.schema) as writer:
+        writer.write(table)
+    return sink.getvalue().to_pybytes()

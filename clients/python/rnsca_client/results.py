@@ -16,6 +16,7 @@ __all__ = [
     "GeoJSONResult",
     "SVGResult",
     "SegmentsResult",
+    "GeoArrowResult",
     "Backend",
     "Limits",
     "Capabilities",
@@ -202,6 +203,36 @@ class SegmentsResult:
                    [list(row) for row in data["t"]], ClipStats.from_dict(data["stats"]),
                    _verification(data.get("verification")), data["method"], data["mode"],
                    data["backend"])
+
+
+@dataclass(frozen=True)
+class GeoArrowResult:
+    """``POST /v1/clip/geoarrow``: the table with its geometry column clipped.
+
+    Attributes
+    ----------
+    stream : bytes
+        The answer, an Arrow IPC stream (read it with ``pyarrow.ipc.open_stream``, or
+        `table`).
+    rows : int
+        Rows in the answer.
+    stats, verification
+        As for every clip.
+    """
+
+    stream: bytes = field(repr=False)
+    rows: int
+    stats: ClipStats
+    verification: Verification | None
+
+    def __len__(self) -> int:
+        return self.rows
+
+    def table(self) -> Any:
+        """Return the answer as a ``pyarrow.Table`` (needs pyarrow)."""
+        import pyarrow as pa
+
+        return pa.ipc.open_stream(pa.py_buffer(self.stream)).read_all()
 
 
 @dataclass(frozen=True)

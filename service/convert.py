@@ -252,10 +252,21 @@ def _read_arrow_stream(body: bytes) -> pa.Table:
         # Offsets past their child, decreasing or out of range would be read as they
         # are by the clip: a full validation refuses them here.
         table.validate(full=True)
-    except pa.ArrowException as exc:
+        _check_names(table.schema)
+    except (pa.ArrowException, OSError, UnicodeDecodeError) as exc:
+        # A truncated buffer is an OSError; a field name that is not UTF-8 (which
+        # the format requires) a UnicodeDecodeError when pyarrow decodes it.
         raise InvalidBodyError(f"the body is not a valid Arrow IPC stream ({exc}); send "
                                f"{ARROW_STREAM}, e.g. from pyarrow.ipc.new_stream") from None
     return table
+
+
+def _check_names(fields: pa.Schema | pa.DataType) -> None:
+    """Decode every field name, nested ones included (pyarrow decodes them lazily)."""
+    for i in range(len(fields) if isinstance(fields, pa.Schema) else fields.num_fields):
+        field = fields.field(i)
+        _ = field.name
+        _check_names(field.type)
 
 
 def _arrow_stream(table: pa.Table) -> bytes:

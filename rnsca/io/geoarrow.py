@@ -309,6 +309,8 @@ def _read_coords(values: pa.Array, field: pa.Field,
         if dims not in ("xy", "xyz", "xym", "xyzm"):
             dims = "xy" if size == 2 else "xyz" if size == 3 else f"{size} values"
         _check_dims(dims, field, name)
+        if size != len(dims):
+            raise ParseError(f"column {field.name!r}: {size} values per vertex named {dims!r}")
         flat = values.values
         if values.offset or len(flat) != size * len(values):
             flat = flat.slice(values.offset * size, size * len(values))

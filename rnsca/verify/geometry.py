@@ -785,8 +785,8 @@ def _ragged_outputs(result: RaggedClipResult, count: int) -> tuple[np.ndarray, n
         raise InvalidGeometryError(
             f"verify needs the {stats_count} geometries that were clipped, got {count}")
     # In 2D: Z is not compared, and may be NaN (`clip_ragged(partial_z=True)`).
-    geometries = shapely.from_ragged_array(result.geometry_type, _xy(result.coords),
-                                           result.offsets)
+    # `to_shapely`: Shapely fails on arrays whose geometries are all empty.
+    geometries = to_shapely(result.geometry_type, _xy(result.coords), result.offsets)
     return geometries, source
 
 

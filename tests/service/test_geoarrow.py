@@ -194,3 +194,40 @@ def test_a_stream_of_several_batches_is_one_table(client):
     r = post(client, sink.getvalue().to_pybytes())
     assert r.status_code == 200, r.text
     assert from_stream(r.content).column("id").to_pylist() == [0, 2]
+
+
+def test_a_truncated_stream_is_422(client):
+    body = to_stream(table([ZIGZAG], "linestring", "interleaved", False))
+    assert_problem(post(client, body[:-40]), 422, "invalid-body", "Arrow IPC stream")
+
+
+def test_a_field_name_that_is_not_utf8_is_422(client):
+    body = to_stream(pa.table({"idx": [1]}))
+    broken = body.replace(b"idx", b"\xfbdx")
+    assert_problem(post(client, broken), 422, "invalid-body", "Arrow IPC stream")
+
+
+def test_mutated_streams_never_fail_as_anything_but_a_problem():
+    """Random bytes changed in valid streams: every failure is a mapped error (never a 500)."""
+    from rnsca.errors import RnscaError
+    from rnsca.window import Window
+    from service import Settings
+    from service.convert import clip_geoarrow
+    from service.errors import ServiceError
+    from service.schemas import GeometryOptions
+
+    rng = np.random.default_rng(7)
+    bodies = [to_stream(table([shapely.box(-5, -5, 5, 5), None], "polygon", encoding, z))
+              for encoding in ("separated", "interleaved", "wkb") for z in (False, True)]
+    bodies.append(to_stream(table([shapely.Point(1, 1), shapely.Point(20, 1)], "point",
+                                  "interleaved", False)))
+    settings = Settings(warm_up=False)
+    for i in range(700):
+        body = bytearray(bodies[i % len(bodies)])
+        for _ in range(rng.integers(1, 4)):
+            body[rng.integers(0, len(body))] = rng.integers(0, 256)
+        try:
+            clip_geoarrow(bytes(body), Window(0, 0, 10, 10),
+                          GeometryOptions(keep_empty=bool(i % 2)), None, None, settings)
+        except (RnscaError, ServiceError):
+            pass

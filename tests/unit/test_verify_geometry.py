@@ -425,3 +425,13 @@ def test_verify_works_for_a_window_of_subnormal_size():
     line = shapely.LineString([(-1e-323, 0.0), (1e-323, 5e-324)])
     v = verify(line, shapely.LineString([(0.0, 0.0), (5e-324, 5e-324)]), window)
     assert v.passed and v.max_deviation == 0.0
+
+
+@pytest.mark.parametrize(("kind", "offsets"), [("multipoint", ([0, 1],)),
+                                                ("linestring", ([0, 2],))])
+def test_a_ragged_result_left_with_no_coordinates_is_compared(kind, offsets):
+    """Every output empty (kept with keep_empty): Shapely's from_ragged_array fails there."""
+    coords = [[20.0, 1.0]] if kind == "multipoint" else [[20.0, 1.0], [30.0, 1.0]]
+    result = clip_ragged(kind, coords, offsets, (0, 0, 10, 10), keep_empty=True)
+    assert result.coords.shape[0] == 0
+    assert verify((kind, np.array(coords), offsets), result, (0, 0, 10, 10)).passed

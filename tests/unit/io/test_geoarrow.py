@@ -198,3 +198,10 @@ def test_large_lists_are_read_and_written_as_large_lists():
                               result.source)
     assert pa.types.is_large_list(array.type) and pa.types.is_large_list(array.type.value_type)
     assert array.to_pylist() == [[[{"x": 0.0, "y": 1.0}, {"x": 10.0, "y": 1.0}]]]
+
+
+def test_interleaved_values_must_match_their_dimension_names():
+    storage = pa.list_(pa.field("xy", pa.float64()), 3)
+    with pytest.raises(ParseError, match="3 values per vertex named 'xy'"):
+        read_geoarrow(pa.array([[1.0, 2.0, 3.0]], storage),
+                      _field("g", storage, "geoarrow.point"))

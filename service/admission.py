@@ -34,9 +34,9 @@ __all__ = ["MemoryBudget", "Reservation", "AdmissionMiddleware", "OverMemoryBudg
 #: polygons 17.8, SVG cubics 22.2, JSON segments 16.1, binary segments 8.2. Verification
 #: asked for explicitly can take more: ``verify: "all"`` measured 31 for segments.
 #: GeoArrow streams (`application/vnd.apache.arrow.stream`) are their buffers, so the ratio
-#: is low: 3.2 lines (interleaved), 3.6 polygons (separated), 6.3 WKB lines as the
+#: is low: 3.1 lines (interleaved), 3.7 polygons (separated), 5.9 WKB lines as the
 #: benchmark sends them (a quarter of the vertices inside the window); with every vertex
-#: inside (the answer as large as the body) 6.1, 7.7 and 9.2.
+#: inside (the answer as large as the body) 5.5, 7.7 and 8.8.
 PEAK_BYTES_PER_BODY_BYTE = {
     ("geojson", "json"): 24.0,
     ("svg", "json"): 24.0,

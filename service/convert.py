@@ -248,6 +248,8 @@ def clip_geojson(body: bytes, settings: Settings, deadline: float | None = None)
 def _read_arrow_stream(body: bytes) -> pa.Table:
     """Return the table an Arrow IPC stream holds, its buffers checked against its offsets."""
     try:
+        # Zero-copy: the columns are views of `body` (read-only; the reader copies the
+        # coordinates the kernels need once, `rnsca.io.geoarrow._numbers`).
         table = pa.ipc.open_stream(pa.py_buffer(body)).read_all()
         # Offsets past their child, decreasing or out of range would be read as they
         # are by the clip: a full validation refuses them here.

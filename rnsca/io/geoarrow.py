@@ -4,9 +4,12 @@ A GeoArrow native column stores one coordinate array and one list offsets array 
 level of nesting (https://geoarrow.org/format.html): the layout of `rnsca.Ragged`. The
 coordinates are either *separated* (a struct of ``x``, ``y`` [, ``z``] double arrays) or
 *interleaved* (a fixed-size list of 2 or 3 doubles per vertex). Reading takes the
-buffers as they are where the layout allows it (interleaved coordinates are viewed, not
-copied; separated ones must be stacked into rows, and int32 offsets widened to int64);
-writing wraps the clipped arrays in Arrow arrays of the input's encoding. WKB and WKT
+buffers as they are where the layout allows it: interleaved coordinates are viewed, not
+copied, where their Arrow buffer is mutable (arrays pyarrow built in this process), and
+copied once where it is not (buffers read from an IPC stream or a file are read-only, and
+the kernels take writeable arrays: see `_numbers`); separated ones are stacked into rows,
+and int32 offsets widened to int64. Writing wraps the clipped arrays in Arrow arrays of
+the input's encoding (``from_arrays`` over them, no copy of interleaved coordinates). WKB and WKT
 columns go through Shapely. This module knows nothing of clipping.
 
 The column's kind and encoding come from the field's Arrow extension metadata
@@ -216,7 +219,8 @@ def read_geoarrow(column: pa.Array | pa.ChunkedArray, field: pa.Field) -> GeoArr
     ('LINESTRING', [[0.0, 1.0], [2.0, 3.0]], [[0, 2]])
     """
     if isinstance(column, pa.ChunkedArray):
-        column = column.combine_chunks()
+        # One chunk (a stream of one batch) as it is: combining copies even one.
+        column = column.chunk(0) if column.num_chunks == 1 else column.combine_chunks()
     if isinstance(column, pa.ExtensionArray):
         column = column.storage
     name = _extension_name(field)
@@ -244,7 +248,7 @@ def read_geoarrow(column: pa.Array | pa.ChunkedArray, field: pa.Field) -> GeoArr
         if level > 0 and values.null_count:
             raise ParseError(f"column {field.name!r}: null {_LEVEL_NAMES[kind][level - 1]} "
                              "(only a whole geometry may be null)")
-        level_offsets = values.offsets.to_numpy()
+        level_offsets = _numbers(values.offsets)
         child = values.values
         # A slice's offsets start past 0 and its child runs on: take the part it uses.
         if level_offsets.shape[0] and (level_offsets[0] != 0
@@ -302,7 +306,9 @@ def _read_coords(values: pa.Array, field: pa.Field,
         arrays = [values.field(i) for i in range(len(dims))]
         if any(a.null_count for a in arrays):
             raise ParseError(f"column {field.name!r}: null coordinates")
-        return np.column_stack([_doubles(a, field) for a in arrays]), CoordLayout.SEPARATED
+        # Stacking into rows copies: the read-only views will do.
+        return (np.column_stack([_doubles(a, field, view=True) for a in arrays]),
+                CoordLayout.SEPARATED)
     if pa.types.is_fixed_size_list(values.type):
         dims = values.type.value_field.name
         size = values.type.list_size
@@ -330,11 +336,27 @@ def _check_dims(dims: str, field: pa.Field, name: str) -> None:
                          "names them x, y [, z] (separated) or xy, xyz (interleaved)")
 
 
-def _doubles(array: pa.Array, field: pa.Field) -> np.ndarray:
+def _doubles(array: pa.Array, field: pa.Field, view: bool = False) -> np.ndarray:
     if not pa.types.is_float64(array.type):
         raise ParseError(f"column {field.name!r}: coordinates must be double, "
                          f"not {array.type}")
-    return array.to_numpy(zero_copy_only=True)
+    return array.to_numpy(zero_copy_only=True) if view else _numbers(array)
+
+
+def _numbers(array: pa.Array) -> np.ndarray:
+    """Return a primitive array without nulls as a writeable NumPy array.
+
+    A view of the Arrow buffer where that buffer is mutable (Arrow's own allocations),
+    else a copy (a memcpy): ``to_numpy`` views are read-only, and the kernels are compiled
+    and warmed up for writeable arrays; a read-only one would make each kernel compile a
+    second specialisation on its first call (seconds, on a cold cache).
+    """
+    dtype = np.dtype(array.type.to_pandas_dtype())
+    buffer = array.buffers()[1]
+    if buffer is not None and buffer.is_mutable:
+        return np.frombuffer(buffer, dtype=dtype, count=len(array),
+                             offset=array.offset * dtype.itemsize)
+    return array.to_numpy(zero_copy_only=False).copy()
 
 
 def _read_serialized(column: pa.Array, field: pa.Field,

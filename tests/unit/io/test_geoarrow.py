@@ -38,6 +38,20 @@ def test_interleaved_coordinates_are_read_without_a_copy():
     assert [o.tolist() for o in read.offsets] == [[0, 6]]
 
 
+def test_coordinates_and_offsets_are_writeable_copies_of_immutable_buffers():
+    """A stream's buffers are read-only: the kernels get writeable copies."""
+    column, field = encode([ZIGZAG], "linestring", "interleaved", z=False)
+    sink = pa.BufferOutputStream()
+    t = pa.Table.from_arrays([column], schema=pa.schema([field]))
+    with pa.ipc.new_stream(sink, t.schema) as writer:
+        writer.write_table(t)
+    read_back = pa.ipc.open_stream(sink.getvalue()).read_all()
+    read = read_geoarrow(read_back.column(0), read_back.schema.field(0))
+    assert read.coords.flags.writeable and read.offsets[0].flags.writeable
+    assert read.coords.tolist() == shapely.get_coordinates(ZIGZAG).tolist()
+    assert [o.tolist() for o in read.offsets] == [[0, 6]]
+
+
 def test_separated_coordinates_are_stacked_into_rows():
     column, field = encode([ZIGZAG], "linestring", "separated", z=False)
     read = read_geoarrow(column, field)

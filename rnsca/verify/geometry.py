@@ -13,7 +13,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable, Iterable
-from dataclasses import asdict, dataclass, fields, replace
+from dataclasses import dataclass, fields, replace
 from typing import Any, TypeAlias, cast
 
 import numpy as np
@@ -138,7 +138,9 @@ class Verification:
 
     def to_dict(self) -> dict[str, Any]:
         """Return the verification as plain JSON-ready values."""
-        return asdict(self)
+        # Its fields are flat values: a copy of them, without `asdict`'s recursive deep copy
+        # (measured: a tenth of a small verified GeoJSON request's verification).
+        return {field.name: getattr(self, field.name) for field in fields(self)}
 
 
 def approx_leaf_bound(lengths: np.ndarray, result: SegmentClipResult) -> np.ndarray:

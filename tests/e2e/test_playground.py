@@ -9,9 +9,7 @@ from __future__ import annotations
 
 import json
 import math
-import os
 import re
-import shutil
 
 import httpx
 import pytest
@@ -21,7 +19,6 @@ from tests.e2e.server import ROOT, LiveServer
 
 pytestmark = pytest.mark.e2e
 
-IN_CI = os.environ.get("CI", "").lower() == "true"
 ARTIFACTS = ROOT / "test-artifacts"
 #: Every wait in the page is bounded by this (ms): a stuck page fails, never hangs.
 WAIT_MS = 30_000
@@ -45,38 +42,10 @@ SNAPSHOT = """() => {
 }"""
 
 
-def _launch_options() -> dict:
-    executable = shutil.which("chromium")
-    message = None
-    try:
-        import playwright.sync_api  # noqa: F401
-    except ImportError:
-        message = "playwright is not installed (pip install playwright, in the dev extra)"
-    if message is None and executable is None:
-        message = "chromium is not installed (apt-get install chromium; .ci/run does)"
-    if message is not None:
-        if IN_CI:
-            pytest.fail(message)
-        pytest.skip(message)
-    return dict(executable_path=executable, headless=True,
-                args=["--no-sandbox", "--disable-gpu", "--disable-background-networking"])
-
-
 @pytest.fixture(scope="module")
 def server():
     with LiveServer() as live:
         yield live
-
-
-@pytest.fixture(scope="module")
-def browser():
-    options = _launch_options()
-    from playwright.sync_api import sync_playwright
-
-    with sync_playwright() as playwright:
-        chromium = playwright.chromium.launch(**options)
-        yield chromium
-        chromium.close()
 
 
 @pytest.fixture

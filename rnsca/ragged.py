@@ -106,7 +106,7 @@ def resolve_geometry_options(
                                      resolution=resolution)
     side = Boundary(boundary)
     engine = get_backend(backend)
-    if dimension == 2 and options.mode is Mode.APPROX:
+    if dimension == 2 and options.mode not in Operation.POLYGONS.modes:
         raise InvalidOptionError(
             "mode='approx' cannot clip polygons: valid polygon output needs the exact "
             "boundary crossings (use mode='exact')")

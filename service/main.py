@@ -92,8 +92,9 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     middleware.append(Middleware(AdmissionMiddleware, budget=memory))
 
     app = FastAPI(title="rnsca", version=rnsca.__version__, description=_DESCRIPTION,
-                  lifespan=lifespan, middleware=middleware, docs_url="/docs",
-                  redoc_url=None, openapi_url="/openapi.json")
+                  lifespan=lifespan, middleware=middleware, openapi_url="/openapi.json",
+                  # /docs and /redoc are service.routes.docs: assets served from here.
+                  docs_url=None, redoc_url=None)
     app.state.settings = settings
     app.state.runner = runner
     app.state.metrics = metrics

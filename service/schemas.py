@@ -33,6 +33,7 @@ __all__ = [
     "StatsModel",
     "VerificationModel",
     "Capabilities",
+    "OperationOptions",
     "Health",
     "Problem",
     "REQUEST_MODELS",
@@ -240,12 +241,23 @@ class Limits(BaseModel):
     verify_max_vertices: int
 
 
+class OperationOptions(BaseModel):
+    """The methods and modes one kind of input is clipped with (others are refused)."""
+
+    methods: list[str]
+    modes: list[str]
+
+
 class Capabilities(BaseModel):
     """What this server can do."""
 
     version: str
     methods: list[str]
     modes: list[str]
+    operations: dict[str, OperationOptions] = Field(
+        description="By kind of input (`segments`; `lines` and `polygons` of GeoJSON, "
+                    "points take any; `paths` of SVG): the methods and modes it accepts, "
+                    "on every backend. Polygons need exact mode; curves, method `rnsca`.")
     backends: list[dict[str, Any]] = Field(description="Each backend: name, available, "
                                                        "devices, and the reason if not; "
                                                        "where available, the operations "

@@ -74,6 +74,39 @@ class Operation(_ChoiceEnum):
     FLATTEN = "flatten"
     """Turn Bézier paths into polylines (`ClipBackend.flatten_paths`)."""
 
+    @property
+    def methods(self) -> tuple[Method, ...]:
+        """Return the methods the operation accepts, on every backend (in `Method` order).
+
+        Curves are clipped by RNSCA only (the line baselines clip them after
+        `flatten_paths`); flattening takes no method.
+
+        Examples
+        --------
+        >>> [m.value for m in Operation.PATHS.methods]
+        ['rnsca']
+        """
+        if self is Operation.FLATTEN:
+            return ()
+        return (Method.RNSCA,) if self is Operation.PATHS else tuple(Method)
+
+    @property
+    def modes(self) -> tuple[Mode, ...]:
+        """Return the modes the operation accepts, on every backend (in `Mode` order).
+
+        Polygons are clipped in exact mode only: valid polygon output needs the exact
+        boundary crossings. Flattening takes no mode. A backend may run fewer
+        (`Capabilities.modes`).
+
+        Examples
+        --------
+        >>> [m.value for m in Operation.POLYGONS.modes]
+        ['exact']
+        """
+        if self is Operation.FLATTEN:
+            return ()
+        return (Mode.EXACT,) if self is Operation.POLYGONS else tuple(Mode)
+
 
 @dataclass(frozen=True, slots=True)
 class Capabilities:

@@ -564,6 +564,8 @@ class _Reader:
 
         `plain` holds a flag per coordinate array, in the order of `layout`'s `arrays`.
         """
+        if plain.all():  # the usual case: nothing to look up (a small request's 7 NumPy calls)
+            return self.sources
         not_plain = np.concatenate(([0], np.cumsum(~plain)))
         n_points, n_parts = len(self.point_arrays), len(self.line_parts)
         ring_offsets = exclusive_sum(self.ring_counts)
@@ -635,8 +637,11 @@ def _read_chunks(arrays: list, sizes: np.ndarray, starts: np.ndarray, dim: int) 
     out = np.empty((total, dim), dtype=np.float64)
     plain = np.zeros(len(arrays), dtype=bool)
     partial_z = False
-    cuts = np.searchsorted(starts, np.arange(_CHUNK, total, _CHUNK), side="right")
-    bounds = np.unique(np.concatenate(([0], cuts, [len(arrays)]))).tolist()
+    if total <= _CHUNK:  # one chunk: a small request's bounds without four NumPy calls
+        bounds = [0, len(arrays)]
+    else:
+        cuts = np.searchsorted(starts, np.arange(_CHUNK, total, _CHUNK), side="right")
+        bounds = np.unique(np.concatenate(([0], cuts, [len(arrays)]))).tolist()
     for lo, hi in zip(bounds[:-1], bounds[1:], strict=True):
         chunk = arrays[lo:hi]
         has_tuples = False

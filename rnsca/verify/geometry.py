@@ -13,7 +13,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable, Iterable
-from dataclasses import asdict, dataclass, fields, replace
+from dataclasses import dataclass, fields, replace
 from typing import Any, TypeAlias, cast
 
 import numpy as np
@@ -138,7 +138,9 @@ class Verification:
 
     def to_dict(self) -> dict[str, Any]:
         """Return the verification as plain JSON-ready values."""
-        return asdict(self)
+        # Its fields are flat values: a copy of them, without `asdict`'s recursive deep copy
+        # (measured: a tenth of a small verified GeoJSON request's verification).
+        return {field.name: getattr(self, field.name) for field in fields(self)}
 
 
 def approx_leaf_bound(lengths: np.ndarray, result: SegmentClipResult) -> np.ndarray:
@@ -280,7 +282,7 @@ def verify(original: Any, clipped: Any, window: _Windows, *, mode: Mode | str | 
     """
     boundary = Boundary(boundary)
     if approx_bound is not None:
-        approx_bound = _bound(approx_bound)
+        approx_bound = _non_negative(approx_bound, "approx_bound")
     if sample is not None and (isinstance(sample, bool) or not isinstance(sample, int | np.integer)
                                or sample < 1):
         raise InvalidOptionError(f"sample must be an integer >= 1, got {sample!r}")
@@ -437,8 +439,11 @@ class _Coverage:
 
 def _limit(value: float | None, name: str) -> float | None:
     """Return a time or crossing limit as a float >= 0 (None: no limit)."""
-    if value is None:
-        return None
+    return None if value is None else _non_negative(value, name)
+
+
+def _non_negative(value: float, name: str) -> float:
+    """Return option `name` as a float >= 0, or raise InvalidOptionError naming it."""
     try:
         limit = float(value)
     except (TypeError, ValueError):
@@ -540,7 +545,8 @@ def _verify_paths(original: object, clipped: object, window: Window | Iterable[f
         raise InvalidGeometryError(
             f"verify needs one clipped path per original: {len(delivered_paths)} clipped, "
             f"{len(originals_paths)} originals")
-    flat = window.size * CURVE_RELATIVE_TOLERANCE if tolerance is None else _bound(tolerance)
+    flat = (window.size * CURVE_RELATIVE_TOLERANCE if tolerance is None
+            else _non_negative(tolerance, "tolerance"))
     if not flat > 0:
         raise InvalidOptionError(f"tolerance must be > 0, got {tolerance!r}")
     if mode is Mode.APPROX:
@@ -584,16 +590,6 @@ def _verify_paths(original: object, clipped: object, window: Window | Iterable[f
         return compared
 
     return _judge(chooser.compare(weights[chosen], compare_chunk), mode.value, allowed)
-
-
-def _bound(value: float) -> float:
-    try:
-        bound = float(value)
-    except (TypeError, ValueError):
-        raise InvalidOptionError(f"approx_bound must be a number, got {value!r}") from None
-    if not bound >= 0.0:
-        raise InvalidOptionError(f"approx_bound must be >= 0, got {bound}")
-    return bound
 
 
 # --- segments -----------------------------------------------------------------------------

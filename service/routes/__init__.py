@@ -1,8 +1,8 @@
-"""The routers: ``/v1`` (clipping, capabilities), the operational endpoints, the playground."""
+"""The routers: ``/v1`` (clipping, capabilities), operations, the API docs, the playground."""
 
 from fastapi import APIRouter
 
-from service.routes import clip, health, meta, playground
+from service.routes import clip, docs, health, meta, playground
 
 __all__ = ["api_router"]
 
@@ -13,4 +13,5 @@ api_router.include_router(clip.router)
 api_router.include_router(meta.v1_router)
 api_router.include_router(health.router)
 api_router.include_router(meta.router)
+api_router.include_router(docs.router)
 api_router.include_router(playground.router)

@@ -8,6 +8,7 @@ from prometheus_client import CONTENT_TYPE_LATEST
 from starlette.responses import Response
 
 import rnsca
+from rnsca.backends.base import Operation
 from rnsca.options import Method, Mode
 from service import convert
 from service.deps import MetricsDep, RunnerDep, SettingsDep
@@ -26,6 +27,9 @@ async def capabilities(settings: SettingsDep, runner: RunnerDep) -> Response:
         "version": rnsca.__version__,
         "methods": [m.value for m in Method],
         "modes": [m.value for m in Mode],
+        "operations": {op.value: {"methods": [m.value for m in op.methods],
+                                  "modes": [m.value for m in op.modes]}
+                       for op in Operation if op.methods},
         "backends": convert.backend_report(),
         "threading_layer": runner.threading_layer,
         "serialized": runner.serialized,

@@ -1,5 +1,6 @@
 """``GET /``: the playground page; ``GET /playground/...``: its scripts, styles and examples.
 
+``GET /favicon.ico`` is the service's icon (an SVG, also linked from the pages).
 Static files only (no build step, nothing from a CDN), kept out of the OpenAPI schema.
 The assets are a route (not a mount) so that the access log and the metrics label them
 with their route like every other request.
@@ -26,6 +27,12 @@ router = APIRouter(include_in_schema=False)
 async def playground() -> FileResponse:
     """Return the playground page."""
     return FileResponse(STATIC_DIR / "index.html", media_type="text/html; charset=utf-8")
+
+
+@router.get("/favicon.ico")
+async def favicon() -> FileResponse:
+    """Return the service's icon (SVG: browsers ask for /favicon.ico whatever it is)."""
+    return FileResponse(STATIC_DIR / "favicon.svg", media_type="image/svg+xml")
 
 
 @router.get("/playground/{path:path}")

@@ -9,7 +9,8 @@
 //
 // Test hooks: <body data-state> is "loading", "busy", "idle" or "error";
 // #results[data-window] is the window (JSON) of the result or error shown; summary
-// values and statistics carry their full-precision number in data-value.
+// values and statistics carry their full-precision number in data-value; #copy-status
+// has data-copied="true" once the result is on the clipboard.
 
 const API = { geojson: "v1/clip/geojson", svg: "v1/clip/svg", capabilities: "v1/capabilities" };
 const EXAMPLES = "playground/examples/";
@@ -25,6 +26,10 @@ const STAT_KEYS = [
   "decided_shallow_fraction",
 ];
 
+// One format for every count shown (vertices, paths, statistics, limits): digits grouped.
+const COUNT = new Intl.NumberFormat("en");
+const count = (n) => COUNT.format(n);
+
 const $ = (id) => document.getElementById(id);
 const canvas = $("canvas");
 const world = $("world");
@@ -38,6 +43,7 @@ const state = {
   window: [NaN, NaN, NaN, NaN],
   capabilities: null,
   examples: [],
+  result: null,          // what Copy and Download give: {text, type, filename, label}
   inFlight: false,
   pending: false,
   drag: null,
@@ -166,15 +172,16 @@ function loadInput({ keepWindow }) {
   if (!state.format) {
     info.textContent = "";
     clearResult();
+    offerOptions();
     setState("idle");
     return;
   }
   const box = $("input-layer").getBBox();
   if (state.format === "geojson") {
     const m = measure(state.geojson);
-    info.textContent = `GeoJSON: ${m.geometries} geometries, ${m.vertices} vertices`;
+    info.textContent = `GeoJSON: ${count(m.geometries)} geometries, ${count(m.vertices)} vertices`;
   } else {
-    info.textContent = `SVG path data: ${state.paths.length} path(s)` +
+    info.textContent = `SVG path data: ${count(state.paths.length)} path(s)` +
       (state.capabilities && !state.capabilities.svg ? " (this server has no SVG clipping)" : "");
   }
   if (parsed.warning) info.innerHTML += ` <span class="warning">${escapeHtml(parsed.warning)}</span>`;
@@ -185,8 +192,51 @@ function loadInput({ keepWindow }) {
     const cx = box.x + box.width / 2, cy = box.y + box.height / 2;
     setWindow(roundWindow([cx - w, cy - h, cx + w, cy + h], { width: size, height: size }));
   }
+  offerOptions();
   fitView();
   requestClip();
+}
+
+// --- options offered for the input --------------------------------------------------
+
+function inputOperations() {
+  // The kinds of input (keys of /v1/capabilities' "operations") the loaded input holds;
+  // points take any method and mode.
+  if (state.format === "svg") return ["paths"];
+  if (state.format !== "geojson") return [];
+  const kinds = new Set();
+  for (const g of geometries(state.geojson)) {
+    if (g.type === "LineString" || g.type === "MultiLineString") kinds.add("lines");
+    if (g.type === "Polygon" || g.type === "MultiPolygon") kinds.add("polygons");
+  }
+  return [...kinds];
+}
+
+function offerOptions() {
+  // Offer only the methods and modes the server accepts for this input (a polygon
+  // refuses approx mode; curves take method rnsca only): the others are disabled, with
+  // the reason, and a choice no longer offered falls back to the first one that is.
+  const operations = (state.capabilities && state.capabilities.operations) || {};
+  const kinds = inputOperations().filter((kind) => kind in operations);
+  const notes = [];
+  for (const [id, key] of [["method", "methods"], ["mode", "modes"]]) {
+    const select = $(id);
+    for (const option of select.options) {
+      const refusing = kinds.filter((kind) => !operations[kind][key].includes(option.value));
+      option.disabled = refusing.length > 0;
+      option.textContent = option.value + (refusing.length ? ` (not for ${refusing.join(", ")})` : "");
+      option.title = refusing.length ? `the server refuses ${id} ${option.value} for ${refusing.join(" and ")}` : "";
+    }
+    if (select.selectedOptions[0] && select.selectedOptions[0].disabled) {
+      const first = [...select.options].find((o) => !o.disabled);
+      if (first) select.value = first.value;
+    }
+    for (const kind of kinds) {
+      const accepted = operations[kind][key];
+      if (accepted.length < select.options.length) notes.push(`${kind}: ${id} ${accepted.join(" or ")} only`);
+    }
+  }
+  $("options-note").textContent = notes.length ? `For this input, ${notes.join("; ")}.` : "";
 }
 
 function overlaps(w, box) {
@@ -473,6 +523,7 @@ function measure(doc) {
 
 function showResult(format, data, body) {
   $("error").hidden = true;
+  keepResult(format, data, body);
   const summary = [];
   if (format === "geojson") {
     drawShapes($("output-layer"), geometries(data.geojson).flatMap(geometryShapes), "evenodd");
@@ -496,7 +547,7 @@ function showResult(format, data, body) {
     const dd = document.createElement("dd");
     dd.dataset.key = key.replace(/ /g, "_");
     dd.dataset.value = String(value);
-    dd.textContent = Number.isInteger(value) ? value.toLocaleString("en") : value.toPrecision(8);
+    dd.textContent = Number.isInteger(value) ? count(value) : value.toPrecision(8);
     return [dt, dd];
   }));
   showStats(data.stats);
@@ -511,7 +562,7 @@ function showStats(stats) {
     name.textContent = key.replace(/_/g, " ");
     const value = document.createElement("td");
     value.dataset.value = String(stats[key]);
-    value.textContent = Number.isInteger(stats[key]) ? stats[key].toLocaleString("en")
+    value.textContent = Number.isInteger(stats[key]) ? count(stats[key])
                                                       : Number(stats[key]).toFixed(3);
     tr.append(name, value);
     return tr;
@@ -537,7 +588,7 @@ function drawLevels(levels) {
     const r = document.createElementNS(SVG_NS, "rect");
     Object.entries({ x: i * 22 + 2, y: 46 - h, width: 18, height: h }).forEach(([k, a]) => r.setAttribute(k, a));
     const title = document.createElementNS(SVG_NS, "title");
-    title.textContent = `level ${i}: ${v} fragments decided`;
+    title.textContent = `level ${i}: ${count(v)} fragments decided`;
     r.append(title);
     const t = document.createElementNS(SVG_NS, "text");
     t.setAttribute("x", i * 22 + 11); t.setAttribute("y", 57); t.setAttribute("text-anchor", "middle");
@@ -559,7 +610,7 @@ function showVerification(v, format, body) {
       why += format === "geojson" ? ": approx mode is judged against a bound; set an approx bound"
                                   : " (approx mode)";
     } else if (state.capabilities) {
-      why += ` (the input is over the server's verify_max_vertices, ${state.capabilities.limits.verify_max_vertices.toLocaleString("en")})`;
+      why += ` (the input is over the server's verify_max_vertices, ${count(state.capabilities.limits.verify_max_vertices)})`;
     }
     box.innerHTML = `<p class="note">${escapeHtml(why)}</p>`;
     box.dataset.passed = "";
@@ -569,17 +620,75 @@ function showVerification(v, format, body) {
   const rows = [["max deviation", v.max_deviation], ["allowed deviation", v.allowed_deviation],
                 ["false positives", v.false_positives], ["ratio to Shapely", v.ratio],
                 ["valid output", v.valid], ["mode", v.mode],
-                ["inputs compared", `${v.checked} of ${v.inputs}`]];
+                ["inputs compared", `${count(v.checked)} of ${count(v.inputs)}`]];
   // null: not every input chosen was compared (time limit, or too costly), none failed.
   const [verdict, text] = v.passed === null ? ["undecided", "? no verdict"]
     : v.passed ? ["passed", "✓ passed"] : ["failed", "✗ failed"];
   box.innerHTML = `<p class="verdict ${verdict}">${text}</p>` +
     "<table>" + rows.map(([k, value]) => `<tr><td>${k}</td><td>${escapeHtml(
-      typeof value === "number" && !Number.isInteger(value) ? value.toPrecision(6) : String(value))}</td></tr>`).join("") +
+      typeof value !== "number" ? String(value) : Number.isInteger(value) ? count(value)
+        : value.toPrecision(6))}</td></tr>`).join("") +
     "</table>" + (v.note ? `<p class="note">${escapeHtml(v.note)}</p>` : "");
 }
 
+// --- copy and download -------------------------------------------------------------
+
+function svgDocument(paths, window, fill) {
+  // The clipped paths as an SVG document whose view is the clip window.
+  const [x0, y0, x1, y1] = window;
+  const paint = fill ? `fill="black" fill-rule="${fill}"`
+    : 'fill="none" stroke="black" stroke-width="1" vector-effect="non-scaling-stroke"';
+  return `<svg xmlns="${SVG_NS}" viewBox="${x0} ${y0} ${x1 - x0} ${y1 - y0}">\n` +
+    paths.filter((d) => d).map((d) => `<path d="${escapeHtml(d)}" ${paint}/>\n`).join("") +
+    "</svg>\n";
+}
+
+function keepResult(format, data, body) {
+  state.result = format === "geojson"
+    ? { text: JSON.stringify(data.geojson), type: "application/geo+json",
+        filename: "clipped.geojson", label: "GeoJSON" }
+    : { text: svgDocument(data.paths, body.window, body.options.fill), type: "image/svg+xml",
+        filename: "clipped.svg", label: "SVG" };
+  $("copy").textContent = `Copy ${state.result.label}`;
+  $("download").textContent = `Download .${state.result.filename.split(".").pop()}`;
+  $("download").title = `save as ${state.result.filename}`;
+  $("copy").disabled = $("download").disabled = false;
+  $("copy-status").textContent = "";
+  delete $("copy-status").dataset.copied;
+}
+
+async function copyResult() {
+  const result = state.result;
+  if (!result) return;
+  const status = $("copy-status");
+  try {
+    await navigator.clipboard.writeText(result.text);
+    status.textContent = `${result.label} copied (${count(result.text.length)} characters)`;
+    status.dataset.copied = "true";
+  } catch (e) {  // no clipboard (a page not served over https or from localhost), or denied
+    status.textContent = `Could not copy: ${e.message}; use Download`;
+    status.dataset.copied = "false";
+  }
+}
+
+function downloadResult() {
+  const result = state.result;
+  if (!result) return;
+  const url = URL.createObjectURL(new Blob([result.text], { type: result.type }));
+  const link = document.createElement("a");
+  link.href = url;
+  link.download = result.filename;
+  document.body.append(link);
+  link.click();
+  link.remove();
+  setTimeout(() => URL.revokeObjectURL(url), 60_000);  // once the download has read it
+}
+
 function clearResult() {
+  state.result = null;
+  $("copy").disabled = $("download").disabled = true;
+  $("copy-status").textContent = "";
+  delete $("copy-status").dataset.copied;
   $("output-layer").replaceChildren();
   $("summary").replaceChildren();
   $("stats").tBodies[0].replaceChildren();
@@ -641,9 +750,9 @@ async function loadCapabilities() {
   }))], "");
   $("server-version").textContent = `rnsca ${caps.version}`;
   const l = caps.limits;
-  $("limits").textContent = `Server limits: ${l.max_vertices.toLocaleString("en")} vertices, ` +
-    `${l.max_body_bytes.toLocaleString("en")} bytes per request; verified by default up to ` +
-    `${l.verify_max_vertices.toLocaleString("en")} vertices.`;
+  $("limits").textContent = `Server limits: ${count(l.max_vertices)} vertices, ` +
+    `${count(l.max_body_bytes)} bytes per request; verified by default up to ` +
+    `${count(l.verify_max_vertices)} vertices.`;
 }
 
 async function loadExamples() {
@@ -727,9 +836,12 @@ async function main() {
     $(id).addEventListener("change", () => { clearTimeout(state.inputTimer); onOptionChange(); });
   }
   $("clip").addEventListener("click", requestClip);
+  $("copy").addEventListener("click", copyResult);
+  $("download").addEventListener("click", downloadResult);
   $("fit").addEventListener("click", fitView);
   try {
     await Promise.all([loadCapabilities(), loadExamples()]);
+    offerOptions();
   } catch (e) {
     showError({ title: "Could not load the playground", detail: String(e) });
     setState("error");

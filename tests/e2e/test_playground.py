@@ -9,9 +9,8 @@ from __future__ import annotations
 
 import json
 import math
-import os
 import re
-import shutil
+import xml.etree.ElementTree as ET
 
 import httpx
 import pytest
@@ -21,7 +20,6 @@ from tests.e2e.server import ROOT, LiveServer
 
 pytestmark = pytest.mark.e2e
 
-IN_CI = os.environ.get("CI", "").lower() == "true"
 ARTIFACTS = ROOT / "test-artifacts"
 #: Every wait in the page is bounded by this (ms): a stuck page fails, never hangs.
 WAIT_MS = 30_000
@@ -45,52 +43,28 @@ SNAPSHOT = """() => {
 }"""
 
 
-def _launch_options() -> dict:
-    executable = shutil.which("chromium")
-    message = None
-    try:
-        import playwright.sync_api  # noqa: F401
-    except ImportError:
-        message = "playwright is not installed (pip install playwright, in the dev extra)"
-    if message is None and executable is None:
-        message = "chromium is not installed (apt-get install chromium; .ci/run does)"
-    if message is not None:
-        if IN_CI:
-            pytest.fail(message)
-        pytest.skip(message)
-    return dict(executable_path=executable, headless=True,
-                args=["--no-sandbox", "--disable-gpu", "--disable-background-networking"])
-
-
 @pytest.fixture(scope="module")
 def server():
     with LiveServer() as live:
         yield live
 
 
-@pytest.fixture(scope="module")
-def browser():
-    options = _launch_options()
-    from playwright.sync_api import sync_playwright
-
-    with sync_playwright() as playwright:
-        chromium = playwright.chromium.launch(**options)
-        yield chromium
-        chromium.close()
-
-
 @pytest.fixture
 def page(browser, server):
-    context = browser.new_context(viewport={"width": 1400, "height": 900})
+    # Clipboard permissions: the Copy button writes there, and the tests read it back.
+    context = browser.new_context(viewport={"width": 1400, "height": 900},
+                                  permissions=["clipboard-read", "clipboard-write"])
     page = context.new_page()
     page.set_default_timeout(WAIT_MS)
-    errors = []
+    errors, missing = [], []
     page.on("pageerror", lambda e: errors.append(str(e)))
+    page.on("response", lambda r: r.status == 404 and missing.append(r.url))
     page.goto(server.url + "/")
     page.wait_for_selector("body[data-state=idle]")
     yield page
     context.close()
     assert not errors, errors
+    assert not missing, missing   # the page's files, its icon (/favicon.ico) included
 
 
 @pytest.fixture(scope="module")
@@ -212,11 +186,10 @@ def test_polygons_window_widened_with_an_edge_handle(page, api):
     assert wider["summary"]["area"] > first["summary"]["area"]
     check_geojson_against_api(api, wider, document, {"boundary": "closed"}, verify=True)
     screenshot(page, "polygons")
-
-    page.select_option("#mode", "approx")          # polygons have no approx mode: a 422
-    refused = settled(page)
-    assert refused["state"] == "error" and "422" in refused["error"]
-    assert "approx" in refused["error"] and refused["drawn"] == []
+    # Polygons have no approx mode (the server would answer 422): it is not offered.
+    assert offered(page, "#mode") == {"exact": True, "approx": False}
+    assert page.input_value("#mode") == "exact"
+    assert "polygons: mode exact only" in page.inner_text("#options-note")
 
 
 def test_options_reach_the_server_and_change_the_statistics(page, api):
@@ -292,3 +265,104 @@ def test_an_svg_document_loaded_from_a_file(page, api):
         "options": {"curves": "preserve", "fill": None}}).json()
     assert shown["drawn"] == [d for d in answer["paths"] if d] and len(shown["drawn"]) == 2
     assert shown["stats"]["pieces_out"] == answer["stats"]["pieces_out"]
+
+
+def offered(page, select: str) -> dict:
+    """Return {value: enabled} of the options of `select`."""
+    return page.eval_on_selector(select, """(s) => Object.fromEntries(
+        [...s.options].map((o) => [o.value, !o.disabled]))""")
+
+
+def test_options_offered_follow_the_capabilities_for_the_input(page, api):
+    operations = api.get("/v1/capabilities").json()["operations"]
+    page.select_option("#example", "coastline")            # lines: every method and mode
+    settled(page)
+    assert all(offered(page, "#mode").values()) and all(offered(page, "#method").values())
+    assert page.inner_text("#options-note") == ""
+    page.select_option("#mode", "approx")
+    assert settled(page)["state"] == "idle"
+
+    page.select_option("#example", "polygons")             # approx falls back to exact
+    shown = settled(page)
+    assert shown["state"] == "idle" and shown["error"] is None and shown["drawn"]
+    assert page.input_value("#mode") == "exact"
+    assert [m for m, on in offered(page, "#mode").items() if on] == \
+        operations["polygons"]["modes"]
+
+    page.select_option("#method", "liang_barsky")
+    settled(page)
+    page.select_option("#example", "glyphs")               # curves: method rnsca only
+    shown = settled(page)
+    assert shown["state"] == "idle" and page.input_value("#method") == "rnsca"
+    assert [m for m, on in offered(page, "#method").items() if on] == \
+        operations["paths"]["methods"] == ["rnsca"]
+    assert all(offered(page, "#mode").values())
+    assert "paths: method rnsca only" in page.inner_text("#options-note")
+
+
+def test_the_geojson_result_is_copied_and_downloaded(page, api):
+    document = json.loads(example_text(api, "coastline.geojson"))
+    page.select_option("#example", "coastline")
+    shown = settled(page)
+    result = check_geojson_against_api(api, shown, document,
+                                       {"method": "rnsca", "mode": "exact",
+                                        "boundary": "closed"}, verify=True)
+    page.click("#copy")
+    page.wait_for_selector("#copy-status[data-copied=true]")
+    assert json.loads(page.evaluate("navigator.clipboard.readText()")) == result["geojson"]
+    with page.expect_download() as info:
+        page.click("#download")
+    download = info.value
+    assert download.suggested_filename == "clipped.geojson"
+    with open(download.path(), encoding="utf-8") as f:
+        assert json.load(f) == result["geojson"]
+
+
+def test_the_svg_result_is_copied_and_downloaded_as_an_svg_document(page, api):
+    paths = example_text(api, "glyphs-dejavu-sans.txt").splitlines()
+    page.select_option("#example", "glyphs")
+    shown = settled(page)
+    answer = api.post("/v1/clip/svg", json={
+        "window": shown["inputs"], "paths": paths,
+        "options": {"curves": "preserve", "fill": "nonzero"}}).json()
+    page.click("#copy")
+    page.wait_for_selector("#copy-status[data-copied=true]")
+    copied = page.evaluate("navigator.clipboard.readText()")
+    with page.expect_download() as info:
+        page.click("#download")
+    assert info.value.suggested_filename == "clipped.svg"
+    with open(info.value.path(), encoding="utf-8") as f:
+        downloaded = f.read()
+    assert downloaded == copied
+    svg = ET.fromstring(downloaded)
+    ns = "{http://www.w3.org/2000/svg}"
+    assert svg.tag == ns + "svg"
+    x0, y0, x1, y1 = shown["inputs"]
+    assert [float(v) for v in svg.get("viewBox").split()] == pytest.approx(
+        [x0, y0, x1 - x0, y1 - y0])
+    drawn = svg.findall(ns + "path")
+    assert [p.get("d") for p in drawn] == [d for d in answer["paths"] if d]
+    assert {p.get("fill-rule") for p in drawn} == {"nonzero"}
+
+
+def test_counts_are_written_in_one_format(page, api):
+    document = json.loads(example_text(api, "coastline.geojson"))
+    page.select_option("#example", "coastline")
+    shown = settled(page)
+    vertices = len(coordinates(document)) // 2
+    assert vertices >= 1000   # so that the digits are grouped
+    assert f"{vertices:,} vertices" in page.inner_text("#input-info")
+    out = page.inner_text('#summary dd[data-key="vertices"]')
+    assert out == f"{shown['summary']['vertices']:,.0f}"
+    for text in page.eval_on_selector_all(
+            "#summary dd, #stats td[data-value]",
+            "(cells) => cells.filter((c) => Number.isInteger(Number(c.dataset.value)))"
+            ".map((c) => c.textContent)"):
+        assert re.fullmatch(r"\d{1,3}(,\d{3})*", text), text
+
+
+def test_the_page_has_an_icon(page, server, api):
+    href = page.get_attribute('link[rel="icon"]', "href")
+    icon = api.get("/" + href)
+    assert icon.status_code == 200 and icon.headers["content-type"] == "image/svg+xml"
+    assert api.get("/favicon.ico").content == icon.content

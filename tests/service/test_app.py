@@ -133,6 +133,18 @@ def test_polygons_refuse_approx_mode_with_422(client):
     assert r.status_code == 422 and r.json()["type"].endswith("invalid-option")
 
 
+def test_capabilities_say_which_methods_and_modes_each_kind_of_input_takes(client):
+    """What the playground offers per input: polygons exact only, curves rnsca only (the
+    library's refusals match these lists: tests/unit/backends/test_contract.py)."""
+    caps = client.get("/v1/capabilities").json()
+    operations = caps["operations"]
+    assert set(operations) == {"segments", "lines", "polygons", "paths"}
+    assert operations["polygons"] == {"methods": caps["methods"], "modes": ["exact"]}
+    assert operations["paths"] == {"methods": ["rnsca"], "modes": ["exact", "approx"]}
+    assert operations["lines"] == operations["segments"] == {"methods": caps["methods"],
+                                                             "modes": caps["modes"]}
+
+
 def test_binary_body_not_a_multiple_of_32_bytes_is_422(client):
     r = client.post("/v1/clip/segments", content=b"\0" * 33,
                     params={"xmin": 0, "ymin": 0, "xmax": 1, "ymax": 1},

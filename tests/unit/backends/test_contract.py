@@ -11,8 +11,8 @@ import rnsca
 from rnsca.backends import base
 from rnsca.backends.base import Capabilities, ClipBackend, Operation
 from rnsca.backends.registry import get_backend
-from rnsca.errors import BackendUnavailableError
-from rnsca.options import Backend, Mode
+from rnsca.errors import BackendUnavailableError, InvalidOptionError
+from rnsca.options import Backend, Method, Mode
 
 OPERATIONS = ["clip_segments", "clip_lines", "clip_polygons", "clip_paths", "flatten_paths",
               "warm_up"]
@@ -100,3 +100,31 @@ def test_results_are_the_contracts_types(backend):
                                         rnsca.Window(0, 0, 10, 10)))
     assert isinstance(segments, base.SegmentPieces)
     assert segments.source.tolist() == [0] and segments.pieces.tolist() == [[0, 5, 10, 5]]
+
+
+# One input per clipping operation, by the public function that runs it.
+_CLIP_BY_OPERATION = {
+    Operation.SEGMENTS: lambda **o: rnsca.clip_segments([[-5.0, 5.0, 15.0, 5.0]],
+                                                        (0, 0, 10, 10), **o),
+    Operation.LINES: lambda **o: rnsca.clip(shapely.LineString([(-5, 5), (15, 5)]),
+                                            (0, 0, 10, 10), **o),
+    Operation.POLYGONS: lambda **o: rnsca.clip(shapely.box(-5, -5, 5, 5), (0, 0, 10, 10), **o),
+    Operation.PATHS: lambda **o: rnsca.clip_svg(["M -5 5 C 0 15 10 -5 15 5"],
+                                                (0, 0, 10, 10), **o),
+}
+
+
+@pytest.mark.parametrize("operation", list(_CLIP_BY_OPERATION), ids=lambda o: o.value)
+def test_an_operation_accepts_exactly_the_methods_and_modes_it_lists(operation):
+    """`Operation.methods` and `.modes` (what /v1/capabilities tells the playground) are
+    what the library accepts: every other combination is refused with InvalidOptionError."""
+    for method in Method:
+        for mode in Mode:
+            listed = method in operation.methods and mode in operation.modes
+            try:
+                _CLIP_BY_OPERATION[operation](method=method.value, mode=mode.value)
+            except InvalidOptionError:
+                assert not listed, (method, mode)
+            else:
+                assert listed, (method, mode)
+    assert Operation.FLATTEN.methods == () and Operation.FLATTEN.modes == ()

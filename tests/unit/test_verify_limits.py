@@ -163,3 +163,21 @@ def test_lines_lying_over_one_another_are_searched_among_their_own_segments(monk
     v = verify(lines, ours, W10)
     assert v.passed and dataclasses.asdict(v)["checked"] == 20
     assert points and sum(pairs) <= 99 * sum(points)
+
+
+def test_segments_beyond_geos_are_skipped_with_the_reason_never_failed():
+    # A segment 2e300 long across a 0..10 window: GEOS's cut points are off by about eps
+    # times its length, far beyond 1e-9 of the window, while rnsca's are exact (checked
+    # against rational arithmetic in tests/property/test_vs_exact.py). Found by fuzzing:
+    # verification used to report such correct clips as failed.
+    segments = np.array([[-1e300, 5.0, 1e300, 5.0], [-5.0, 5.0, 15.0, 5.0],
+                         [1e-160, 1e-160, 3.0, 3.0]])
+    result = clip_segments(segments, W10)
+    assert result.segments[result.source == 0].tolist() == [[0.0, 5.0, 10.0, 5.0]]
+    v = verify(segments, result, W10)
+    assert (v.inputs, v.checked, v.skipped, v.passed) == (3, 1, 2, None)
+    assert "2 segments skipped: GEOS cannot clip them to 1e-9 of the window" in v.note
+    # The segment GEOS can judge is still judged.
+    wrong = dataclasses.replace(result, segments=result.segments + (result.source == 1)[:, None])
+    assert verify(segments, wrong, W10).passed is False
+    assert verify(segments[1:2], clip_segments(segments[1:2], W10), W10).passed is True

@@ -137,19 +137,7 @@ def clip_segments(segments: Any, window: Any, *, binary: bool | None, verify: bo
         if verify is not None:
             payload["verify"] = verify
         return _post_json("/v1/clip/segments", payload, SegmentsResult.from_dict)
-    unknown = sorted(set(options) - set(BINARY_OPTIONS))
-    if unknown:
-        raise InvalidInputError(
-            f"unknown option(s) {', '.join(unknown)} for segments; accepted: "
-            f"{', '.join(BINARY_OPTIONS)}")
-    params = dict(zip(("xmin", "ymin", "xmax", "ymax"),
-                      (repr(b) for b in window_bounds(window)), strict=True))
-    for name, value in _options(options).items():
-        if not (name == "n" and value == "auto"):  # the binary form's default is auto
-            params[name] = str(value)
-    if verify is not None:
-        params["verify"] = verify if isinstance(verify, str) else (
-            "true" if verify else "false")
+    params = _query(window, options, verify, BINARY_OPTIONS, "segments")
     return Call("POST", "/v1/clip/segments", _read_binary_segments,
                 content=segment_rows(segments).tobytes(), params=params,
                 headers={"Content-Type": "application/octet-stream",
@@ -171,24 +159,29 @@ def clip_geoarrow(table: Any, window: Any, *, column: str | None,
     `table` is the stream's bytes, or a ``pyarrow.Table`` or ``RecordBatch`` (written
     as a stream here, with pyarrow).
     """
-    unknown = sorted(set(options) - set(GEOARROW_OPTIONS))
-    if unknown:
-        raise InvalidInputError(
-            f"unknown option(s) {', '.join(unknown)} for GeoArrow; accepted: "
-            f"{', '.join(GEOARROW_OPTIONS)}")
-    params = dict(zip(("xmin", "ymin", "xmax", "ymax"),
-                      (repr(b) for b in window_bounds(window)), strict=True))
-    for name, value in _options(options).items():
-        if not (name == "n" and value == "auto"):
-            params[name] = ("true" if value else "false") if isinstance(value, bool) \
-                else str(value)
+    params = _query(window, options, verify, GEOARROW_OPTIONS, "GeoArrow")
     if column is not None:
         params["column"] = column
-    if verify is not None:
-        params["verify"] = verify if isinstance(verify, str) else (
-            "true" if verify else "false")
     return Call("POST", "/v1/clip/geoarrow", _read_geoarrow, content=arrow_stream(table),
                 params=params, headers={"Content-Type": ARROW_STREAM, "Accept": ARROW_STREAM})
+
+
+def _query(window: Any, options: Mapping[str, Any], verify: bool | str | None,
+           accepted: tuple[str, ...], endpoint: str) -> dict[str, str]:
+    """Return the query parameters of a binary endpoint: window, options and verify."""
+    unknown = sorted(set(options) - set(accepted))
+    if unknown:
+        raise InvalidInputError(
+            f"unknown option(s) {', '.join(unknown)} for {endpoint}; accepted: "
+            f"{', '.join(accepted)}")
+    params = dict(zip(("xmin", "ymin", "xmax", "ymax"),
+                      (repr(b) for b in window_bounds(window)), strict=True))
+    for name, value in {**_options(options), "verify": verify}.items():
+        if value is None or (name == "n" and value == "auto"):  # the query's defaults
+            continue
+        params[name] = ("true" if value else "false") if isinstance(value, bool) \
+            else str(value)
+    return params
 
 
 def _read_geoarrow(response: httpx.Response) -> GeoArrowResult:

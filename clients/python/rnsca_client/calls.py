@@ -184,14 +184,18 @@ def _query(window: Any, options: Mapping[str, Any], verify: bool | str | None,
     return params
 
 
+def _stats_and_verification(headers: httpx.Headers) -> tuple[ClipStats, Verification | None]:
+    """Return a binary answer's stats and verification, read from its headers."""
+    stats = ClipStats.from_dict(json.loads(headers["x-rnsca-stats"]))
+    verified = headers.get("x-rnsca-verification")
+    return stats, None if verified is None else Verification.from_dict(json.loads(verified))
+
+
 def _read_geoarrow(response: httpx.Response) -> GeoArrowResult:
     headers = response.headers
     try:
         rows = int(headers["x-rnsca-rows"])
-        stats = ClipStats.from_dict(json.loads(headers["x-rnsca-stats"]))
-        verified = headers.get("x-rnsca-verification")
-        verification = None if verified is None else Verification.from_dict(
-            json.loads(verified))
+        stats, verification = _stats_and_verification(headers)
     except (KeyError, ValueError, TypeError) as exc:
         raise ResponseFormatError(
             f"the GeoArrow answer lacks a readable header ({exc})") from None
@@ -205,10 +209,7 @@ def _read_binary_segments(response: httpx.Response) -> SegmentsResult:
     headers = response.headers
     try:
         count = int(headers["x-rnsca-pieces"])
-        stats = ClipStats.from_dict(json.loads(headers["x-rnsca-stats"]))
-        verified = headers.get("x-rnsca-verification")
-        verification = None if verified is None else Verification.from_dict(
-            json.loads(verified))
+        stats, verification = _stats_and_verification(headers)
         method, mode, backend = (headers["x-rnsca-method"], headers["x-rnsca-mode"],
                                  headers["x-rnsca-backend"])
     except (KeyError, ValueError, TypeError) as exc:

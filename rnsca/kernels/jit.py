@@ -44,13 +44,16 @@ three times, 10 s each, on this 2-core machine). `_OneSpecialisation` unliterals
 argument types of such calls. A kernel that needs a literal (dead branches pruned by a
 constant, a tuple indexed by one) cannot be written with these presets; none is.
 
-Where a hot function's flags should fold away, ``borrowing_per_constant`` keeps Numba's
-default: the line clip's core (`polylines.clip_chains`), called with ``write`` and
-``break_at_boundary`` constant by the line clip and by the polygon clip, one copy each
-(with one copy taking them as arguments, the lines benchmark was 5-9% slower in three
-`benchmarks.compare` runs; a cold start compiles the two copies in two processes at once
-anyway). Inlining it into two wrappers instead cost 15-19 s of compiling per copy
-against 9-10 s. A small hot helper is ``inlined`` instead (`midpoint._search`).
+Where a hot function's flags should fold away, the ``*_per_constant`` presets keep
+Numba's default (one copy per constant value): the line clip's core
+(`polylines.clip_chains`), called with ``write`` and ``break_at_boundary`` constant by the
+line clip and by the polygon clip, and the line clip's passes, called with ``write``
+constant by its count and write passes (`polylines._line_pass` down to `_line_parts`).
+With one copy of each taking the flags as arguments, the lines benchmark was 8-20%
+slower (`benchmarks.compare`, four runs); with these copies it is back to 0.98 of
+before, and a cold start compiles the copies of the two callers in two processes at
+once anyway. Inlining `clip_chains` into two wrappers instead cost 15-19 s of compiling
+per copy against 9-10 s. A small hot helper is ``inlined`` instead (`midpoint._search`).
 
 Nothing here changes the process: how idle OpenMP threads wait is the application's
 choice (`rnsca.runtime.prefer_passive_openmp_wait`).
@@ -60,8 +63,8 @@ import numba
 from numba.core import types
 from numba.core.registry import CPUDispatcher
 
-__all__ = ["scalar", "parallel", "borrowing", "borrowing_per_constant", "inlined",
-           "allocating"]
+__all__ = ["scalar", "parallel", "borrowing", "inlined", "allocating", "scalar_per_constant",
+           "parallel_per_constant", "borrowing_per_constant"]
 
 
 class _OneSpecialisation(CPUDispatcher):
@@ -90,4 +93,6 @@ parallel = _preset(parallel=True)
 borrowing = _preset(_nrt=False)
 inlined = _preset(inline="always")
 allocating = _preset(_nrt=True)
+scalar_per_constant = numba.njit(cache=True, nogil=True, error_model="numpy")
+parallel_per_constant = numba.njit(cache=True, nogil=True, parallel=True, error_model="numpy")
 borrowing_per_constant = numba.njit(cache=True, nogil=True, error_model="numpy", _nrt=False)

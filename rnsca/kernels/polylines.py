@@ -52,7 +52,15 @@ from rnsca.constants import (
     RUN_STACK_CAPACITY,
 )
 from rnsca.kernels import counters as C
-from rnsca.kernels.jit import borrowing, borrowing_per_constant, inlined, parallel, scalar
+from rnsca.kernels.jit import (
+    borrowing,
+    borrowing_per_constant,
+    inlined,
+    parallel,
+    parallel_per_constant,
+    scalar,
+    scalar_per_constant,
+)
 from rnsca.kernels.outcode import outcode
 from rnsca.kernels.records import Window, window_of
 from rnsca.kernels.segments import (
@@ -725,7 +733,7 @@ def emit_plan(line, first, last, cut, options, out, v, c, block, plan):
     return v, c
 
 
-@scalar
+@scalar_per_constant
 def _line_block(blk, block_size, line, lines, options, drop_edge_runs, write, chunks, counts,
                 out, counters):
     """Count or write the parts of geometries ``blk * block_size`` on: the body of a pass.
@@ -750,7 +758,7 @@ def _line_block(blk, block_size, line, lines, options, drop_edge_runs, write, ch
                 options, drop_edge_runs, write, chunks, counts, out, block)
 
 
-@borrowing
+@borrowing_per_constant
 def _line_parts(g_begin, g_end, line, lines, options, drop_edge_runs, write, chunks, counts,
                 out, block):
     """Count or write the parts of geometries g_begin..g_end-1 (see `_line_block`)."""
@@ -781,7 +789,7 @@ def _line_parts(g_begin, g_end, line, lines, options, drop_edge_runs, write, chu
             counts.n_chains[p] = c
 
 
-@parallel
+@parallel_per_constant
 def _line_pass(block_size, line, lines, options, drop_edge_runs, write, chunks, counts, out,
                counters):
     """Run `_line_block` over every block, one prange iteration each."""
@@ -791,7 +799,7 @@ def _line_pass(block_size, line, lines, options, drop_edge_runs, write, chunks, 
                     counts, out, counters)
 
 
-@scalar
+@scalar_per_constant
 def _line_pass_serial(block_size, line, lines, options, drop_edge_runs, write, chunks, counts,
                       out, counters):
     """Do what `_line_pass` does on the calling thread (small inputs)."""

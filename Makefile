@@ -21,11 +21,12 @@ $(STAMP): pyproject.toml clients/python/pyproject.toml
 	  echo "$(abspath $(VENV))/lib/libintelocl.so" > $(VENV)/opencl-vendors/intel-cpu.icd; fi
 	touch $(STAMP)
 
-# The service alone needs only the `service` extra (a full dev install also satisfies it).
-$(SERVE_STAMP): pyproject.toml
+# The service needs only the `service` extra (a full dev install also satisfies it); the
+# SDK is installed beside it, so the README's client example runs in the same .venv.
+$(SERVE_STAMP): pyproject.toml clients/python/pyproject.toml
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
-	$(PY) -m pip install --quiet -e '.[service]'
+	$(PY) -m pip install --quiet -e '.[service]' -e clients/python
 	touch $(SERVE_STAMP)
 
 # The HTTP service on http://$(HOST):$(PORT) (docs at /docs); Ctrl-C stops it gracefully.

@@ -27,9 +27,7 @@ from hypothesis import HealthCheck, settings  # noqa: E402
 from rnsca import Backend, Method, Mode  # noqa: E402
 from rnsca.backends.registry import get_backend  # noqa: E402
 from rnsca.errors import BackendUnavailableError  # noqa: E402
-
-#: Whether a missing optional backend fails the run (CI) instead of skipping its tests.
-IN_CI = os.environ.get("CI", "").lower() == "true"
+from tests.missing import IN_CI, missing  # noqa: E402
 
 _COMMON = dict(deadline=None, print_blob=True,
                suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
@@ -37,7 +35,7 @@ settings.register_profile("dev", max_examples=30, **_COMMON)
 settings.register_profile("ci", max_examples=25, derandomize=True, **_COMMON)
 settings.register_profile("thorough", max_examples=1000, **_COMMON)
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE")
-                      or ("ci" if os.environ.get("CI", "").lower() == "true" else "dev"))
+                      or ("ci" if IN_CI else "dev"))
 
 #: The seed of every non-Hypothesis random input, so a failure reproduces exactly.
 SEED = 20_241_122
@@ -56,9 +54,7 @@ def require_backend(kind: Backend) -> Backend:
     try:
         get_backend(kind)
     except BackendUnavailableError as exc:
-        if IN_CI:
-            pytest.fail(f"backend {kind.value!r} is missing in CI: {exc}")
-        pytest.skip(f"backend {kind.value!r} is not available here: {exc}")
+        missing(f"backend {kind.value!r} is not available here: {exc}")
     return kind
 
 

@@ -5,7 +5,6 @@ every suite (segments, geometry, svg) keeps the structure benchmarks/README.md d
 """
 
 import json
-import os
 import shutil
 import subprocess
 import sys
@@ -15,6 +14,7 @@ import pytest
 
 from rnsca import Backend
 from rnsca.backends.registry import available_backends
+from tests.missing import missing
 
 ROOT = Path(__file__).resolve().parents[2]
 LABELS = {
@@ -265,10 +265,7 @@ def test_thread_scaling_runs_one_process_per_thread_count(tmp_path):
 def test_load_suite_runs_wrk_against_a_real_server(tmp_path):
     """`python -m benchmarks.load --quick`: every case answered, figures parsed from wrk."""
     if shutil.which("wrk") is None:
-        message = "wrk is not installed (apt-get install wrk; .ci/run does)"
-        if os.environ.get("CI", "").lower() == "true":
-            pytest.fail(message)
-        pytest.skip(message)
+        missing("wrk is not installed (apt-get install wrk; .ci/run does)")
     subprocess.run([sys.executable, "-m", "benchmarks.load", "--quick", "--out", str(tmp_path)],
                    cwd=ROOT, check=True, capture_output=True, timeout=600)
     (path,) = tmp_path.glob("load-*.json")

@@ -130,17 +130,25 @@ def check_segment_values(segments: np.ndarray) -> None:
     service, a JSON path).
     """
     row = int(first_invalid_segment(segments))
-    if row < 0:
-        return
-    values = segments[row].tolist()
-    if not np.isfinite(segments[row]).all():
-        error = InvalidGeometryError(f"segment {row} has a non-finite coordinate: {values}")
+    if row >= 0:
+        raise segment_error(row, segments[row])
+
+
+def segment_error(row: int, values: np.ndarray) -> InvalidGeometryError:
+    """Return the error for segment `row`, whose float64 `values` are not finite.
+
+    The message says which: a NaN or infinite coordinate, or differences that overflow.
+    """
+    values = np.asarray(values, dtype=np.float64)
+    if not np.isfinite(values).all():
+        error = InvalidGeometryError(
+            f"segment {row} has a non-finite coordinate: {values.tolist()}")
     else:
         error = InvalidGeometryError(
             f"segment {row} spans more than float64 can hold (x1 - x0 or y1 - y0 "
-            f"overflows): {values}")
+            f"overflows): {values.tolist()}")
     error.row = row
-    raise error
+    return error
 
 
 def geometry_error(index: int, detail: str) -> InvalidGeometryError:

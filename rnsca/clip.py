@@ -11,13 +11,16 @@ import numpy.typing as npt
 
 from rnsca.arrays import GeometryKind, check_segment_values, geometry_error
 from rnsca.backends.registry import get_backend
-from rnsca.errors import InvalidGeometryError, UnsupportedGeometryError
+from rnsca.errors import InvalidGeometryError, InvalidOptionError, UnsupportedGeometryError
 from rnsca.options import Backend, Method, Mode, SegmentOptions
 from rnsca.ragged import clip_ragged, resolve_geometry_options
 from rnsca.stats import ClipStats
 from rnsca.window import Window, WindowTable
 
-__all__ = ["SegmentClipResult", "clip_segments", "as_segments", "clip"]
+__all__ = ["SegmentClipResult", "clip_segments", "as_segments", "clip", "SEGMENT_OUTPUTS"]
+
+#: What `clip_segments` can return (``outputs``).
+SEGMENT_OUTPUTS = ("segments", "source", "t")
 
 
 @dataclass(frozen=True, slots=True)
@@ -28,11 +31,14 @@ class SegmentClipResult:
     ----------
     segments : ndarray of float64, shape (m, 4)
         ``[x0, y0, x1, y1]`` of each piece, in input order and direction, inside the window.
-    source : ndarray of int64, shape (m,)
-        Index of the input segment each piece came from (strictly increasing).
-    t : ndarray of float64, shape (m, 2)
+        For device input (OpenCL), a ``pyopencl.array.Array`` in the device's precision.
+    source : ndarray of int64, shape (m,), or None
+        Index of the input segment each piece came from (strictly increasing); None
+        where ``outputs`` leaves it out.
+    t : ndarray of float64, shape (m, 2), or None
         Parameter interval ``[t0, t1]`` of each piece on its source segment, where
-        ``P(t) = P0 + t (P1 - P0)``; use it to interpolate attributes.
+        ``P(t) = P0 + t (P1 - P0)``; use it to interpolate attributes. None where
+        ``outputs`` leaves it out.
     stats : ClipStats
     method, mode, backend : Method, Mode, Backend
         What ran.
@@ -40,9 +46,9 @@ class SegmentClipResult:
         The resolved options (defaults filled in).
     """
 
-    segments: np.ndarray
-    source: np.ndarray
-    t: np.ndarray
+    segments: Any
+    source: Any
+    t: Any
     stats: ClipStats
     method: Method
     mode: Mode
@@ -91,7 +97,8 @@ def clip_segments(segments: npt.ArrayLike, window: Window | Iterable[float], *,
                   method: Method | str = "rnsca", n: SupportsIndex | str = "auto",
                   max_depth: SupportsIndex | None = None, tolerance: float | None = None,
                   mode: Mode | str = "exact", backend: Backend | str = "numba",
-                  resolution: float | str | None = None) -> SegmentClipResult:
+                  resolution: float | str | None = None,
+                  outputs: Iterable[str] = SEGMENT_OUTPUTS) -> SegmentClipResult:
     """Return the parts of line segments inside a closed rectangular window.
 
     Each segment gives at most one piece (the window is convex). Boundary rules, the
@@ -101,8 +108,10 @@ def clip_segments(segments: npt.ArrayLike, window: Window | Iterable[float], *,
 
     Parameters
     ----------
-    segments : array_like, shape (n, 4) or (n, 2, 2)
-        ``[x0, y0, x1, y1]`` per segment; finite; converted to float64.
+    segments : array_like, shape (n, 4) or (n, 2, 2), or pyopencl.array.Array
+        ``[x0, y0, x1, y1]`` per segment; finite; converted to float64. With
+        ``backend="opencl"``, an (n, 4) device array in the device's precision stays on
+        the device, and so do the pieces (see README, "Data kept on the device").
     window : Window or sequence of 4 floats
         ``(xmin, ymin, xmax, ymax)``.
     method : {"rnsca", "cohen_sutherland", "liang_barsky", "nicholl_lee_nicholl", "midpoint"}
@@ -125,6 +134,10 @@ def clip_segments(segments: npt.ArrayLike, window: Window | Iterable[float], *,
         Approx mode: the output's resolution, which sets the tolerance: a length in
         output units, or ``"<k>px"``, the window's longer side as k pixels. Default
         ``"4096px"`` (a vector tile's grid). Not with `tolerance`, nor in exact mode.
+    outputs : iterable of {"segments", "source", "t"}
+        The outputs to compute; those left out are None in the result. ``"segments"``
+        is always computed. On a device, leaving out ``source`` and ``t`` saves their
+        writes and transfers (a third of the bytes back).
 
     Returns
     -------
@@ -146,13 +159,39 @@ def clip_segments(segments: npt.ArrayLike, window: Window | Iterable[float], *,
     window = Window.of(window)
     options = SegmentOptions.resolve(window, method=method, n=n, max_depth=max_depth,
                                      tolerance=tolerance, mode=mode, resolution=resolution)
+    wanted = _segment_outputs(outputs)
     engine = get_backend(backend)
     # The backend checks the values: the Numba one in its clipping pass (a second
-    # read of the input cost 3% of the call, 10M segments).
-    array = as_segments(segments, check_values=False)
-    out = engine.clip_segments(array, window, options)
+    # read of the input cost 3% of the call, 10M segments), the OpenCL one on the device.
+    if is_device_array(segments):
+        if not engine.capabilities.device_arrays:
+            raise InvalidGeometryError(
+                "segments in a pyopencl array are on an OpenCL device: clip them with "
+                "backend='opencl', or bring them to the host (.get())")
+        array = segments
+    else:
+        array = as_segments(segments, check_values=False)
+    out = engine.clip_segments(array, window, options, source="source" in wanted,
+                               t="t" in wanted)
     return SegmentClipResult(out.pieces, out.source, out.t, out.stats, options.method,
                              options.mode, engine.kind, options)
+
+
+def _segment_outputs(outputs: Iterable[str]) -> frozenset[str]:
+    if isinstance(outputs, str):
+        outputs = (outputs,)
+    wanted = frozenset(outputs)
+    unknown = sorted(wanted - frozenset(SEGMENT_OUTPUTS))
+    if unknown:
+        raise InvalidOptionError(
+            f"outputs {unknown} are not outputs of clip_segments; choose from "
+            f"{list(SEGMENT_OUTPUTS)}")
+    return wanted
+
+
+def is_device_array(obj: Any) -> bool:
+    """Return whether `obj` is a ``pyopencl.array.Array`` (without importing pyopencl)."""
+    return type(obj).__module__.startswith("pyopencl") and hasattr(obj, "queue")
 
 
 def clip(obj: Any, window: Window | Iterable[float] | Iterable[Iterable[float]],

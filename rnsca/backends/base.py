@@ -123,6 +123,9 @@ class Capabilities:
         The floating-point precision of its kernels (FLOAT64 or FLOAT32).
     devices : tuple of str
         Where it runs: ``("cpu",)``, or the OpenCL device's ``"platform:device"`` id.
+    device_arrays : bool
+        Whether it takes segments already on its device (``pyopencl.array.Array``) and
+        leaves the pieces there.
     """
 
     backend: Backend
@@ -130,6 +133,7 @@ class Capabilities:
     modes: frozenset[Mode] = field(default_factory=lambda: frozenset(Mode))
     precision: Precision = Precision.FLOAT64
     devices: tuple[str, ...] = ("cpu",)
+    device_arrays: bool = False
 
     def supports(self, operation: Operation | str, mode: Mode | str = Mode.EXACT) -> bool:
         """Return whether `operation` runs here in `mode`."""
@@ -163,16 +167,17 @@ class SegmentPieces:
     Attributes
     ----------
     pieces : ndarray of float64, shape (m, 4)
-    source : ndarray of int64, shape (m,)
-        The segment each piece came from (strictly increasing).
-    t : ndarray of float64, shape (m, 2)
-        Each piece's parameter interval on its segment.
+        (A device array in the device's precision for device input.)
+    source : ndarray of int64, shape (m,), or None
+        The segment each piece came from (strictly increasing); None if not asked for.
+    t : ndarray of float64, shape (m, 2), or None
+        Each piece's parameter interval on its segment; None if not asked for.
     stats : ClipStats
     """
 
-    pieces: np.ndarray
-    source: np.ndarray
-    t: np.ndarray
+    pieces: Any
+    source: Any
+    t: Any
     stats: ClipStats
 
 
@@ -249,13 +254,15 @@ class ClipBackend(Protocol):
         """Return what this backend runs here."""
         ...
 
-    def clip_segments(self, segments: np.ndarray, window: Window,
-                      options: SegmentOptions) -> SegmentPieces:
+    def clip_segments(self, segments: np.ndarray, window: Window, options: SegmentOptions,
+                      *, source: bool = True, t: bool = True) -> SegmentPieces:
         """Return the visible piece of each segment.
 
-        `segments` is float64 (n, 4), C-contiguous; its values are not yet checked: the
-        backend raises `InvalidGeometryError` (`rnsca.arrays.check_segment_values`) for
-        a segment that is not finite or whose differences overflow, and clips nothing.
+        `segments` is float64 (n, 4), C-contiguous (or, on a device backend, a device
+        array it accepts); its values are not yet checked: the backend raises
+        `InvalidGeometryError` (`rnsca.arrays.segment_error`) for a segment that is not
+        finite or whose differences overflow, and returns nothing. `source` and `t`
+        False: those outputs are None (a device leaves them on the device).
         """
         ...
 

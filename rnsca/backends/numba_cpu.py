@@ -100,9 +100,13 @@ class NumbaBackend:
         """Return what this backend runs: every operation, both modes, in float64."""
         return _CAPABILITIES
 
-    def clip_segments(self, segments: np.ndarray, window: Window,
-                      options: SegmentOptions) -> SegmentPieces:
-        """Return the visible piece of each segment; see `ClipBackend.clip_segments`."""
+    def clip_segments(self, segments: np.ndarray, window: Window, options: SegmentOptions,
+                      *, source: bool = True, t: bool = True) -> SegmentPieces:
+        """Return the visible piece of each segment; see `ClipBackend.clip_segments`.
+
+        The kernel writes `source` and `t` in its one pass (cheaper than a second
+        kernel); those not asked for are dropped (None).
+        """
         n = segments.shape[0]
         n_blocks = max(1, -(-n // BLOCK_SIZE))
         bounds = R.Window(window.xmin, window.ymin, window.xmax, window.ymax)
@@ -135,12 +139,13 @@ class NumbaBackend:
             if start != m:
                 K.move_rows(out, start, m, count)
             m += count
-        pieces, source, t = out.pieces, out.source, out.t
+        pieces, sources, ts = out.pieces, out.source, out.t
         if m < n:  # new arrays no one else holds: realloc shrinks them where they are
             pieces.resize((m, 4), refcheck=False)
-            source.resize(m, refcheck=False)
-            t.resize((m, 2), refcheck=False)
-        return SegmentPieces(pieces, source, t, ClipStats.from_counters(out.counters, n, m))
+            sources.resize(m, refcheck=False)
+            ts.resize((m, 2), refcheck=False)
+        return SegmentPieces(pieces, sources if source else None, ts if t else None,
+                             ClipStats.from_counters(out.counters, n, m))
 
     def clip_lines(self, lines: Ragged, windows: WindowTable, options: SegmentOptions,
                    drop_edge_runs: bool) -> GeometryPieces:

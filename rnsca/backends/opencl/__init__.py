@@ -50,19 +50,21 @@ import threading
 import warnings
 from dataclasses import dataclass, field
 from importlib import resources
-from typing import cast
+from typing import Any, cast
 
 import numpy as np
 import pyopencl as cl
 import pyopencl.array as cl_array
+import pyopencl.tools
+from pyopencl.scan import GenericScanKernel
 
 from rnsca import constants
 from rnsca.arrays import (
     PathArrays,
     Ragged,
-    check_segment_values,
     exclusive_sum,
     group_offsets,
+    segment_error,
 )
 from rnsca.backends.base import (
     METHOD_ID,
@@ -81,6 +83,7 @@ from rnsca.backends.numba_cpu import (
     warm_up_geometry,
     warm_up_paths,
 )
+from rnsca.backends.opencl import segments as _segments
 from rnsca.errors import BackendUnavailableError, InvalidGeometryError, InvalidWindowError
 from rnsca.kernels import bezier as BZ
 from rnsca.kernels import counters as C
@@ -230,6 +233,14 @@ class _Device:
     context: cl.Context
     queue: cl.CommandQueue
     programs: dict = field(default_factory=dict)
+    # A second in-order queue: a pipelined segment call alternates its chunks between
+    # the two, so one chunk's transfers overlap the other's kernels (`segments.py`).
+    second_queue: cl.CommandQueue | None = None
+    staging: _segments.Staging | None = None
+    # Device scratch and the outputs kept on the device come from a pool, not one
+    # allocation per call.
+    allocator: cl.tools.MemoryPool | None = None
+    scans: dict = field(default_factory=dict)
     lock: threading.Lock = field(default_factory=threading.Lock)
     # Kernel objects hold their arguments and are shared by every backend on this
     # device: one call at a time sets and enqueues them.
@@ -250,8 +261,19 @@ class _Device:
                     program.clip_segments, program.write_pieces, program.chunk_boxes,
                     program.classify_runs, program.clip_chunk_segments,
                     program.classify_bezier, program.flatten_bezier,
-                    program.classify_bezier_runs)
+                    program.classify_bezier_runs, program.reduce_counters)
             return self.programs[options]
+
+    def scan(self) -> GenericScanKernel:
+        """Return the inclusive int64 prefix sum of the segment pipeline (built once)."""
+        with self.lock:
+            if "int64" not in self.scans:
+                self.scans["int64"] = GenericScanKernel(
+                    self.context, np.int64,
+                    arguments="__global const long *keep, __global long *position",
+                    input_expr="keep[i]", scan_expr="a+b", neutral="0",
+                    output_statement="position[i] = item;")
+            return self.scans["int64"]
 
 
 def _build_program(context: cl.Context, name: str, source: str, options: list) -> cl.Program:
@@ -281,6 +303,7 @@ class _Kernels:
     classify_bezier: cl.Kernel
     flatten_bezier: cl.Kernel
     classify_bezier_runs: cl.Kernel
+    reduce_counters: cl.Kernel
 
 
 _DEVICES: dict[str, _Device] = {}
@@ -294,10 +317,13 @@ def _device(entry: dict) -> _Device:
             p, d = (int(i) for i in entry["id"].split(":"))
             device = cl.get_platforms()[p].get_devices()[d]
             context = cl.Context([device])
-            queue = cl.CommandQueue(
+            queues = tuple(cl.CommandQueue(
                 context, properties=cl.command_queue_properties.PROFILING_ENABLE)
+                for _ in range(2))
             _DEVICES[entry["id"]] = _Device(
-                f"{entry['platform']} / {entry['device']}", context, queue)
+                f"{entry['platform']} / {entry['device']}", context, queues[0],
+                second_queue=queues[1], staging=_segments.Staging(context, queues),
+                allocator=cl.tools.MemoryPool(cl.tools.ImmediateAllocator(queues[0])))
         return _DEVICES[entry["id"]]
 
 
@@ -385,79 +411,121 @@ class OpenCLBackend:
     def capabilities(self) -> Capabilities:
         """Return what this backend runs: every operation, both modes, on its device."""
         return Capabilities(Backend.OPENCL, precision=self.precision,
-                            devices=(self.device["id"],))
+                            devices=(self.device["id"],), device_arrays=True)
 
     @property
     def real(self) -> type:
         """Return the NumPy dtype of device coordinates."""
         return np.float64 if self.precision is Precision.FLOAT64 else np.float32
 
-    def clip_segments(self, segments: np.ndarray, window: Window,
-                      options: SegmentOptions) -> SegmentPieces:
+    def clip_segments(self, segments: np.ndarray | cl_array.Array, window: Window,
+                      options: SegmentOptions, *, source: bool = True,
+                      t: bool = True) -> SegmentPieces:
         """Return the visible piece of each segment; see `ClipBackend.clip_segments`.
 
-        ``stats.device`` holds the device, the precision, and the transfers and times.
+        Host arrays stream through the device in pipelined chunks (`segments.clip_host`);
+        a `pyopencl.array.Array` of this backend's context and dtype stays there, and so
+        do the pieces (`segments.clip_device`: device arrays back, nothing copied but
+        the count and the counters). `source` and `t` False leave those outputs out
+        (None): less to write and copy back. ``stats.device`` holds the device, the
+        precision, and the transfers and times.
 
         Raises
         ------
         InvalidGeometryError, InvalidWindowError
-            In float32, for coordinates (or their differences) beyond float32's range,
-            or a window that collapses when rounded to float32.
+            A segment that is not finite (found on the device: nothing is returned), or
+            in float32 coordinates (or their differences) beyond float32's range, or a
+            window that collapses when rounded to float32.
+        ValueError
+            A device array of another context, dtype or shape.
         """
-        check_segment_values(segments)
         real = self.real
-        n = segments.shape[0]
-        with np.errstate(over="ignore"):  # float32: checked below, with the row named
-            data: np.ndarray = np.ascontiguousarray(segments, dtype=real)
+        on_device = isinstance(segments, cl_array.Array)
+        if on_device:
+            self._check_device_segments(segments)
+            data = segments
+        else:
+            with np.errstate(over="ignore"):  # float32: checked below, with the row named
+                data = np.ascontiguousarray(segments, dtype=real)
+        n = int(data.shape[0])
         bounds: np.ndarray = np.array(window.bounds, dtype=real)
-        if real is np.float32:
+        if real is np.float32 and not on_device:
             _check_float32(data, bounds)
-        xmin, ymin, xmax, ymax = (real(b) for b in bounds)
-        queue = self._device.queue
-        ledger = _Ledger()
-        groups = max(1, -(-n // LOCAL_SIZE))
-        with self._device.call_lock:
-            kernels = self._device.program(real is np.float64)
-            clip_kernel, write_kernel = kernels.clip_segments, kernels.write_pieces
-            device_segments = ledger.to_device(queue, data.reshape(-1))
-            result = cl_array.empty(queue, max(1, 6 * n), real)
-            keep = cl_array.empty(queue, max(1, n), np.int64)
-            counters = cl_array.empty(queue, groups * _SEGMENT_COUNTERS, np.int64)
-            ledger.kernel_events.append(clip_kernel(
-                queue, (groups * LOCAL_SIZE,), (LOCAL_SIZE,), _data(device_segments),
-                np.int64(n), xmin, ymin, xmax, ymax, np.int32(METHOD_ID[options.method]),
-                np.int32(options.n), np.int32(options.max_depth), real(options.tolerance),
-                np.int32(options.mode is Mode.EXACT), _data(result),
-                _data(keep), _data(counters), wait_for=ledger.copy_events))
-            m = 0
-            if n:
-                event, position = cl_array.cumsum(keep[:n], queue=queue, return_event=True,
-                                                  wait_for=ledger.kernel_events)
-                ledger.kernel_events.append(event)
-                m = int(ledger.from_device(queue, position[n - 1:n])[0])
-            pieces = cl_array.empty(queue, max(1, 4 * m), real)
-            source = cl_array.empty(queue, max(1, m), np.int64)
-            t = cl_array.empty(queue, max(1, 2 * m), real)
-            if m:
-                ledger.kernel_events.append(write_kernel(
-                    queue, (n,), None, _data(result), _data(keep), _data(position), np.int64(n),
-                    xmin, ymin, xmax, ymax, _data(pieces), _data(source), _data(t),
-                    wait_for=ledger.kernel_events[-1:]))
-            rows = ledger.from_device(queue, counters).reshape(groups, _SEGMENT_COUNTERS)
-            out_pieces = ledger.from_device(queue, pieces[:4 * m]).reshape(m, 4)
-            out_source = ledger.from_device(queue, source[:m])
-            out_t = ledger.from_device(queue, t[:2 * m]).reshape(m, 2)
-            device_stats = ledger.stats(self.name, self.precision)
-        out_pieces = out_pieces.astype(np.float64)
+        device = self._device
+        with device.call_lock:
+            run = self._segment_run(bounds if n else None, options, source, t)
+            if on_device:
+                outputs, totals, m = _segments.clip_device(run, device.queue, data, n,
+                                                           device.allocator)
+            else:
+                assert device.staging is not None
+                host, totals, m = _segments.clip_host(run, device.staging, data,
+                                                      _segments.CHUNK_SEGMENTS)
+            device_stats = self._run_stats(run)
+        bad = totals[:, -1].min() if totals.shape[0] else n
+        if bad < n:
+            self._raise_invalid(segments, int(bad), on_device)
+        rows = np.zeros((max(1, totals.shape[0]), C.WIDTH), dtype=np.int64)
+        rows[:totals.shape[0], :_SEGMENT_COUNTERS] = totals[:, :-1]
+        stats = ClipStats.from_counters(rows, n, m, device=device_stats)
+        if on_device:
+            return SegmentPieces(outputs["pieces"], outputs["source"], outputs["t"], stats)
+        pieces = host.pieces
         if real is np.float32:
             # The float32 window may reach an ulp past the float64 one: no output point
             # lies outside the window the caller gave.
-            np.clip(out_pieces[:, 0::2], window.xmin, window.xmax, out=out_pieces[:, 0::2])
-            np.clip(out_pieces[:, 1::2], window.ymin, window.ymax, out=out_pieces[:, 1::2])
-        full = np.zeros((groups, C.WIDTH), dtype=np.int64)
-        full[:, :_SEGMENT_COUNTERS] = rows
-        stats = ClipStats.from_counters(full, n, m, device=device_stats)
-        return SegmentPieces(out_pieces, out_source, out_t.astype(np.float64), stats)
+            np.clip(pieces[:, 0::2], window.xmin, window.xmax, out=pieces[:, 0::2])
+            np.clip(pieces[:, 1::2], window.ymin, window.ymax, out=pieces[:, 1::2])
+        return SegmentPieces(pieces, host.source, host.t, stats)
+
+    def _segment_run(self, bounds: np.ndarray | None, options: SegmentOptions, source: bool,
+                     t: bool) -> _segments.SegmentRun:
+        """Return the settings of one segment call, its window table uploaded.
+
+        `bounds` None: nothing to clip, nothing uploaded.
+        """
+        device = self._device
+        real = self.real
+        kernels = device.program(real is np.float64)
+        windows = np.ascontiguousarray(bounds if bounds is not None else [], dtype=real
+                                       ).reshape(-1)
+        run = _segments.SegmentRun(
+            kernels, device.scan(), real, LOCAL_SIZE,
+            cl.Buffer(device.context, cl.mem_flags.READ_ONLY, max(8, windows.nbytes)),
+            METHOD_ID[options.method], options.n, options.max_depth, options.tolerance,
+            int(options.mode is Mode.EXACT), source, t,
+            nowhere=cl.Buffer(device.context, cl.mem_flags.READ_WRITE, 8))
+        if windows.size:
+            run.ready.append(run.upload(device.queue, run.windows, windows))
+        return run
+
+    def _run_stats(self, run: _segments.SegmentRun) -> DeviceStats:
+        events = run.copy_events + run.kernel_events
+        if events:
+            cl.wait_for_events(events)
+        return DeviceStats(device=self.name, precision=self.precision.value,
+                           transfers=len(run.copy_events),
+                           bytes_to_device=run.bytes_to_device,
+                           bytes_from_device=run.bytes_from_device,
+                           transfer_seconds=_seconds(run.copy_events),
+                           kernel_seconds=_seconds(run.kernel_events))
+
+    def _check_device_segments(self, segments: cl_array.Array) -> None:
+        if segments.context != self._device.context:
+            raise ValueError("the segments are on another OpenCL context than the backend's "
+                             f"device {self.name!r}")
+        if segments.dtype != self.real or segments.ndim != 2 or segments.shape[1] != 4:
+            raise ValueError(
+                f"device segments must be (n, 4) {np.dtype(self.real).name} (the device's "
+                f"precision), got {segments.shape} {segments.dtype}")
+        if not segments.flags.c_contiguous:
+            raise ValueError("device segments must be C-contiguous")
+
+    @staticmethod
+    def _raise_invalid(segments: Any, row: int, on_device: bool) -> None:
+        """Raise the error of segment `row`, which the device found not finite."""
+        values = segments[row].get() if on_device else np.asarray(segments[row])
+        raise segment_error(row, values)
 
     def clip_lines(self, lines: Ragged, windows: WindowTable, options: SegmentOptions,
                    drop_edge_runs: bool) -> GeometryPieces:

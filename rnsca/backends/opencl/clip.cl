@@ -1002,23 +1002,39 @@ void store_counters(Counters st, int width, __global long *counters) {
         row[k] = st[k];
 }
 
-/* Pass 1: clip segment i, store (t0, t1, ax, ay, bx, by) at result[6 i] and keep[i] in
- * {0, 1}; each group writes its summed counters to counters[group]. */
+/* Pass 1 over `n` items, each a segment (`pairs` 0: item i is segment i, clipped to
+ * window 0) or a (segment, window) pair (`pairs` 1: item i is pair p = item_base + i,
+ * segment pair_segment[p] clipped to window pair_window[p]). Item i's result (t0, t1, ax, ay, bx, by) goes to
+ * result[6 i] and keep[i] in {0, 1}. A grid-stride loop: the host launches few groups
+ * (`_groups`), so each group's counter row sums many items and few rows are written and
+ * reduced (`reduce_counters`). A segment that is not finite (a NaN or infinite
+ * coordinate, or differences that overflow: `check_segment_values`) is not clipped;
+ * the smallest such item of the group goes to first_bad[group] (n if none). */
 __kernel __attribute__((reqd_work_group_size(LOCAL_SIZE, 1, 1)))
-void clip_segments(__global const REAL *segments, const long n, const REAL xmin,
-                   const REAL ymin, const REAL xmax, const REAL ymax, const int method,
-                   const int n_fixed, const int max_depth, const REAL tol,
-                   const int exact, __global REAL *result,
-                   __global long *keep, __global long *counters) {
+void clip_segments(__global const REAL *segments, const long n,
+                   __global const REAL *windows, const int pairs, const long item_base,
+                   __global const long *pair_segment, __global const int *pair_window,
+                   const int method, const int n_fixed, const int max_depth, const REAL tol,
+                   const int exact, __global REAL *result, __global long *keep,
+                   __global long *counters, __global long *first_bad) {
     __local int st[SEGMENT_COUNTERS];
+    __local long bad[LOCAL_SIZE];
     clear_counters(st, SEGMENT_COUNTERS);
-    long i = get_global_id(0);
-    if (i < n) {
-        REAL x0 = segments[4 * i], y0 = segments[4 * i + 1];
-        REAL x1 = segments[4 * i + 2], y1 = segments[4 * i + 3];
+    long my_bad = n;  /* this work-item's first item that is not finite */
+    long stride = get_global_size(0);
+    for (long i = get_global_id(0); i < n; i += stride) {
+        long s = pairs ? pair_segment[item_base + i] : i;
+        __global const REAL *w = windows + 4 * (pairs ? pair_window[item_base + i] : 0);
+        REAL xmin = w[0], ymin = w[1], xmax = w[2], ymax = w[3];
+        REAL x0 = segments[4 * s], y0 = segments[4 * s + 1];
+        REAL x1 = segments[4 * s + 2], y1 = segments[4 * s + 3];
         REAL out[6];
-        int kept;
-        if (method == RNSCA) {
+        int kept = 0;
+        if (!(isfinite(x0) && isfinite(y0) && isfinite(x1) && isfinite(y1)
+              && isfinite(x1 - x0) && isfinite(y1 - y0))) {
+            if (my_bad == n)  /* a work-item's items rise: its first is its smallest */
+                my_bad = i;
+        } else if (method == RNSCA) {
             Stack stack;
             kept = rnsca_level0(x0, y0, x1, y1, xmin, ymin, xmax, ymax, n_fixed, max_depth,
                                 tol, exact, st, &stack, out);
@@ -1038,26 +1054,74 @@ void clip_segments(__global const REAL *segments, const long n, const REAL xmin,
                 result[6 * i + k] = out[k];
     }
     store_counters(st, SEGMENT_COUNTERS, counters);
+    int l = get_local_id(0);
+    bad[l] = my_bad;
+    for (int step = LOCAL_SIZE / 2; step > 0; step /= 2) {
+        barrier(CLK_LOCAL_MEM_FENCE);
+        if (l < step)
+            bad[l] = min(bad[l], bad[l + step]);
+    }
+    if (l == 0)
+        first_bad[get_group_id(0)] = bad[0];
 }
 
-/* Pass 3: copy segment i's kept result to slot position[i] - 1 (`position` is the
- * inclusive prefix sum of `keep`), its ends clamped into the window (`_write_piece`). */
+/* Pass 3: copy item i's kept result to slot position[i] - 1 (`position` is the
+ * inclusive prefix sum of `keep`), its ends clamped into its window (`_write_piece`);
+ * its segment to `source` and its parameters to `t` where asked for (`want_source`,
+ * `want_t`), and for pairs its window to `window_out`. */
 __kernel void write_pieces(__global const REAL *result, __global const long *keep,
-                           __global const long *position, const long n, const REAL xmin,
-                           const REAL ymin, const REAL xmax, const REAL ymax,
-                           __global REAL *pieces, __global long *source, __global REAL *t) {
+                           __global const long *position, const long n,
+                           __global const REAL *windows, const int pairs,
+                           const long item_base, __global const long *pair_segment,
+                           __global const int *pair_window, const long segment_base, const int want_source, const int want_t,
+                           __global REAL *pieces, __global long *source, __global REAL *t,
+                           __global int *window_out) {
     long i = get_global_id(0);
     if (i >= n || !keep[i])
         return;
     long k = position[i] - 1;
+    int wi = pairs ? pair_window[item_base + i] : 0;
+    __global const REAL *w = windows + 4 * wi;
     __global const REAL *r = result + 6 * i;
-    pieces[4 * k] = clamp_real(r[2], xmin, xmax);
-    pieces[4 * k + 1] = clamp_real(r[3], ymin, ymax);
-    pieces[4 * k + 2] = clamp_real(r[4], xmin, xmax);
-    pieces[4 * k + 3] = clamp_real(r[5], ymin, ymax);
-    source[k] = i;
-    t[2 * k] = r[0];
-    t[2 * k + 1] = r[1];
+    pieces[4 * k] = clamp_real(r[2], w[0], w[2]);
+    pieces[4 * k + 1] = clamp_real(r[3], w[1], w[3]);
+    pieces[4 * k + 2] = clamp_real(r[4], w[0], w[2]);
+    pieces[4 * k + 3] = clamp_real(r[5], w[1], w[3]);
+    if (want_source)
+        source[k] = pairs ? pair_segment[item_base + i] : segment_base + i;
+    if (want_t) {
+        t[2 * k] = r[0];
+        t[2 * k + 1] = r[1];
+    }
+    if (pairs)
+        window_out[k] = wi;
+}
+
+/* The counter rows of `rows` groups (each SEGMENT_COUNTERS wide) to one row: group k
+ * (of SEGMENT_COUNTERS + 1) reduces column k, summed except DEEPEST (a maximum); the
+ * last group takes the minimum of first_bad. */
+__kernel __attribute__((reqd_work_group_size(LOCAL_SIZE, 1, 1)))
+void reduce_counters(__global const long *counters, __global const long *first_bad,
+                     const long rows, __global long *total) {
+    __local long part[LOCAL_SIZE];
+    int k = get_group_id(0);
+    int l = get_local_id(0);
+    int bad = k == SEGMENT_COUNTERS;
+    long acc = bad ? LONG_MAX : 0;
+    for (long r = l; r < rows; r += LOCAL_SIZE) {
+        long v = bad ? first_bad[r] : counters[r * SEGMENT_COUNTERS + k];
+        acc = bad ? min(acc, v) : (k == DEEPEST ? max(acc, v) : acc + v);
+    }
+    part[l] = acc;
+    for (int step = LOCAL_SIZE / 2; step > 0; step /= 2) {
+        barrier(CLK_LOCAL_MEM_FENCE);
+        if (l < step) {
+            long a = part[l], b = part[l + step];
+            part[l] = bad ? min(a, b) : (k == DEEPEST ? max(a, b) : a + b);
+        }
+    }
+    if (l == 0)
+        total[k] = part[0];
 }
 
 /* --- kernels/polylines.py: run-level pruning of lines ------------------------------- */

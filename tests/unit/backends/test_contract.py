@@ -25,9 +25,16 @@ def test_every_backend_implements_every_operation_with_the_contracts_signature(b
         implemented = inspect.signature(getattr(type(engine), name)).parameters
         # The contract's parameters, in order; an implementation may add keyword-only
         # ones with defaults (the Numba backend's `device`, for the OpenCL backend).
-        contract = [p for p in implemented.values()
+        # The contract's own keyword-only options (segments' `source` and `t`) are
+        # there too, with the contract's defaults.
+        def positional(parameters):
+            return [p.name for p in parameters.values()
                     if not (p.kind is p.KEYWORD_ONLY and p.default is not p.empty)]
-        assert [p.name for p in contract] == list(declared.parameters), name
+
+        assert positional(implemented) == positional(declared.parameters), name
+        for p in declared.parameters.values():
+            if p.kind is p.KEYWORD_ONLY:
+                assert implemented[p.name].default == p.default, (name, p.name)
     capabilities = engine.capabilities
     assert capabilities.backend is backend
     assert capabilities.operations == frozenset(Operation)

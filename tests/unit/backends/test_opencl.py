@@ -241,25 +241,25 @@ def test_stats_count_the_transfers_and_their_bytes(opencl, rng):
     d = r.stats.device
     real = 8 if opencl.precision is Precision.FLOAT64 else 4
     m = len(r)
-    groups = -(-1000 // 64)
     assert d.device == opencl.name and d.precision == opencl.precision.value
-    # Up: the segments. Down: the total, the counter rows, the pieces, sources, t.
-    assert d.transfers == 6
-    assert d.bytes_to_device == 1000 * 4 * real
-    assert d.bytes_from_device == 8 + groups * 41 * 8 + m * (4 * real + 8 + 2 * real)
+    # Up: the window and the segments. Down: the count, the counter row reduced on the
+    # device (41 counters and the first non-finite segment), the pieces, sources, t.
+    assert d.transfers == 7
+    assert d.bytes_to_device == 4 * real + 1000 * 4 * real
+    assert d.bytes_from_device == 8 + 42 * 8 + m * (4 * real + 8 + 2 * real)
     assert d.kernel_seconds > 0 and d.transfer_seconds > 0
 
 
 def test_nothing_kept_brings_back_only_the_counters(opencl):
     r = clip_segments([[20.0, 30.0, 40.0, 50.0]], W, backend="opencl")
     assert len(r) == 0 and r.stats.rejected == 1
-    assert r.stats.device.transfers == 3  # segments up; total and counters down
+    assert r.stats.device.transfers == 4  # window, segments up; count, counters down
 
 
 def test_empty_input_moves_nothing_but_the_counters(opencl):
     r = clip_segments(np.empty((0, 4)), W, backend="opencl")
     assert len(r) == 0 and r.stats.segments_in == 0
-    assert r.stats.device.bytes_to_device == 0 and r.stats.device.transfers == 1
+    assert r.stats.device.bytes_to_device == 0 and r.stats.device.transfers == 0
 
 
 def test_combined_stats_add_the_device_counters(opencl, rng):
@@ -269,7 +269,7 @@ def test_combined_stats_add_the_device_counters(opencl, rng):
     b = clip_segments(rng.uniform(-10, 30, (50, 4)), W, backend="opencl").stats
     both = ClipStats.combine([a, b])
     assert both.device.transfers == a.device.transfers + b.device.transfers
-    assert both.device.bytes_to_device == (100 + 50) * 4 * (
+    assert both.device.bytes_to_device == (2 + 100 + 50) * 4 * (
         8 if opencl.precision is Precision.FLOAT64 else 4)
 
 

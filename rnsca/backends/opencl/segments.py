@@ -1,0 +1,402 @@
+"""Segments on an OpenCL device: staged, overlapped transfers, and inputs kept on the device.
+
+A call on host arrays streams the segments in chunks through two slots, each with its
+own in-order queue, page-locked (pinned) staging buffers and device buffers, all kept
+for the next call. While one slot's chunk is copied up, clipped and compacted, the
+other's pieces are copied down and into the caller's arrays: upload, kernels, download
+and the host's copies overlap. Per chunk, on the device:
+
+1. ``clip_segments``: each item's result and a 0/1 keep count, the counters summed per
+   work-group (few groups: a grid-stride loop), the first non-finite segment;
+2. an inclusive scan of the counts (the slots of the kept pieces);
+3. ``reduce_counters``: the groups' counter rows to one row;
+4. ``write_pieces``: the kept results to their slots, in the output's dtype and layout
+   (``source`` and ``t`` only where asked for).
+
+Only the count and one counter row come back before the pieces. The host copies between
+the caller's arrays and the staging buffers on every core (`rnsca.kernels.copies`).
+
+A call on a `pyopencl.array.Array` of segments runs the same kernels in one pass and
+returns device arrays: nothing crosses the bus but the count and the counters.
+
+An item is a segment and the window, or a (segment, window) pair of a many-window call
+(``pairs``): the kernels read the window of each pair from a table on the device.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import pyopencl as cl
+import pyopencl.array as cl_array
+from pyopencl.scan import GenericScanKernel
+
+from rnsca import constants
+from rnsca.kernels.copies import copy_into
+
+__all__ = ["SegmentRun", "Staging", "MAX_GROUPS", "CHUNK_SEGMENTS"]
+
+#: Work-groups per clip launch at most: enough to fill a large GPU (132 SMs x 2,048
+#: work-items on an H100 is 4,224 groups of 64), few enough that the counter rows stay
+#: small (the grid-stride loop gives each group many items).
+MAX_GROUPS = 4096
+#: Items per chunk of a host input: each slot's share of a pipelined call.
+CHUNK_SEGMENTS = 1 << 20
+_WIDTH = constants.SEGMENT_COUNTERS
+_NONE = np.iinfo(np.int64).max
+
+
+def groups_for(n: int, local_size: int) -> int:
+    """Return the work-groups of a clip launch over `n` items."""
+    return max(1, min(-(-n // local_size), MAX_GROUPS))
+
+
+class _Pinned:
+    """A page-locked host buffer, mapped once for the process.
+
+    The device copies to and from its NumPy view at full bus speed (``ALLOC_HOST_PTR``:
+    the driver pins it).
+    """
+
+    def __init__(self, context: cl.Context, queue: cl.CommandQueue, nbytes: int) -> None:
+        self.nbytes = max(nbytes, 8)
+        self.buffer = cl.Buffer(context, cl.mem_flags.READ_WRITE | cl.mem_flags.ALLOC_HOST_PTR,
+                                self.nbytes)
+        # Kept mapped: its host pointer is the source and target of the transfers
+        # (the pattern NVIDIA's OpenCL guide gives for pinned staging).
+        self.view, _ = cl.enqueue_map_buffer(
+            queue, self.buffer, cl.map_flags.READ | cl.map_flags.WRITE, 0, (self.nbytes,),
+            np.uint8, is_blocking=True)
+
+    def array(self, offset: int, dtype: Any, count: int) -> np.ndarray:
+        """Return `count` items of `dtype` from byte `offset` on, a view."""
+        dtype = np.dtype(dtype)
+        return self.view[offset:offset + count * dtype.itemsize].view(dtype)
+
+
+@dataclass
+class _Slot:
+    """One lane of the pipeline: a queue, staging and device buffers for one chunk."""
+
+    queue: cl.CommandQueue
+    capacity: int
+    real: Any
+    pinned_in: _Pinned
+    pinned_out: _Pinned
+    segments: cl.Buffer
+    buffers: dict
+    # The chunk in flight: where it is, and what the device said of it.
+    state: str = "idle"
+    n: int = 0
+    first: int = 0
+    m: int = 0
+    offset: int = 0
+    count: np.ndarray = field(default_factory=lambda: np.zeros(1, np.int64))
+    total: np.ndarray = field(default_factory=lambda: np.zeros(_WIDTH + 1, np.int64))
+    events: list = field(default_factory=list)
+
+
+def _device_buffers(context: cl.Context, capacity: int, real: Any) -> dict:
+    item = np.dtype(real).itemsize
+    size = max(1, capacity)
+
+    def buffer(nbytes: int) -> cl.Buffer:
+        return cl.Buffer(context, cl.mem_flags.READ_WRITE, max(8, nbytes))
+
+    return {"result": buffer(6 * item * size), "keep": buffer(8 * size),
+            "position": buffer(8 * size), "counters": buffer(8 * _WIDTH * MAX_GROUPS),
+            "first_bad": buffer(8 * MAX_GROUPS), "total": buffer(8 * (_WIDTH + 1)),
+            "pieces": buffer(4 * item * size), "source": buffer(8 * size),
+            "t": buffer(2 * item * size), "window": buffer(4 * size)}
+
+
+class Staging:
+    """The slots of one device and precision, grown to the largest chunk asked for."""
+
+    def __init__(self, context: cl.Context, queues: tuple[cl.CommandQueue, ...]) -> None:
+        self.context = context
+        self.queues = queues
+        self.slots: dict[Any, list[_Slot]] = {}
+
+    def slots_for(self, real: Any, chunk: int) -> list[_Slot]:
+        """Return the slots for `real` coordinates, each holding at least `chunk` items.
+
+        Capacities are powers of two from 2**12, so a few sizes serve every call.
+        """
+        capacity = 1 << max(12, (chunk - 1).bit_length())
+        slots = self.slots.get(real)
+        if slots is None or slots[0].capacity < capacity:
+            item = np.dtype(real).itemsize
+            slots = [_Slot(queue, capacity, real,
+                           _Pinned(self.context, queue, 4 * item * capacity),
+                           _Pinned(self.context, queue, (6 * item + 12) * capacity),
+                           cl.Buffer(self.context, cl.mem_flags.READ_ONLY,
+                                     4 * item * capacity),
+                           _device_buffers(self.context, capacity, real))
+                     for queue in self.queues]
+            self.slots[real] = slots
+        return slots
+
+
+@dataclass
+class SegmentRun:
+    """One clip call's kernels and settings: everything but the data."""
+
+    kernels: Any
+    scan: GenericScanKernel
+    real: Any
+    local_size: int
+    windows: cl.Buffer
+    method: int
+    n_fixed: int
+    max_depth: int
+    tolerance: Any
+    exact: int
+    want_source: bool
+    want_t: bool
+    pair_segment: cl.Buffer | None = None
+    pair_window: cl.Buffer | None = None
+    nowhere: cl.Buffer | None = None
+    # The uploads every clip waits for (the window table), whichever queue it runs on.
+    ready: list = field(default_factory=list)
+    kernel_events: list = field(default_factory=list)
+    copy_events: list = field(default_factory=list)
+    bytes_to_device: int = 0
+    bytes_from_device: int = 0
+
+    @property
+    def pairs(self) -> bool:
+        """Return whether the items are (segment, window) pairs."""
+        return self.pair_segment is not None
+
+    def clip(self, queue: cl.CommandQueue, segments: cl.Buffer, n: int, first: int,
+             buffers: dict, wait_for: list) -> cl.Event:
+        """Enqueue the clip, scan and counter reduction of items first..first+n-1."""
+        real = self.real
+        groups = groups_for(n, self.local_size)
+        clip = self.kernels.clip_segments(
+            queue, (groups * self.local_size,), (self.local_size,), segments, np.int64(n),
+            self.windows, np.int32(self.pairs), np.int64(first), *self._pair_buffers(),
+            np.int32(self.method), np.int32(self.n_fixed), np.int32(self.max_depth),
+            real(self.tolerance), np.int32(self.exact), buffers["result"], buffers["keep"],
+            buffers["counters"], buffers["first_bad"], wait_for=wait_for + self.ready)
+        keep = cl_array.Array(queue, n, np.int64, data=buffers["keep"])
+        position = cl_array.Array(queue, n, np.int64, data=buffers["position"])
+        scan = self.scan(keep, position, queue=queue, size=n, wait_for=[clip])
+        reduce = self.kernels.reduce_counters(
+            queue, ((_WIDTH + 1) * self.local_size,), (self.local_size,), buffers["counters"],
+            buffers["first_bad"], np.int64(groups), buffers["total"], wait_for=[clip])
+        self.kernel_events += [clip, scan, reduce]
+        return scan
+
+    def write(self, queue: cl.CommandQueue, n: int, first: int, buffers: dict,
+              segment_base: int, out: dict) -> cl.Event:
+        """Enqueue the write of the kept items' pieces into `out`'s buffers."""
+        event = self.kernels.write_pieces(
+            queue, (n,), None, buffers["result"], buffers["keep"], buffers["position"],
+            np.int64(n), self.windows, np.int32(self.pairs), np.int64(first),
+            *self._pair_buffers(),
+            np.int64(segment_base), np.int32(self.want_source), np.int32(self.want_t),
+            out["pieces"], out["source"], out["t"], out["window"])
+        self.kernel_events.append(event)
+        return event
+
+    def _pair_buffers(self) -> tuple[cl.Buffer | None, cl.Buffer | None]:
+        if not self.pairs:
+            return self.nowhere, self.nowhere
+        return self.pair_segment, self.pair_window
+
+    def upload(self, queue: cl.CommandQueue, target: cl.Buffer, source: np.ndarray) -> cl.Event:
+        """Enqueue a copy of `source` to the device, counted in the call's stats."""
+        event = cl.enqueue_copy(queue, target, source, is_blocking=False)
+        self.copy_events.append(event)
+        self.bytes_to_device += source.nbytes
+        return event
+
+    def download(self, queue: cl.CommandQueue, target: np.ndarray, source: cl.Buffer,
+                 wait_for: list | None = None, offset: int = 0) -> cl.Event:
+        """Enqueue a copy from the device (from byte `offset`), counted in the stats."""
+        event = cl.enqueue_copy(queue, target, source, src_offset=offset, is_blocking=False,
+                                wait_for=wait_for)
+        self.copy_events.append(event)
+        self.bytes_from_device += target.nbytes
+        return event
+
+
+@dataclass
+class HostOutputs:
+    """The caller's arrays, sized for every item kept, shrunk to the count at the end."""
+
+    pieces: np.ndarray
+    source: np.ndarray | None
+    t: np.ndarray | None
+    window: np.ndarray | None
+
+    @classmethod
+    def empty(cls, n: int, want_source: bool, want_t: bool, pairs: bool) -> HostOutputs:
+        # Pages are touched only where pieces land (np.empty maps them lazily).
+        return cls(np.empty((n, 4)), np.empty(n, np.int64) if want_source else None,
+                   np.empty((n, 2)) if want_t else None,
+                   np.empty(n, np.int32) if pairs else None)
+
+    def shrink(self, m: int) -> None:
+        # Arrays no one else holds: realloc shrinks them where they are.
+        self.pieces.resize((m, 4), refcheck=False)
+        if self.source is not None:
+            self.source.resize(m, refcheck=False)
+        if self.t is not None:
+            self.t.resize((m, 2), refcheck=False)
+        if self.window is not None:
+            self.window.resize(m, refcheck=False)
+
+
+def _out_views(slot: _Slot, m: int) -> dict[str, np.ndarray]:
+    """Return the slot's pinned output regions for `m` pieces."""
+    item = np.dtype(slot.real).itemsize
+    c = slot.capacity
+    return {"pieces": slot.pinned_out.array(0, slot.real, 4 * m),
+            "source": slot.pinned_out.array(4 * item * c, np.int64, m),
+            "t": slot.pinned_out.array((4 * item + 8) * c, slot.real, 2 * m),
+            "window": slot.pinned_out.array((6 * item + 8) * c, np.int32, m)}
+
+
+def clip_host(run: SegmentRun, staging: Staging, data: np.ndarray,
+              chunk: int = CHUNK_SEGMENTS) -> tuple[HostOutputs, np.ndarray, int]:
+    """Clip host segments (or pairs) in pipelined chunks; return outputs, totals, first bad.
+
+    `data` holds the items' segments (n, 4) in the device's dtype; for pairs, `run`
+    carries the pair tables (already on the device) and `data` every segment, uploaded
+    once whole (`n_items` is then the pair count: see `clip_pairs_host`). Returns the
+    caller's arrays (shrunk), the counter totals of each chunk (rows of
+    SEGMENT_COUNTERS + 1, the last the chunk's first non-finite item, chunk-relative)
+    and the count of pieces.
+    """
+    n = data.shape[0]
+    slots = staging.slots_for(run.real, min(max(n, 1), chunk))
+    outputs = HostOutputs.empty(n, run.want_source, run.want_t, run.pairs)
+    totals: list[np.ndarray] = []
+    m = 0
+    chunk = slots[0].capacity
+    starts = list(range(0, n, chunk))
+    for c, start in enumerate(starts):
+        slot = slots[c % len(slots)]
+        if slot.state == "downloading":
+            _drain(slot, outputs)
+        count = min(chunk, n - start)
+        staged = slot.pinned_in.array(0, run.real, 4 * count)
+        copy_into(staged, data[start:start + count].reshape(-1))
+        upload = run.upload(slot.queue, slot.segments, staged)
+        _start(run, slot, slot.segments, count, start, [upload])
+        previous = slots[(c - 1) % len(slots)]
+        if c and previous.state == "clipping":
+            m = _finish(run, previous, m, totals)
+    for c in range(max(0, len(starts) - 1), len(starts)):
+        slot = slots[c % len(slots)]
+        if slot.state == "clipping":
+            m = _finish(run, slot, m, totals)
+    for slot in slots:
+        if slot.state == "downloading":
+            _drain(slot, outputs)
+    outputs.shrink(m)
+    return outputs, np.array(totals, np.int64).reshape(-1, _WIDTH + 1), m
+
+
+def _start(run: SegmentRun, slot: _Slot, segments: cl.Buffer, n: int, first: int,
+           wait_for: list) -> None:
+    scan = run.clip(slot.queue, segments, n, first if run.pairs else 0, slot.buffers,
+                    wait_for)
+    slot.events = [
+        run.download(slot.queue, slot.count, slot.buffers["position"], wait_for=[scan],
+                     offset=8 * (n - 1)),
+        run.download(slot.queue, slot.total, slot.buffers["total"])]
+    slot.state, slot.n, slot.first = "clipping", n, first
+
+
+def _finish(run: SegmentRun, slot: _Slot, m: int, totals: list) -> int:
+    """Wait for the slot's count, enqueue its write and downloads; return the new count."""
+    cl.wait_for_events(slot.events)
+    total = slot.total.copy()
+    # The call's index of the chunk's first non-finite item, or none (the largest int).
+    total[_WIDTH] = total[_WIDTH] + slot.first if total[_WIDTH] < slot.n else _NONE
+    totals.append(total)
+    slot.m = int(slot.count[0])
+    slot.offset = m
+    slot.events = []
+    if slot.m:
+        base = 0 if run.pairs else slot.first
+        write = run.write(slot.queue, slot.n, slot.first, slot.buffers, base, slot.buffers)
+        views = _out_views(slot, slot.m)
+        wanted = ["pieces"] + (["source"] if run.want_source else []) + (
+            ["t"] if run.want_t else []) + (["window"] if run.pairs else [])
+        slot.events = [run.download(slot.queue, views[name], slot.buffers[name],
+                                    wait_for=[write]) for name in wanted]
+    slot.state = "downloading"
+    return m + slot.m
+
+
+def _drain(slot: _Slot, outputs: HostOutputs) -> None:
+    """Wait for the slot's downloads and copy its pieces into the caller's arrays."""
+    if slot.events:
+        cl.wait_for_events(slot.events)
+    m, a = slot.m, slot.offset
+    if m:
+        views = _out_views(slot, m)
+        _land(outputs.pieces[a:a + m], views["pieces"])
+        if outputs.source is not None:
+            copy_into(outputs.source[a:a + m], views["source"])
+        if outputs.t is not None:
+            _land(outputs.t[a:a + m], views["t"])
+        if outputs.window is not None:
+            copy_into(outputs.window[a:a + m], views["window"])
+    slot.state, slot.events = "idle", []
+
+
+def _land(target: np.ndarray, staged: np.ndarray) -> None:
+    """Copy device reals into float64 output rows (a conversion on a float32 device)."""
+    if staged.dtype == np.float64:
+        copy_into(target.reshape(-1), staged)
+    else:
+        target.reshape(-1)[...] = staged
+
+
+def clip_device(run: SegmentRun, queue: cl.CommandQueue, segments: cl_array.Array, n: int,
+                allocator: Any) -> tuple[dict, np.ndarray, int]:
+    """Clip segments (or pairs) already on the device; return device outputs, totals, m.
+
+    The outputs are `pyopencl.array.Array` objects of exactly the pieces kept; only the
+    count and the counter row come back to the host.
+    """
+    item = np.dtype(run.real).itemsize
+    size = max(1, n)
+
+    def scratch(nbytes: int) -> cl.Buffer:
+        return cl_array.empty(queue, max(8, nbytes), np.uint8, allocator=allocator).data
+
+    buffers = {"result": scratch(6 * item * size), "keep": scratch(8 * size),
+               "position": scratch(8 * size), "counters": scratch(8 * _WIDTH * MAX_GROUPS),
+               "first_bad": scratch(8 * MAX_GROUPS), "total": scratch(8 * (_WIDTH + 1))}
+    count = np.zeros(1, np.int64)
+    total = np.zeros(_WIDTH + 1, np.int64)
+    m = 0
+    if n:
+        scan = run.clip(queue, segments.data, n, 0, buffers, [])
+        events = [run.download(queue, count, buffers["position"], wait_for=[scan],
+                               offset=8 * (n - 1)),
+                  run.download(queue, total, buffers["total"])]
+        cl.wait_for_events(events)
+        m = int(count[0])
+    out_arrays = {
+        "pieces": cl_array.empty(queue, (m, 4), run.real, allocator=allocator),
+        "source": cl_array.empty(queue, m, np.int64, allocator=allocator)
+        if run.want_source else None,
+        "t": cl_array.empty(queue, (m, 2), run.real, allocator=allocator)
+        if run.want_t else None,
+        "window": cl_array.empty(queue, m, np.int32, allocator=allocator)
+        if run.pairs else None}
+    if m:
+        out = {name: (array.data if array is not None and array.size else run.nowhere)
+               for name, array in out_arrays.items()}
+        run.write(queue, n, 0, buffers, 0, out).wait()
+    return out_arrays, total.reshape(1, -1), m

@@ -11,7 +11,13 @@ import numpy.typing as npt
 
 from rnsca.arrays import GeometryKind, check_segment_values, geometry_error
 from rnsca.backends.registry import get_backend
-from rnsca.errors import InvalidGeometryError, InvalidOptionError, UnsupportedGeometryError
+from rnsca.errors import (
+    InvalidGeometryError,
+    InvalidOptionError,
+    InvalidWindowError,
+    UnsupportedGeometryError,
+)
+from rnsca.many_windows import as_windows
 from rnsca.options import Backend, Method, Mode, SegmentOptions
 from rnsca.ragged import clip_ragged, resolve_geometry_options
 from rnsca.stats import ClipStats
@@ -44,6 +50,12 @@ class SegmentClipResult:
         What ran.
     options : SegmentOptions
         The resolved options (defaults filled in).
+    window : ndarray of int32, shape (m,), or None
+        With ``windows=``: the window of each piece (its row in `windows`); the pieces
+        are sorted by window, then source. None for one window.
+    window_offsets : ndarray of int64, shape (k + 1,), or None
+        With ``windows=``: window ``w``'s pieces are rows
+        ``window_offsets[w]:window_offsets[w + 1]``.
     """
 
     segments: Any
@@ -54,6 +66,8 @@ class SegmentClipResult:
     mode: Mode
     backend: Backend
     options: SegmentOptions
+    window: Any = None
+    window_offsets: np.ndarray | None = None
 
     def __len__(self) -> int:
         return self.segments.shape[0]
@@ -93,7 +107,8 @@ def as_segments(segments: npt.ArrayLike, *, check_values: bool = True) -> np.nda
     return array
 
 
-def clip_segments(segments: npt.ArrayLike, window: Window | Iterable[float], *,
+def clip_segments(segments: npt.ArrayLike, window: Window | Iterable[float] | None = None, *,
+                  windows: npt.ArrayLike | None = None,
                   method: Method | str = "rnsca", n: SupportsIndex | str = "auto",
                   max_depth: SupportsIndex | None = None, tolerance: float | None = None,
                   mode: Mode | str = "exact", backend: Backend | str = "numba",
@@ -114,6 +129,12 @@ def clip_segments(segments: npt.ArrayLike, window: Window | Iterable[float], *,
         the device, and so do the pieces (see README, "Data kept on the device").
     window : Window or sequence of 4 floats
         ``(xmin, ymin, xmax, ymax)``.
+    windows : array_like, shape (k, 4), optional
+        Many windows instead of `window`: every segment is clipped against every window
+        its bounding box touches, in one call; the result says the window of each piece
+        (``window``, ``window_offsets``). A regular grid of windows (the cells between
+        sorted x and y edges, any order) is recognised and found by arithmetic; other
+        sets by a sweep. Default tolerances follow the smallest window.
     method : {"rnsca", "cohen_sutherland", "liang_barsky", "nicholl_lee_nicholl", "midpoint"}
     n : int in 2..64 or "auto"
         Pieces per subdivision (RNSCA). ``"auto"`` picks it per piece from the piece's
@@ -129,7 +150,9 @@ def clip_segments(segments: npt.ArrayLike, window: Window | Iterable[float], *,
         approx mode the length lost at each boundary crossing is at most one leaf,
         ``max(tolerance, length / 2**max_depth)``-ish; see README, "Approx mode".
         The analytic methods (Cohen–Sutherland, Liang–Barsky, NLN) are always exact.
-    backend : {"numba", "opencl"}
+    backend : {"numba", "opencl", "auto"}
+        ``"auto"``: OpenCL where it measured faster than Numba here for this operation
+        and size (a calibration at the first such call, cached; `rnsca.backends.auto`).
     resolution : float > 0 or str, optional
         Approx mode: the output's resolution, which sets the tolerance: a length in
         output units, or ``"<k>px"``, the window's longer side as k pixels. Default
@@ -156,11 +179,19 @@ def clip_segments(segments: npt.ArrayLike, window: Window | Iterable[float], *,
     >>> r.segments.tolist(), r.source.tolist(), r.t.tolist()
     ([[0.0, 5.0, 10.0, 5.0]], [0], [[0.25, 0.75]])
     """
+    if (window is None) == (windows is None):
+        raise InvalidWindowError("give one of window= and windows=")
+    table = None
+    if windows is not None:
+        table = as_windows(windows)
+        smallest = int(np.argmin((table[:, 2] - table[:, 0]) * (table[:, 3] - table[:, 1])))
+        window = Window(*table[smallest].tolist())
     window = Window.of(window)
     options = SegmentOptions.resolve(window, method=method, n=n, max_depth=max_depth,
                                      tolerance=tolerance, mode=mode, resolution=resolution)
     wanted = _segment_outputs(outputs)
-    engine = get_backend(backend)
+    engine = get_backend(backend, "segments" if table is None else "windows",
+                         _rows(segments))
     # The backend checks the values: the Numba one in its clipping pass (a second
     # read of the input cost 3% of the call, 10M segments), the OpenCL one on the device.
     if is_device_array(segments):
@@ -171,10 +202,26 @@ def clip_segments(segments: npt.ArrayLike, window: Window | Iterable[float], *,
         array = segments
     else:
         array = as_segments(segments, check_values=False)
-    out = engine.clip_segments(array, window, options, source="source" in wanted,
-                               t="t" in wanted)
+    if table is not None:
+        if is_device_array(array):
+            raise InvalidGeometryError(
+                "windows= takes host segments (the windows each segment touches are found "
+                "on the host); give a NumPy array")
+        engine.capabilities.require("windows", options.mode)
+        out = engine.clip_segment_windows(array, table, options, source="source" in wanted,
+                                          t="t" in wanted)
+    else:
+        out = engine.clip_segments(array, window, options, source="source" in wanted,
+                                   t="t" in wanted)
     return SegmentClipResult(out.pieces, out.source, out.t, out.stats, options.method,
-                             options.mode, engine.kind, options)
+                             options.mode, engine.kind, options, out.window,
+                             out.window_offsets)
+
+
+def _rows(segments: Any) -> int:
+    """Return the number of segments (for ``backend="auto"``), 0 if unknown yet."""
+    shape = getattr(segments, "shape", None)
+    return int(shape[0]) if shape else len(segments) if hasattr(segments, "__len__") else 0
 
 
 def _segment_outputs(outputs: Iterable[str]) -> frozenset[str]:

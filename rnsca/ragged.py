@@ -88,7 +88,7 @@ def resolve_geometry_options(
         method: Method | str = "rnsca", n: SupportsIndex | str = "auto",
         max_depth: SupportsIndex | None = None, tolerance: float | None = None,
         mode: Mode | str = "exact", backend: Backend | str = "numba",
-        resolution: float | str | None = None,
+        resolution: float | str | None = None, size: int = 0,
 ) -> tuple[SegmentOptions, Boundary, ClipBackend]:
     """Return ``(SegmentOptions, Boundary, backend)`` for clipping geometry of `dimension`.
 
@@ -105,7 +105,7 @@ def resolve_geometry_options(
                                      max_depth=max_depth, tolerance=tolerance, mode=mode,
                                      resolution=resolution)
     side = Boundary(boundary)
-    engine = get_backend(backend)
+    engine = get_backend(backend, "lines" if dimension == 1 else "polygons", size)
     if dimension == 2 and options.mode not in Operation.POLYGONS.modes:
         raise InvalidOptionError(
             "mode='approx' cannot clip polygons: valid polygon output needs the exact "
@@ -160,7 +160,9 @@ def clip_ragged(geometry_type: shapely.GeometryType | GeometryKind | str, coords
     method, n, max_depth, tolerance, mode, resolution
         As for `clip_segments`; runs of vertices are pruned by RNSCA with N runs per
         split (``n="auto"``: 16). Polygons need ``mode="exact"``.
-    backend : {"numba", "opencl"}
+    backend : {"numba", "opencl", "auto"}
+        ``"auto"``: OpenCL where it measured faster than Numba here for this operation
+        and size (a calibration at the first such call, cached; `rnsca.backends.auto`).
         OpenCL: the run pruning of lines and rings and the clip of their undecided
         segments on the device; chains and polygons assembled on the host (Numba).
     partial_z : bool
@@ -200,7 +202,7 @@ def clip_ragged(geometry_type: shapely.GeometryType | GeometryKind | str, coords
     options, side, engine = resolve_geometry_options(
         windows, ragged.kind.dimension, boundary=boundary, method=method, n=n,
         max_depth=max_depth, tolerance=tolerance, mode=mode, backend=backend,
-        resolution=resolution)
+        resolution=resolution, size=ragged.coords.shape[0])
     if ragged.kind.dimension == 0:
         return _clip_points(ragged, windows, side, keep_empty)
     if ragged.kind.dimension == 1:

@@ -12,6 +12,7 @@ Operations (one method each, the same signature on every backend):
 operation    input                                    result
 ===========  =======================================  ===========================
 segments     (n, 4) float64 array, `Window`           `SegmentPieces`
+windows      (n, 4) float64 array, (k, 4) windows     `SegmentPieces` (+ window)
 lines        `Ragged` lines, `WindowTable`            `GeometryPieces`
 polygons     `Ragged` polygons, `WindowTable`         `GeometryPieces`
 paths        `PathArrays`, `Window`                   `PathPieces`
@@ -65,6 +66,8 @@ class Operation(_ChoiceEnum):
 
     SEGMENTS = "segments"
     """Clip line segments (`ClipBackend.clip_segments`)."""
+    WINDOWS = "windows"
+    """Clip line segments against many windows (`ClipBackend.clip_segment_windows`)."""
     LINES = "lines"
     """Clip lines and multi-lines into chains (`ClipBackend.clip_lines`)."""
     POLYGONS = "polygons"
@@ -173,12 +176,19 @@ class SegmentPieces:
     t : ndarray of float64, shape (m, 2), or None
         Each piece's parameter interval on its segment; None if not asked for.
     stats : ClipStats
+    window : ndarray of int32, shape (m,), or None
+        Many windows (`ClipBackend.clip_segment_windows`): the window of each piece;
+        the pieces are sorted by window, then source. None for one window.
+    window_offsets : ndarray of int64, shape (k + 1,), or None
+        Many windows: window ``w``'s pieces are ``window_offsets[w]:window_offsets[w + 1]``.
     """
 
     pieces: Any
     source: Any
     t: Any
     stats: ClipStats
+    window: Any = None
+    window_offsets: np.ndarray | None = None
 
 
 @dataclass(frozen=True, slots=True)
@@ -263,6 +273,18 @@ class ClipBackend(Protocol):
         `InvalidGeometryError` (`rnsca.arrays.segment_error`) for a segment that is not
         finite or whose differences overflow, and returns nothing. `source` and `t`
         False: those outputs are None (a device leaves them on the device).
+        """
+        ...
+
+    def clip_segment_windows(self, segments: np.ndarray, windows: np.ndarray,
+                             options: SegmentOptions, *, source: bool = True,
+                             t: bool = True) -> SegmentPieces:
+        """Return the piece of each segment in each window it crosses.
+
+        `windows` is a checked float64 (k, 4) table (`rnsca.many_windows.as_windows`);
+        the pairs come from `rnsca.many_windows.assign`. The pieces are sorted by window,
+        then source, with ``window`` and ``window_offsets`` set; the counters count the
+        (segment, window) pairs clipped. Bad segments as `clip_segments`.
         """
         ...
 

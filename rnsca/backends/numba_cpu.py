@@ -31,7 +31,9 @@ from rnsca.kernels import polygons as PG
 from rnsca.kernels import polylines as PL
 from rnsca.kernels import records as R
 from rnsca.kernels import segments as K
+from rnsca.kernels import windows as WK
 from rnsca.kernels.validate import all_finite
+from rnsca.many_windows import assign
 from rnsca.options import Backend, Curves, Method, Mode, PathOptions, SegmentOptions
 from rnsca.stats import ClipStats, DeviceStats
 from rnsca.window import Window, WindowTable
@@ -146,6 +148,53 @@ class NumbaBackend:
             ts.resize((m, 2), refcheck=False)
         return SegmentPieces(pieces, sources if source else None, ts if t else None,
                              ClipStats.from_counters(out.counters, n, m))
+
+    def clip_segment_windows(self, segments: np.ndarray, windows: np.ndarray,
+                             options: SegmentOptions, *, source: bool = True,
+                             t: bool = True) -> SegmentPieces:
+        """Return each segment's piece in each window; see `ClipBackend.clip_segment_windows`.
+
+        The pairs' segments are gathered so each window's are consecutive rows, clipped
+        in blocks of one window each (`windows.clip_pairs`) and compacted as one window's
+        are.
+        """
+        check_segment_values(segments)  # the assignment reads the boxes
+        pairs = assign(segments, windows)
+        p = pairs.segment.shape[0]
+        gathered = np.empty((p, 4))
+        WK.gather_rows(segments, pairs.segment, gathered)
+        per_window = np.diff(pairs.window_offsets)
+        blocks_per_window = -(-per_window // BLOCK_SIZE)
+        block_window = np.repeat(np.arange(windows.shape[0], dtype=np.int64),
+                                 blocks_per_window)
+        n_blocks = block_window.shape[0]
+        within = np.arange(n_blocks) - np.repeat(exclusive_sum(blocks_per_window)[:-1],
+                                                 blocks_per_window)
+        block_first = pairs.window_offsets[block_window] + within * BLOCK_SIZE
+        block_end = np.minimum(block_first + BLOCK_SIZE, pairs.window_offsets[block_window + 1])
+        out = K.SegmentOutput(
+            np.empty((p, 4)), np.empty(p, dtype=np.int64), np.empty((p, 2)),
+            np.empty(n_blocks, dtype=np.int64), np.empty(n_blocks, dtype=np.int64),
+            np.zeros((max(1, n_blocks), C.WIDTH), dtype=np.int64))
+        n_chunks = max(1, min(numba.get_num_threads(), n_blocks))
+        WK.clip_pairs(gathered, windows, block_window, block_first, block_end,
+                      core_options(options), n_chunks, out)
+        m = 0
+        for chunk in range(n_chunks if n_blocks else 0):
+            first, last = K.chunk_blocks(chunk, n_chunks, n_blocks)
+            count = int(out.block_count[first:last].sum())
+            start = int(out.block_start[first]) if count else m
+            if start != m:
+                K.move_rows(out, start, m, count)
+            m += count
+        rows = out.source[:m]
+        window = (np.searchsorted(pairs.window_offsets, rows, side="right") - 1).astype(np.int32)
+        window_offsets = np.zeros(windows.shape[0] + 1, dtype=np.int64)
+        np.cumsum(np.bincount(window, minlength=windows.shape[0]), out=window_offsets[1:])
+        return SegmentPieces(out.pieces[:m].copy(), pairs.segment[rows] if source else None,
+                             out.t[:m].copy() if t else None,
+                             ClipStats.from_counters(out.counters, p, m), window,
+                             window_offsets)
 
     def clip_lines(self, lines: Ragged, windows: WindowTable, options: SegmentOptions,
                    drop_edge_runs: bool) -> GeometryPieces:

@@ -19,7 +19,8 @@ from rnsca.backends.base import ClipBackend
 from rnsca.errors import BackendUnavailableError
 from rnsca.options import Backend, Precision
 
-__all__ = ["get_backend", "available_backends", "configure_opencl", "opencl_report"]
+__all__ = ["get_backend", "available_backends", "configure_opencl", "opencl_report",
+           "opencl_available"]
 
 _BUILT: dict[Backend, ClipBackend] = {}
 _LOCK = threading.RLock()
@@ -37,14 +38,22 @@ _OPENCL = _OpenCLSettings()
 _OPENCL_FAILURE: list[str] = []  # why the configured OpenCL backend could not be built
 
 
-def get_backend(kind: Backend | str) -> ClipBackend:
+def get_backend(kind: Backend | str, operation: str = "segments",
+                size: int = 0) -> ClipBackend:
     """Return the backend for `kind`, built once (OpenCL: once per configuration).
+
+    ``kind="auto"`` picks the backend measured faster here for a call of `operation`
+    (an `Operation` value) on `size` items (`rnsca.backends.auto`).
 
     Raises
     ------
     BackendUnavailableError
         If that backend cannot run here (never replaced by another one silently).
     """
+    if isinstance(kind, str) and not isinstance(kind, Backend) and kind == "auto":
+        from rnsca.backends.auto import choose
+
+        kind = choose(operation, size)
     kind = Backend(kind)
     with _LOCK:
         if kind not in _BUILT:
@@ -142,6 +151,11 @@ def opencl_report() -> dict[str, Any]:
         report["selected"] = None
         report["precision"] = _OPENCL.precision.value
     return report
+
+
+def opencl_available() -> bool:
+    """Return whether ``backend="opencl"`` can run as configured (checked once)."""
+    return _opencl_reason() is None
 
 
 def available_backends() -> list[Backend]:

@@ -62,6 +62,7 @@ from rnsca import constants
 from rnsca.arrays import (
     PathArrays,
     Ragged,
+    check_segment_values,
     exclusive_sum,
     group_offsets,
     segment_error,
@@ -91,6 +92,7 @@ from rnsca.kernels import polygons as PG
 from rnsca.kernels import polylines as PL
 from rnsca.kernels import records as R
 from rnsca.kernels.outcode import BOTTOM, LEFT, RIGHT, TOP
+from rnsca.many_windows import assign
 from rnsca.options import Backend, Curves, Method, Mode, PathOptions, Precision, SegmentOptions
 from rnsca.stats import ClipStats, DeviceStats
 from rnsca.window import Window, WindowTable
@@ -477,6 +479,62 @@ class OpenCLBackend:
             np.clip(pieces[:, 0::2], window.xmin, window.xmax, out=pieces[:, 0::2])
             np.clip(pieces[:, 1::2], window.ymin, window.ymax, out=pieces[:, 1::2])
         return SegmentPieces(pieces, host.source, host.t, stats)
+
+    def clip_segment_windows(self, segments: np.ndarray, windows: np.ndarray,
+                             options: SegmentOptions, *, source: bool = True,
+                             t: bool = True) -> SegmentPieces:
+        """Return each segment's piece in each window; see `ClipBackend.clip_segment_windows`.
+
+        The pairs come from the host (`many_windows.assign`, the one assignment); the
+        segments go up once, whole, and so do the pairs; the pairs are then clipped in
+        pipelined chunks (`segments.clip_host` with ``pairs``), each piece written with
+        its window.
+
+        Raises
+        ------
+        InvalidGeometryError, InvalidWindowError
+            A segment that is not finite; in float32, as `clip_segments`.
+        """
+        check_segment_values(segments)  # the assignment reads the boxes
+        real = self.real
+        with np.errstate(over="ignore"):
+            data = np.ascontiguousarray(segments, dtype=real)
+            bounds = np.ascontiguousarray(windows, dtype=real)
+        if real is np.float32:
+            _check_float32(data, bounds[0])
+            _check_float32_lines(data.reshape(-1, 2), bounds)
+        pairs = assign(segments, windows)
+        p = int(pairs.segment.shape[0])
+        device = self._device
+        assert device.staging is not None
+        with device.call_lock:
+            run = self._segment_run(bounds if p else None, options, source, t)
+            if p:
+                chunk = _segments.CHUNK_SEGMENTS
+                whole = _segments.upload_whole(run, device.staging, data, chunk)
+                run.pair_segment = _segments.upload_whole(run, device.staging, pairs.segment,
+                                                          chunk)
+                run.pair_window = _segments.upload_whole(run, device.staging, pairs.window(),
+                                                         chunk)
+                host, totals, m = _segments.clip_host(run, device.staging, None, chunk,
+                                                      pairs=p, segments=whole)
+            else:
+                host = _segments.HostOutputs.empty(0, source, t, True)
+                totals, m = np.zeros((0, _SEGMENT_COUNTERS + 1), np.int64), 0
+            device_stats = self._run_stats(run)
+        rows = np.zeros((max(1, totals.shape[0]), C.WIDTH), dtype=np.int64)
+        rows[:totals.shape[0], :_SEGMENT_COUNTERS] = totals[:, :-1]
+        stats = ClipStats.from_counters(rows, p, m, device=device_stats)
+        assert host.window is not None
+        if real is np.float32:
+            bounds64 = windows[host.window]
+            for axis in (0, 1):
+                np.clip(host.pieces[:, axis::2], bounds64[:, [axis]], bounds64[:, [axis + 2]],
+                        out=host.pieces[:, axis::2])
+        window_offsets = np.zeros(windows.shape[0] + 1, dtype=np.int64)
+        np.cumsum(np.bincount(host.window, minlength=windows.shape[0]), out=window_offsets[1:])
+        return SegmentPieces(host.pieces, host.source, host.t, stats, host.window,
+                             window_offsets)
 
     def _segment_run(self, bounds: np.ndarray | None, options: SegmentOptions, source: bool,
                      t: bool) -> _segments.SegmentRun:

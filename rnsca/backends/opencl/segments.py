@@ -96,6 +96,18 @@ class _Slot:
     count: np.ndarray = field(default_factory=lambda: np.zeros(1, np.int64))
     total: np.ndarray = field(default_factory=lambda: np.zeros(_WIDTH + 1, np.int64))
     events: list = field(default_factory=list)
+    # The last copy out of `pinned_in`: its staging memory is free once that is done.
+    staged: cl.Event | None = None
+
+    def stage(self, source: np.ndarray, offset: int = 0) -> np.ndarray:
+        """Copy `source` into the input staging buffer (once its last upload is done)."""
+        if self.staged is not None:
+            self.staged.wait()
+            self.staged = None
+        raw = source.reshape(-1).view(np.uint8)
+        staged = self.pinned_in.view[offset:offset + raw.nbytes]
+        copy_into(staged, raw)
+        return staged
 
 
 def _device_buffers(context: cl.Context, capacity: int, real: Any) -> dict:
@@ -262,18 +274,41 @@ def _out_views(slot: _Slot, m: int) -> dict[str, np.ndarray]:
             "window": slot.pinned_out.array((6 * item + 8) * c, np.int32, m)}
 
 
-def clip_host(run: SegmentRun, staging: Staging, data: np.ndarray,
-              chunk: int = CHUNK_SEGMENTS) -> tuple[HostOutputs, np.ndarray, int]:
-    """Clip host segments (or pairs) in pipelined chunks; return outputs, totals, first bad.
+def upload_whole(run: SegmentRun, staging: Staging, array: np.ndarray,
+                 chunk: int) -> cl.Buffer:
+    """Return a device copy of `array`, streamed through the slots' staging buffers.
 
-    `data` holds the items' segments (n, 4) in the device's dtype; for pairs, `run`
-    carries the pair tables (already on the device) and `data` every segment, uploaded
-    once whole (`n_items` is then the pair count: see `clip_pairs_host`). Returns the
-    caller's arrays (shrunk), the counter totals of each chunk (rows of
-    SEGMENT_COUNTERS + 1, the last the chunk's first non-finite item, chunk-relative)
-    and the count of pieces.
+    The copies of successive pieces alternate between the slots' queues (one piece's
+    host copy overlaps the other's transfer); the clips wait for them (``run.ready``).
     """
-    n = data.shape[0]
+    slots = staging.slots_for(run.real, chunk)
+    raw = np.ascontiguousarray(array).reshape(-1).view(np.uint8)
+    buffer = cl.Buffer(staging.context, cl.mem_flags.READ_ONLY, max(8, raw.nbytes))
+    step = slots[0].pinned_in.nbytes
+    for c, offset in enumerate(range(0, raw.nbytes, step)):
+        slot = slots[c % len(slots)]
+        staged = slot.stage(raw[offset:offset + step])
+        slot.staged = cl.enqueue_copy(slot.queue, buffer, staged, dst_offset=offset,
+                                      is_blocking=False)
+        run.copy_events.append(slot.staged)
+        run.bytes_to_device += staged.nbytes
+        run.ready.append(slot.staged)
+    return buffer
+
+
+def clip_host(run: SegmentRun, staging: Staging, data: np.ndarray | None,
+              chunk: int, pairs: int = 0,
+              segments: cl.Buffer | None = None) -> tuple[HostOutputs, np.ndarray, int]:
+    """Clip host segments (or pairs) in pipelined chunks; return outputs, totals, count.
+
+    `data` holds the segments (n, 4) in the device's dtype, streamed up chunk by chunk.
+    For pairs, `data` is None: the segments are already on the device whole
+    (`segments`, from `upload_whole`), and so are the pair tables (in `run`); the
+    chunks are `pairs` items long. Returns the caller's arrays (shrunk), the counter
+    totals of each chunk (rows of SEGMENT_COUNTERS + 1, the last the call's first
+    non-finite item, or the largest int) and the count of pieces.
+    """
+    n = data.shape[0] if data is not None else pairs
     slots = staging.slots_for(run.real, min(max(n, 1), chunk))
     outputs = HostOutputs.empty(n, run.want_source, run.want_t, run.pairs)
     totals: list[np.ndarray] = []
@@ -285,10 +320,13 @@ def clip_host(run: SegmentRun, staging: Staging, data: np.ndarray,
         if slot.state == "downloading":
             _drain(slot, outputs)
         count = min(chunk, n - start)
-        staged = slot.pinned_in.array(0, run.real, 4 * count)
-        copy_into(staged, data[start:start + count].reshape(-1))
-        upload = run.upload(slot.queue, slot.segments, staged)
-        _start(run, slot, slot.segments, count, start, [upload])
+        if data is not None:
+            staged = slot.stage(data[start:start + count])
+            slot.staged = run.upload(slot.queue, slot.segments, staged)
+            _start(run, slot, slot.segments, count, start, [slot.staged])
+        else:
+            assert segments is not None
+            _start(run, slot, segments, count, start, [])
         previous = slots[(c - 1) % len(slots)]
         if c and previous.state == "clipping":
             m = _finish(run, previous, m, totals)

@@ -14,8 +14,8 @@ from rnsca.backends.registry import get_backend
 from rnsca.errors import BackendUnavailableError, InvalidOptionError
 from rnsca.options import Backend, Method, Mode
 
-OPERATIONS = ["clip_segments", "clip_lines", "clip_polygons", "clip_paths", "flatten_paths",
-              "warm_up"]
+OPERATIONS = ["clip_segments", "clip_segment_windows", "clip_lines", "clip_polygons",
+              "clip_paths", "flatten_paths", "warm_up"]
 
 
 def test_every_backend_implements_every_operation_with_the_contracts_signature(backend):

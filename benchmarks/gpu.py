@@ -1,0 +1,322 @@
+"""The GPU issue's workloads: Numba on every host core against OpenCL, in one process.
+
+Run on a machine with an OpenCL GPU (DEVELOPERS.md, "Measuring on a GPU")::
+
+    python -m benchmarks.gpu                  # every workload, the sizes of the issue
+    python -m benchmarks.gpu --small          # the same at toy sizes (a CPU check)
+
+Each workload runs on both backends (best of ``--repeats`` after one untimed call) and
+the results are compared bit for bit. For each OpenCL call the table splits the wall
+time into the device's kernels and transfers (OpenCL event profiling) and the rest
+(host work; negative where transfers and kernels overlap each other or the host).
+Cold start: a fresh process's first call of each kind, with empty and with warm caches
+(Numba's and pyopencl's), children of this one. Writes
+``benchmarks/results/gpu-<stamp>.json`` (and ``$OUT/gpu.json`` where ``OUT`` is set).
+Needs only the project and its wheels (numpy, numba, pyopencl, shapely).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import subprocess
+import sys
+import time
+from concurrent.futures import ThreadPoolExecutor
+from datetime import datetime, timezone
+from pathlib import Path
+
+import numpy as np
+
+import rnsca
+from benchmarks import bench_curves as BC
+from benchmarks import datasets as D
+
+W = (250.0, 250.0, 750.0, 750.0)
+HERE = Path(__file__).resolve().parent
+COLD_KINDS = ("segments", "lines", "polygons", "paths")
+
+
+def _best(call, repeats: int) -> tuple[float, object]:
+    result = call()
+    best = float("inf")
+    for _ in range(repeats):
+        start = time.perf_counter()
+        result = call()
+        best = min(best, time.perf_counter() - start)
+    return best, result
+
+
+def _split(result, wall: float) -> dict:
+    stats = getattr(result, "stats", None)
+    device = getattr(stats, "device", None)
+    if device is None:
+        return {}
+    return {"kernel_s": device.kernel_seconds, "transfer_s": device.transfer_seconds,
+            "host_s": wall - device.kernel_seconds - device.transfer_seconds,
+            "bytes_to_device": device.bytes_to_device,
+            "bytes_from_device": device.bytes_from_device, "transfers": device.transfers}
+
+
+class Table:
+    """Rows of the report: printed as they come, kept for the JSON."""
+
+    def __init__(self) -> None:
+        self.rows: list[dict] = []
+        print(f"{'workload':46s} {'numba':>10s} {'opencl':>10s} {'speed-up':>9s} "
+              f"{'kernels':>9s} {'transfers':>10s} {'host':>9s}  equal", flush=True)
+
+    def add(self, name: str, numba_s: float | None, opencl_s: float, split: dict,
+            equal: bool | None, **extra) -> None:
+        """Print and keep one row."""
+        row = {"workload": name, "numba_s": numba_s, "opencl_s": opencl_s,
+               "speedup": (numba_s / opencl_s) if numba_s else None, "equal": equal,
+               **split, **extra}
+        self.rows.append(row)
+
+        def ms(v):
+            return f"{v * 1e3:8.2f}ms" if v is not None else f"{'-':>10s}"
+
+        speed = f"{row['speedup']:8.2f}x" if row["speedup"] else f"{'-':>9s}"
+        print(f"{name:46s} {ms(numba_s)} {ms(opencl_s)} {speed} "
+              f"{ms(split.get('kernel_s'))[:-2]:>9s} {ms(split.get('transfer_s'))[:-2]:>10s} "
+              f"{ms(split.get('host_s'))[:-2]:>9s}  {equal}", flush=True)
+
+
+def _same_segments(a, b) -> bool:
+    def host(x):
+        return x.get() if hasattr(x, "get") and not isinstance(x, np.ndarray) else x
+
+    return bool(np.array_equal(host(a.segments), b.segments)
+                and (a.source is None or np.array_equal(host(a.source), b.source))
+                and (a.t is None or np.array_equal(host(a.t), b.t)))
+
+
+def segments(table: Table, n: int, repeats: int, variants: bool) -> None:
+    segs = D.uniform_segments(n)
+    label = f"{n / 1e6:g}M" if n >= 1e6 else f"{n}"
+    for method in ("rnsca", "liang_barsky") if variants else ("rnsca",):
+        tn, rn = _best(lambda m=method: rnsca.clip_segments(segs, W, method=m), repeats)
+        to, ro = _best(lambda m=method: rnsca.clip_segments(segs, W, method=m,
+                                                            backend="opencl"), repeats)
+        table.add(f"segments {label} {method}", tn, to, _split(ro, to), _same_segments(ro, rn),
+                  pieces=len(rn))
+    if not variants:
+        return
+    tn, rn = _best(lambda: rnsca.clip_segments(segs, W, outputs=("segments",)), repeats)
+    to, ro = _best(lambda: rnsca.clip_segments(segs, W, backend="opencl",
+                                               outputs=("segments",)), repeats)
+    table.add(f"segments {label} pieces only", tn, to, _split(ro, to), _same_segments(ro, rn))
+    _device_resident(table, segs, label, repeats)
+    _chunk_sizes(table, segs, label)
+    _copies(table, segs)
+
+
+def _device_resident(table: Table, segs: np.ndarray, label: str, repeats: int) -> None:
+    import pyopencl.array as cl_array
+
+    from rnsca.backends.registry import get_backend
+
+    backend = get_backend("opencl")
+    queue = backend._device.queue
+    start = time.perf_counter()
+    on_device = cl_array.to_device(queue, segs)
+    queue.finish()
+    upload = time.perf_counter() - start
+    tn, rn = _best(lambda: rnsca.clip_segments(segs, W), repeats)
+    to, ro = _best(lambda: rnsca.clip_segments(on_device, W, backend="opencl"), repeats)
+    table.add(f"segments {label} device-resident", tn, to, _split(ro, to),
+              _same_segments(ro, rn), upload_s=upload)
+
+
+def _chunk_sizes(table: Table, segs: np.ndarray, label: str) -> None:
+    """Time the pipeline's chunk sizes: which overlaps transfers best on this device."""
+    from rnsca.backends.opencl import segments as S
+
+    kept = S.CHUNK_SEGMENTS
+    try:
+        for shift in (18, 19, 20, 21, 22, 23):
+            S.CHUNK_SEGMENTS = 1 << shift
+            to, ro = _best(lambda: rnsca.clip_segments(segs, W, backend="opencl"), 2)
+            table.add(f"  chunk 2**{shift} ({label})", None, to, _split(ro, to), None,
+                      chunk=1 << shift)
+    finally:
+        S.CHUNK_SEGMENTS = kept
+
+
+def _copies(table: Table, segs: np.ndarray) -> None:
+    """Time host copies: one thread (NumPy) against every core (`copies.copy_into`)."""
+    from rnsca.kernels.copies import copy_into
+
+    target = np.empty_like(segs)
+    tn, _ = _best(lambda: np.copyto(target, segs), 2)
+    tp, _ = _best(lambda: copy_into(target, segs), 2)
+    fresh_start = time.perf_counter()
+    copy_into(np.empty_like(segs), segs)
+    fresh = time.perf_counter() - fresh_start
+    gb = segs.nbytes / 1e9
+    table.add(f"  host copy {segs.nbytes / 1e6:.0f} MB (numpy | all cores)", tn, tp, {}, None,
+              numpy_gbps=gb / tn, parallel_gbps=gb / tp, fresh_pages_gbps=gb / fresh)
+
+
+def many_windows(table: Table, n: int, k: int, repeats: int) -> None:
+    segs = D.uniform_segments(n)
+    side = int(round(k ** 0.5))
+    xs = np.linspace(0.0, 1000.0, side + 1)
+    ys = np.linspace(0.0, 1000.0, side + 1)
+    grid = np.array([(xs[i], ys[j], xs[i + 1], ys[j + 1]) for j in range(side)
+                     for i in range(side)])
+    tn, rn = _best(lambda: rnsca.clip_segments(segs, windows=grid), repeats)
+    to, ro = _best(lambda: rnsca.clip_segments(segs, windows=grid, backend="opencl"),
+                   repeats)
+    equal = _same_segments(ro, rn) and bool(np.array_equal(ro.window, rn.window))
+    table.add(f"{len(grid)} windows over {n / 1e6:g}M segments", tn, to, _split(ro, to),
+              equal, pieces=len(rn))
+
+
+def lines(table: Table, n_lines: int, repeats: int) -> None:
+    coords, offsets = D.smooth_polylines(n_lines)
+    tn, rn = _best(lambda: rnsca.clip_ragged("linestring", coords, (offsets,), W), repeats)
+    to, ro = _best(lambda: rnsca.clip_ragged("linestring", coords, (offsets,), W,
+                                             backend="opencl"), repeats)
+    equal = bool(np.array_equal(rn.coords, ro.coords)
+                 and all(np.array_equal(a, b) for a, b in zip(rn.offsets, ro.offsets,
+                                                              strict=True)))
+    table.add(f"polylines {n_lines} ({len(coords) / 1e6:.1f}M vertices)", tn, to,
+              _split(ro, to), equal)
+
+
+def polygons(table: Table, n: int, repeats: int) -> None:
+    coords, ring_offsets, geometry_offsets = D.star_polygons(n)
+    offsets = (ring_offsets, geometry_offsets)
+    tn, rn = _best(lambda: rnsca.clip_ragged("polygon", coords, offsets, W), repeats)
+    to, ro = _best(lambda: rnsca.clip_ragged("polygon", coords, offsets, W,
+                                             backend="opencl"), repeats)
+    equal = bool(np.array_equal(rn.coords, ro.coords)
+                 and all(np.array_equal(a, b) for a, b in zip(rn.offsets, ro.offsets,
+                                                              strict=True)))
+    table.add(f"polygons {n / 1e3:g}k stars with holes", tn, to, _split(ro, to), equal)
+
+
+def curves(table: Table, small: bool, repeats: int) -> None:
+    for label, paths, window in (
+            ("glyph page", *BC.glyph_page(25 if small else 2500)),
+            ("curves 200 x 500 cubics", BC.long_curves(*((5, 50) if small else (200, 500))),
+             W)):
+        tn, rn = _best(lambda p=paths, w=window: rnsca.clip_paths(p, w), repeats)
+        to, ro = _best(lambda p=paths, w=window: rnsca.clip_paths(p, w, backend="opencl"),
+                       repeats)
+        equal = bool(np.array_equal(rn.paths.controls, ro.paths.controls))
+        table.add(label, tn, to, _split(ro, to), equal)
+
+
+# --- cold start: a fresh process's first call of each kind -------------------------------
+
+_CHILD = """
+import sys, time
+start = time.perf_counter()
+import numpy as np
+import rnsca
+from benchmarks import datasets as D
+from benchmarks import bench_curves as BC
+kind, backend = sys.argv[1], sys.argv[2]
+W = (250.0, 250.0, 750.0, 750.0)
+imported = time.perf_counter()
+if kind == "segments":
+    rnsca.clip_segments(D.uniform_segments(1000), W, backend=backend)
+elif kind == "lines":
+    c, o = D.smooth_polylines(3)
+    rnsca.clip_ragged("linestring", c, (o,), W, backend=backend)
+elif kind == "polygons":
+    c, r, g = D.star_polygons(50)
+    rnsca.clip_ragged("polygon", c, (r, g), W, backend=backend)
+else:
+    paths, window = BC.glyph_page(4)
+    rnsca.clip_paths(paths, window, backend=backend)
+done = time.perf_counter()
+print(f"{imported - start:.3f} {done - imported:.3f}")
+"""
+
+
+def _first_call(kind: str, backend: str) -> dict:
+    start = time.perf_counter()
+    run = subprocess.run([sys.executable, "-c", _CHILD, kind, backend], capture_output=True,
+                         text=True, cwd=HERE.parent, timeout=400)
+    wall = time.perf_counter() - start
+    if run.returncode:
+        return {"kind": kind, "backend": backend, "error": run.stderr[-2000:]}
+    imported, first = (float(v) for v in run.stdout.split()[-2:])
+    return {"kind": kind, "backend": backend, "process_s": wall, "import_s": imported,
+            "first_call_s": first}
+
+
+def cold_start(backends: tuple[str, ...]) -> list[dict]:
+    """First calls with empty caches (all kinds at once: one child each), then warm."""
+    jobs = [(kind, backend) for backend in backends for kind in COLD_KINDS]
+    rows = []
+    with ThreadPoolExecutor(len(jobs)) as pool:
+        for row in pool.map(lambda job: _first_call(*job), jobs):
+            rows.append({**row, "caches": "cold (compiled beside the other kinds)"})
+    for job in jobs:
+        rows.append({**_first_call(*job), "caches": "warm"})
+    for row in rows:
+        shown = (f"first call {row['first_call_s']:7.2f} s (import {row['import_s']:.2f} s)"
+                 if "error" not in row else "ERROR " + row["error"][-300:])
+        print(f"cold start {row['backend']:6s} {row['kind']:9s} {row['caches']:40s} {shown}",
+              flush=True)
+    return rows
+
+
+def main(argv: list[str] | None = None) -> dict:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--small", action="store_true", help="toy sizes (a CPU check)")
+    parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--skip-cold-start", action="store_true")
+    parser.add_argument("--only", default="", help="comma-separated workload families")
+    args = parser.parse_args(argv)
+    import numba
+
+    from rnsca.backends.opencl import list_devices
+    from rnsca.backends.registry import get_backend
+
+    report: dict = {"started": datetime.now(timezone.utc).isoformat(timespec="seconds"),
+                    "host": {"cores": os.cpu_count(), "numba_threads": numba.get_num_threads(),
+                             "python": platform.python_version(), "numpy": np.__version__,
+                             "numba": numba.__version__, "machine": platform.processor()},
+                    "devices": list_devices(), "small": args.small}
+    print(json.dumps(report, indent=1), flush=True)
+    if not args.skip_cold_start:
+        report["cold_start"] = cold_start(("numba", "opencl"))
+    opencl = get_backend("opencl")
+    report["opencl_device"] = opencl.name
+    table = Table()
+    families = set(filter(None, args.only.split(","))) or {
+        "segments", "windows", "lines", "polygons", "curves"}
+    small = args.small
+    if "segments" in families:
+        segments(table, 20_000 if small else 10_000_000, args.repeats, variants=True)
+        segments(table, 50_000 if small else 50_000_000, args.repeats, variants=False)
+    if "windows" in families:
+        many_windows(table, 20_000 if small else 10_000_000, 1024, args.repeats)
+    if "lines" in families:
+        lines(table, 10 if small else 4000, args.repeats)
+    if "polygons" in families:
+        polygons(table, 1000 if small else 1_000_000, args.repeats)
+    if "curves" in families:
+        curves(table, small, args.repeats)
+    report["rows"] = table.rows
+    stamp = datetime.now(timezone.utc).strftime("%Y%m%dT%H%M%SZ")
+    paths = [HERE / "results" / f"gpu-{stamp}.json"]
+    if os.environ.get("OUT"):
+        paths.append(Path(os.environ["OUT"]) / "gpu.json")
+    for path in paths:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(json.dumps(report, indent=1, default=str))
+        print(f"wrote {path}", flush=True)
+    return report
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,133 @@
+"""Many windows at once: the windows' table, and which segments each window gets.
+
+`assign` pairs every segment with every window its bounding box touches, sorted by
+window then segment, without a windows-by-segments loop (`rnsca.kernels.windows`): a
+regular grid of windows is recognised (`grid_of`) and found by arithmetic on the edges;
+any other set by a sweep over the windows sorted by ``xmin``. The backends clip the
+pairs (`ClipBackend.clip_segment_windows`); both use this one assignment.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numba
+import numpy as np
+import numpy.typing as npt
+
+from rnsca.errors import InvalidWindowError
+from rnsca.kernels import windows as K
+
+__all__ = ["WindowPairs", "as_windows", "assign", "grid_of"]
+
+
+@dataclass(frozen=True, slots=True)
+class WindowPairs:
+    """The (segment, window) pairs to clip, sorted by window then segment.
+
+    Attributes
+    ----------
+    segment : ndarray of int64, shape (p,)
+        The segment of each pair.
+    window_offsets : ndarray of int64, shape (k + 1,)
+        Window ``w``'s pairs are ``window_offsets[w]:window_offsets[w + 1]``.
+    """
+
+    segment: np.ndarray
+    window_offsets: np.ndarray
+
+    def window(self) -> np.ndarray:
+        """Return the window of each pair (int32: the device reads it so)."""
+        k = self.window_offsets.shape[0] - 1
+        return np.repeat(np.arange(k, dtype=np.int32), np.diff(self.window_offsets))
+
+
+def as_windows(windows: npt.ArrayLike) -> np.ndarray:
+    """Return `windows` as a checked float64 (k, 4) C-contiguous table.
+
+    Raises
+    ------
+    InvalidWindowError
+        For another shape, no windows, more than 2**31 - 1 of them, a bound that is not
+        finite, or ``min >= max``; the message names the first bad row.
+    """
+    try:
+        table = np.ascontiguousarray(windows, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise InvalidWindowError(
+            f"windows must be a (k, 4) array of [xmin, ymin, xmax, ymax] rows, got "
+            f"{windows!r:.80}") from None
+    if table.ndim != 2 or table.shape[1] != 4 or table.shape[0] == 0:
+        raise InvalidWindowError(
+            f"windows must be a (k, 4) array of [xmin, ymin, xmax, ymax] rows, k >= 1; got "
+            f"shape {table.shape}")
+    if table.shape[0] >= 2**31:
+        raise InvalidWindowError(f"at most 2**31 - 1 windows, got {table.shape[0]}")
+    good = (np.isfinite(table).all(axis=1) & (table[:, 0] < table[:, 2])
+            & (table[:, 1] < table[:, 3]))
+    if not good.all():
+        row = int(np.argmin(good))
+        raise InvalidWindowError(
+            f"window {row} {table[row].tolist()} must be finite with xmin < xmax and "
+            "ymin < ymax")
+    return table
+
+
+def grid_of(windows: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    """Return ``(xs, ys, cell_window)`` if the windows are exactly the cells of a grid.
+
+    A grid: sorted distinct x edges ``xs`` and y edges ``ys`` such that the windows are
+    the ``(len(xs) - 1) * (len(ys) - 1)`` cells ``[xs[c], ys[r], xs[c + 1], ys[r + 1]]``,
+    each once, in any order; ``cell_window[r, c]`` is the window of cell (r, c).
+    Otherwise None.
+    """
+    xs = np.unique(windows[:, [0, 2]])
+    ys = np.unique(windows[:, [1, 3]])
+    cols, rows = xs.shape[0] - 1, ys.shape[0] - 1
+    if cols * rows != windows.shape[0]:
+        return None
+    c = np.searchsorted(xs, windows[:, 0])
+    r = np.searchsorted(ys, windows[:, 1])
+    if not (np.array_equal(xs[np.minimum(c + 1, cols)], windows[:, 2])
+            and np.array_equal(ys[np.minimum(r + 1, rows)], windows[:, 3])
+            and (c < cols).all() and (r < rows).all()):
+        return None
+    cell_window = np.full((rows, cols), -1, dtype=np.int64)
+    cell_window[r, c] = np.arange(windows.shape[0])
+    if (cell_window < 0).any():  # two windows on one cell
+        return None
+    return xs, ys, cell_window
+
+
+def assign(segments: np.ndarray, windows: np.ndarray) -> WindowPairs:
+    """Return the pairs of every segment with every window its box touches.
+
+    `segments` is float64 (n, 4), finite; `windows` a table from `as_windows`.
+    """
+    k = windows.shape[0]
+    grid = grid_of(windows)
+    if grid is not None:
+        xs, ys, cell_window = grid
+        order = np.empty(0, dtype=np.int64)
+        xmins = np.empty(0)
+        widest = 0.0
+    else:
+        xs = ys = np.empty(0)
+        cell_window = np.empty((0, 0), dtype=np.int64)
+        order = np.argsort(windows[:, 0], kind="stable").astype(np.int64)
+        xmins = np.ascontiguousarray(windows[order, 0])
+        widest = float((windows[:, 2] - windows[:, 0]).max())
+    n = segments.shape[0]
+    threads = max(1, min(numba.get_num_threads(), -(-n // 65536)))
+    finder = K.WindowFinder(grid is not None, xs, ys, cell_window, windows, order, xmins,
+                            widest)
+    counts = np.zeros((threads, k), dtype=np.int64)
+    K.assign_counts(segments, finder, threads, counts)
+    per_window = counts.sum(axis=0)
+    offsets = np.zeros(k + 1, dtype=np.int64)
+    np.cumsum(per_window, out=offsets[1:])
+    # Each (thread, window)'s first slot: window-major, threads in segment order.
+    cursor = np.ascontiguousarray(offsets[:-1][None, :] + (np.cumsum(counts, axis=0) - counts))
+    pairs = np.empty(int(offsets[-1]), dtype=np.int64)
+    K.assign_write(segments, finder, threads, cursor, pairs)
+    return WindowPairs(pairs, offsets)

@@ -162,7 +162,11 @@ def _copies(table: Table, segs: np.ndarray) -> None:
 
 
 def many_windows(table: Table, n: int, k: int, repeats: int) -> None:
-    segs = D.uniform_segments(n)
+    """Time a grid of `k` windows over `n` short segments (edges of real data: a few
+    units long in a 1000-unit extent, so most lie in one window)."""
+    rng = np.random.default_rng(7)
+    start = rng.uniform(0.0, 1000.0, size=(n, 2))
+    segs = np.ascontiguousarray(np.c_[start, start + rng.uniform(-10.0, 10.0, size=(n, 2))])
     side = int(round(k ** 0.5))
     xs = np.linspace(0.0, 1000.0, side + 1)
     ys = np.linspace(0.0, 1000.0, side + 1)
@@ -210,6 +214,48 @@ def curves(table: Table, small: bool, repeats: int) -> None:
                        repeats)
         equal = bool(np.array_equal(rn.paths.controls, ro.paths.controls))
         table.add(label, tn, to, _split(ro, to), equal)
+
+
+def _calibration() -> dict:
+    """Run backend='auto''s calibration here and print each operation's crossover."""
+    from rnsca.backends import auto
+
+    start = time.perf_counter()
+    result = auto.calibrate()
+    result["wall_s"] = time.perf_counter() - start
+    for operation, rows in result["seconds"].items():
+        cells = "  ".join(f"{size}: {n * 1e3:.2f}/{o * 1e3:.2f} ms" for size, n, o in rows)
+        print(f"auto {operation:9s} crossover {result['crossover'][operation]}  "
+              f"(numba/opencl) {cells}", flush=True)
+    print(f"auto calibration took {result['wall_s']:.1f} s", flush=True)
+    return result
+
+
+def _profiles(small: bool) -> dict:
+    """Profile one OpenCL call of lines and of polygons: where the host time goes."""
+    import cProfile
+    import io
+    import pstats
+
+    coords, offsets = D.smooth_polylines(10 if small else 4000)
+    polygons_data = D.star_polygons(1000 if small else 1_000_000)
+    calls = {
+        "lines": lambda: rnsca.clip_ragged("linestring", coords, (offsets,), W,
+                                           backend="opencl"),
+        "polygons": lambda: rnsca.clip_ragged("polygon", polygons_data[0],
+                                              polygons_data[1:], W, backend="opencl")}
+    out = {}
+    for name, call in calls.items():
+        call()
+        profile = cProfile.Profile()
+        profile.enable()
+        call()
+        profile.disable()
+        text = io.StringIO()
+        pstats.Stats(profile, stream=text).sort_stats("cumulative").print_stats(14)
+        out[name] = text.getvalue()
+        print(f"--- profile: {name} on OpenCL\n{out[name]}", flush=True)
+    return out
 
 
 # --- cold start: a fresh process's first call of each kind -------------------------------
@@ -275,6 +321,10 @@ def main(argv: list[str] | None = None) -> dict:
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--skip-cold-start", action="store_true")
     parser.add_argument("--only", default="", help="comma-separated workload families")
+    parser.add_argument("--skip-calibration", action="store_true",
+                        help="skip backend='auto''s calibration (its crossover sizes)")
+    parser.add_argument("--profile", action="store_true",
+                        help="profile one OpenCL call of lines and of polygons (host time)")
     args = parser.parse_args(argv)
     import numba
 
@@ -307,6 +357,10 @@ def main(argv: list[str] | None = None) -> dict:
     if "curves" in families:
         curves(table, small, args.repeats)
     report["rows"] = table.rows
+    if not args.skip_calibration:
+        report["auto_calibration"] = _calibration()
+    if args.profile:
+        report["profiles"] = _profiles(small)
     stamp = datetime.now(timezone.utc).strftime("%Y%m%dT%H%M%SZ")
     paths = [HERE / "results" / f"gpu-{stamp}.json"]
     if os.environ.get("OUT"):

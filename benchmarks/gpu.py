@@ -162,8 +162,10 @@ def _copies(table: Table, segs: np.ndarray) -> None:
 
 
 def many_windows(table: Table, n: int, k: int, repeats: int) -> None:
-    """Time a grid of `k` windows over `n` short segments (edges of real data: a few
-    units long in a 1000-unit extent, so most lie in one window).
+    """Time a grid of `k` windows over `n` short segments.
+
+    Short as the edges of real data: a few units in a 1000-unit extent, so most lie in
+    one window.
     """
     rng = np.random.default_rng(7)
     start = rng.uniform(0.0, 1000.0, size=(n, 2))

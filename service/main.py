@@ -89,7 +89,8 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     middleware.append(Middleware(BodyLimitMiddleware, max_bytes=settings.max_body_bytes))
     middleware.append(Middleware(InflateMiddleware, max_bytes=settings.max_body_bytes))
     # Innermost: it sees bodies inflated, and the route's thread holds its reservation.
-    middleware.append(Middleware(AdmissionMiddleware, budget=memory))
+    middleware.append(Middleware(AdmissionMiddleware, budget=memory, stream_bytes=max(
+        settings.stream_chunk_bytes, settings.stream_max_record_bytes)))
 
     app = FastAPI(title="rnsca", version=rnsca.__version__, description=_DESCRIPTION,
                   lifespan=lifespan, middleware=middleware, openapi_url="/openapi.json",

@@ -291,6 +291,9 @@ class Problem(BaseModel):
     instance: str | None = None
     path: str | None = Field(None, description="JSON path of the offending value.")
     position: int | None = Field(None, description="Character offset of a syntax error.")
+    record: int | None = Field(None, description="Streamed GeoJSON: the number (from 0) of "
+                                                 "the record at fault; `path` and `position` "
+                                                 "are then within it.")
 
 
 #: Models read from request bodies in a worker thread (see `service.routes.clip`); the

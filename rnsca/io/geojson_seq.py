@@ -30,7 +30,7 @@ import orjson
 from rnsca.errors import InvalidOptionError, LimitExceededError, ParseError
 
 __all__ = ["RS", "Framing", "RecordSplitter", "split_records", "read_records",
-           "record_bytes", "write_records", "framing_of_path"]
+           "parse_record", "record_bytes", "write_records", "framing_of_path"]
 
 #: The record separator that opens every text of a GeoJSON text sequence.
 RS = b"\x1e"
@@ -217,7 +217,7 @@ def split_records(pieces: Iterable[bytes], framing: Framing | str | None = None,
 def _pieces(source: IO[bytes] | Iterable[bytes], block: int) -> Iterator[bytes]:
     read = getattr(source, "read", None)
     if read is None:
-        yield from source  # type: ignore[misc]
+        yield from source
         return
     while piece := read(block):
         yield piece
@@ -257,7 +257,7 @@ def read_records(source: IO[bytes] | Iterable[bytes], framing: Framing | str | N
         yield parse_record(text, number)
 
 
-def parse_record(text: bytes | str, number: int) -> Any:
+def parse_record(text: bytes | bytearray | memoryview | str, number: int) -> Any:
     """Return the JSON value of record `number`'s `text`; raise `ParseError` naming it."""
     try:
         return orjson.loads(text)

@@ -96,7 +96,8 @@ def clip_records(records: Sequence[Any], window: Window | Iterable[float], *,
         A record's text is not JSON; ``record`` names it, ``position`` the offset in it.
     InvalidGeometryError
         A record is not a GeoJSON object, or not valid GeoJSON; the message names the
-        record, ``record`` its number and ``path`` the JSON path inside it.
+        record, ``record`` its number and ``path`` the JSON path inside it. The first
+        record at fault is named, whatever is wrong with it.
     LimitExceededError
         More than `max_vertices` positions.
     InvalidWindowError, InvalidOptionError
@@ -116,7 +117,18 @@ def clip_records(records: Sequence[Any], window: Window | Iterable[float], *,
     (2, [100, 102])
     """
     window = Window.of(window)
-    parsed = [_checked(record, first + i) for i, record in enumerate(records)]
+    parsed: list[dict] = []
+    for i, record in enumerate(records):
+        try:
+            parsed.append(_checked(record, first + i))
+        except RnscaError:
+            if parsed:  # a problem in the geometry of an earlier record comes first
+                try:
+                    clip_records(parsed, window, first=first, keep_empty=keep_empty,
+                                 max_vertices=max_vertices, **options)
+                except InvalidGeometryError as earlier:
+                    raise earlier from None
+            raise
     out: list[tuple[int, Any]] = []
     stats: list[ClipStats] = []
     budget = max_vertices

@@ -34,7 +34,8 @@ __all__ = ["create_app"]
 
 _DESCRIPTION = """\
 Clip geometry against an axis-aligned window with the Recursive N-Subdivision Clipping
-Algorithm (RNSCA): GeoJSON, SVG path data and line segments (JSON or binary). Every
+Algorithm (RNSCA): GeoJSON (whole, or streamed as text sequences), GeoArrow tables, SVG
+path data and line segments (JSON or binary). Every
 answer carries the clipping statistics and, on request (by default for small inputs), the
 comparison with Shapely's exact intersection. Errors are RFC 9457 problem documents
 (`application/problem+json`).
@@ -49,8 +50,8 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     >>> app = create_app(Settings(warm_up=False))
     >>> sorted(p for p in app.openapi()["paths"] if p.startswith("/v1"))
     ... # doctest: +NORMALIZE_WHITESPACE
-    ['/v1/capabilities', '/v1/clip/geoarrow', '/v1/clip/geojson', '/v1/clip/segments',
-     '/v1/clip/svg']
+    ['/v1/capabilities', '/v1/clip/geoarrow', '/v1/clip/geojson', '/v1/clip/geojson-seq',
+     '/v1/clip/segments', '/v1/clip/svg']
     """
     settings = settings or Settings()
     configure_logging(settings.log_level)

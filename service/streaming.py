@@ -227,7 +227,7 @@ class StreamedClip:
         try:
             chunk = await self._next_chunk()
             await self._clip(chunk or [])
-            if self._failure is not None:
+            if self._failure is not None and not self._pending:  # the next record is bad
                 raise self._failure
         except BaseException:
             self.close()
@@ -241,10 +241,9 @@ class StreamedClip:
         """
         try:
             while (chunk := await self._next_chunk()) is not None:
-                await self._clip_or_fail(chunk)
-                if self._failure is not None:
-                    return self._put_problem(self._failure)
-            if self._failure is not None:
+                if (error := await self._clip_or_fail(chunk)) is not None:
+                    return self._put_problem(error)
+            if self._failure is not None:  # met while reading, after the records clipped
                 return self._put_problem(self._failure)
             if self.summary:
                 self.spool.put(record_bytes(self._summary(), self.answer_framing))
@@ -304,6 +303,8 @@ class StreamedClip:
                         f"{self.runner.time_limit:g} s", headers={"Connection": "close"})
                 assert isinstance(piece, bytes)
                 self._pending.extend(self.splitter.feed(piece))
+                if self.splitter.error is not None:  # after the records just cut
+                    raise self.splitter.error
                 if self._body_ended:
                     self._pending.extend(self.splitter.finish())
             except (RnscaError, ServiceError) as exc:
@@ -345,8 +346,8 @@ class StreamedClip:
         self.records_out += outcome.records_out
         self.chunks += 1
 
-    async def _clip_or_fail(self, chunk: list[bytes]) -> None:
-        """Clip `chunk`; on a problem at one record, answer the records before it first."""
+    async def _clip_or_fail(self, chunk: list[bytes]) -> RnscaError | None:
+        """Clip `chunk`; return the problem met, having answered the records before it."""
         try:
             await self._clip(chunk)
         except RnscaError as exc:
@@ -356,7 +357,8 @@ class StreamedClip:
                     await self._clip(chunk[:record - self.records_in])
                 except RnscaError:
                     pass  # answered with the first problem alone
-            self._failure = exc
+            return exc
+        return None
 
     # --- answer records ----------------------------------------------------------
 
@@ -413,5 +415,6 @@ class SequenceResponse(StreamingResponse):
                     raise ClientDisconnect() from None
         finally:
             self.clip.close()
+            self.clip.metrics.stream_spilled.inc(self.clip.spool.spilled)
             self.clip.spool.discard()
 

@@ -27,7 +27,7 @@ from typing import IO, Any
 
 import orjson
 
-from rnsca.errors import InvalidOptionError, LimitExceededError, ParseError
+from rnsca.errors import InvalidOptionError, LimitExceededError, ParseError, RnscaError
 
 __all__ = ["RS", "Framing", "RecordSplitter", "split_records", "read_records",
            "parse_record", "record_bytes", "write_records", "framing_of_path"]
@@ -92,6 +92,9 @@ class RecordSplitter:
     ----------
     records : int
         Texts returned so far (the next one's number).
+    error : RnscaError or None
+        A problem met after texts that `feed` returned: it is raised by the next call
+        (`feed` or `finish`), so that the texts before a bad one are never lost.
 
     Examples
     --------
@@ -114,6 +117,7 @@ class RecordSplitter:
         self._pending: list[bytes] = []   # the unfinished text, in the pieces it came in
         self._pending_bytes = 0
         self._started = False             # RS framing: whether the first RS has been met
+        self.error: RnscaError | None = None
 
     def feed(self, data: bytes | bytearray | memoryview) -> list[bytes]:
         """Return the texts that `data` completes, in order (possibly none).
@@ -125,24 +129,34 @@ class RecordSplitter:
         LimitExceededError
             A text is longer than `max_record_bytes`.
         """
-        data = bytes(data)
+        out: list[bytes] = []
+        try:
+            self._feed(bytes(data), out)
+        except RnscaError as exc:
+            if not out:
+                raise
+            self.error = exc
+        return out
+
+    def _feed(self, data: bytes, out: list[bytes]) -> None:
+        if self.error is not None:
+            raise self.error
         if not data:
-            return []
+            return
         if self.framing is None:
             first = _NON_SPACE.search(data)
             if first is None:
-                return []  # whitespace only, so far: nothing decided
+                return  # whitespace only, so far: nothing decided
             self.framing = Framing.RS if data[first.start():first.start() + 1] == RS \
                 else Framing.LINES
         delimiter = RS if self.framing is Framing.RS else _LF
         parts = data.split(delimiter)
-        out: list[bytes] = []
         if self.framing is Framing.RS and not self._started:
             # Before the first RS only whitespace may come: it is no text of the sequence.
             if _NON_SPACE.search(parts[0]):
                 self._not_a_sequence()
             if len(parts) == 1:
-                return out
+                return
             self._started = True
             parts[0] = b""
             self._pending, self._pending_bytes = [], 0
@@ -157,10 +171,11 @@ class RecordSplitter:
             self._pending.append(last)
             self._pending_bytes += len(last)
             self._check_length()
-        return out
 
     def finish(self) -> list[bytes]:
         """Return the last text (the stream has ended), if there is one."""
+        if self.error is not None:
+            raise self.error
         out: list[bytes] = []
         if self._pending:
             text, self._pending, self._pending_bytes = b"".join(self._pending), [], 0

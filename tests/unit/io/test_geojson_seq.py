@@ -144,3 +144,17 @@ def test_any_records_cut_anywhere_come_back_equal(records, framing, cuts):
     pieces = [data[a:b] for a, b in zip(bounds, bounds[1:], strict=False)]
     texts = list(split_records(pieces, framing))
     assert [orjson.loads(t) for t in texts] == records
+
+
+def test_the_records_before_a_bad_one_are_returned_before_it_is_raised():
+    splitter = RecordSplitter(Framing.LINES, max_record_bytes=10)
+    assert splitter.feed(b"{}\n[1]\n" + b"[" + b"0," * 10 + b"0]\n{}\n") == [b"{}", b"[1]"]
+    assert isinstance(splitter.error, LimitExceededError) and splitter.error.record == 2
+    with pytest.raises(LimitExceededError, match="record 2"):
+        splitter.feed(b"{}\n")
+    with pytest.raises(LimitExceededError, match="record 2"):
+        splitter.finish()
+    texts = split_records([b"{}\n{}\n{" + b" " * 20], max_record_bytes=10)
+    assert next(texts) == b"{}" and next(texts) == b"{}"
+    with pytest.raises(LimitExceededError, match="record 2"):
+        next(texts)

@@ -234,11 +234,15 @@ class ClipSegmentsResponse(BaseModel):
 class Limits(BaseModel):
     """The limits a request must stay within."""
 
-    max_body_bytes: int
+    max_body_bytes: int = Field(description="Largest body (not of streamed GeoJSON).")
     max_vertices: int
     work_budget: int
     request_time_limit: float
     verify_max_vertices: int
+    stream_chunk_bytes: int = Field(description="Streamed GeoJSON is clipped in chunks of "
+                                                "about this many bytes of records ...")
+    stream_chunk_records: int = Field(description="... or this many records.")
+    stream_max_record_bytes: int = Field(description="Longest record of streamed GeoJSON.")
 
 
 class OperationOptions(BaseModel):

@@ -472,3 +472,12 @@ def test_random_features_equal_the_geojson_endpoint_and_shapely(client, case, me
             assert_matches_shapely(shapely.geometry.shape(feature["geometry"]),
                                    geometries[feature["id"]], window, "closed",
                                    where=f"feature {feature['id']}")
+
+
+def test_capabilities_name_the_stream_limits():
+    from fastapi.testclient import TestClient
+
+    with TestClient(stream_app()) as client:
+        limits = client.get("/v1/capabilities").json()["limits"]
+    assert (limits["stream_chunk_records"], limits["stream_chunk_bytes"],
+            limits["stream_max_record_bytes"]) == (7, 4096, 16 << 10)

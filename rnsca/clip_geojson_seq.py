@@ -275,12 +275,19 @@ class SequenceClip:
         if chunk or not self.chunks:
             yield from self._clip(chunk, window, options)
 
-    def _clip(self, chunk: list[Any], window: Window, options: dict) -> list[Any]:
-        result = clip_records(chunk, window, first=self.records_in, **options)
+    def _clip(self, chunk: list[Any], window: Window, options: dict) -> Iterator[Any]:
+        """Yield the chunk's records clipped; at a bad record, those before it first."""
+        try:
+            result = clip_records(chunk, window, first=self.records_in, **options)
+        except RnscaError as exc:
+            before = -1 if exc.record is None else exc.record - self.records_in
+            if 0 < before < len(chunk):
+                yield from self._clip(chunk[:before], window, options)
+            raise
         self.records_in += len(chunk)
         self.chunks += 1
         self._stats.append(result.stats)
-        return result.records
+        yield from result.records
 
 
 def clip_geojson_seq(records: Iterable[Any], window: Window | Iterable[float], *,
@@ -318,8 +325,8 @@ def clip_geojson_seq(records: Iterable[Any], window: Window | Iterable[float], *
     ------
     ParseError, InvalidGeometryError, LimitExceededError, InvalidWindowError,
     InvalidOptionError
-        As `clip_records`, while iterating; the records of earlier chunks have been
-        given out by then.
+        As `clip_records`, while iterating, once the records before the bad one have
+        been given out.
 
     Examples
     --------

@@ -141,11 +141,13 @@ def test_chunks_are_cut_by_bytes_of_text():
     assert len(list(clipped)) == 6 and clipped.chunks == 3
 
 
-def test_an_error_comes_after_the_earlier_chunks_records():
-    texts = [orjson.dumps(feature(i, ZIGZAG)) for i in range(4)] + [b"{"]
-    clipped = rnsca.clip_geojson_seq(texts, WINDOW, chunk_records=2)
-    assert [next(clipped)["id"] for _ in range(4)] == [0, 1, 2, 3]
-    with pytest.raises(ParseError, match="record 4"):
+@pytest.mark.parametrize("chunk_records", [2, 3, 100])
+def test_an_error_comes_after_every_record_before_it(chunk_records):
+    texts = [orjson.dumps(feature(i, ZIGZAG)) for i in range(5)] + [b"{"] + [
+        orjson.dumps(feature(6, ZIGZAG))]
+    clipped = rnsca.clip_geojson_seq(texts, WINDOW, chunk_records=chunk_records)
+    assert [next(clipped)["id"] for _ in range(5)] == [0, 1, 2, 3, 4]
+    with pytest.raises(ParseError, match="record 5"):
         next(clipped)
 
 

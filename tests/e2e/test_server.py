@@ -372,6 +372,28 @@ def test_clip_geojson_seq_answers_the_first_records_before_the_body_ends(server)
     assert ids == list(range(9000))
 
 
+def test_clip_geojson_seq_client_leaving_mid_stream_is_no_server_error(server, client):
+    """A client that goes away after its answer started: the server stops, logs it as a
+    client that left (no traceback) and goes on serving."""
+    import socket
+
+    port = int(server.url.rsplit(":", 1)[1])
+    with socket.create_connection(("127.0.0.1", port), timeout=60) as sock:
+        sock.sendall(b"POST /v1/clip/geojson-seq?xmin=0&ymin=0&xmax=10&ymax=10 HTTP/1.1\r\n"
+                     b"Host: test\r\nContent-Type: application/geo+json-seq\r\n"
+                     b"Transfer-Encoding: chunked\r\n\r\n"
+                     + _chunked(b"".join(_seq_records(6000))))
+        received = b""
+        while b"\x1e" not in received:
+            received += sock.recv(1 << 16)
+    deadline = time.monotonic() + 30
+    while "client disconnected during a streamed request" not in server.log():
+        assert time.monotonic() < deadline, server.log()[-2000:]
+        time.sleep(0.1)
+    assert client.get("/healthz").status_code == 200
+    assert "Traceback" not in server.log() and "unhandled" not in server.log()
+
+
 def test_too_many_vertices_413(client):
     r = client.post("/v1/clip/segments", content=np.zeros((200_001, 4)).tobytes(),
                     params={"xmin": 0, "ymin": 0, "xmax": 1, "ymax": 1},

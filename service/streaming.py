@@ -397,7 +397,8 @@ class SequenceResponse(StreamingResponse):
 
     Not `StreamingResponse`'s own ``__call__``: that one reads ``receive`` to watch for
     the client leaving, and ``receive`` is the body the clip reads. The clip sees the
-    client leave itself (``http.disconnect``).
+    client leave itself (``http.disconnect``); a server whose ``send`` raises `OSError`
+    once the client is gone stops the clip too, and the answer ends with a log line.
     """
 
     def __init__(self, clip: StreamedClip, media_type: str) -> None:
@@ -405,16 +406,21 @@ class SequenceResponse(StreamingResponse):
         self.clip = clip
 
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:  # noqa: D102
+        gone = False
         try:
             async with anyio.create_task_group() as group:
                 group.start_soon(self.clip.produce)
                 try:
                     await self.stream_response(send)
-                except OSError:
+                except OSError:  # the client went away (a server that says so)
+                    gone = True
                     group.cancel_scope.cancel()
-                    raise ClientDisconnect() from None
         finally:
             self.clip.close()
             self.clip.metrics.stream_spilled.inc(self.clip.spool.spilled)
             self.clip.spool.discard()
+        if gone:  # nothing more to send, and no status to change: only a log line
+            _log.info("client disconnected during a streamed answer",
+                      extra={"fields": {"path": self.clip.instance,
+                                        "records": self.clip.records_in}})
 

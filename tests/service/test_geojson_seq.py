@@ -481,3 +481,31 @@ def test_capabilities_name_the_stream_limits():
         limits = client.get("/v1/capabilities").json()["limits"]
     assert (limits["stream_chunk_records"], limits["stream_chunk_bytes"],
             limits["stream_max_record_bytes"]) == (7, 4096, 16 << 10)
+
+
+def test_a_client_gone_while_the_answer_is_sent_stops_the_clip(app, caplog):
+    """A server whose ``send`` raises OSError once the client is gone: the answer stops,
+    the clip with it (the rest of the body is never read), and the app returns."""
+    body = framed(features(100))
+    messages = [{"type": "http.request", "body": body[i:i + 500],
+                 "more_body": i + 500 < len(body)} for i in range(0, len(body), 500)]
+    sent = []
+
+    async def receive():
+        return messages.pop(0)
+
+    async def send(message):
+        sent.append(message)
+        if len(sent) == 3:
+            raise OSError("connection reset")
+
+    scope = {"type": "http", "asgi": {"version": "3.0", "spec_version": "2.3"},
+             "http_version": "1.1", "method": "POST", "scheme": "http",
+             "path": "/v1/clip/geojson-seq", "raw_path": b"/v1/clip/geojson-seq",
+             "query_string": b"xmin=0&ymin=0&xmax=10&ymax=10", "root_path": "",
+             "headers": [(b"content-type", SEQ.encode())], "client": ("127.0.0.1", 1),
+             "server": ("test", 80)}
+    asyncio.run(asyncio.wait_for(app(scope, receive, send), 30))
+    assert [m["type"] for m in sent] == ["http.response.start"] + 2 * ["http.response.body"]
+    assert messages, "the rest of the body was not read"
+    assert "client disconnected during a streamed answer" in caplog.text

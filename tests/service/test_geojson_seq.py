@@ -451,7 +451,7 @@ def test_a_large_stream_is_clipped_in_bounded_memory(monkeypatch):
 
 
 @settings(max_examples=20)
-@given(case=st.sampled_from(sorted(KINDS)).flatmap(lambda kind: cases(kind, 4, z=False)),
+@given(case=st.sampled_from(sorted(KINDS)).flatmap(lambda kind: cases(kind, 4, z=None)),
        media=st.sampled_from([SEQ, NDJSON]))
 def test_random_features_equal_the_geojson_endpoint_and_shapely(client, case, media):
     geometries, window = case

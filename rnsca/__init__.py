@@ -6,6 +6,7 @@ The public API lives here; see README.md for a tour.
 from rnsca.arrays import GeometryKind, PathArrays, Ragged
 from rnsca.clip import SegmentClipResult, clip, clip_segments
 from rnsca.clip_geojson import GeoJSONClipResult, clip_geojson
+from rnsca.clip_geojson_seq import RecordsClipResult, SequenceClip, clip_geojson_seq, clip_records
 from rnsca.clip_svg import Curves, Fill, PathClipResult, clip_paths, clip_svg, flatten_paths
 from rnsca.clip_svgdoc import FillMode, clip_svg_document
 from rnsca.errors import (
@@ -48,15 +49,19 @@ __all__ = [
     "PathClipResult",
     "Ragged",
     "RaggedClipResult",
+    "RecordsClipResult",
     "RnscaError",
     "SegmentClipResult",
+    "SequenceClip",
     "UnsupportedGeometryError",
     "Verification",
     "Window",
     "clip",
     "clip_geojson",
+    "clip_geojson_seq",
     "clip_paths",
     "clip_ragged",
+    "clip_records",
     "clip_segments",
     "clip_svg",
     "clip_svg_document",

@@ -1,7 +1,8 @@
 """The ``rnsca`` command line.
 
-Commands: ``clip`` (GeoJSON or SVG documents), ``segments`` (.npy arrays of segments),
-``backends``, ``warm-up`` and ``serve`` (the HTTP service; needs the ``service`` extra).
+Commands: ``clip`` (GeoJSON or SVG documents, GeoJSON text sequences), ``segments``
+(.npy arrays of segments), ``backends``, ``warm-up`` and ``serve`` (the HTTP service;
+needs the ``service`` extra).
 Errors print one line, ``error: <what and where>``, on stderr and exit with 2 for a wrong
 command line (options, window, the kind of input) or 1 for input that cannot be clipped
 (not JSON, invalid GeoJSON or SVG, unreadable files).
@@ -9,6 +10,7 @@ command line (options, window, the kind of input) or 1 for input that cannot be 
 
 from __future__ import annotations
 
+import itertools
 import json
 import re
 import sys
@@ -36,6 +38,7 @@ from rnsca.errors import (
     RnscaError,
 )
 from rnsca.io.geojson import dumps, loads
+from rnsca.io.geojson_seq import RS, Framing, framing_of_path, split_records, write_records
 from rnsca.io.svgpath import warm_up_readers
 from rnsca.options import Backend, Boundary, Mode
 from rnsca.runtime import configure_process
@@ -51,6 +54,10 @@ EXIT_DATA = 1
 EXIT_USAGE = 2
 #: File name endings read as GeoJSON (compared case-insensitively).
 GEOJSON_SUFFIXES = (".geojson", ".json")
+#: File name endings read as GeoJSON text sequences, clipped as they are read
+#: (`rnsca.io.geojson_seq.framing_of_path`).
+SEQUENCE_SUFFIXES = (".geojsons", ".geojsonseq", ".geojsonl", ".geojsonld", ".ndjson",
+                     ".jsonl")
 #: File name endings read as SVG; so is input whose first character is ``<``.
 SVG_SUFFIXES = (".svg",)
 #: With stderr on a terminal, inputs of at least this many bytes get a progress bar.
@@ -228,6 +235,12 @@ def clip(
              "stroke or fill")] = "auto",
     precision: Annotated[int | None, typer.Option(
         help="SVG: significant digits of the written path data [default: exact]")] = None,
+    framing: Annotated[str | None, typer.Option(
+        "--seq", show_default=False,
+        help="read a GeoJSON text sequence, clipped a chunk of records at a time and "
+             "written as it goes: rs (RFC 8142, records after RS) or lines (one per "
+             "line); default: by the file's name (.geojsons: rs; .geojsonl, .ndjson, "
+             ".jsonl: lines), or rs for stdin that starts with RS")] = None,
 ) -> None:
     """Clip a GeoJSON document to a window and write the clipped GeoJSON.
 
@@ -238,6 +251,12 @@ def clip(
     SVG documents (a .svg file, or input starting with <) have every drawn shape
     clipped (basic shapes become paths, transforms applied) and the rest left intact;
     --keep-empty keeps emptied shapes as empty paths.
+
+    GeoJSON text sequences (a .geojsons, .geojsonl or .ndjson file, or --seq) are read,
+    clipped and written a chunk of records at a time, in the input's framing, so a
+    sequence of any length takes the memory of one chunk; records left empty are
+    dropped (unless --keep-empty). A bad record stops the command (exit 1) after the
+    records before it are written.
     """
     bounds = _window_bounds(window)
     options: dict[str, Any] = dict(
@@ -254,10 +273,24 @@ def clip(
         clip_svg_document("<svg/>", bounds, curves=curves, fill_mode=fill,
                           precision=precision)   # checks the SVG options
     name, path = _input(source)
+    with _reporting(EXIT_USAGE):
+        chosen = None if framing is None else Framing(framing)
+    sequence, pieces, prefix = _sequence_blocks(path, chosen)
+    if sequence is not None:
+        with _reporting(EXIT_USAGE):
+            for flag, given in {"--verify": verify, "--indent": indent,
+                                "--approx-bound": approx_bound is not None}.items():
+                if given:
+                    raise InvalidOptionError(f"{flag} does not apply to GeoJSON text "
+                                             "sequences")
+        report = _clip_sequence(pieces, sequence, bounds, options, keep_empty, output)
+        with _reporting(EXIT_DATA):
+            _write_report(report, stats)
+        return
     bar = _ProgressBar(progress)
     try:
         with _reporting(EXIT_DATA):
-            data = _read(path, bar)
+            data = _read(path, bar, prefix)
             bar.phase(f"clipping {name}")
             if _is_svg(path, data):
                 geojson_only = {"--verify": verify, "--check-validity": check_validity,
@@ -373,6 +406,66 @@ def _clip_svg(data: memoryview, bounds: tuple[float, float, float, float], optio
     return text.encode("utf-8"), {"stats": clip_stats.to_dict()}
 
 
+def _sequence_blocks(path: Path | None, framing: Framing | None
+                     ) -> tuple[Framing | None, Iterator[bytes], bytes]:
+    """Return the framing and the blocks of input that is a GeoJSON text sequence.
+
+    The framing is `framing` if given, else the file name's; stdin is a sequence if it
+    starts with RS. For other input the framing is None, and the third item holds what
+    was read of stdin to find that out.
+    """
+    if path is not None:
+        framing = framing or framing_of_path(path.name)
+        return framing, _file_blocks(path), b""
+    # What has arrived, not a whole block: records piped in slowly are clipped as they come.
+    read = getattr(sys.stdin.buffer, "read1", sys.stdin.buffer.read)
+    rest = iter(lambda: read(_BLOCK), b"")
+    if framing is not None:
+        return framing, rest, b""
+    first = next(rest, b"")
+    start = _NON_SPACE.search(first)
+    if start is None or first[start.start():start.start() + 1] != RS:
+        return None, rest, first
+    return Framing.RS, itertools.chain([first], rest), b""
+
+
+def _file_blocks(path: Path) -> Iterator[bytes]:
+    with _reporting(EXIT_DATA), open(path, "rb") as stream:
+        while block := stream.read(_BLOCK):
+            yield block
+
+
+def _clip_sequence(pieces: Iterator[bytes], framing: Framing,
+                   bounds: tuple[float, float, float, float], options: dict,
+                   keep_empty: bool, output: str | None) -> dict:
+    """Clip a sequence a chunk at a time, writing each chunk's records; return the report.
+
+    The output is flushed after each chunk, so a reader downstream gets records as they
+    are clipped, and a bad record leaves those before it written.
+    """
+    to_stdout = output is None or output == "-"
+    with _reporting(EXIT_DATA):
+        stream = sys.stdout.buffer if to_stdout else open(str(output), "wb")  # noqa: SIM115
+    try:
+        with _reporting(EXIT_DATA):
+            clipped = rnsca.clip_geojson_seq(
+                split_records(pieces, framing), bounds, keep_empty=keep_empty,
+                arrays=True, **options)
+            chunks = 0
+            for record in clipped:
+                write_records([record], stream, framing)
+                if clipped.chunks != chunks:
+                    chunks = clipped.chunks
+                    stream.flush()
+            stream.flush()
+    finally:
+        if not to_stdout:
+            stream.close()
+    assert clipped.stats is not None
+    return {"stats": clipped.stats.to_dict(), "records_in": clipped.records_in,
+            "records_out": clipped.records_out, "chunks": clipped.chunks}
+
+
 def _is_svg(path: Path | None, data: memoryview) -> bool:
     """Return whether the input is SVG: by its name, else by its first character."""
     if path is not None and path.suffix.lower() in SVG_SUFFIXES:
@@ -390,28 +483,30 @@ def _input(source: str | None) -> tuple[str, Path | None]:
     if source is None or source == "-":
         return "<stdin>", None
     path = Path(source)
-    if path.suffix and path.suffix.lower() not in GEOJSON_SUFFIXES + SVG_SUFFIXES:
+    if path.suffix and path.suffix.lower() not in (GEOJSON_SUFFIXES + SVG_SUFFIXES
+                                                   + SEQUENCE_SUFFIXES):
         _fail(f"{source}: only GeoJSON or SVG input is accepted (a .geojson, .json or .svg "
-              f"file, or either on stdin), got a {path.suffix} file", EXIT_USAGE)
+              f"file, a GeoJSON text sequence .geojsons, .geojsonl or .ndjson, or either "
+              f"on stdin), got a {path.suffix} file", EXIT_USAGE)
     if not path.is_file():
         _fail(f"{source}: no such file" if not path.exists() else f"{source}: not a file",
               EXIT_USAGE)
     return source, path
 
 
-def _read(path: Path | None, bar: _ProgressBar) -> memoryview:
-    """Return the bytes of the input file (stdin for None), in blocks for the bar."""
+def _read(path: Path | None, bar: _ProgressBar, prefix: bytes = b"") -> memoryview:
+    """Return the bytes of the input file (stdin for None, after `prefix` read of it)."""
     if path is None:
         stream: BinaryIO = sys.stdin.buffer
-        return _read_blocks(stream, None, "<stdin>", bar)
+        return _read_blocks(stream, None, "<stdin>", bar, prefix)
     with open(path, "rb") as stream:
         return _read_blocks(stream, path.stat().st_size, str(path), bar)
 
 
 def _read_blocks(stream: BinaryIO, size: int | None, name: str,
-                 bar: _ProgressBar) -> memoryview:
+                 bar: _ProgressBar, prefix: bytes = b"") -> memoryview:
     bar.phase(f"reading {name}", size)
-    buffer = bytearray()
+    buffer = bytearray(prefix)
     while block := stream.read(_BLOCK):
         buffer += block
         bar.advance(len(block), read=len(buffer))

@@ -33,6 +33,9 @@ class RnscaError(Exception):
         Index of the geometry at fault in a ragged array.
     row : int or None
         Index of the segment (row of the segments array) at fault.
+    record : int or None
+        Number (from 0) of the text at fault in a GeoJSON text sequence; `path` and
+        `position` are then within that text.
     detail : str or None
         The message without its location, for callers that name the location themselves.
     """
@@ -44,6 +47,7 @@ class RnscaError(Exception):
     column: int | None = None
     geometry: int | None = None
     row: int | None = None
+    record: int | None = None
     detail: str | None = None
 
 

@@ -9,6 +9,11 @@ reserves ``BASE_BYTES`` plus its body times that ratio before its body is read (
 reservation does not fit next to those in flight is answered 503 with ``Retry-After`` at
 once, its body unread; one that could never fit, even alone, is 413.
 
+A streamed body (``POST /v1/clip/geojson-seq``) is clipped a chunk at a time: it reserves
+what a JSON body of its largest chunk would, ``stream_bytes``
+(`Settings.stream_chunk_bytes` or `Settings.stream_max_record_bytes`, the larger),
+whatever its length.
+
 The reservation lasts until the clip's thread has finished with the request, not only
 until the answer is sent: a request answered 503 past its time limit still runs in its
 thread (threads cannot be stopped), and its memory is still in use.
@@ -22,7 +27,7 @@ from contextvars import ContextVar
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 from service.errors import ServiceError
-from service.middleware import send_problem
+from service.middleware import STREAMED_PATHS, send_problem
 
 __all__ = ["MemoryBudget", "Reservation", "AdmissionMiddleware", "OverMemoryBudgetError",
            "MemoryBudgetFullError", "PEAK_BYTES_PER_BODY_BYTE", "BASE_BYTES",
@@ -126,15 +131,24 @@ _MEDIA = {b"application/octet-stream": "binary",
 
 
 class AdmissionMiddleware:
-    """Reserve each clip request's memory from `budget` before its body is read."""
+    """Reserve each clip request's memory from `budget` before its body is read.
 
-    def __init__(self, app: ASGIApp, budget: MemoryBudget, retry_after: int = 1) -> None:
+    A request to one of the `STREAMED_PATHS` reserves that of a GeoJSON body of
+    `stream_bytes` (its largest chunk), its body's length aside.
+    """
+
+    def __init__(self, app: ASGIApp, budget: MemoryBudget, retry_after: int = 1,
+                 stream_bytes: int = 8 << 20) -> None:
         self.app = app
         self.budget = budget
         self.retry_after = retry_after
+        self.stream_bytes = stream_bytes
 
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:  # noqa: D102
-        endpoint = _ENDPOINTS.get(scope.get("path", "")) if scope["type"] == "http" else None
+        path = scope.get("path", "") if scope["type"] == "http" else None
+        if path in STREAMED_PATHS and scope["method"] == "POST":
+            return await self._streamed(scope, receive, send)
+        endpoint = _ENDPOINTS.get(path or "")
         if endpoint is None or scope["method"] != "POST":
             return await self.app(scope, receive, send)
         length = None
@@ -165,6 +179,21 @@ class AdmissionMiddleware:
                 return message
 
             await self.app(scope, reserving_receive if length is None else receive, send)
+        finally:
+            current_reservation.reset(token)
+            reservation.release()
+
+    async def _streamed(self, scope: Scope, receive: Receive, send: Send) -> None:
+        reservation = Reservation(self.budget)
+        token = current_reservation.set(reservation)
+        try:
+            try:
+                self._reserve(reservation,
+                              estimate_bytes("geojson", "json", self.stream_bytes))
+            except ServiceError as exc:
+                return await send_problem(send, exc.status, exc.slug, exc.title, exc.detail,
+                                          scope["path"], exc.headers, **exc.extensions)
+            await self.app(scope, receive, send)
         finally:
             current_reservation.reset(token)
             reservation.release()

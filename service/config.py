@@ -55,6 +55,17 @@ class Settings(BaseSettings):
     """Memory the clip requests in flight may use, all workers together (each worker
     takes its share); a request's need is estimated from its body (`service.admission`).
     Past it: 503 with Retry-After; a request that needs more than a worker's share: 413."""
+    stream_chunk_bytes: PositiveInt = 4 * 2**20
+    """Streamed GeoJSON (``POST /v1/clip/geojson-seq``) is clipped in chunks of records
+    holding about this many bytes of text (a chunk ends before the record that would take
+    it past this), or `stream_chunk_records` records, whichever comes first."""
+    stream_chunk_records: PositiveInt = 5000
+    """Records (GeoJSON texts) of a streamed chunk, at most."""
+    stream_max_record_bytes: PositiveInt = 8 * 2**20
+    """Longest record of a streamed body; a longer one is refused (413 before the answer
+    has started, else a problem record ends it). The memory a stream reserves is that of a
+    JSON body of ``max(stream_chunk_bytes, stream_max_record_bytes)`` (`service.admission`),
+    whatever the stream's length: ``max_body_bytes`` does not apply to it."""
     request_time_limit: PositiveFloat = 30.0
     """Seconds a request may wait for and use a clipping thread; past it: 503."""
     clip_threads: PositiveInt = 2

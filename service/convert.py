@@ -27,6 +27,7 @@ from rnsca.errors import (
     RnscaError,
 )
 from rnsca.io.geoarrow import find_geometry_column, read_geoarrow, write_geoarrow
+from rnsca.io.geojson_seq import Framing, record_bytes
 from rnsca.options import Mode
 from rnsca.stats import ClipStats
 from rnsca.verify import Verification
@@ -41,6 +42,7 @@ from service.budget import (
 from service.config import Settings
 from service.errors import (
     InvalidBodyError,
+    ServiceError,
     TooManyVerticesError,
     WorkOverBudgetError,
 )
@@ -53,9 +55,9 @@ from service.schemas import (
 )
 from service.slices import parse_geojson_request
 
-__all__ = ["Outcome", "clip_geojson", "clip_svg", "clip_segments_json",
-           "clip_segments_binary", "clip_geoarrow", "warm_up_svg", "backend_report",
-           "SEGMENT_BYTES", "ARROW_STREAM"]
+__all__ = ["Outcome", "ChunkOutcome", "clip_geojson", "clip_records", "clip_svg",
+           "clip_segments_json", "clip_segments_binary", "clip_geoarrow", "warm_up_svg",
+           "backend_report", "SEGMENT_BYTES", "ARROW_STREAM"]
 
 #: One binary segment: four little-endian float64.
 SEGMENT_BYTES = 32
@@ -206,15 +208,7 @@ def clip_geojson(body: bytes, settings: Settings, deadline: float | None = None)
             arrays=True, boundary=options.boundary, check_validity=options.check_validity,
             **arguments)
     except LimitExceededError as exc:
-        if by_budget:
-            per_vertex = 1 + subdivision_cost(options, window, None)
-            raise WorkOverBudgetError(
-                f"{exc}: with these options a vertex may cost up to {per_vertex} fragments, "
-                f"so the work budget of {settings.work_budget} allows {cap} vertices; lower "
-                "options.max_depth or options.n, or use exact mode with no tolerance",
-                budget=settings.work_budget) from None
-        raise TooManyVerticesError(f"{exc} (this server's max_vertices)",
-                                   limit=cap) from None
+        raise _over_vertex_cap(str(exc), options, window, cap, by_budget, settings) from None
     except InvalidGeometryError as exc:
         path = getattr(exc, "path", None)
         if path is not None:  # a JSON path inside the document: make it one in the body
@@ -240,6 +234,53 @@ def clip_geojson(body: bytes, settings: Settings, deadline: float | None = None)
     payload = {"geojson": clipped, "stats": stats.to_dict(),
                "verification": _dict_or_none(verification)}
     return Outcome(orjson.dumps(payload, option=_JSON), stats)
+
+
+def _over_vertex_cap(what: str, options: GeometryOptions, window: Window, cap: int,
+                     by_budget: bool, settings: Settings) -> ServiceError:
+    """Return the error of geometry over `cap` vertices (`geometry_vertex_cap`)."""
+    if by_budget:
+        per_vertex = 1 + subdivision_cost(options, window, None)
+        return WorkOverBudgetError(
+            f"{what}: with these options a vertex may cost up to {per_vertex} fragments, "
+            f"so the work budget of {settings.work_budget} allows {cap} vertices; lower "
+            "options.max_depth or options.n, or use exact mode with no tolerance",
+            budget=settings.work_budget)
+    return TooManyVerticesError(f"{what} (this server's max_vertices)", limit=cap)
+
+
+# --- GeoJSON text sequences ----------------------------------------------------------
+
+
+@dataclass
+class ChunkOutcome:
+    """One clipped chunk of a streamed request: its answer's records, framed, and stats."""
+
+    content: bytes
+    stats: ClipStats
+    records_out: int
+
+
+def clip_records(records: list[bytes], first: int, window: Window, options: GeometryOptions,
+                 framing: Framing, settings: Settings) -> ChunkOutcome:
+    """Clip one chunk of ``POST /v1/clip/geojson-seq``: record texts in, framed records out.
+
+    `first` is the number of ``records[0]`` in the stream. The limits (``max_vertices``,
+    the work budget) apply to each chunk; errors name the record at fault (`record`).
+    """
+    cap, by_budget = geometry_vertex_cap(options, window, settings.max_vertices,
+                                         settings.work_budget)
+    try:
+        result = rnsca.clip_records(
+            records, window, first=first, keep_empty=options.keep_empty, max_vertices=cap,
+            arrays=True, boundary=options.boundary, check_validity=options.check_validity,
+            **_library_options(options, settings))
+    except LimitExceededError as exc:
+        span = f"the chunk of records {first} to {first + len(records) - 1}"
+        raise _over_vertex_cap(f"{span}: {exc}", options, window, cap, by_budget,
+                               settings) from None
+    content = b"".join([record_bytes(record, framing) for record in result.records])
+    return ChunkOutcome(content, result.stats, len(result.records))
 
 
 # --- GeoArrow ------------------------------------------------------------------------

@@ -49,6 +49,8 @@ __all__ = [
     "NotReadyError",
     "problem",
     "problem_bytes",
+    "problem_document",
+    "problem_fields",
     "install_handlers",
     "json_path",
     "CLIENT_CLOSED_REQUEST",
@@ -169,11 +171,19 @@ def problem(status: int, slug: str, title: str, detail: str, *, instance: str | 
 def problem_bytes(status: int, slug: str, title: str, detail: str, *,
                   instance: str | None = None, **extensions: object) -> bytes:
     """Return the body of a problem response (also used by the pure ASGI middleware)."""
-    body = {"type": _TYPE_PREFIX + slug, "title": title, "status": status, "detail": detail}
+    return orjson.dumps(problem_document(status, slug, title, detail, instance=instance,
+                                         **extensions), default=str)
+
+
+def problem_document(status: int, slug: str, title: str, detail: str, *,
+                     instance: str | None = None, **extensions: object) -> dict:
+    """Return a problem document as a dict (a streamed answer's problem record)."""
+    body: dict[str, Any] = {"type": _TYPE_PREFIX + slug, "title": title, "status": status,
+                            "detail": detail}
     if instance is not None:
         body["instance"] = instance
     body.update({k: v for k, v in extensions.items() if v is not None})
-    return orjson.dumps(body, default=str)
+    return body
 
 
 def json_path(location: Iterable[str | int]) -> str:
@@ -199,7 +209,14 @@ def json_path(location: Iterable[str | int]) -> str:
     return out
 
 
-def _library_problem(request: Request, exc: RnscaError) -> Response:
+def problem_fields(exc: RnscaError | ServiceError) -> tuple[int, str, str, str, dict]:
+    """Return ``(status, slug, title, detail, extensions)`` of a library or service error.
+
+    The extensions are where the error is: ``path`` (a JSON path), ``position`` (an
+    offset in a text) and ``record`` (a record of a GeoJSON text sequence), as known.
+    """
+    if isinstance(exc, ServiceError):
+        return exc.status, exc.slug, exc.title, exc.detail, dict(exc.extensions)
     status, slug, title = next(
         _LIBRARY[cls] for cls in type(exc).__mro__ if cls in _LIBRARY)
     extensions: dict[str, Any] = {}
@@ -207,13 +224,18 @@ def _library_problem(request: Request, exc: RnscaError) -> Response:
         extensions["path"] = "window"
     elif isinstance(exc, InvalidOptionError):
         extensions["path"] = "options"
-    for name in ("path", "position"):
+    for name in ("record", "path", "position"):
         value = getattr(exc, name, None)
         if value is not None:
             extensions[name] = value
     if status >= 500:
         _log.error("unmapped library error", exc_info=exc)
-    return problem(status, slug, title, str(exc), instance=request.url.path, **extensions)
+    return status, slug, title, str(exc), extensions
+
+
+def _library_problem(request: Request, exc: RnscaError) -> Response:
+    status, slug, title, detail, extensions = problem_fields(exc)
+    return problem(status, slug, title, detail, instance=request.url.path, **extensions)
 
 
 def _validation_problem(request: Request, errors: list) -> Response:

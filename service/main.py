@@ -34,7 +34,8 @@ __all__ = ["create_app"]
 
 _DESCRIPTION = """\
 Clip geometry against an axis-aligned window with the Recursive N-Subdivision Clipping
-Algorithm (RNSCA): GeoJSON, SVG path data and line segments (JSON or binary). Every
+Algorithm (RNSCA): GeoJSON (whole, or streamed as text sequences), GeoArrow tables, SVG
+path data and line segments (JSON or binary). Every
 answer carries the clipping statistics and, on request (by default for small inputs), the
 comparison with Shapely's exact intersection. Errors are RFC 9457 problem documents
 (`application/problem+json`).
@@ -49,8 +50,8 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     >>> app = create_app(Settings(warm_up=False))
     >>> sorted(p for p in app.openapi()["paths"] if p.startswith("/v1"))
     ... # doctest: +NORMALIZE_WHITESPACE
-    ['/v1/capabilities', '/v1/clip/geoarrow', '/v1/clip/geojson', '/v1/clip/segments',
-     '/v1/clip/svg']
+    ['/v1/capabilities', '/v1/clip/geoarrow', '/v1/clip/geojson', '/v1/clip/geojson-seq',
+     '/v1/clip/segments', '/v1/clip/svg']
     """
     settings = settings or Settings()
     configure_logging(settings.log_level)
@@ -89,7 +90,8 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     middleware.append(Middleware(BodyLimitMiddleware, max_bytes=settings.max_body_bytes))
     middleware.append(Middleware(InflateMiddleware, max_bytes=settings.max_body_bytes))
     # Innermost: it sees bodies inflated, and the route's thread holds its reservation.
-    middleware.append(Middleware(AdmissionMiddleware, budget=memory))
+    middleware.append(Middleware(AdmissionMiddleware, budget=memory, stream_bytes=max(
+        settings.stream_chunk_bytes, settings.stream_max_record_bytes)))
 
     app = FastAPI(title="rnsca", version=rnsca.__version__, description=_DESCRIPTION,
                   lifespan=lifespan, middleware=middleware, openapi_url="/openapi.json",

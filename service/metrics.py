@@ -40,6 +40,11 @@ class Metrics:
             "rnsca_intersections", "Edge intersection parameters computed.",
             registry=self.registry)
 
+        self.stream_spilled = Counter(
+            "rnsca_stream_spilled_bytes",
+            "Bytes of streamed answers that waited in a temporary file for a client that "
+            "was not reading them yet (service.streaming).", registry=self.registry)
+
     def observe_request(self, method: str, route: str, status: int, seconds: float) -> None:
         """Count one answered request."""
         labels = (method, route, str(status))

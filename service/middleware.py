@@ -17,9 +17,17 @@ from service.errors import (
 from service.logs import ACCESS_LOGGER
 from service.metrics import Metrics
 
-__all__ = ["BodyLimitMiddleware", "InflateMiddleware", "AccessMiddleware", "send_problem"]
+__all__ = ["BodyLimitMiddleware", "InflateMiddleware", "AccessMiddleware", "send_problem",
+           "STREAMED_PATHS", "INFLATED_PIECE_BYTES"]
 
 _access = logging.getLogger(ACCESS_LOGGER)
+
+#: Endpoints that read their body as a stream, a chunk at a time: no limit on the body's
+#: length applies to them (their memory is bounded by the chunk, `service.admission`).
+STREAMED_PATHS = frozenset({"/v1/clip/geojson-seq"})
+#: A gzip body of a streamed endpoint reaches it inflated in pieces of at most this many
+#: bytes, however much one piece of the compressed body inflates to.
+INFLATED_PIECE_BYTES = 1 << 20
 
 
 async def send_problem(send: Send, status: int, slug: str, title: str, detail: str,
@@ -54,10 +62,11 @@ class BodyLimitMiddleware(_BodyMiddleware):
     (chunked) is counted as it arrives and refused at the first chunk past the limit:
     `BodyTooLargeError` is raised from ``receive`` inside the route, where the service's
     handler answers it (and, should the response not have started otherwise, here).
+    Bodies of the `STREAMED_PATHS` are not limited.
     """
 
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:  # noqa: D102
-        if scope["type"] != "http":
+        if scope["type"] != "http" or scope.get("path") in STREAMED_PATHS:
             return await self.app(scope, receive, send)
         limit = self.max_bytes
         for name, value in scope["headers"]:
@@ -103,6 +112,10 @@ class InflateMiddleware(_BodyMiddleware):
     the first byte past the limit, so a small "gzip bomb" costs no more than the limit
     to refuse (413). Broken or truncated gzip data is 422; another encoding is 415. The
     application sees a plain body: the encoding and length headers are taken away.
+
+    A body of the `STREAMED_PATHS` has no limit on its length; it is inflated as the
+    endpoint reads it, in pieces of at most `INFLATED_PIECE_BYTES`, so that one small
+    piece of compressed body never inflates into more memory than that.
     """
 
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:  # noqa: D102
@@ -120,8 +133,13 @@ class InflateMiddleware(_BodyMiddleware):
                 send, 415, UnsupportedMediaTypeError.slug, UnsupportedMediaTypeError.title,
                 f"request bodies may be sent with Content-Encoding gzip (or none), got "
                 f"{encoding.decode('latin-1')!r}", scope["path"])
+        headers = [(name, value) for name, value in scope["headers"]
+                   if name not in (b"content-encoding", b"content-length")]
+        scope = {**scope, "headers": headers}
+        if scope.get("path") in STREAMED_PATHS:
+            return await self.app(scope, _inflating_in_pieces(receive), send)
         limit = self.max_bytes
-        inflater = zlib.decompressobj(wbits=16 + zlib.MAX_WBITS)  # gzip framing only
+        inflater = _gzip_inflater()
         inflated = 0
 
         def inflate(data: bytes) -> bytes:
@@ -144,7 +162,7 @@ class InflateMiddleware(_BodyMiddleware):
                     return b"".join(parts)
                 # A gzip file may hold several members one after another (RFC 1952).
                 data = inflater.unused_data
-                inflater = zlib.decompressobj(wbits=16 + zlib.MAX_WBITS)
+                inflater = _gzip_inflater()
 
         async def inflating_receive():
             message = await receive()
@@ -155,9 +173,56 @@ class InflateMiddleware(_BodyMiddleware):
                 raise InvalidBodyError("the gzip request body is truncated")
             return {**message, "body": body}
 
-        headers = [(name, value) for name, value in scope["headers"]
-                   if name not in (b"content-encoding", b"content-length")]
-        await self.app({**scope, "headers": headers}, inflating_receive, send)
+        await self.app(scope, inflating_receive, send)
+
+
+def _gzip_inflater():  # gzip framing only
+    return zlib.decompressobj(wbits=16 + zlib.MAX_WBITS)
+
+
+def _inflating_in_pieces(receive: Receive) -> Receive:
+    """Return a ``receive`` giving the gzip body of `receive` inflated, a piece at a time.
+
+    Each message holds at most `INFLATED_PIECE_BYTES`; compressed input not inflated yet
+    waits for the next call. Members of a multi-member gzip body follow one another.
+    """
+    inflater = _gzip_inflater()
+    tail = b""          # compressed bytes not inflated yet
+    last = False        # whether `receive` has given the body's last message
+    done = False        # whether the last inflated message has been given
+
+    async def inflating_receive():
+        nonlocal inflater, tail, last, done
+        while not done:
+            if tail:
+                try:
+                    part = inflater.decompress(tail, INFLATED_PIECE_BYTES)
+                except zlib.error as exc:
+                    raise InvalidBodyError(
+                        f"the gzip request body cannot be inflated: {exc}") from None
+                if inflater.eof:
+                    tail = inflater.unused_data
+                    if tail:  # another gzip member follows (RFC 1952)
+                        inflater = _gzip_inflater()
+                else:
+                    tail = inflater.unconsumed_tail
+                if part:
+                    return {"type": "http.request", "body": part,
+                            "more_body": bool(tail) or not last}
+                continue
+            if last:
+                if not inflater.eof:
+                    raise InvalidBodyError("the gzip request body is truncated")
+                done = True
+                return {"type": "http.request", "body": b"", "more_body": False}
+            message = await receive()
+            if message["type"] != "http.request":
+                return message
+            tail = message.get("body", b"")
+            last = not message.get("more_body", False)
+        return await receive()
+
+    return inflating_receive
 
 
 class AccessMiddleware:

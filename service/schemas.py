@@ -234,11 +234,15 @@ class ClipSegmentsResponse(BaseModel):
 class Limits(BaseModel):
     """The limits a request must stay within."""
 
-    max_body_bytes: int
+    max_body_bytes: int = Field(description="Largest body (not of streamed GeoJSON).")
     max_vertices: int
     work_budget: int
     request_time_limit: float
     verify_max_vertices: int
+    stream_chunk_bytes: int = Field(description="Streamed GeoJSON is clipped in chunks of "
+                                                "about this many bytes of records ...")
+    stream_chunk_records: int = Field(description="... or this many records.")
+    stream_max_record_bytes: int = Field(description="Longest record of streamed GeoJSON.")
 
 
 class OperationOptions(BaseModel):
@@ -291,6 +295,9 @@ class Problem(BaseModel):
     instance: str | None = None
     path: str | None = Field(None, description="JSON path of the offending value.")
     position: int | None = Field(None, description="Character offset of a syntax error.")
+    record: int | None = Field(None, description="Streamed GeoJSON: the number (from 0) of "
+                                                 "the record at fault; `path` and `position` "
+                                                 "are then within it.")
 
 
 #: Models read from request bodies in a worker thread (see `service.routes.clip`); the

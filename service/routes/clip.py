@@ -3,17 +3,19 @@
 from __future__ import annotations
 
 import time
-from typing import Annotated, Any, Literal
+from typing import Annotated, Any, Literal, TypeVar
 
 from fastapi import APIRouter, Query, Request
 from pydantic import BaseModel, ConfigDict, Field, FiniteFloat
 from starlette.responses import Response
 
+from rnsca.errors import RnscaError
+from rnsca.io.geojson_seq import Framing
 from rnsca.options import Boundary, Method, Mode
 from rnsca.window import Window
 from service import convert
 from service.deps import MetricsDep, RunnerDep, SettingsDep
-from service.errors import UnsupportedMediaTypeError
+from service.errors import ServiceError, UnsupportedMediaTypeError
 from service.metrics import Metrics
 from service.runner import ClipRunner
 from service.schemas import (
@@ -28,6 +30,7 @@ from service.schemas import (
     GeometryOptions,
     Problem,
 )
+from service.streaming import SUMMARY_TYPE, SequenceResponse, StreamedClip, refusal
 
 __all__ = ["router"]
 
@@ -105,8 +108,8 @@ async def clip_svg(request: Request, settings: SettingsDep, runner: RunnerDep,
                                      time_left=time_left, endpoint="svg"), metrics)
 
 
-class SegmentQuery(BaseModel):
-    """Window and options of a binary request (ignored for JSON bodies).
+class WindowQuery(BaseModel):
+    """Window and options given as query parameters (binary and streamed bodies).
 
     Unknown parameters are refused (422), as unknown members of a JSON body are: a
     misspelt option must not silently clip with the default.
@@ -125,10 +128,18 @@ class SegmentQuery(BaseModel):
     resolution: str | None = Field(None, description="Approx mode: a length, or `<k>px`.")
     mode: Mode | None = None
     backend: BackendName | None = None
-    verify: bool | Literal["all"] | None = Field(
-        None, description="true: within the verification budget (a random sample past it); "
-                          "all: every segment, as far as the request's time limit allows "
-                          "(X-Rnsca-Verification says how many); false: none.")
+
+
+_VERIFY_QUERY = Field(
+    None, description="true: within the verification budget (a random sample past it); "
+                      "all: every segment, as far as the request's time limit allows "
+                      "(X-Rnsca-Verification says how many); false: none.")
+
+
+class SegmentQuery(WindowQuery):
+    """Window and options of a binary request (ignored for JSON bodies)."""
+
+    verify: bool | Literal["all"] | None = _VERIFY_QUERY
 
 
 @router.post("/segments", response_model=ClipSegmentsResponse,
@@ -152,10 +163,7 @@ async def clip_segments(request: Request, query: Annotated[SegmentQuery, Query()
     media = _media_type(request)
     if media == "application/octet-stream":
         window = _query_window(query)
-        options = ClipOptions.model_validate({
-            k: v for k, v in query.model_dump(
-                include={"method", "n", "max_depth", "tolerance", "mode", "backend"}).items()
-            if v is not None} | _query_resolution(query.resolution), strict=False)
+        options = _query_options(query, ClipOptions)
         body, time_left = await runner.read_body(request)
         outcome = await runner.run(convert.clip_segments_binary, body, window, options,
                                    query.verify, settings, _deadline(time_left),
@@ -178,7 +186,7 @@ def _query_resolution(text: str | None) -> dict:
         return {"resolution": text}  # ClipOptions checks the '<k>px' form
 
 
-def _query_window(query: SegmentQuery) -> Window:
+def _query_window(query: WindowQuery) -> Window:
     bounds = (query.xmin, query.ymin, query.xmax, query.ymax)
     given = [b for b in bounds if b is not None]
     if len(given) < len(bounds):
@@ -192,17 +200,34 @@ def _query_window(query: SegmentQuery) -> Window:
     return Window(*given)
 
 
-class GeoArrowQuery(SegmentQuery):
-    """Window and options of ``POST /v1/clip/geoarrow`` (the body is the Arrow stream)."""
+class GeometryQuery(WindowQuery):
+    """Window and options of a geometry request given as query parameters."""
 
     boundary: Boundary | None = Field(None, description="As in the GeoJSON options.")
     keep_empty: bool | None = Field(
-        None, description="Keep rows whose geometry is clipped away, empty or null (an "
-                          "empty geometry; null stays null) instead of dropping them.")
+        None, description="Keep rows (records) whose geometry is clipped away, empty or "
+                          "null (an empty geometry; null stays null) instead of dropping "
+                          "them.")
     check_validity: bool | None = None
+
+
+class GeoArrowQuery(GeometryQuery):
+    """Window and options of ``POST /v1/clip/geoarrow`` (the body is the Arrow stream)."""
+
+    verify: bool | Literal["all"] | None = _VERIFY_QUERY
     column: str | None = Field(
         None, description="The geometry column (default: the one tagged geoarrow.*, else a "
                           "binary column named `geometry`, read as WKB).")
+
+
+_Options = TypeVar("_Options", bound=ClipOptions)
+
+
+def _query_options(query: WindowQuery, model: type[_Options]) -> _Options:
+    """Return the options `query` gives, validated by `model` (the JSON body's options)."""
+    names = set(model.model_fields) & set(type(query).model_fields) - {"resolution"}
+    given = {k: v for k, v in query.model_dump(include=names).items() if v is not None}
+    return model.model_validate(given | _query_resolution(query.resolution), strict=False)
 
 
 _ARROW_BODY = {"requestBody": {"required": True, "content": {convert.ARROW_STREAM: {
@@ -242,13 +267,105 @@ async def clip_geoarrow(request: Request, query: Annotated[GeoArrowQuery, Query(
         raise UnsupportedMediaTypeError(
             f"send the body as {convert.ARROW_STREAM}, got {media or 'no Content-Type'}")
     window = _query_window(query)
-    options = GeometryOptions.model_validate({
-        k: v for k, v in query.model_dump(
-            include={"method", "n", "max_depth", "tolerance", "mode", "backend", "boundary",
-                     "keep_empty", "check_validity"}).items()
-        if v is not None} | _query_resolution(query.resolution), strict=False)
+    options = _query_options(query, GeometryOptions)
     body, time_left = await runner.read_body(request)
     outcome = await runner.run(convert.clip_geoarrow, body, window, options, query.column,
                                query.verify, settings, _deadline(time_left),
                                time_left=time_left, endpoint="geoarrow")
     return _respond(outcome, metrics)
+
+
+# --- Streamed GeoJSON ----------------------------------------------------------------
+
+#: Body media types of ``POST /v1/clip/geojson-seq`` and the framing each stands for.
+SEQUENCE_MEDIA = {
+    "application/geo+json-seq": Framing.RS,   # RFC 8142
+    "application/json-seq": Framing.RS,       # RFC 7464
+    "application/x-ndjson": Framing.LINES,
+    "application/ndjson": Framing.LINES,
+    "application/jsonl": Framing.LINES,
+}
+
+
+class GeoJSONSeqQuery(GeometryQuery):
+    """Window and options of ``POST /v1/clip/geojson-seq`` (the body is the records)."""
+
+    summary: bool = Field(
+        False, description=f"End the answer with one summary record (`type` "
+                           f"`{SUMMARY_TYPE}`: `records_in`, `records_out`, `chunks` and "
+                           f"the clip's `stats`).")
+
+
+def _answer_media(request: Request, sent: str) -> str:
+    """Return the answer's media type: the first sequence type `Accept` names, else `sent`."""
+    for item in request.headers.get("accept", "").split(","):
+        media = item.split(";")[0].strip().lower()
+        if media in SEQUENCE_MEDIA:
+            return media
+    return sent
+
+
+_SEQUENCE_BODY = {"requestBody": {"required": True, "content": {
+    media: {"schema": {"type": "string", "format": "binary",
+                       "description": "GeoJSON texts, one Feature, Geometry or "
+                                      "FeatureCollection each: "
+                                      + ("RS before each, LF after it (RFC 8142)"
+                                         if framing is Framing.RS else "one per line")}}
+    for media, framing in SEQUENCE_MEDIA.items()}}}
+
+
+@router.post("/geojson-seq", responses={
+    **_ERRORS, 200: {"content": {media: {"schema": {"type": "string", "format": "binary"}}
+                                 for media in SEQUENCE_MEDIA},
+                     "description": "The records clipped, streamed in the request's framing "
+                                    "(or the one Accept names)"}},
+    openapi_extra=_SEQUENCE_BODY, response_class=Response,
+    summary="Clip streamed GeoJSON (text sequences or newline-delimited), chunk by chunk")
+async def clip_geojson_seq(request: Request, query: Annotated[GeoJSONSeqQuery, Query()],
+                           settings: SettingsDep, runner: RunnerDep,
+                           metrics: MetricsDep) -> Response:
+    """Return each record clipped, streamed as the body arrives, in input order.
+
+    The body is a sequence of GeoJSON texts, each a Feature, a Geometry or a
+    FeatureCollection: `application/geo+json-seq` (RFC 8142: RS 0x1E before each text,
+    LF after it; also `application/json-seq`), or newline-delimited GeoJSON
+    (`application/x-ndjson`, `application/ndjson`, `application/jsonl`: one text per
+    line). Blank lines are skipped. The window (`xmin, ymin, xmax, ymax`) and the
+    options are query parameters, as for GeoArrow, with `summary`; there is no
+    verification on this endpoint (`/v1/clip/geojson` verifies).
+
+    The body is read and clipped a chunk of records at a time (the server's
+    `stream_chunk_bytes` or `stream_chunk_records`, whichever is reached first, or
+    what has arrived when the body pauses), and each chunk's answer is sent as soon as
+    it is clipped: memory holds one chunk whatever the body's length, and no limit on
+    the body's length applies (a record is at most `stream_max_record_bytes`;
+    `max_vertices` and the work budget apply to each chunk, the time limit to each
+    chunk's wait for its body and for its clip). The answer is in the request's framing
+    (or the first sequence type `Accept` names): each record clipped as
+    `/v1/clip/geojson` clips it (a Geometry stays a Geometry, a Feature keeps its
+    `properties`, `id` and foreign members), in input order; records left empty are
+    dropped unless `keep_empty`.
+
+    Errors: a problem in the first chunk (or with the options) is the request's status
+    with a problem document, which names the `record` (from 0) and the `path` in it.
+    After the first chunk the status is sent: a problem ends the answer with the
+    records before the bad one, then a problem record (RFC 9457 members, `type`
+    `urn:rnsca:problem:...`) as the last record. Read the answer while you send the
+    body, or not: what you have not read yet waits on the server's disk.
+    """
+    media = _media_type(request)
+    framing = SEQUENCE_MEDIA.get(media)
+    if framing is None:
+        raise UnsupportedMediaTypeError(
+            f"send GeoJSON text sequences as {', '.join(SEQUENCE_MEDIA)}, got "
+            f"{media or 'no Content-Type'}")
+    window = _query_window(query)
+    options = _query_options(query, GeometryOptions)
+    answer = _answer_media(request, media)
+    clip = StreamedClip(request.receive, framing, SEQUENCE_MEDIA[answer], window, options,
+                        query.summary, settings, runner, metrics, request.url.path)
+    try:
+        await clip.start()
+    except (RnscaError, ServiceError) as exc:
+        return refusal(exc, request.url.path, clip.body_ended)
+    return SequenceResponse(clip, answer)

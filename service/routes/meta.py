@@ -40,6 +40,9 @@ async def capabilities(settings: SettingsDep, runner: RunnerDep) -> Response:
             "work_budget": settings.work_budget,
             "request_time_limit": settings.request_time_limit,
             "verify_max_vertices": settings.verify_max_vertices,
+            "stream_chunk_bytes": settings.stream_chunk_bytes,
+            "stream_chunk_records": settings.stream_chunk_records,
+            "stream_max_record_bytes": settings.stream_max_record_bytes,
         },
     }
     return Response(orjson.dumps(body), media_type="application/json")

@@ -29,6 +29,7 @@ LINE = {"type": "Feature", "id": 7, "properties": {"name": "road"},
 @pytest.fixture(scope="module")
 def server():
     with LiveServer(env={"RNSCA_CLIP_THREADS": "3", "RNSCA_MAX_BODY_BYTES": str(8 * 2**20),
+                         "RNSCA_STREAM_CHUNK_BYTES": str(2**20),
                          "RNSCA_MAX_VERTICES": "400000",
                          "RNSCA_VERIFY_MAX_VERTICES": "1000"}) as live:
         yield live
@@ -291,6 +292,106 @@ def test_body_over_the_limit_413_while_reading_a_chunked_body(client):
                     headers={"Content-Type": "application/octet-stream"})
     assert_problem(r, 413, "body-too-large")
     assert client.get("/healthz").status_code == 200
+
+
+def _seq_records(count: int, start: int = 0) -> list[bytes]:
+    """`count` RS-framed features, each with one vertex left and right of the window."""
+    return [b"\x1e" + orjson.dumps({
+        "type": "Feature", "id": i, "properties": {"n": i},
+        "geometry": {"type": "LineString", "coordinates": [[-5, 1 + i % 8], [15, 2 + i % 8]]}})
+        + b"\n" for i in range(start, start + count)]
+
+
+def test_clip_geojson_seq_to_a_client_that_reads_only_after_sending(client):
+    """httpx sends the whole body before it reads: 28 MB of records (over this server's
+    8 MiB body limit) whose answer, 25 MB, is more than the sockets hold (about 10 MB
+    measured on loopback). The rest waits in the server's spool, and everything arrives."""
+    count = 200_000
+    spilled = _metric(client, "rnsca_stream_spilled_bytes_total")
+
+    def body():
+        for start in range(0, count, 1000):
+            yield b"".join(_seq_records(1000, start))
+
+    with client.stream("POST", "/v1/clip/geojson-seq", content=body(),
+                       params={"xmin": 0, "ymin": 0, "xmax": 10, "ymax": 10,
+                               "summary": "true"},
+                       headers={"Content-Type": "application/geo+json-seq",
+                                "Accept-Encoding": "identity"}) as r:
+        assert r.status_code == 200
+        texts = r.read().split(b"\x1e")[1:]
+    *records, summary = [orjson.loads(t) for t in texts]
+    assert [f["id"] for f in records] == list(range(count))
+    assert records[3]["geometry"]["coordinates"] == [[0.0, 4.25], [10.0, 4.75]]
+    assert summary["records_in"] == count and summary["chunks"] >= count // 8000
+    # What the sockets could not hold went through the spool's file.
+    assert _metric(client, "rnsca_stream_spilled_bytes_total") > spilled
+    assert client.get("/healthz").status_code == 200
+
+
+def _metric(client, name: str) -> float:
+    text = client.get("/metrics").text
+    return float(re.search(rf"^{name} (\S+)$", text, re.MULTILINE).group(1))
+
+
+def _chunked(payload: bytes) -> bytes:
+    return b"%x\r\n" % len(payload) + payload + b"\r\n"
+
+
+def test_clip_geojson_seq_answers_the_first_records_before_the_body_ends(server):
+    """A client that reads while it sends (a raw socket, chunked): the first chunk's
+    records arrive while the body is still open, the rest once it ends."""
+    import socket
+
+    port = int(server.url.rsplit(":", 1)[1])
+    first, rest = b"".join(_seq_records(6000)), b"".join(_seq_records(3000, 6000))
+    with socket.create_connection(("127.0.0.1", port), timeout=60) as sock:
+        sock.sendall(b"POST /v1/clip/geojson-seq?xmin=0&ymin=0&xmax=10&ymax=10 HTTP/1.1\r\n"
+                     b"Host: test\r\nContent-Type: application/geo+json-seq\r\n"
+                     b"Transfer-Encoding: chunked\r\n\r\n" + _chunked(first))
+        received = b""
+        deadline = time.monotonic() + 60
+        while received.count(b"\x1e") < 5000 and time.monotonic() < deadline:
+            received += sock.recv(1 << 16)  # the body is still open
+        assert received.startswith(b"HTTP/1.1 200"), received[:200]
+        assert received.count(b"\x1e") >= 5000
+        sock.sendall(_chunked(rest) + b"0\r\n\r\n")
+        while not received.endswith(b"\r\n0\r\n\r\n"):
+            data = sock.recv(1 << 16)
+            assert data, "the connection closed before the answer ended"
+            received += data
+    head, _, chunked = received.partition(b"\r\n\r\n")
+    answer = b""
+    while True:
+        size, _, chunked = chunked.partition(b"\r\n")
+        if int(size, 16) == 0:
+            break
+        answer += chunked[:int(size, 16)]
+        chunked = chunked[int(size, 16) + 2:]
+    ids = [orjson.loads(t)["id"] for t in answer.split(b"\x1e")[1:]]
+    assert ids == list(range(9000))
+
+
+def test_clip_geojson_seq_client_leaving_mid_stream_is_no_server_error(server, client):
+    """A client that goes away after its answer started: the server stops, logs it as a
+    client that left (no traceback) and goes on serving."""
+    import socket
+
+    port = int(server.url.rsplit(":", 1)[1])
+    with socket.create_connection(("127.0.0.1", port), timeout=60) as sock:
+        sock.sendall(b"POST /v1/clip/geojson-seq?xmin=0&ymin=0&xmax=10&ymax=10 HTTP/1.1\r\n"
+                     b"Host: test\r\nContent-Type: application/geo+json-seq\r\n"
+                     b"Transfer-Encoding: chunked\r\n\r\n"
+                     + _chunked(b"".join(_seq_records(6000))))
+        received = b""
+        while b"\x1e" not in received:
+            received += sock.recv(1 << 16)
+    deadline = time.monotonic() + 30
+    while "client disconnected during a streamed request" not in server.log():
+        assert time.monotonic() < deadline, server.log()[-2000:]
+        time.sleep(0.1)
+    assert client.get("/healthz").status_code == 200
+    assert "Traceback" not in server.log() and "unhandled" not in server.log()
 
 
 def test_too_many_vertices_413(client):

@@ -17,6 +17,10 @@ app = create_app(Settings(warm_up=False, verify_max_vertices=50, max_vertices=10
 schema = schemathesis.openapi.from_asgi("/openapi.json", app)
 # GeoArrow bodies are bytes (Arrow IPC streams): sent as the bytes generated, as binary is.
 schemathesis.serializer.alias("application/vnd.apache.arrow.stream", "application/octet-stream")
+# Streamed GeoJSON bodies too (POST /v1/clip/geojson-seq): bytes, framed or not.
+schemathesis.serializer.alias(["application/geo+json-seq", "application/json-seq",
+                               "application/x-ndjson", "application/ndjson",
+                               "application/jsonl"], "application/octet-stream")
 
 
 @pytest.fixture(scope="module", autouse=True)

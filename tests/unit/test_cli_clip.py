@@ -348,3 +348,49 @@ def test_clip_as_a_process_fails_in_one_line_without_a_traceback():
     assert done.returncode == 1 and done.stdout == b""
     assert done.stderr.decode().count("\n") == 1
     assert done.stderr.startswith(b"error: GeoJSON text is not valid JSON")
+
+
+# --- GeoJSON text sequences ------------------------------------------------------------------
+
+def _sequence(records, rs: bool) -> bytes:
+    return b"".join((b"\x1e" if rs else b"") + orjson.dumps(r) + b"\n" for r in records)
+
+
+@pytest.mark.parametrize("name, rs", [("roads.geojsons", True), ("roads.geojsonl", False),
+                                      ("roads.ndjson", False)])
+def test_clip_streams_a_sequence_file_in_its_framing(runner, tmp_path, name, rs):
+    path = tmp_path / name
+    path.write_bytes(_sequence(DOCUMENT["features"] + [LINE], rs))
+    result = run(runner, str(path), *WINDOW)
+    assert result.exit_code == 0, result.output
+    out = result.stdout_bytes
+    assert out.startswith(b"\x1e") == rs and out.count(b"\n") == 3
+    texts = out.split(b"\x1e")[1:] if rs else out.splitlines()
+    assert [orjson.loads(t) for t in texts] == CLIPPED["features"] + [CLIPPED_LINE]
+    report = report_of(result)
+    assert (report["records_in"], report["records_out"], report["chunks"]) == (4, 3, 1)
+    assert report["stats"]["geometries_in"] == 4
+
+
+def test_clip_streams_stdin_that_starts_with_rs_or_is_named_by_seq(runner):
+    rs = run(runner, *WINDOW, stdin=_sequence([LINE, FAR], True))
+    assert rs.exit_code == 0 and rs.stdout_bytes == b"\x1e" + orjson.dumps(CLIPPED_LINE) + b"\n"
+    lines = run(runner, "--seq", "lines", *WINDOW, stdin=_sequence([LINE, FAR], False))
+    assert lines.exit_code == 0 and lines.stdout_bytes == orjson.dumps(CLIPPED_LINE) + b"\n"
+
+
+def test_clip_writes_a_sequences_records_before_a_bad_one_then_exits_1(runner):
+    stdin = _sequence([LINE, LINE], False) + b'{"type": "Point", "coordinates": [1]}\n'
+    result = run(runner, "--seq", "lines", *WINDOW, stdin=stdin)
+    assert result.exit_code == 1
+    assert result.stdout_bytes == 2 * (orjson.dumps(CLIPPED_LINE) + b"\n")
+    assert result.stderr.startswith("error: record 2: invalid GeoJSON at coordinates")
+
+
+def test_clip_refuses_document_options_and_unknown_framings_for_sequences(runner, tmp_path):
+    path = tmp_path / "a.geojsons"
+    path.write_bytes(_sequence([LINE], True))
+    assert_one_line_error(run(runner, str(path), *WINDOW, "--verify"), 2,
+                          "--verify does not apply to GeoJSON text sequences")
+    assert_one_line_error(run(runner, str(path), *WINDOW, "--seq", "csv"), 2,
+                          "unknown framing 'csv'")

@@ -1,4 +1,6 @@
-"""Python client of the rnsca HTTP API: clip GeoJSON, SVG paths and segments remotely.
+"""Python client of the rnsca HTTP API: clip GeoJSON, GeoArrow, SVG paths, segments remotely.
+
+GeoJSON goes whole (`Client.clip_geojson`) or streamed (`Client.clip_geojson_seq`).
 
 Examples
 --------
@@ -41,12 +43,14 @@ from rnsca_client.results import (
     Verification,
 )
 from rnsca_client.retry import Retry
+from rnsca_client.streams import AsyncClippedRecords, ClippedRecords
 
 __version__ = "0.1.0"
 
 __all__ = [
     "Client", "AsyncClient", "Retry", "DEFAULT_URL", "DEFAULT_TIMEOUT", "DEFAULT_RETRY",
     "GeoJSONResult", "SVGResult", "SegmentsResult", "GeoArrowResult", "ClipStats", "Verification",
+    "ClippedRecords", "AsyncClippedRecords",
     "Capabilities", "Backend", "Limits", "Health",
     "RnscaClientError", "InvalidInputError", "ResponseFormatError", "TransportError",
     "ConnectError", "RequestTimeoutError", "ApiError", "BadRequestError", "NotFoundError",

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import asyncio
 import time
-from collections.abc import Sequence
+from collections.abc import AsyncIterable, AsyncIterator, Iterable, Iterator, Sequence
 from typing import Any, TypeVar
 
 import httpx
@@ -16,6 +16,7 @@ from rnsca_client.errors import (
     RequestTimeoutError,
     ServiceUnavailableError,
     TransportError,
+    api_error,
     retry_after_seconds,
 )
 from rnsca_client.results import (
@@ -27,6 +28,15 @@ from rnsca_client.results import (
     SVGResult,
 )
 from rnsca_client.retry import Retry
+from rnsca_client.streams import (
+    NDJSON,
+    SEQ_OPTIONS,
+    SEQ_PATH,
+    AsyncClippedRecords,
+    ClippedRecords,
+    async_record_pieces,
+    record_pieces,
+)
 
 __all__ = ["Client", "AsyncClient", "DEFAULT_TIMEOUT", "DEFAULT_URL", "DEFAULT_RETRY"]
 
@@ -285,6 +295,71 @@ class Client:
         return self.send(calls.clip_geoarrow(table, window, column=column, verify=verify,
                                              options=options))
 
+    def clip_geojson_seq(self, records: Iterable[Any], window: Any,
+                         **options: Any) -> ClippedRecords:
+        """Return the records clipped to `window`, streamed: sent and read as they come.
+
+        The records go to ``POST /v1/clip/geojson-seq`` as newline-delimited GeoJSON,
+        made from `records` while they are sent; the server clips them a chunk at a
+        time and the clipped ones are read back as it answers, so neither side holds
+        the whole stream (the server keeps what is not read yet in a file, so sending
+        first and reading after, as httpx does, is fine).
+
+        Parameters
+        ----------
+        records : iterable
+            Features, Geometries or FeatureCollections: dicts, their JSON text, or
+            objects with ``__geo_interface__`` (Shapely geometries). A generator is
+            read lazily.
+        window : sequence of 4 float
+            ``[xmin, ymin, xmax, ymax]``.
+        **options
+            ``method``, ``n``, ``max_depth``, ``tolerance``, ``mode``, ``backend``,
+            ``resolution``, ``boundary``, ``keep_empty``, ``check_validity``.
+
+        Returns
+        -------
+        ClippedRecords
+            An iterator over the clipped records, each of its input's kind, in input
+            order (those left empty dropped unless ``keep_empty``); once read whole,
+            ``stats`` and ``records_in``. Not retried (its records cannot be resent).
+
+        Raises
+        ------
+        ApiError
+            While iterating: the server refused the request, or a record (``record``
+            names it; the records before it have been given out).
+        InvalidInputError
+            A record cannot be sent (not GeoJSON, NaN coordinates).
+
+        Examples
+        --------
+        ::
+
+            features = ({"type": "Feature", "properties": {"i": i}, "geometry": {
+                "type": "LineString", "coordinates": [[-5, i], [15, i]]}}
+                for i in range(100_000))
+            with Client() as client:
+                for feature in client.clip_geojson_seq(features, (0, 0, 10, 10)):
+                    ...
+        """
+        params = calls._query(window, options, None, SEQ_OPTIONS, "streamed GeoJSON")
+        return ClippedRecords(self._stream_lines(record_pieces(records), params))
+
+    def _stream_lines(self, pieces: Iterator[bytes], params: dict[str, str]
+                      ) -> Iterator[str]:
+        try:
+            with self._http.stream("POST", SEQ_PATH, content=pieces,
+                                   params={**params, "summary": "true"},
+                                   headers={"Content-Type": NDJSON, "Accept": NDJSON}
+                                   ) as response:
+                if response.status_code >= 400:
+                    response.read()
+                    raise api_error(response)
+                yield from response.iter_lines()
+        except httpx.TransportError as failure:
+            raise _transport_error(failure, 1) from failure
+
     def capabilities(self) -> Capabilities:
         """Return the server's methods, modes, backends (and why one is missing), limits."""
         return self.send(calls.capabilities())
@@ -410,6 +485,30 @@ class AsyncClient:
         """Return a table with its geometry column clipped (see `Client.clip_geoarrow`)."""
         return await self.send(calls.clip_geoarrow(table, window, column=column,
                                                    verify=verify, options=options))
+
+    def clip_geojson_seq(self, records: Iterable[Any] | AsyncIterable[Any], window: Any,
+                         **options: Any) -> AsyncClippedRecords:
+        """Return the records clipped, streamed (see `Client.clip_geojson_seq`).
+
+        `records` may be an async iterable; iterate the result with ``async for``.
+        """
+        params = calls._query(window, options, None, SEQ_OPTIONS, "streamed GeoJSON")
+        return AsyncClippedRecords(self._stream_lines(async_record_pieces(records), params))
+
+    async def _stream_lines(self, pieces: AsyncIterator[bytes], params: dict[str, str]
+                            ) -> AsyncIterator[str]:
+        try:
+            async with self._http.stream("POST", SEQ_PATH, content=pieces,
+                                         params={**params, "summary": "true"},
+                                         headers={"Content-Type": NDJSON, "Accept": NDJSON}
+                                         ) as response:
+                if response.status_code >= 400:
+                    await response.aread()
+                    raise api_error(response)
+                async for line in response.aiter_lines():
+                    yield line
+        except httpx.TransportError as failure:
+            raise _transport_error(failure, 1) from failure
 
     async def capabilities(self) -> Capabilities:
         """Return what the server can do (see `Client.capabilities`)."""

@@ -50,6 +50,7 @@ __all__ = [
     "NotImplementedOnServerError",
     "ServiceUnavailableError",
     "api_error",
+    "problem_error",
     "retry_after_seconds",
     "PROBLEM_TYPE_PREFIX",
 ]
@@ -105,6 +106,8 @@ class ApiError(RnscaClientError):
         JSON path of the offending value, e.g. ``geojson.features[3].geometry``.
     position : int or None
         Character offset of a syntax error (SVG path data).
+    record : int or None
+        Streamed GeoJSON: the number (from 0) of the record at fault.
     errors : list of dict
         Each validation error (``path``, ``message``, ``type``) for ``invalid-request``.
     retry_after : float or None
@@ -126,10 +129,13 @@ class ApiError(RnscaClientError):
         self.instance = problem.get("instance")
         self.path = problem.get("path")
         self.position = problem.get("position")
+        self.record = problem.get("record")
         self.errors = list(problem.get("errors") or [])
         self.retry_after = retry_after
         self.attempts = 1
         where = f" at {self.path}" if self.path else ""
+        if self.record is not None:
+            where = f" in record {self.record}" + where
         super().__init__(f"{self.status} {self.title}{where}: {self.detail}")
 
 
@@ -243,8 +249,27 @@ def api_error(response: httpx.Response) -> ApiError:
     if not isinstance(problem, dict) or "status" not in problem:
         problem = {"status": response.status_code, "title": response.reason_phrase,
                    "detail": response.text[:500]}
+    return problem_error(problem, response.status_code, retry_after_seconds(response))
+
+
+def problem_error(problem: dict[str, Any], status: int | None = None,
+                  retry_after: float | None = None) -> ApiError:
+    """Return the exception for a problem document (`status`: the HTTP one, if known).
+
+    A streamed answer ends with such a document as its last record when a problem is
+    met after the answer started (its HTTP status was already 200).
+
+    Examples
+    --------
+    >>> error = problem_error({"type": "urn:rnsca:problem:parse-error", "status": 422,
+    ...                        "title": "Malformed input", "record": 12,
+    ...                        "detail": "record 12 is not valid JSON"})
+    >>> type(error).__name__, error.record
+    ('InvalidRequestError', 12)
+    """
     kind = str(problem.get("type", ""))[len(PROBLEM_TYPE_PREFIX):]
-    status = response.status_code
+    if status is None:
+        status = int(problem.get("status", 0))
     cls = _BY_KIND.get(kind) or _BY_STATUS.get(status) or (
         ServerError if status >= 500 else ApiError)
-    return cls(problem, retry_after=retry_after_seconds(response))
+    return cls(problem, retry_after=retry_after)

@@ -255,6 +255,10 @@ class Limits(_FromDict):
     work_budget: int
     request_time_limit: float
     verify_max_vertices: int
+    #: Streamed GeoJSON's chunks and longest record (None from a server without them).
+    stream_chunk_bytes: int | None = None
+    stream_chunk_records: int | None = None
+    stream_max_record_bytes: int | None = None
     extra: dict[str, Any] = field(default_factory=dict, repr=False, compare=False)
 
 

@@ -1,4 +1,4 @@
-"""Python client of the rnsca HTTP API: clip GeoJSON, SVG paths and segments remotely.
+"""Python client of the rnsca HTTP API: clip GeoJSON, GeoPandas, GeoArrow, SVG and segments.
 
 Examples
 --------
@@ -7,11 +7,20 @@ Examples
 3
 """
 
-from rnsca_client.client import DEFAULT_RETRY, DEFAULT_TIMEOUT, DEFAULT_URL, AsyncClient, Client
+from rnsca_client.client import (
+    DEFAULT_CONCURRENCY,
+    DEFAULT_RETRY,
+    DEFAULT_TIMEOUT,
+    DEFAULT_URL,
+    AsyncClient,
+    Client,
+)
+from rnsca_client.clipping import DEFAULT_BATCH_SIZE
 from rnsca_client.errors import (
     ApiError,
     BackendUnavailableError,
     BadRequestError,
+    BatchError,
     ConnectError,
     InvalidInputError,
     InvalidRequestError,
@@ -31,6 +40,7 @@ from rnsca_client.errors import (
 from rnsca_client.results import (
     Backend,
     Capabilities,
+    ClipResult,
     ClipStats,
     GeoArrowResult,
     GeoJSONResult,
@@ -46,9 +56,12 @@ __version__ = "0.1.0"
 
 __all__ = [
     "Client", "AsyncClient", "Retry", "DEFAULT_URL", "DEFAULT_TIMEOUT", "DEFAULT_RETRY",
-    "GeoJSONResult", "SVGResult", "SegmentsResult", "GeoArrowResult", "ClipStats", "Verification",
+    "DEFAULT_CONCURRENCY", "DEFAULT_BATCH_SIZE",
+    "ClipResult", "GeoJSONResult", "SVGResult", "SegmentsResult", "GeoArrowResult", "ClipStats",
+    "Verification",
     "Capabilities", "Backend", "Limits", "Health",
-    "RnscaClientError", "InvalidInputError", "ResponseFormatError", "TransportError",
+    "RnscaClientError", "InvalidInputError", "ResponseFormatError", "BatchError",
+    "TransportError",
     "ConnectError", "RequestTimeoutError", "ApiError", "BadRequestError", "NotFoundError",
     "MethodNotAllowedError", "PayloadTooLargeError", "UnsupportedMediaTypeError",
     "InvalidRequestError", "BackendUnavailableError", "WorkOverBudgetError", "ServerError",

@@ -35,8 +35,8 @@ from rnsca_client.results import (
     Verification,
 )
 
-__all__ = ["Call", "clip_geojson", "clip_svg", "clip_segments", "capabilities", "health",
-           "readiness", "BINARY_OPTIONS"]
+__all__ = ["Call", "clip_geojson", "clip_feature_collection", "clip_svg", "clip_segments",
+           "clip_geoarrow", "capabilities", "health", "readiness", "BINARY_OPTIONS"]
 
 T = TypeVar("T")
 _JSON = {"Content-Type": "application/json", "Accept": "application/json"}
@@ -113,6 +113,20 @@ def clip_geojson(obj: Any, window: Any, *, verify: bool | str | None, approx_bou
     if approx_bound is not None:
         payload["approx_bound"] = approx_bound
     return _post_json("/v1/clip/geojson", payload, GeoJSONResult.from_dict)
+
+
+def clip_feature_collection(features: bytes, window: Any, *, verify: bool | str | None,
+                            options: Mapping[str, Any]) -> Call[GeoJSONResult]:
+    """Return the call ``POST /v1/clip/geojson`` of a FeatureCollection's JSON bytes.
+
+    The bytes go into the body as they are (not parsed and written again).
+    """
+    payload: dict[str, Any] = {"window": window_bounds(window), "options": _options(options)}
+    if verify is not None:
+        payload["verify"] = verify
+    content = encode_json(payload)[:-1] + b',"geojson":' + features + b"}"
+    return Call("POST", "/v1/clip/geojson", _reader(GeoJSONResult.from_dict),
+                content=content, headers=_JSON)
 
 
 def clip_svg(paths: str | Sequence[str], window: Any, *, verify: bool | str | None,

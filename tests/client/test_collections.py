@@ -420,3 +420,51 @@ def test_each_geometry_equals_shapely(client, via, data):
             assert ours is None or not ours.is_empty
             ours = shapely.GeometryCollection() if ours is None else ours
         assert_matches_shapely(ours, geometry, window, "closed", where=f"row {row}")
+
+
+# --- the README, and what goes on the wire ------------------------------------------------
+
+
+def readme_block(text: str, first_line: str) -> str:
+    start = text.index(first_line)
+    return text[start:text.index("```", start)]
+
+
+def test_the_readme_geopandas_examples_run_as_written(server, gpd):
+    from tests.e2e.server import ROOT
+
+    top = (ROOT / "README.md").read_text()
+    top = top[top.index("## Python client (SDK)"):]
+    scope: dict = {}
+    exec(readme_block(top, "import geopandas\n").replace("http://127.0.0.1:8000", server.url),
+         scope)  # noqa: S102 - our own README
+    assert scope["clipped"].index.tolist() == ["p1", "r7"] and scope["result"].verification
+    text = (ROOT / "clients/python/README.md").read_text()
+    scope: dict = {}
+    for first_line in ("import geopandas\n", "from rnsca_client import BatchError\n"):
+        code = readme_block(text, first_line).replace("http://127.0.0.1:8000", server.url)
+        exec(code, scope)  # noqa: S102 - our own README
+    clipped = scope["clipped"]
+    assert clipped.index.tolist() == ["p1", "r7"] and clipped.crs == "EPSG:3857"
+    assert clipped.geometry.iloc[1].geom_type == "MultiLineString"
+    assert scope["result"].rows.tolist() == [0, 1]
+    assert [type(r).__name__ for r in scope["by_item"]] == ["ClipResult", "ClipResult",
+                                                            "GeoJSONResult"]
+
+
+def test_binary_answers_are_asked_for_uncompressed():
+    seen = []
+
+    def handler(request: httpx.Request) -> httpx.Response:
+        seen.append((request.url.path, request.headers.get("accept-encoding")))
+        return httpx.Response(422, json={"status": 422, "title": "Invalid", "detail": "x"})
+
+    with Client("http://rnsca.test", transport=httpx.MockTransport(handler),
+                retries=None) as client:
+        for call in (lambda: client.clip([box(1, 1, 2, 2)], WINDOW),
+                     lambda: client.clip_segments(np.zeros((1, 4)), WINDOW),
+                     lambda: client.clip([box(1, 1, 2, 2)], WINDOW, via="geojson")):
+            with pytest.raises(rnsca_client.InvalidRequestError):
+                call()
+    assert seen[:2] == [("/v1/clip/geoarrow", "identity"), ("/v1/clip/segments", "identity")]
+    assert seen[2][0] == "/v1/clip/geojson" and "gzip" in seen[2][1]   # JSON: httpx's default

@@ -154,6 +154,21 @@ def test_points_and_3d_geometries(client, gpd):
     assert [g.has_z for g in mixed] == [False, True]
 
 
+def test_geometry_collections_go_as_geojson_and_missing_ones_need_no_request(client, gpd):
+    collection = shapely.GeometryCollection([Point(1, 1), box(-1, -1, 2, 2)])
+    series = gpd.GeoSeries([box(1, 1, 2, 2), collection, None], index=list("abc"))
+    result = client.clip(series, WINDOW)                 # polygons: GeoArrow; the rest: JSON
+    assert result.requests == 2 and result.data.index.tolist() == ["a", "b"]
+    assert_same_geometries(result.data, [box(1, 1, 2, 2), shapely.GeometryCollection(
+        [Point(1, 1), box(0, 0, 2, 2)])])
+    nothing = gpd.GeoSeries([None, None], crs=4326)
+    for via in VIAS:
+        assert client.clip(nothing, WINDOW, via=via).data.empty
+        kept = client.clip(nothing, WINDOW, via=via, keep_empty=True)
+        assert kept.data.tolist() == [None, None] and kept.data.crs == nothing.crs
+    assert client.clip(nothing, WINDOW).requests == 0      # nothing to clip: not sent
+
+
 # --- Shapely lists and arrays -------------------------------------------------------------
 
 

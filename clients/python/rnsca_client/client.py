@@ -281,11 +281,17 @@ class Client:
         pieces = {}
         for batch in plan.batches:
             try:
-                pieces[batch.number] = plan.decode(batch, self.send(plan.call(batch)))
+                pieces[batch.number] = self._answer(plan, batch)
             except ApiError as error:
                 plan.locate(batch, error)
                 raise
         return plan.assemble(pieces)
+
+    def _answer(self, plan: clipping.Plan, batch: clipping.Batch) -> Any:
+        local = plan.local(batch)
+        if local is not None:
+            return local
+        return plan.decode(batch, self.send(plan.call(batch)))
 
     def clip_many(self, items: Any, window: Any, *, batch_size: int = DEFAULT_BATCH_SIZE,
                   concurrency: int = DEFAULT_CONCURRENCY, via: str | None = None,
@@ -333,12 +339,10 @@ class Client:
         if not plan.batches:
             return plan.assemble({})
 
-        def answer(batch: clipping.Batch) -> Any:
-            return plan.decode(batch, self.send(plan.call(batch)))
-
         with ThreadPoolExecutor(max_workers=min(concurrency, len(plan.batches)),
                                 thread_name_prefix="rnsca-clip") as pool:
-            futures = {pool.submit(answer, batch): batch for batch in plan.batches}
+            futures = {pool.submit(self._answer, plan, batch): batch
+                       for batch in plan.batches}
             done, pending = wait(futures, return_when=FIRST_EXCEPTION)
             if any(f.exception() is not None for f in done):
                 for future in pending:
@@ -570,6 +574,9 @@ class AsyncClient:
         return plan.assemble(pieces)
 
     async def _answer(self, plan: clipping.Plan, batch: clipping.Batch) -> Any:
+        local = plan.local(batch)
+        if local is not None:
+            return local
         call = await asyncio.to_thread(plan.call, batch)
         answer = await self.send(call)
         return await asyncio.to_thread(plan.decode, batch, answer)

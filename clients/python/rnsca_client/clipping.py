@@ -12,7 +12,8 @@ each row's position beside it (the `ROW_COLUMN`, or the feature's id), so the an
 which rows are left; the other columns stay here and are taken from the input. A GeoArrow
 column holds one family of geometries (points, lines or polygons, single and multi), so a
 batch that mixes families goes as one request per family, and the pieces are put back in
-row order.
+row order; geometry collections (and linear rings), which no GeoArrow column the server
+reads can hold, go as GeoJSON, which takes them.
 """
 
 from __future__ import annotations
@@ -45,7 +46,7 @@ DEFAULT_VIA = "geoarrow"
 DEFAULT_BATCH_SIZE = 10_000
 _ROW_IN_PATH = re.compile(r"\[(\d+)\]")
 #: The family of each Shapely type id: what one GeoArrow column can hold together
-#: (0 points, 1 lines, 2 polygons; 3 anything else, which the server refuses by name).
+#: (0 points, 1 lines, 2 polygons; 3 anything else, which goes as GeoJSON).
 FAMILIES = {0: 0, 4: 0, 1: 1, 5: 1, 3: 2, 6: 2}
 _OTHER = 3
 _MISSING = -1
@@ -79,6 +80,7 @@ class Piece:
     field: Any
     stats: ClipStats
     verification: Any
+    sent: bool = True
 
 
 def _require_pyarrow(what: str) -> None:
@@ -151,6 +153,21 @@ class _CollectionClip:
         return span[(families == batch.family)
                     | ((families == _MISSING) & (batch.family == first))]
 
+    def local(self, batch: Batch) -> Piece | None:
+        """Return the answer of a batch that needs no request (only missing geometries).
+
+        There is nothing to clip in it: its rows are dropped, or kept missing where the
+        clip keeps empty rows (as the server would answer).
+        """
+        if batch.family != _MISSING:
+            return None
+        import numpy as np
+
+        rows = (self.positions(batch) if self.options.get("keep_empty")
+                else np.empty(0, dtype=np.int64))
+        return Piece(rows, np.full(len(rows), None, dtype=object), None,
+                     ClipStats.combine([]), None, sent=False)
+
     def call(self, batch: Batch) -> calls.Call:
         """Return the request of `batch` (its geometries encoded here)."""
         assert batch.start is not None and batch.stop is not None
@@ -167,20 +184,18 @@ class _CollectionClip:
                                         pa.array(np.arange(start, stop, dtype=np.int64)))
             return calls.clip_geoarrow(table, self.window, column=table.schema.names[0],
                                        verify=self.verify, options=self.options)
-        if self.via == "geoarrow":
+        positions = self.positions(batch)
+        if self.via == "geoarrow" and batch.family != _OTHER:
             from rnsca_client.geoarrow import GEOMETRY_COLUMN, geometry_table
 
-            positions = self.positions(batch)
             table = geometry_table(collection.geometries[positions], positions)
             return calls.clip_geoarrow(table, self.window, column=GEOMETRY_COLUMN,
                                        verify=self.verify, options=self.options)
         from rnsca_client.features import feature_collection
 
-        geometries = collection.geometries[start:stop]
-
-        return calls.clip_feature_collection(feature_collection(geometries, first=start),
-                                             self.window, verify=self.verify,
-                                             options=self.options)
+        return calls.clip_feature_collection(
+            feature_collection(collection.geometries[positions], positions),
+            self.window, verify=self.verify, options=self.options)
 
     def decode(self, batch: Batch, answer: GeoArrowResult | GeoJSONResult) -> Piece:
         """Return the answer of `batch`: the rows left and their geometries."""
@@ -237,8 +252,9 @@ class _CollectionClip:
                 order = np.argsort(rows, kind="stable")
                 rows, geometries = rows[order], geometries[order]
             data = collection.rebuild(rows, geometries)
-        return ClipResult(data, rows, ClipStats.combine([p.stats for p in pieces]),
-                          tuple(p.verification for p in pieces), self.via)
+        sent = [p for p in pieces if p.sent]
+        return ClipResult(data, rows, ClipStats.combine([p.stats for p in sent]),
+                          tuple(p.verification for p in sent), self.via)
 
 
 def _chunks(column: Any) -> list[Any]:
@@ -258,6 +274,10 @@ class _DocumentClip:
     def spans(self, batch_size: int | None) -> list[tuple[int | None, int | None, None]]:
         """Return the one request's span (a document is not split)."""
         return [(None, None, None)]
+
+    def local(self, batch: Batch) -> None:
+        """Return None: a document is always sent."""
+        return None
 
     def call(self, batch: Batch) -> calls.Call:
         """Return the request of the document."""
@@ -288,6 +308,10 @@ class Plan:
 
     def _job(self, batch: Batch) -> Any:
         return self.jobs[0 if batch.item is None else batch.item]
+
+    def local(self, batch: Batch) -> Any:
+        """Return the decoded answer of `batch` where it needs no request, else None."""
+        return self._job(batch).local(batch)
 
     def call(self, batch: Batch) -> calls.Call:
         """Return the request of `batch`."""
@@ -327,17 +351,12 @@ class Plan:
         if named is None:
             return
         index = int(named.group(1))
-        if self.via_of(batch) == "geoarrow" and isinstance(job.collection, GeometryCollection):
+        if isinstance(job.collection, GeometryCollection):
             positions = job.positions(batch)
             error.row = int(positions[index]) if index < len(positions) else None
         else:
             assert batch.start is not None
             error.row = batch.start + index
-
-    def via_of(self, batch: Batch) -> str | None:
-        """Return the endpoint that carries `batch` (None: a GeoJSON document)."""
-        job = self._job(batch)
-        return None if isinstance(job, _DocumentClip) else job.via
 
     def _batch_error(self, batch: Batch, error: RnscaClientError) -> BatchError:
         self.locate(batch, error)

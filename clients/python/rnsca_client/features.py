@@ -22,10 +22,11 @@ _EMPTY_TYPES = {0: "Point", 1: "LineString", 2: "LineString", 3: "Polygon", 4: "
                 5: "MultiLineString", 6: "MultiPolygon", 7: "GeometryCollection"}
 
 
-def feature_collection(geometries: np.ndarray, first: int = 0) -> bytes:
-    """Return the JSON bytes of a FeatureCollection of `geometries`, ids from `first`.
+def feature_collection(geometries: np.ndarray, ids: np.ndarray | int = 0) -> bytes:
+    """Return the JSON bytes of a FeatureCollection of `geometries` with their `ids`.
 
-    A missing geometry (None) is a feature whose geometry is null; an empty one has no
+    `ids` is one integer per geometry, or the first of consecutive ones. A missing
+    geometry (None) is a feature whose geometry is null; an empty one has no
     coordinates.
 
     Raises
@@ -35,16 +36,18 @@ def feature_collection(geometries: np.ndarray, first: int = 0) -> bytes:
 
     Examples
     --------
-    >>> feature_collection(np.array([shapely.Point(1, 2), None], dtype=object), first=5)
+    >>> feature_collection(np.array([shapely.Point(1, 2), None], dtype=object), ids=5)
     b'{"type":"FeatureCollection","features":[{"type":"Feature","id":5,"properties":{},\
 "geometry":{"type":"Point","coordinates":[1.0,2.0]}},{"type":"Feature","id":6,"properties":\
 {},"geometry":null}]}'
     """
+    if isinstance(ids, (int, np.integer)):
+        ids = np.arange(ids, ids + len(geometries))
     coords = shapely.get_coordinates(geometries, include_z=True)
     if not np.isfinite(coords[:, :2]).all() or np.isinf(coords[:, 2]).any():
         row = _first_non_finite(geometries)
         raise InvalidInputError(
-            f"geometry {first + row} has a NaN or infinite coordinate, which JSON cannot "
+            f"geometry {ids[row]} has a NaN or infinite coordinate, which JSON cannot "
             "carry: every coordinate must be finite")
     texts = shapely.to_geojson(geometries)
     empty = shapely.is_empty(geometries)
@@ -56,8 +59,8 @@ def feature_collection(geometries: np.ndarray, first: int = 0) -> bytes:
     missing = shapely.is_missing(geometries)
     texts[missing] = "null"
     features = ",".join(
-        f'{{"type":"Feature","id":{first + i},"properties":{{}},"geometry":{text}}}'
-        for i, text in enumerate(texts.tolist()))
+        f'{{"type":"Feature","id":{i},"properties":{{}},"geometry":{text}}}'
+        for i, text in zip(ids.tolist(), texts.tolist(), strict=True))
     return f'{{"type":"FeatureCollection","features":[{features}]}}'.encode()
 
 
@@ -78,7 +81,7 @@ def read_features(document: dict[str, Any]) -> tuple[np.ndarray, np.ndarray]:
     Examples
     --------
     >>> ids, geometries = read_features(json.loads(feature_collection(
-    ...     np.array([shapely.Point(1, 2)]), first=3)))
+    ...     np.array([shapely.Point(1, 2)]), ids=3)))
     >>> ids.tolist(), geometries.tolist()
     ([3], [<POINT (1 2)>])
     """

@@ -111,8 +111,9 @@ def _post_json(path: str, payload: dict[str, Any], build: Callable[[dict], T]) -
 def clip_geojson(obj: Any, window: Any, *, verify: bool | str | None, approx_bound: float | None,
                  options: Mapping[str, Any]) -> Call[GeoJSONResult]:
     """Return the call ``POST /v1/clip/geojson``."""
-    payload = {"window": window_bounds(window), "geojson": geojson_document(obj),
-               "options": _options(options)}
+    payload: dict[str, Any] = {"window": window_bounds(window),
+                               "geojson": geojson_document(obj),
+                               "options": _options(options)}
     if verify is not None:
         payload["verify"] = verify
     if approx_bound is not None:
@@ -137,7 +138,7 @@ def clip_feature_collection(features: bytes, window: Any, *, verify: bool | str 
 def clip_svg(paths: str | Sequence[str], window: Any, *, verify: bool | str | None,
              options: Mapping[str, Any]) -> Call[SVGResult]:
     """Return the call ``POST /v1/clip/svg``."""
-    payload = {"window": window_bounds(window), "paths": svg_paths(paths),
+    payload: dict[str, Any] = {"window": window_bounds(window), "paths": svg_paths(paths),
                "options": _options(options)}
     if verify is not None:
         payload["verify"] = verify
@@ -151,7 +152,7 @@ def clip_segments(segments: Any, window: Any, *, binary: bool | None, verify: bo
         binary = is_numpy_array(segments)
     if not binary:
         rows = segments.tolist() if is_numpy_array(segments) else [list(s) for s in segments]
-        payload = {"window": window_bounds(window), "segments": rows,
+        payload: dict[str, Any] = {"window": window_bounds(window), "segments": rows,
                    "options": _options(options)}
         if verify is not None:
             payload["verify"] = verify

@@ -93,11 +93,12 @@ def _finish(call: calls.Call[T], response: httpx.Response, attempts: int) -> T:
 class _Options:
     """What both clients keep: the retry policy and how to make the httpx client."""
 
-    def __init__(self, base_url: str, timeout, retries, headers) -> None:
+    def __init__(self, base_url: str, timeout: float | httpx.Timeout,
+                 retries: Retry | int | None, headers: dict[str, str] | None) -> None:
         from rnsca_client import __version__
 
         self.retry = Retry.of(retries)
-        self.http_options = dict(
+        self.http_options: dict[str, Any] = dict(
             base_url=base_url, timeout=timeout,
             headers={"User-Agent": f"rnsca-client/{__version__}", **(headers or {})})
 
@@ -159,7 +160,7 @@ class Client:
     def __enter__(self) -> Client:
         return self
 
-    def __exit__(self, *exc) -> None:
+    def __exit__(self, *exc: object) -> None:
         self.close()
 
     def send(self, call: calls.Call[T]) -> T:
@@ -526,7 +527,7 @@ class AsyncClient:
     async def __aenter__(self) -> AsyncClient:
         return self
 
-    async def __aexit__(self, *exc) -> None:
+    async def __aexit__(self, *exc: object) -> None:
         await self.aclose()
 
     async def send(self, call: calls.Call[T]) -> T:

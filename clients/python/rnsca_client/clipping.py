@@ -30,7 +30,7 @@ from rnsca_client.containers import (
     collection_of,
     is_collection,
 )
-from rnsca_client.errors import BatchError, InvalidInputError, RnscaClientError
+from rnsca_client.errors import ApiError, BatchError, InvalidInputError, RnscaClientError
 from rnsca_client.results import ClipResult, ClipStats, GeoArrowResult, GeoJSONResult
 
 __all__ = ["VIAS", "DEFAULT_VIA", "DEFAULT_BATCH_SIZE", "FAMILIES", "Batch", "Piece", "Plan",
@@ -131,6 +131,7 @@ class _CollectionClip:
             import numpy as np
             import shapely
 
+            assert isinstance(self.collection, GeometryCollection)
             geometries = self.collection.geometries
             type_ids = shapely.get_type_id(geometries)        # -1: missing
             codes = np.full(len(geometries), _OTHER, dtype=np.int64)
@@ -343,9 +344,11 @@ class Plan:
         The server names a row of the request (``geometry[3]``, ``features[3]``); its
         position in the caller's collection is the batch's row there.
         """
-        path = getattr(error, "path", None)
         job = self._job(batch)
-        if isinstance(job, _DocumentClip) or not isinstance(path, str):
+        if not isinstance(error, ApiError) or isinstance(job, _DocumentClip):
+            return
+        path = error.path
+        if not isinstance(path, str):
             return
         named = _ROW_IN_PATH.search(path)
         if named is None:

@@ -119,7 +119,7 @@ def is_numpy_array(obj: Any) -> bool:
     return type(obj).__module__ == "numpy" and hasattr(obj, "__array_interface__")
 
 
-def segment_rows(segments: Any):
+def segment_rows(segments: Any) -> Any:
     """Return a NumPy array of segments as C-ordered little-endian float64 rows of 4."""
     import numpy as np
 
@@ -152,7 +152,7 @@ def encode_json(payload: dict[str, Any]) -> bytes:
         raise InvalidInputError(f"the request cannot be sent as JSON: {exc}") from None
 
 
-def geometry_from_geojson(geometry: dict[str, Any] | None):
+def geometry_from_geojson(geometry: dict[str, Any] | None) -> Any:
     """Return a GeoJSON geometry dict as a Shapely geometry (None stays None).
 
     A geometry that mixes 2D and 3D positions (the server answers each position in the

@@ -9,7 +9,7 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, TypeVar
 
 __all__ = [
     "ClipStats",
@@ -26,19 +26,22 @@ __all__ = [
 ]
 
 
-def _split(cls, data: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any]]:
+def _split(cls: Any, data: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any]]:
     """Return `data` split into the fields of dataclass `cls` and the rest."""
     names = {f.name for f in dataclasses.fields(cls)} - {"extra"}
     return ({k: v for k, v in data.items() if k in names},
             {k: v for k, v in data.items() if k not in names})
 
 
+_T = TypeVar("_T")
+
+
 class _FromDict:
     @classmethod
-    def from_dict(cls, data: dict[str, Any]):
+    def from_dict(cls: type[_T], data: dict[str, Any]) -> _T:
         """Return an instance from the server's JSON object."""
         known, extra = _split(cls, data)
-        return cls(**known, extra=extra)
+        return cls(**known, extra=extra)  # type: ignore[call-arg]  # the dataclass's
 
 
 @dataclass(frozen=True)

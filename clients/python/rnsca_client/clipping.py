@@ -39,8 +39,9 @@ __all__ = ["VIAS", "DEFAULT_VIA", "DEFAULT_BATCH_SIZE", "FAMILIES", "Batch", "Pi
 #: The endpoints a collection can travel through.
 VIAS = ("geoarrow", "geojson")
 #: GeoArrow: a GeoDataFrame of 10,000 polygons with holes (520,000 vertices) is clipped
-#: in about 0.12 s, against 4.7 s as GeoJSON, with the same result, client and server on
-#: one loopback (benchmarks/sdk_frames.py).
+#: in 0.1 to 0.25 s, against 3.7 to 4.7 s as GeoJSON, with the same result (best and
+#: median of 7, client and server on one loopback of a loaded 2-core machine;
+#: benchmarks/sdk_frames.py).
 DEFAULT_VIA = "geoarrow"
 #: Rows per request of ``clip_many``.
 DEFAULT_BATCH_SIZE = 10_000

@@ -22,11 +22,12 @@ $(STAMP): pyproject.toml clients/python/pyproject.toml
 	touch $(STAMP)
 
 # The service needs only the `service` extra (a full dev install also satisfies it); the
-# SDK is installed beside it, so the README's client example runs in the same .venv.
+# SDK is installed beside it with GeoPandas (its `geopandas` extra), so the README's client
+# examples, GeoDataFrames included, run in the same .venv.
 $(SERVE_STAMP): pyproject.toml clients/python/pyproject.toml
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
-	$(PY) -m pip install --quiet -e '.[service]' -e clients/python
+	$(PY) -m pip install --quiet -e '.[service]' -e 'clients/python[geopandas]'
 	touch $(SERVE_STAMP)
 
 # The HTTP service on http://$(HOST):$(PORT) (docs at /docs); Ctrl-C stops it gracefully.

@@ -1,4 +1,4 @@
-"""Python client of the rnsca HTTP API: clip GeoJSON, GeoArrow, SVG paths, segments remotely.
+"""Python client of the rnsca HTTP API: clip GeoJSON, GeoPandas, GeoArrow, SVG and segments.
 
 GeoJSON goes whole (`Client.clip_geojson`) or streamed (`Client.clip_geojson_seq`).
 
@@ -9,11 +9,20 @@ Examples
 3
 """
 
-from rnsca_client.client import DEFAULT_RETRY, DEFAULT_TIMEOUT, DEFAULT_URL, AsyncClient, Client
+from rnsca_client.client import (
+    DEFAULT_CONCURRENCY,
+    DEFAULT_RETRY,
+    DEFAULT_TIMEOUT,
+    DEFAULT_URL,
+    AsyncClient,
+    Client,
+)
+from rnsca_client.clipping import DEFAULT_BATCH_SIZE
 from rnsca_client.errors import (
     ApiError,
     BackendUnavailableError,
     BadRequestError,
+    BatchError,
     ConnectError,
     InvalidInputError,
     InvalidRequestError,
@@ -33,6 +42,7 @@ from rnsca_client.errors import (
 from rnsca_client.results import (
     Backend,
     Capabilities,
+    ClipResult,
     ClipStats,
     GeoArrowResult,
     GeoJSONResult,
@@ -49,10 +59,12 @@ __version__ = "0.1.0"
 
 __all__ = [
     "Client", "AsyncClient", "Retry", "DEFAULT_URL", "DEFAULT_TIMEOUT", "DEFAULT_RETRY",
-    "GeoJSONResult", "SVGResult", "SegmentsResult", "GeoArrowResult", "ClipStats", "Verification",
-    "ClippedRecords", "AsyncClippedRecords",
+    "DEFAULT_CONCURRENCY", "DEFAULT_BATCH_SIZE",
+    "ClipResult", "GeoJSONResult", "SVGResult", "SegmentsResult", "GeoArrowResult", "ClipStats",
+    "Verification", "ClippedRecords", "AsyncClippedRecords",
     "Capabilities", "Backend", "Limits", "Health",
-    "RnscaClientError", "InvalidInputError", "ResponseFormatError", "TransportError",
+    "RnscaClientError", "InvalidInputError", "ResponseFormatError", "BatchError",
+    "TransportError",
     "ConnectError", "RequestTimeoutError", "ApiError", "BadRequestError", "NotFoundError",
     "MethodNotAllowedError", "PayloadTooLargeError", "UnsupportedMediaTypeError",
     "InvalidRequestError", "BackendUnavailableError", "WorkOverBudgetError", "ServerError",

@@ -5,15 +5,19 @@ from __future__ import annotations
 import asyncio
 import time
 from collections.abc import AsyncIterable, AsyncIterator, Iterable, Iterator, Sequence
+from concurrent.futures import FIRST_EXCEPTION, ThreadPoolExecutor, wait
 from typing import Any, TypeVar
 
 import httpx
 
-from rnsca_client import calls
+from rnsca_client import calls, clipping
+from rnsca_client.clipping import DEFAULT_BATCH_SIZE
 from rnsca_client.errors import (
     ApiError,
     ConnectError,
+    InvalidInputError,
     RequestTimeoutError,
+    RnscaClientError,
     ServiceUnavailableError,
     TransportError,
     api_error,
@@ -21,6 +25,7 @@ from rnsca_client.errors import (
 )
 from rnsca_client.results import (
     Capabilities,
+    ClipResult,
     GeoArrowResult,
     GeoJSONResult,
     Health,
@@ -38,7 +43,8 @@ from rnsca_client.streams import (
     record_pieces,
 )
 
-__all__ = ["Client", "AsyncClient", "DEFAULT_TIMEOUT", "DEFAULT_URL", "DEFAULT_RETRY"]
+__all__ = ["Client", "AsyncClient", "DEFAULT_TIMEOUT", "DEFAULT_URL", "DEFAULT_RETRY",
+           "DEFAULT_CONCURRENCY"]
 
 T = TypeVar("T")
 DEFAULT_URL = "http://127.0.0.1:8000"
@@ -47,6 +53,15 @@ DEFAULT_URL = "http://127.0.0.1:8000"
 DEFAULT_TIMEOUT = httpx.Timeout(60.0, connect=5.0)
 #: Up to 4 tries, waiting about 0.25, 0.5 and 1 s (or what ``Retry-After`` says).
 DEFAULT_RETRY = Retry()
+#: Requests of ``clip_many`` in flight at once.
+DEFAULT_CONCURRENCY = 4
+
+
+def _check_concurrency(concurrency: int) -> int:
+    if isinstance(concurrency, bool) or not isinstance(concurrency, int) or concurrency < 1:
+        raise InvalidInputError(f"concurrency must be a whole number >= 1, got "
+                                f"{concurrency!r}")
+    return concurrency
 
 
 def _transport_error(exc: httpx.TransportError, attempts: int) -> TransportError:
@@ -88,11 +103,12 @@ def _finish(call: calls.Call[T], response: httpx.Response, attempts: int) -> T:
 class _Options:
     """What both clients keep: the retry policy and how to make the httpx client."""
 
-    def __init__(self, base_url: str, timeout, retries, headers) -> None:
+    def __init__(self, base_url: str, timeout: float | httpx.Timeout,
+                 retries: Retry | int | None, headers: dict[str, str] | None) -> None:
         from rnsca_client import __version__
 
         self.retry = Retry.of(retries)
-        self.http_options = dict(
+        self.http_options: dict[str, Any] = dict(
             base_url=base_url, timeout=timeout,
             headers={"User-Agent": f"rnsca-client/{__version__}", **(headers or {})})
 
@@ -154,7 +170,7 @@ class Client:
     def __enter__(self) -> Client:
         return self
 
-    def __exit__(self, *exc) -> None:
+    def __exit__(self, *exc: object) -> None:
         self.close()
 
     def send(self, call: calls.Call[T]) -> T:
@@ -209,6 +225,155 @@ class Client:
         """
         return self.send(calls.clip_geojson(obj, window, verify=verify,
                                             approx_bound=approx_bound, options=options))
+
+    def clip(self, data: Any, window: Any, *, via: str | None = None,
+             column: str | None = None, verify: bool | str | None = None,
+             **options: Any) -> ClipResult:
+        """Return a collection of geometries clipped to `window`, in the kind it came in.
+
+        Parameters
+        ----------
+        data : GeoDataFrame, GeoSeries, ndarray, list, tuple, pyarrow.Table or RecordBatch
+            The geometries: a GeoPandas frame (its active geometry column, or `column`)
+            or series, a 1-D array or a list or tuple of Shapely geometries (None: a
+            missing one), or a pyarrow table with a GeoArrow geometry column (native,
+            WKB or WKT; the one tagged ``geoarrow.*``, or `column`).
+        window : sequence of 4 float, or an object with ``bounds``
+            ``[xmin, ymin, xmax, ymax]``.
+        via : {"geoarrow", "geojson"}, optional
+            The endpoint to send the geometries through: ``POST /v1/clip/geoarrow``
+            (the default, needs pyarrow; several times faster) or
+            ``POST /v1/clip/geojson``. A pyarrow table goes as GeoArrow.
+        column : str, optional
+            The geometry column of a frame or table.
+        verify : bool or "all", optional
+            Compare with Shapely on the server (see `clip_geojson`).
+        **options
+            ``method``, ``n``, ``max_depth``, ``tolerance``, ``mode``, ``backend``,
+            ``boundary``, ``keep_empty``, ``check_validity`` (and, via GeoArrow,
+            ``resolution``).
+
+        Returns
+        -------
+        ClipResult
+            ``data``: the same kind as `data`, holding the rows left in their input
+            order, each with its clipped geometry and the rest as it was (other columns,
+            index labels, name, CRS). **A row whose geometry is clipped away (or is
+            empty, or missing) is dropped**, unless ``keep_empty=True`` (then it holds an
+            empty geometry; a missing one stays missing). ``rows`` gives each kept row's
+            position in `data`; also ``stats``, ``verifications``, ``passed``. A line or
+            polygon left in several parts is a multi kind; one left whole is its own.
+
+        Raises
+        ------
+        InvalidInputError
+            `data` is not a collection, or holds something that is not a geometry.
+        ApiError
+            As for every call: e.g. `InvalidRequestError`, whose ``row`` is the position
+            in `data` of the row the server names (its ``path`` names it in the request:
+            a collection mixing points, lines and polygons goes as GeoArrow in one
+            request per family).
+
+        Examples
+        --------
+        With a server on the default address (``make serve``)::
+
+            import geopandas, shapely
+            frame = geopandas.GeoDataFrame(
+                {"name": ["in", "across", "out"]}, index=["a", "b", "c"], crs=3857,
+                geometry=[shapely.box(1, 1, 2, 2), shapely.box(5, 5, 15, 15),
+                          shapely.box(20, 20, 30, 30)])
+            with Client() as client:
+                clipped = client.clip(frame, (0, 0, 10, 10)).data
+            clipped.index.tolist(), clipped.crs   # ['a', 'b'], <Projected CRS: EPSG:3857>
+        """
+        plan = clipping.plan(data, window, via=via, column=column, verify=verify,
+                             options=options)
+        pieces = {}
+        for batch in plan.batches:
+            try:
+                pieces[batch.number] = self._answer(plan, batch)
+            except ApiError as error:
+                plan.locate(batch, error)
+                raise
+        return plan.assemble(pieces)
+
+    def _answer(self, plan: clipping.Plan, batch: clipping.Batch) -> Any:
+        local = plan.local(batch)
+        if local is not None:
+            return local
+        return plan.decode(batch, self.send(plan.call(batch)))
+
+    def clip_many(self, items: Any, window: Any, *, batch_size: int = DEFAULT_BATCH_SIZE,
+                  concurrency: int = DEFAULT_CONCURRENCY, via: str | None = None,
+                  column: str | None = None, verify: bool | str | None = None,
+                  **options: Any) -> Any:
+        """Return many geometries clipped to `window`: in batches, several requests at once.
+
+        Parameters
+        ----------
+        items
+            One collection (anything `clip` takes), split into batches of `batch_size`
+            rows; or a list (or any iterable) of items, each a collection (split too,
+            where longer) or a GeoJSON document (one request each, as `clip_geojson`).
+        window : sequence of 4 float
+            ``[xmin, ymin, xmax, ymax]``.
+        batch_size : int
+            Rows per request (default 10,000).
+        concurrency : int
+            Requests in flight at once (default 4), on a pool of as many threads; each
+            one is retried as the client's `retry` policy says.
+        via, column, verify, **options
+            As `clip` takes them.
+
+        Returns
+        -------
+        ClipResult or list
+            For one collection, its `ClipResult`, as `clip` gives it (``stats`` of all
+            the requests together, ``verifications`` one per request). For a list of
+            items, one result per item, in order: a `ClipResult` per collection, a
+            `GeoJSONResult` per document. Rows clipped to nothing are dropped unless
+            ``keep_empty=True``.
+
+        Raises
+        ------
+        BatchError
+            A request failed (after its retries): its ``batch``, ``item``, rows
+            ``start:stop``, the ``row`` the server names, and the ``error`` it raised.
+            The requests not yet sent are not sent.
+        InvalidInputError
+            Something cannot be sent (raised before any request).
+        """
+        concurrency = _check_concurrency(concurrency)
+        plan = clipping.plan(items, window, via=via, column=column, verify=verify,
+                             options=options, batch_size=batch_size, many=True)
+        if not plan.batches:
+            return plan.assemble({})
+
+        with ThreadPoolExecutor(max_workers=min(concurrency, len(plan.batches)),
+                                thread_name_prefix="rnsca-clip") as pool:
+            futures = {pool.submit(self._answer, plan, batch): batch
+                       for batch in plan.batches}
+            done, pending = wait(futures, return_when=FIRST_EXCEPTION)
+            if any(f.exception() is not None for f in done):
+                for future in pending:
+                    future.cancel()
+                wait(pending)
+            failures: dict[int, RnscaClientError] = {}
+            pieces = {}
+            for future, batch in futures.items():
+                if future.cancelled():
+                    continue
+                error = future.exception()
+                if error is None:
+                    pieces[batch.number] = future.result()
+                elif isinstance(error, RnscaClientError):
+                    failures[batch.number] = error
+                else:
+                    raise error
+        if failures:
+            raise plan.failure(failures)
+        return plan.assemble(pieces)
 
     def clip_svg(self, paths: str | Sequence[str], window: Any, *, curves: str | None = None,
                  fill: str | None = None, verify: bool | str | None = None,
@@ -437,7 +602,7 @@ class AsyncClient:
     async def __aenter__(self) -> AsyncClient:
         return self
 
-    async def __aexit__(self, *exc) -> None:
+    async def __aexit__(self, *exc: object) -> None:
         await self.aclose()
 
     async def send(self, call: calls.Call[T]) -> T:
@@ -465,6 +630,76 @@ class AsyncClient:
         """Return a GeoJSON document clipped to `window` (see `Client.clip_geojson`)."""
         return await self.send(calls.clip_geojson(obj, window, verify=verify,
                                                   approx_bound=approx_bound, options=options))
+
+    async def clip(self, data: Any, window: Any, *, via: str | None = None,
+                   column: str | None = None, verify: bool | str | None = None,
+                   **options: Any) -> ClipResult:
+        """Return a collection clipped to `window`, in its kind (see `Client.clip`).
+
+        Encoding and decoding run in a worker thread, off the event loop.
+        """
+        plan = clipping.plan(data, window, via=via, column=column, verify=verify,
+                             options=options)
+        pieces = {}
+        for batch in plan.batches:
+            try:
+                pieces[batch.number] = await self._answer(plan, batch)
+            except ApiError as error:
+                plan.locate(batch, error)
+                raise
+        return plan.assemble(pieces)
+
+    async def _answer(self, plan: clipping.Plan, batch: clipping.Batch) -> Any:
+        local = plan.local(batch)
+        if local is not None:
+            return local
+        call = await asyncio.to_thread(plan.call, batch)
+        answer = await self.send(call)
+        return await asyncio.to_thread(plan.decode, batch, answer)
+
+    async def clip_many(self, items: Any, window: Any, *,
+                        batch_size: int = DEFAULT_BATCH_SIZE,
+                        concurrency: int = DEFAULT_CONCURRENCY, via: str | None = None,
+                        column: str | None = None, verify: bool | str | None = None,
+                        **options: Any) -> Any:
+        """Return many geometries clipped, in batches (see `Client.clip_many`).
+
+        At most `concurrency` requests are in flight (tasks on this event loop); each
+        batch is encoded and decoded in a worker thread. A failed request raises
+        `BatchError` once the requests in flight have ended; the others are cancelled.
+        """
+        concurrency = _check_concurrency(concurrency)
+        plan = clipping.plan(items, window, via=via, column=column, verify=verify,
+                             options=options, batch_size=batch_size, many=True)
+        slots = asyncio.Semaphore(concurrency)
+
+        async def answer(batch: clipping.Batch) -> Any:
+            async with slots:
+                return await self._answer(plan, batch)
+
+        tasks = {asyncio.ensure_future(answer(batch)): batch for batch in plan.batches}
+        if not tasks:
+            return plan.assemble({})
+        done, pending = await asyncio.wait(tasks, return_when=asyncio.FIRST_EXCEPTION)
+        if pending:
+            for task in pending:
+                task.cancel()
+            await asyncio.wait(pending)
+        failures: dict[int, RnscaClientError] = {}
+        pieces = {}
+        for task, batch in tasks.items():
+            if task.cancelled():
+                continue
+            error = task.exception()
+            if error is None:
+                pieces[batch.number] = task.result()
+            elif isinstance(error, RnscaClientError):
+                failures[batch.number] = error
+            else:
+                raise error
+        if failures:
+            raise plan.failure(failures)
+        return plan.assemble(pieces)
 
     async def clip_svg(self, paths: str | Sequence[str], window: Any, *,
                        curves: str | None = None, fill: str | None = None,

@@ -5,6 +5,7 @@
     RnscaClientError
     ├── InvalidInputError (ValueError)        refused before sending (not JSON-encodable)
     ├── ResponseFormatError                   a success answer the SDK cannot read
+    ├── BatchError                            one request of clip_many failed (`error`: why)
     ├── TransportError                        no HTTP answer at all
     │   ├── ConnectError (ConnectionError)    could not connect (after the retries)
     │   └── RequestTimeoutError (TimeoutError)
@@ -34,6 +35,7 @@ __all__ = [
     "RnscaClientError",
     "InvalidInputError",
     "ResponseFormatError",
+    "BatchError",
     "TransportError",
     "ConnectError",
     "RequestTimeoutError",
@@ -69,6 +71,49 @@ class InvalidInputError(RnscaClientError, ValueError):
 
 class ResponseFormatError(RnscaClientError):
     """A success answer that is not what the API documents (wrong server or proxy?)."""
+
+
+class BatchError(RnscaClientError):
+    """A request of `clip_many` failed: which one, which rows, and the error it raised.
+
+    The error itself (an `ApiError`, a `TransportError`, ...) is `error`, and the
+    exception's ``__cause__``; the retries of the client were made before it counted.
+
+    Attributes
+    ----------
+    batch : int
+        The request's number among the call's requests (from 0, in input order).
+    item : int or None
+        The item of the `items` list it belongs to (None: one collection was given).
+    start, stop : int or None
+        Its rows: positions ``start:stop`` of the item (or of the collection); None for
+        a GeoJSON document (sent whole).
+    row : int or None
+        The position, in the item, of the row the server's answer names (its `path`),
+        where it names one.
+    error : RnscaClientError
+        What the request raised.
+    others : list of BatchError
+        The other requests that failed before the call stopped (requests not yet sent
+        then are not sent).
+    """
+
+    def __init__(self, error: RnscaClientError, *, batch: int, item: int | None,
+                 start: int | None, stop: int | None, row: int | None = None) -> None:
+        self.error = error
+        self.batch = batch
+        self.item = item
+        self.start = start
+        self.stop = stop
+        self.row = row
+        self.others: list[BatchError] = []
+        where = [f"item {item}"] if item is not None else []
+        if start is not None:
+            where.append(f"rows {start}:{stop}")
+        if row is not None:
+            where.append(f"row {row}")
+        super().__init__(f"request {batch} ({', '.join(where)}) failed: "
+                         f"{type(error).__name__}: {error}")
 
 
 class TransportError(RnscaClientError):
@@ -114,6 +159,10 @@ class ApiError(RnscaClientError):
         Seconds the server asked to wait (``Retry-After``), if it said.
     attempts : int
         How many times the request was sent (more than 1 after retried 503s).
+    row : int or None
+        For `Client.clip` and ``clip_many``: the position, in the collection clipped,
+        of the row the problem names (`path` names it in the request, which may hold
+        only some of the rows).
     problem : dict
         The whole problem document (extension members included).
     """
@@ -133,6 +182,7 @@ class ApiError(RnscaClientError):
         self.errors = list(problem.get("errors") or [])
         self.retry_after = retry_after
         self.attempts = 1
+        self.row: int | None = None
         where = f" at {self.path}" if self.path else ""
         if self.record is not None:
             where = f" in record {self.record}" + where

@@ -49,14 +49,26 @@ def window_bounds(window: Any) -> list[float]:
 def geojson_document(obj: Any) -> dict[str, Any]:
     """Return `obj` as a GeoJSON Geometry, Feature or FeatureCollection dict.
 
-    `obj` is such a dict, its JSON text, or anything with ``__geo_interface__`` (Shapely
-    geometries, GeoPandas frames). The server validates the document itself.
+    `obj` is such a dict, its JSON text, anything with ``__geo_interface__`` (Shapely
+    geometries, GeoPandas frames), or a list, tuple or 1-D array of such geometries,
+    features or None: a FeatureCollection of them, in order, each geometry (or None) a
+    feature whose ``id`` is its position (the server keeps ids, so the answer says which
+    are left: features clipped to nothing are dropped unless ``keep_empty``). The server
+    validates the document itself.
 
     Examples
     --------
     >>> geojson_document('{"type": "Point", "coordinates": [1, 2]}')
     {'type': 'Point', 'coordinates': [1, 2]}
+    >>> geojson_document([{"type": "Point", "coordinates": [1, 2]}, None])["features"]
+    ... # doctest: +NORMALIZE_WHITESPACE
+    [{'type': 'Feature', 'id': 0, 'properties': {},
+      'geometry': {'type': 'Point', 'coordinates': [1, 2]}},
+     {'type': 'Feature', 'id': 1, 'properties': {}, 'geometry': None}]
     """
+    if isinstance(obj, (list, tuple)) or (is_numpy_array(obj) and obj.ndim == 1):
+        return {"type": "FeatureCollection",
+                "features": [_feature(item, i) for i, item in enumerate(obj)]}
     if isinstance(obj, (str, bytes)):
         try:
             obj = json.loads(obj)
@@ -69,6 +81,19 @@ def geojson_document(obj: Any) -> dict[str, Any]:
             "expected a GeoJSON dict, its JSON text or an object with __geo_interface__ "
             f"(a Shapely geometry), got {type(obj).__name__}")
     return obj
+
+
+def _feature(item: Any, position: int) -> dict[str, Any]:
+    """Return item `position` of a list as a Feature (a Feature as it is)."""
+    if item is None:
+        return {"type": "Feature", "id": position, "properties": {}, "geometry": None}
+    document = geojson_document(item)
+    if document.get("type") == "Feature":
+        return document
+    if document.get("type") == "FeatureCollection":
+        raise InvalidInputError(f"item {position} is a FeatureCollection; a list holds "
+                                "geometries or features")
+    return {"type": "Feature", "id": position, "properties": {}, "geometry": document}
 
 
 def svg_paths(paths: str | Sequence[str]) -> list[str]:
@@ -94,7 +119,7 @@ def is_numpy_array(obj: Any) -> bool:
     return type(obj).__module__ == "numpy" and hasattr(obj, "__array_interface__")
 
 
-def segment_rows(segments: Any):
+def segment_rows(segments: Any) -> Any:
     """Return a NumPy array of segments as C-ordered little-endian float64 rows of 4."""
     import numpy as np
 
@@ -127,7 +152,7 @@ def encode_json(payload: dict[str, Any]) -> bytes:
         raise InvalidInputError(f"the request cannot be sent as JSON: {exc}") from None
 
 
-def geometry_from_geojson(geometry: dict[str, Any] | None):
+def geometry_from_geojson(geometry: dict[str, Any] | None) -> Any:
     """Return a GeoJSON geometry dict as a Shapely geometry (None stays None).
 
     A geometry that mixes 2D and 3D positions (the server answers each position in the

@@ -7,8 +7,9 @@ of the SDK does not know (a newer server) are kept in `extra` rather than refuse
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, TypeVar
 
 __all__ = [
     "ClipStats",
@@ -17,6 +18,7 @@ __all__ = [
     "SVGResult",
     "SegmentsResult",
     "GeoArrowResult",
+    "ClipResult",
     "Backend",
     "Limits",
     "Capabilities",
@@ -24,19 +26,22 @@ __all__ = [
 ]
 
 
-def _split(cls, data: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any]]:
+def _split(cls: Any, data: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any]]:
     """Return `data` split into the fields of dataclass `cls` and the rest."""
     names = {f.name for f in dataclasses.fields(cls)} - {"extra"}
     return ({k: v for k, v in data.items() if k in names},
             {k: v for k, v in data.items() if k not in names})
 
 
+_T = TypeVar("_T")
+
+
 class _FromDict:
     @classmethod
-    def from_dict(cls, data: dict[str, Any]):
+    def from_dict(cls: type[_T], data: dict[str, Any]) -> _T:
         """Return an instance from the server's JSON object."""
         known, extra = _split(cls, data)
-        return cls(**known, extra=extra)
+        return cls(**known, extra=extra)  # type: ignore[call-arg]  # the dataclass's
 
 
 @dataclass(frozen=True)
@@ -73,6 +78,42 @@ class ClipStats(_FromDict):
     invalid_polygons: int = 0
     decided_shallow_fraction: float = 1.0
     extra: dict[str, Any] = field(default_factory=dict, repr=False, compare=False)
+
+    @classmethod
+    def combine(cls, parts: Sequence[ClipStats]) -> ClipStats:
+        """Return the stats of several requests taken as one (the library's ``combine``).
+
+        Counters and per-level lists add up; the deepest levels are the deepest of any
+        part, and `decided_shallow_fraction` is that of the summed levels. No parts give
+        all-zero stats.
+
+        Examples
+        --------
+        >>> a = ClipStats(2, 1, 3, 1, 1, 1, 0, 0, 2, 1, [1, 2])
+        >>> b = ClipStats(1, 1, 1, 1, 0, 0, 0, 0, 0, 0, [1])
+        >>> both = ClipStats.combine([a, b])
+        >>> both.segments_in, both.deepest_level, both.decided_per_level
+        (3, 1, [2, 2])
+        >>> both.decided_shallow_fraction
+        1.0
+        """
+        values: dict[str, Any] = {}
+        for f in dataclasses.fields(cls):
+            if f.name in ("extra", "decided_shallow_fraction"):
+                continue
+            present = [getattr(part, f.name) for part in parts]
+            if f.name in ("deepest_level", "runs_deepest_level"):
+                values[f.name] = max(present, default=0)
+            elif f.name.endswith("_per_level"):
+                width = max((len(levels) for levels in present), default=0)
+                values[f.name] = [sum(levels[i] for levels in present if i < len(levels))
+                                  for i in range(width)]
+            else:
+                values[f.name] = sum(present)
+        decided = values["decided_per_level"]
+        values["decided_shallow_fraction"] = (sum(decided[:2]) / sum(decided)
+                                              if sum(decided) else 1.0)
+        return cls(**values)
 
 
 @dataclass(frozen=True)
@@ -233,6 +274,56 @@ class GeoArrowResult:
         import pyarrow as pa
 
         return pa.ipc.open_stream(pa.py_buffer(self.stream)).read_all()
+
+
+@dataclass(frozen=True)
+class ClipResult:
+    """``Client.clip`` and ``clip_many``: a collection clipped, in the kind it came in.
+
+    Attributes
+    ----------
+    data
+        The input's kind (``GeoDataFrame``, ``GeoSeries``, NumPy array, list, tuple,
+        pyarrow ``Table`` or ``RecordBatch``) holding the rows kept, in input order, each
+        with its clipped geometry and everything else as it was (other columns, index
+        labels, name, CRS). A row whose geometry is clipped away, empty or missing is
+        dropped, unless the clip was asked to ``keep_empty`` (then it holds an empty
+        geometry; a missing one stays missing).
+    rows : ndarray of int64
+        The position in the input of each row of `data`.
+    stats : ClipStats
+        Of all the requests together (`ClipStats.combine`).
+    verifications : tuple of Verification or None
+        The server's verification of each request, in order (None: not verified).
+    via : str
+        The endpoint that carried the geometries: ``"geoarrow"`` or ``"geojson"``.
+    """
+
+    data: Any = field(repr=False)
+    rows: Any = field(repr=False)
+    stats: ClipStats
+    verifications: tuple[Verification | None, ...]
+    via: str
+
+    def __len__(self) -> int:
+        return len(self.rows)
+
+    @property
+    def requests(self) -> int:
+        """Return how many requests the clip took."""
+        return len(self.verifications)
+
+    @property
+    def passed(self) -> bool | None:
+        """Return the verdict of the verifications together.
+
+        False if any request failed its verification; True if every request was
+        verified and passed; None otherwise (some not verified, or without a verdict).
+        """
+        verdicts = [None if v is None else v.passed for v in self.verifications]
+        if False in verdicts:
+            return False
+        return True if verdicts and all(verdicts) else None
 
 
 @dataclass(frozen=True)

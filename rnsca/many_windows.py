@@ -99,6 +99,16 @@ def grid_of(windows: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray] | 
     return xs, ys, cell_window
 
 
+def _equally_spaced(edges: np.ndarray) -> bool:
+    """Return whether the arithmetic guess of a cell is within one of the right cell.
+
+    Exactness does not depend on it (the kernel corrects the guess against the edges);
+    speed does: for uneven edges the guess could be far off, and binary search is used.
+    """
+    steps = np.diff(edges)
+    return bool(steps.size and np.ptp(steps) <= 1e-9 * steps.mean())
+
+
 def assign(segments: np.ndarray, windows: np.ndarray) -> WindowPairs:
     """Return the pairs of every segment with every window its box touches.
 
@@ -119,8 +129,11 @@ def assign(segments: np.ndarray, windows: np.ndarray) -> WindowPairs:
         widest = float((windows[:, 2] - windows[:, 0]).max())
     n = segments.shape[0]
     threads = max(1, min(numba.get_num_threads(), -(-n // 65536)))
-    finder = K.WindowFinder(grid is not None, xs, ys, cell_window, windows, order, xmins,
-                            widest)
+    uniform = grid is not None and _equally_spaced(xs) and _equally_spaced(ys)
+    finder = K.WindowFinder(grid is not None, uniform,
+                            (xs.shape[0] - 1) / (xs[-1] - xs[0]) if uniform else 0.0,
+                            (ys.shape[0] - 1) / (ys[-1] - ys[0]) if uniform else 0.0,
+                            xs, ys, cell_window, windows, order, xmins, widest)
     counts = np.zeros((threads, k), dtype=np.int64)
     K.assign_counts(segments, finder, threads, counts)
     per_window = counts.sum(axis=0)

@@ -27,7 +27,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import prange
 
-from rnsca.kernels.jit import parallel, scalar
+from rnsca.kernels.jit import borrowing, parallel, scalar
 from rnsca.kernels.records import Window
 from rnsca.kernels.segments import (
     INVALID_BLOCK,
@@ -41,13 +41,13 @@ from rnsca.kernels.segments import (
 __all__ = ["WindowFinder", "assign_counts", "assign_write", "clip_pairs", "gather_rows"]
 
 
-@scalar
+@borrowing
 def _box(segments, i):
     x0, y0, x1, y1 = segments[i, 0], segments[i, 1], segments[i, 2], segments[i, 3]
     return min(x0, x1), min(y0, y1), max(x0, x1), max(y0, y1)
 
 
-@scalar
+@borrowing
 def _first_not_below(edges, value):
     """Return the first index of the sorted `edges` whose value is >= `value`."""
     lo, hi = 0, edges.shape[0]
@@ -60,7 +60,7 @@ def _first_not_below(edges, value):
     return lo
 
 
-@scalar
+@borrowing
 def _first_above(edges, value):
     """Return the first index of the sorted `edges` whose value is > `value`."""
     lo, hi = 0, edges.shape[0]
@@ -79,6 +79,11 @@ class WindowFinder(NamedTuple):
     Attributes
     ----------
     grid : bool
+    uniform : bool
+        The grid's edges are equally spaced: a coordinate's cell is found by arithmetic
+        (``(x - xs[0]) * x_scale``, corrected against the edges), else by binary search.
+    x_scale, y_scale : float
+        Cells per unit (uniform grids).
     xs, ys : float64 (cols + 1,), (rows + 1,)
         The grid's sorted edges (grid only).
     cell_window : int64 (rows, cols)
@@ -93,6 +98,9 @@ class WindowFinder(NamedTuple):
     """
 
     grid: bool
+    uniform: bool
+    x_scale: float
+    y_scale: float
     xs: np.ndarray
     ys: np.ndarray
     cell_window: np.ndarray
@@ -102,7 +110,42 @@ class WindowFinder(NamedTuple):
     widest: float
 
 
-@scalar
+@borrowing
+def _guess(edges, value, scale):
+    """Return the cell of `value` on equally spaced `edges` by arithmetic (a guess: the
+    rounding may miss by one, which the callers correct against the edges exactly)."""
+    cells = edges.shape[0] - 1
+    g = (value - edges[0]) * scale
+    if not g > 0.0:  # below the first edge, or NaN
+        return 0
+    if g >= cells - 1:
+        return cells - 1
+    return int(g)
+
+
+@borrowing
+def _low_cell(edges, value, scale):
+    """Return the first cell whose right edge is >= `value` (0 if none is below)."""
+    g = _guess(edges, value, scale)
+    while g > 0 and edges[g] >= value:
+        g -= 1
+    while g < edges.shape[0] - 2 and edges[g + 1] < value:
+        g += 1
+    return g
+
+
+@borrowing
+def _high_cell(edges, value, scale):
+    """Return the last cell whose left edge is <= `value` (-1 if none)."""
+    g = _guess(edges, value, scale)
+    while g < edges.shape[0] - 2 and edges[g + 1] <= value:
+        g += 1
+    while g >= 0 and edges[g] > value:
+        g -= 1
+    return g
+
+
+@borrowing
 def _visit(segments, i, finder, table, t, pairs, write):
     """Count segment `i`'s pairs in ``table[t, w]`` or (`write`) write them.
 
@@ -115,10 +158,16 @@ def _visit(segments, i, finder, table, t, pairs, write):
         cols = xs.shape[0] - 1
         rows = ys.shape[0] - 1
         # Columns c with xs[c] <= bx1 and xs[c + 1] >= bx0 (closed cells).
-        c0 = max(_first_not_below(xs, bx0) - 1, 0)
-        c1 = min(_first_above(xs, bx1) - 1, cols - 1)
-        r0 = max(_first_not_below(ys, by0) - 1, 0)
-        r1 = min(_first_above(ys, by1) - 1, rows - 1)
+        if finder.uniform:
+            c0 = _low_cell(xs, bx0, finder.x_scale)
+            c1 = _high_cell(xs, bx1, finder.x_scale)
+            r0 = _low_cell(ys, by0, finder.y_scale)
+            r1 = _high_cell(ys, by1, finder.y_scale)
+        else:
+            c0 = max(_first_not_below(xs, bx0) - 1, 0)
+            c1 = min(_first_above(xs, bx1) - 1, cols - 1)
+            r0 = max(_first_not_below(ys, by0) - 1, 0)
+            r1 = min(_first_above(ys, by1) - 1, rows - 1)
         for r in range(r0, r1 + 1):
             for c in range(c0, c1 + 1):
                 if xs[c] <= bx1 and xs[c + 1] >= bx0 and ys[r] <= by1 and ys[r + 1] >= by0:
@@ -135,7 +184,7 @@ def _visit(segments, i, finder, table, t, pairs, write):
             _take(table, t, w, pairs, i, write)
 
 
-@scalar
+@borrowing
 def _take(table, t, w, pairs, i, write):
     if write:
         pairs[table[t, w]] = i
@@ -161,7 +210,7 @@ def assign_write(segments, finder, n_threads, cursor, pairs):
         _assign_share(segments, finder, np.int64(t), n_threads, cursor, pairs, True)
 
 
-@scalar
+@borrowing
 def _assign_share(segments, finder, t, n_threads, table, pairs, write):
     """Count or write the pairs of thread `t`'s share of the segments, in order."""
     n = segments.shape[0]

@@ -10,6 +10,7 @@ from rnsca.clip_svg import Curves, Fill, PathClipResult, clip_paths, clip_svg, f
 from rnsca.clip_svgdoc import FillMode, clip_svg_document
 from rnsca.errors import (
     BackendUnavailableError,
+    FontError,
     InvalidGeometryError,
     InvalidOptionError,
     InvalidWindowError,
@@ -35,6 +36,7 @@ __all__ = [
     "Curves",
     "Fill",
     "FillMode",
+    "FontError",
     "GeoJSONClipResult",
     "GeometryKind",
     "InvalidGeometryError",

@@ -167,16 +167,18 @@ class GlyphClipResult:
         """Return a standalone SVG document of the clipped glyphs.
 
         Its ``viewBox`` is the window; one ``path`` per glyph with something left
-        (``data-glyph`` names the glyph), filled under the clip's fill rule (outlined
-        where the clip ran on strokes). In font units (y up) the paths keep their
-        coordinates and a group flips them about the window's middle
-        (``matrix(1 0 0 -1 0 ymin+ymax)``), so the document shows the glyphs upright
-        over the same window.
+        (``data-glyph`` names the glyph), filled under the clip's fill rule (stroked,
+        one pixel wide at any zoom, where the clip ran on strokes). In font units (y up)
+        the paths keep their coordinates and a group flips them about the window's
+        middle (``matrix(1 0 0 -1 0 ymin+ymax)``), so the document shows the glyphs
+        upright over the same window.
         """
         w = self.window
         view = " ".join(_number(v) for v in (w.xmin, w.ymin, w.xmax - w.xmin, w.ymax - w.ymin))
+        stroke = ""  # vector-effect is not inherited: each path has it
         if self.clip.fill is None:
-            paint = 'fill="none" stroke="black" vector-effect="non-scaling-stroke"'
+            paint = 'fill="none" stroke="black"'
+            stroke = ' vector-effect="non-scaling-stroke"'
         else:
             paint = f'fill="black" fill-rule="{self.clip.fill}"'
         if self.run.units is Units.FONT:
@@ -184,7 +186,7 @@ class GlyphClipResult:
         lines = ['<?xml version="1.0" encoding="UTF-8"?>',
                  f'<svg xmlns="http://www.w3.org/2000/svg" viewBox="{view}">',
                  f"  <g {paint}>"]
-        lines += [f"    <path data-glyph={quoteattr(name)} d={quoteattr(d)}/>"
+        lines += [f"    <path data-glyph={quoteattr(name)} d={quoteattr(d)}{stroke}/>"
                   for name, d in zip(self.run.names, self.d, strict=True) if d]
         lines += ["  </g>", "</svg>", ""]
         return "\n".join(lines)

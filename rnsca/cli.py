@@ -342,6 +342,8 @@ def glyphs(
     bounds = _window_bounds(window)
     with _reporting(EXIT_USAGE):
         place = _point(origin, "--origin")
+        if fill.lower() not in ("nonzero", "evenodd", "stroke"):
+            raise InvalidOptionError(f"--fill must be nonzero, evenodd or stroke, got {fill!r}")
     if not font.is_file():
         _fail(f"{font}: no such file" if not font.exists() else f"{font}: not a file",
               EXIT_USAGE)

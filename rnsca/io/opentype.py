@@ -22,6 +22,7 @@ imports it on first use. WOFF2 also needs brotli (in the ``fonts`` extra too).
 
 from __future__ import annotations
 
+import io
 import os
 from typing import Any
 
@@ -67,10 +68,13 @@ def read_font(source: str | os.PathLike[str]) -> Any:
         A WOFF2 file, and brotli is not installed.
     """
     name = os.fspath(source)
-    try:
-        font = TTFont(name)
+    try:  # read whole: the font then holds no open file
+        with open(name, "rb") as stream:
+            data = stream.read()
     except OSError as error:
         raise FontError(f"{name}: {error.strerror or error}") from None
+    try:
+        font = TTFont(io.BytesIO(data))
     except ImportError as error:  # fontTools' WOFF2 reader without brotli
         raise ModuleNotFoundError(f"{name}: reading WOFF2 needs brotli: {INSTALL_HINT}",
                                   name="brotli") from error

@@ -185,11 +185,11 @@ def test_web_font_round_trip_keeps_every_outline(tmp_path, key, flavor):
     options.flavor = flavor
     options.layout_features = []
     subsetter = subset.Subsetter(options)
-    web = subset.load_font(str(font.path), options)
-    subsetter.populate(text=TEXT)
-    subsetter.subset(web)
     path = tmp_path / f"subset.{flavor}"
-    subset.save_font(web, str(path), options)
+    with subset.load_font(str(font.path), options) as web:
+        subsetter.populate(text=TEXT)
+        subsetter.subset(web)
+        subset.save_font(web, str(path), options)
     again = Font(path)
     assert again.flavor == flavor
     assert again.outlines == font.outlines

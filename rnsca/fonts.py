@@ -55,6 +55,9 @@ __all__ = ["Font", "Glyph", "GlyphClipResult", "GlyphRun", "Units", "clip_glyphs
 _MAX_CODEPOINT = 0x10FFFF
 
 GlyphKey = int | str
+# The arrays of a PathArrays. Writable ones: Numba compiles a kernel again for read-only
+# arrays (seconds), so the font's cached outlines are copied, never frozen.
+_PATH_FIELDS = ("controls", "degree", "subpath_offsets", "closed", "start", "path_offsets")
 
 
 def _opentype() -> ModuleType:
@@ -87,7 +90,7 @@ class Glyph:
     paths : PathArrays
         One path, one closed subpath per contour (none for an empty glyph such as a
         space): lines and quadratics (TrueType) or lines and cubics (CFF). Its arrays
-        are the font's cache: read-only.
+        are the caller's (a copy of the font's cache).
     """
 
     name: str
@@ -360,8 +363,10 @@ class Font:
         return name
 
     def _glyph(self, name: str, codepoint: int | None) -> Glyph:
-        return Glyph(name, codepoint, self._advance(name), self.units_per_em,
-                     self._outline(name))
+        cached = self._outline(name)
+        paths = PathArrays.from_kernel(**{field: getattr(cached, field).copy()
+                                          for field in _PATH_FIELDS})
+        return Glyph(name, codepoint, self._advance(name), self.units_per_em, paths)
 
     def _advance(self, name: str) -> int:
         return int(self._glyph_set[name].width)
@@ -370,11 +375,7 @@ class Font:
         """Return the outline of glyph `name` (font units), read once."""
         paths = self._outlines.get(name)
         if paths is None:
-            paths = self._opentype.glyph_outline(self._glyph_set, name)
-            for array in (paths.controls, paths.degree, paths.subpath_offsets, paths.closed,
-                          paths.start, paths.path_offsets):
-                array.setflags(write=False)
-            self._outlines[name] = paths
+            paths = self._outlines[name] = self._opentype.glyph_outline(self._glyph_set, name)
         return paths
 
 

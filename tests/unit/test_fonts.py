@@ -50,10 +50,12 @@ def test_glyph_outline_is_in_font_units_y_up(font):
     assert g.paths.degree.tolist() == [1, 2, 2]
 
 
-def test_glyph_arrays_are_read_only(font):
+def test_glyph_arrays_are_the_callers_own(font):
     g = font.glyph("L")
-    with pytest.raises(ValueError, match="read-only"):
-        g.paths.controls[0, 0, 0] = 1.0
+    assert g.paths.controls.flags.writeable
+    g.paths.controls[0, 0, 0] = -1.0
+    assert font.glyph("L").paths.controls[0, 0, 0] == 100
+    assert font.text_paths("L").paths.controls[0, 0, 0] == 100
 
 
 def test_code_point_missing_from_the_cmap_is_named(font, font_path):

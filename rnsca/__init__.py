@@ -11,6 +11,7 @@ from rnsca.clip_svg import Curves, Fill, PathClipResult, clip_paths, clip_svg, f
 from rnsca.clip_svgdoc import FillMode, clip_svg_document
 from rnsca.errors import (
     BackendUnavailableError,
+    FontError,
     InvalidGeometryError,
     InvalidOptionError,
     InvalidWindowError,
@@ -36,6 +37,7 @@ __all__ = [
     "Curves",
     "Fill",
     "FillMode",
+    "FontError",
     "GeoJSONClipResult",
     "GeometryKind",
     "InvalidGeometryError",

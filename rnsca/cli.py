@@ -1,8 +1,9 @@
 """The ``rnsca`` command line.
 
-Commands: ``clip`` (GeoJSON or SVG documents, GeoJSON text sequences), ``segments``
-(.npy arrays of segments), ``backends``, ``warm-up`` and ``serve`` (the HTTP service;
-needs the ``service`` extra).
+Commands: ``clip`` (GeoJSON or SVG documents, GeoJSON text sequences), ``glyphs`` (text
+from a font file, as SVG; needs the ``fonts`` extra), ``segments`` (.npy arrays of
+segments), ``backends``, ``warm-up`` and ``serve`` (the HTTP service; needs the
+``service`` extra).
 Errors print one line, ``error: <what and where>``, on stderr and exit with 2 for a wrong
 command line (options, window, the kind of input) or 1 for input that cannot be clipped
 (not JSON, invalid GeoJSON or SVG, unreadable files).
@@ -37,6 +38,7 @@ from rnsca.errors import (
     InvalidWindowError,
     RnscaError,
 )
+from rnsca.fonts import clip_glyphs
 from rnsca.io.geojson import dumps, loads
 from rnsca.io.geojson_seq import RS, Framing, framing_of_path, split_records, write_records
 from rnsca.io.svgpath import warm_up_readers
@@ -321,6 +323,83 @@ def clip(
         _fail(f"verification failed: max_deviation={verification.max_deviation!r} "
               f"(allowed {verification.allowed_deviation!r}), false_positives="
               f"{verification.false_positives}, valid={verification.valid}", EXIT_DATA)
+
+
+@app.command()
+def glyphs(
+    font: Annotated[Path, typer.Argument(
+        show_default=False, help="TrueType or OpenType font (.ttf, .otf: glyf or CFF "
+        "outlines), WOFF or WOFF2 file")],
+    # Required: Typer reads the Ellipsis so (a default must follow `font`'s).
+    text: Annotated[str, typer.Option(
+        "--text", "-t", show_default=False,
+        help="the characters to draw, left to right; a newline starts a new line")
+    ] = ...,  # type: ignore[assignment]
+    window: Annotated[str, typer.Option(
+        "--window", "-w", show_default=False,
+        help="xmin,ymin,xmax,ymax in the layout's units, e.g. 0,-16,100,4 with --size 16"
+    )] = ...,  # type: ignore[assignment]
+    size: Annotated[float | None, typer.Option(
+        show_default=False, help="the em in user units (the font size); implies --units "
+        "user")] = None,
+    units: Annotated[str | None, typer.Option(
+        show_default=False, help="font (font units, y up) or user (scaled to --size, y "
+        "down as in SVG) [default: user with --size, else font]")] = None,
+    origin: Annotated[str, typer.Option(
+        help="x,y: where the first glyph's origin (on the baseline) goes")] = "0,0",
+    output: Annotated[str | None, typer.Option(
+        "--output", "-o", show_default=False,
+        help="SVG file to write; default (or -): stdout")] = None,
+    stats: Annotated[Path | None, typer.Option(
+        "--stats", show_default=False,
+        help="write the statistics JSON to this file instead of stderr")] = None,
+    fill: Annotated[str, typer.Option(
+        help="nonzero (as fonts fill), evenodd, or stroke (outlines as lines)")
+    ] = "nonzero",
+    curves: Annotated[str, typer.Option(
+        help="preserve (Béziers cut at the edges) or flatten (lines)")] = "preserve",
+    tolerance: Annotated[float | None, typer.Option(
+        help="how far flattened curves may stray (user units)")] = None,
+    backend: Annotated[str, typer.Option(help="numba or opencl")] = "numba",
+    precision: Annotated[int | None, typer.Option(
+        help="significant digits of the written path data [default: exact]")] = None,
+) -> None:
+    """Draw text from a font file clipped to a window, as a standalone SVG document.
+
+    Glyphs come by code point from the font's cmap and are laid out by advance widths
+    (no kerning or shaping), in font units (y up) or scaled to --size (y down). The
+    document's viewBox is the window; each glyph with something left is one path,
+    filled under the nonzero rule with its curves kept (TrueType quadratics, CFF
+    cubics). The statistics go to stderr as JSON (or to --stats FILE).
+    """
+    bounds = _window_bounds(window)
+    with _reporting(EXIT_USAGE):
+        place = _point(origin, "--origin")
+        if fill.lower() not in ("nonzero", "evenodd", "stroke"):
+            raise InvalidOptionError(f"--fill must be nonzero, evenodd or stroke, got {fill!r}")
+    if not font.is_file():
+        _fail(f"{font}: no such file" if not font.exists() else f"{font}: not a file",
+              EXIT_USAGE)
+    try:
+        with _reporting(EXIT_DATA):
+            result = clip_glyphs(font, text, bounds, units=units, size=size, origin=place,
+                                 fill=None if fill.lower() == "stroke" else fill,
+                                 curves=curves, tolerance=tolerance, backend=backend,
+                                 precision=precision)
+            _write(output, result.svg().encode("utf-8"), _ProgressBar(False))
+            _write_report({"stats": result.stats.to_dict()}, stats)
+    except ModuleNotFoundError as error:  # fontTools, or brotli for WOFF2
+        _fail(error, EXIT_USAGE)
+
+
+def _point(text: str, option: str) -> tuple[float, float]:
+    """Return the two numbers of an ``x,y`` option."""
+    try:
+        x, y = (float(part) for part in text.split(","))
+    except ValueError:
+        raise InvalidOptionError(f"{option} needs two comma-separated numbers x,y, got "
+                                 f"{text!r}") from None
+    return x, y
 
 
 def _fail(message: object, code: int) -> NoReturn:

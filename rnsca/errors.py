@@ -9,6 +9,7 @@ __all__ = [
     "UnsupportedGeometryError",
     "LimitExceededError",
     "BackendUnavailableError",
+    "FontError",
 ]
 
 
@@ -77,3 +78,7 @@ class LimitExceededError(RnscaError):
 
 class BackendUnavailableError(RnscaError, RuntimeError):
     """The requested backend (or its precision) is not present here."""
+
+
+class FontError(RnscaError, ValueError):
+    """A font file cannot be read, or has no glyph for the code point or name asked for."""

@@ -13,7 +13,8 @@ from rnsca.window import Window
 
 __all__ = ["Method", "Mode", "Backend", "Boundary", "Precision", "SegmentOptions", "Curves",
            "Fill", "PathOptions", "N_MIN", "N_MAX", "MAX_DEPTH_LIMIT",
-           "CURVE_RELATIVE_TOLERANCE", "APPROX_DEFAULT_PIXELS", "approx_tolerance"]
+           "CURVE_RELATIVE_TOLERANCE", "APPROX_DEFAULT_PIXELS", "approx_tolerance",
+           "Units"]
 
 #: Approx mode's default resolution: the window's longer side in this many pixels, the
 #: grid of a vector tile (the Mapbox Vector Tile extent). Output at that resolution
@@ -94,6 +95,15 @@ class Boundary(_ChoiceEnum):
     """Keep them, as ``shapely.intersection`` does (the window is a closed set)."""
     INTERIOR = "interior"
     """Drop parts that only run along or touch the edge, as GEOS ``clip_by_rect`` does."""
+
+
+class Units(_ChoiceEnum):
+    """The coordinates of glyph outlines taken from a font (`rnsca.fonts`)."""
+
+    FONT = "font"
+    """Font units, y up: the font's own coordinates (``unitsPerEm`` to the em)."""
+    USER = "user"
+    """User units, y down as in SVG: the em scaled to the font size, y flipped."""
 
 
 @dataclass(frozen=True, slots=True)

@@ -26,6 +26,7 @@ from starlette.responses import Response
 
 from rnsca.errors import (
     BackendUnavailableError,
+    FontError,
     InvalidGeometryError,
     InvalidOptionError,
     InvalidWindowError,
@@ -146,6 +147,8 @@ _LIBRARY = {
     UnsupportedGeometryError: (422, "unsupported-geometry", "Unsupported geometry"),
     LimitExceededError: (413, "limit-exceeded", "Input over the limit"),
     BackendUnavailableError: (422, "backend-unavailable", "Backend not available"),
+    # No route reads fonts today (glyph outlines arrive as path data); mapped for any that will.
+    FontError: (422, "font-error", "Unreadable font or missing glyph"),
     RnscaError: (500, "internal-error", "Internal server error"),
 }
 _HTTP_SLUGS = {404: "not-found", 405: "method-not-allowed"}

@@ -10,7 +10,7 @@ import numpy as np
 import numpy.typing as npt
 
 from rnsca.arrays import GeometryKind, check_segment_values, geometry_error
-from rnsca.backends.registry import get_backend
+from rnsca.backends.auto import backend_for
 from rnsca.errors import (
     InvalidGeometryError,
     InvalidOptionError,
@@ -190,7 +190,7 @@ def clip_segments(segments: npt.ArrayLike, window: Window | Iterable[float] | No
     options = SegmentOptions.resolve(window, method=method, n=n, max_depth=max_depth,
                                      tolerance=tolerance, mode=mode, resolution=resolution)
     wanted = _segment_outputs(outputs)
-    engine = get_backend(backend, "segments" if table is None else "windows",
+    engine = backend_for(backend, "segments" if table is None else "windows",
                          _rows(segments))
     # The backend checks the values: the Numba one in its clipping pass (a second
     # read of the input cost 3% of the call, 10M segments), the OpenCL one on the device.

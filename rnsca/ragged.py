@@ -18,8 +18,8 @@ import numpy.typing as npt
 import shapely
 
 from rnsca.arrays import GeometryKind, Ragged
+from rnsca.backends.auto import backend_for
 from rnsca.backends.base import ClipBackend, GeometryPieces, Operation
-from rnsca.backends.registry import get_backend
 from rnsca.errors import InvalidOptionError
 from rnsca.kernels import counters as C
 from rnsca.options import Backend, Boundary, Method, Mode, SegmentOptions
@@ -105,7 +105,7 @@ def resolve_geometry_options(
                                      max_depth=max_depth, tolerance=tolerance, mode=mode,
                                      resolution=resolution)
     side = Boundary(boundary)
-    engine = get_backend(backend, "lines" if dimension == 1 else "polygons", size)
+    engine = backend_for(backend, "lines" if dimension == 1 else "polygons", size)
     if dimension == 2 and options.mode not in Operation.POLYGONS.modes:
         raise InvalidOptionError(
             "mode='approx' cannot clip polygons: valid polygon output needs the exact "

@@ -7,7 +7,7 @@ faster on the CPU. So the choice is measured, not guessed: at the first ``"auto"
 a short calibration (a few seconds) times both backends on generated inputs of a few
 sizes per operation, and keeps, per operation, the smallest size from which OpenCL was
 faster at every larger size measured (its crossover; none if it never was). The
-result is cached on disk per device, host and version (``$RNSCA_CACHE_DIR``, default
+result is cached on disk per device, host and kernel sources (``$RNSCA_CACHE_DIR``, default
 ``~/.cache/rnsca``), so later processes read it. Without a usable OpenCL device,
 ``"auto"`` is Numba. Asking for ``"opencl"`` by name never runs anything else.
 
@@ -28,9 +28,11 @@ from pathlib import Path
 
 import numpy as np
 
+from rnsca.backends.base import ClipBackend
+from rnsca.backends.registry import get_backend, opencl_available
 from rnsca.options import Backend
 
-__all__ = ["AUTO", "choose", "calibration", "calibrate", "CALIBRATED"]
+__all__ = ["AUTO", "backend_for", "choose", "calibration", "calibrate", "CALIBRATED"]
 
 #: The backend name that asks for the measured choice.
 AUTO = "auto"
@@ -44,14 +46,25 @@ _CACHE: dict[str, dict] = {}
 _WINDOW = (250.0, 250.0, 750.0, 750.0)
 
 
+def backend_for(kind: Backend | str, operation: str, size: int) -> ClipBackend:
+    """Return the backend `kind` names, or for ``"auto"`` the one `choose` picks.
+
+    Raises
+    ------
+    BackendUnavailableError
+        If a backend asked for by name cannot run here (never replaced by another).
+    """
+    if isinstance(kind, str) and not isinstance(kind, Backend) and kind == AUTO:
+        kind = choose(operation, size)
+    return get_backend(kind)
+
+
 def choose(operation: str, size: int) -> Backend:
     """Return the backend for a call of `operation` on `size` items (segments, vertices).
 
     `operation` is an `Operation` value; one not calibrated (paths, flatten) is Numba.
     """
-    from rnsca.backends import registry
-
-    if operation not in CALIBRATED or not registry.opencl_available():
+    if operation not in CALIBRATED or not opencl_available():
         return Backend.NUMBA
     crossover = calibration().get(operation)
     return Backend.OPENCL if crossover is not None and size >= crossover else Backend.NUMBA
@@ -60,9 +73,11 @@ def choose(operation: str, size: int) -> Backend:
 def _cache_file(device: str) -> Path:
     import numba
 
-    import rnsca
-
-    key = json.dumps([device, rnsca.__version__, platform.node(), os.cpu_count(),
+    # The kernels' sources: a change to them measures again.
+    sources = Path(__file__).parent
+    kernels = [sources / "opencl" / "clip.cl", *sorted((sources.parent / "kernels").glob("*.py"))]
+    digest = hashlib.sha256(b"".join(path.read_bytes() for path in kernels)).hexdigest()
+    key = json.dumps([device, digest, platform.node(), os.cpu_count(),
                       numba.get_num_threads(), sorted(CALIBRATED.items())])
     folder = Path(os.environ.get("RNSCA_CACHE_DIR") or Path.home() / ".cache" / "rnsca")
     return folder / f"auto-{hashlib.sha256(key.encode()).hexdigest()[:16]}.json"
@@ -73,8 +88,6 @@ def calibration() -> dict:
 
     Read from the disk cache, or measured once (`calibrate`) and written there.
     """
-    from rnsca.backends.registry import get_backend
-
     device = get_backend(Backend.OPENCL).capabilities.devices[0]
     name = getattr(get_backend(Backend.OPENCL), "name", device)
     with _LOCK:
@@ -107,28 +120,37 @@ def _best(call: Callable[[], object], repeats: int = 3) -> float:
 
 
 def _calls(operation: str, size: int, backend: Backend) -> Callable[[], object]:
-    import rnsca
+    """Return a call of `operation` on about `size` generated items, on `backend`.
 
+    The backends' operations themselves (this module sits below the public functions).
+    """
+    from rnsca.arrays import Ragged
+    from rnsca.many_windows import as_windows
+    from rnsca.options import SegmentOptions
+    from rnsca.window import Window, WindowTable
+
+    engine = get_backend(backend)
+    window = Window(*_WINDOW)
+    options = SegmentOptions.resolve(window)
     rng = np.random.default_rng(size)
     if operation == "segments":
         segments = rng.uniform(0.0, 1000.0, size=(size, 4))
-        return lambda: rnsca.clip_segments(segments, _WINDOW, backend=backend)
+        return lambda: engine.clip_segments(segments, window, options)
     if operation == "windows":
         start = rng.uniform(0.0, 1000.0, size=(size, 2))
-        segments = np.c_[start, start + rng.uniform(-10.0, 10.0, size=(size, 2))]
+        segments = np.ascontiguousarray(np.c_[start, start + rng.uniform(-10.0, 10.0,
+                                                                          size=(size, 2))])
         edges = np.linspace(0.0, 1000.0, 9)
-        grid = np.array([(edges[i], edges[j], edges[i + 1], edges[j + 1])
-                         for j in range(8) for i in range(8)])
-        return lambda: rnsca.clip_segments(segments, windows=grid, backend=backend)
+        grid = as_windows([(edges[i], edges[j], edges[i + 1], edges[j + 1])
+                           for j in range(8) for i in range(8)])
+        return lambda: engine.clip_segment_windows(segments, grid, options)
     if operation == "lines":
-        per_line = 1000
         steps = rng.normal(0.0, 3.0, size=(size, 2))
         coords = np.cumsum(steps, axis=0) % 1000.0
-        offsets = np.arange(0, size + 1, per_line, dtype=np.int64)
-        if offsets[-1] != size:
-            offsets = np.r_[offsets, size]
-        return lambda: rnsca.clip_ragged("linestring", coords, (offsets,), _WINDOW,
-                                         backend=backend)
+        offsets = np.unique(np.r_[np.arange(0, size, 1000), size]).astype(np.int64)
+        lines = Ragged.of("linestring", coords, (offsets,))
+        table = WindowTable.of(window, lines.count)
+        return lambda: engine.clip_lines(lines, table, options, False)
     # Polygons: stars of 32 vertices (closed rings), scattered.
     n = max(1, size // 33)
     angle = np.linspace(0.0, 2 * np.pi, 33)[:32]
@@ -137,10 +159,10 @@ def _calls(operation: str, size: int, backend: Backend) -> Callable[[], object]:
     ring = np.r_[ring, ring[:1]]
     centres = rng.uniform(0.0, 1000.0, size=(n, 1, 2))
     coords = (centres + ring[None]).reshape(-1, 2)
-    ring_offsets = np.arange(0, 33 * n + 1, 33, dtype=np.int64)
-    geometry_offsets = np.arange(n + 1, dtype=np.int64)
-    return lambda: rnsca.clip_ragged("polygon", coords, (ring_offsets, geometry_offsets),
-                                     _WINDOW, backend=backend)
+    polygons = Ragged.of("polygon", coords, (np.arange(0, 33 * n + 1, 33, dtype=np.int64),
+                                             np.arange(n + 1, dtype=np.int64)))
+    table = WindowTable.of(window, polygons.count)
+    return lambda: engine.clip_polygons(polygons, table, options)
 
 
 def calibrate(operations: dict[str, tuple[int, ...]] | None = None) -> dict:

@@ -38,22 +38,16 @@ _OPENCL = _OpenCLSettings()
 _OPENCL_FAILURE: list[str] = []  # why the configured OpenCL backend could not be built
 
 
-def get_backend(kind: Backend | str, operation: str = "segments",
-                size: int = 0) -> ClipBackend:
+def get_backend(kind: Backend | str) -> ClipBackend:
     """Return the backend for `kind`, built once (OpenCL: once per configuration).
 
-    ``kind="auto"`` picks the backend measured faster here for a call of `operation`
-    (an `Operation` value) on `size` items (`rnsca.backends.auto`).
+    (``"auto"`` is resolved per call by `rnsca.backends.auto.backend_for`.)
 
     Raises
     ------
     BackendUnavailableError
         If that backend cannot run here (never replaced by another one silently).
     """
-    if isinstance(kind, str) and not isinstance(kind, Backend) and kind == "auto":
-        from rnsca.backends.auto import choose
-
-        kind = choose(operation, size)
     kind = Backend(kind)
     with _LOCK:
         if kind not in _BUILT:

@@ -112,8 +112,10 @@ class WindowFinder(NamedTuple):
 
 @borrowing
 def _guess(edges, value, scale):
-    """Return the cell of `value` on equally spaced `edges` by arithmetic (a guess: the
-    rounding may miss by one, which the callers correct against the edges exactly)."""
+    """Return the cell of `value` on equally spaced `edges` by arithmetic.
+
+    A guess: the rounding may miss by one, which the callers correct against the edges.
+    """
     cells = edges.shape[0] - 1
     g = (value - edges[0]) * scale
     if not g > 0.0:  # below the first edge, or NaN

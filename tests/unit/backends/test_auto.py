@@ -7,7 +7,6 @@ import pytest
 
 import rnsca
 from rnsca.backends import auto
-from rnsca.backends.registry import get_backend
 from rnsca.options import Backend
 
 
@@ -19,11 +18,9 @@ def fresh_cache(tmp_path, monkeypatch):
 
 
 def test_auto_is_numba_where_opencl_is_missing(monkeypatch):
-    from rnsca.backends import registry
-
-    monkeypatch.setattr(registry, "opencl_available", lambda: False)
+    monkeypatch.setattr(auto, "opencl_available", lambda: False)
     assert auto.choose("segments", 10**9) is Backend.NUMBA
-    assert get_backend("auto", "segments", 10**9).kind is Backend.NUMBA
+    assert auto.backend_for("auto", "segments", 10**9).kind is Backend.NUMBA
 
 
 def test_curves_stay_on_numba(opencl):

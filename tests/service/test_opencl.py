@@ -56,7 +56,7 @@ def test_segments_clipped_on_opencl_match_numba(opencl, rng, default_configurati
     assert body["backend"] == "opencl"
     np.testing.assert_allclose(np.array(body["segments"]), expected.segments, rtol=1e-12)
     device = body["stats"]["device"]
-    assert device["device"] == opencl.name and device["transfers"] == 7
+    assert device["device"] == opencl.name and device["transfers"] == 6
 
 
 def test_a_device_that_is_not_there_is_a_422_with_the_reason(opencl, default_configuration):

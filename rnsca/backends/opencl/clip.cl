@@ -1099,10 +1099,13 @@ __kernel void write_pieces(__global const REAL *result, __global const long *kee
 
 /* The counter rows of `rows` groups (each SEGMENT_COUNTERS wide) to one row: group k
  * (of SEGMENT_COUNTERS + 1) reduces column k, summed except DEEPEST (a maximum); the
- * last group takes the minimum of first_bad. */
+ * last group takes the minimum of first_bad. Group 0 also copies the count of kept
+ * items (the prefix sum's last value) to total[SEGMENT_COUNTERS + 1]: the host reads
+ * one row back per chunk. */
 __kernel __attribute__((reqd_work_group_size(LOCAL_SIZE, 1, 1)))
 void reduce_counters(__global const long *counters, __global const long *first_bad,
-                     const long rows, __global long *total) {
+                     const long rows, __global const long *position, const long n,
+                     __global long *total) {
     __local long part[LOCAL_SIZE];
     int k = get_group_id(0);
     int l = get_local_id(0);
@@ -1122,6 +1125,8 @@ void reduce_counters(__global const long *counters, __global const long *first_b
     }
     if (l == 0)
         total[k] = part[0];
+    if (k == 0 && l == 0)
+        total[SEGMENT_COUNTERS + 1] = n > 0 ? position[n - 1] : 0;
 }
 
 /* --- kernels/polylines.py: run-level pruning of lines ------------------------------- */

@@ -43,7 +43,7 @@ __all__ = ["SegmentRun", "Staging", "MAX_GROUPS", "CHUNK_SEGMENTS"]
 #: small (the grid-stride loop gives each group many items).
 MAX_GROUPS = 4096
 #: Items per chunk of a host input: each slot's share of a pipelined call.
-CHUNK_SEGMENTS = 1 << 20
+CHUNK_SEGMENTS = 1 << 22
 _WIDTH = constants.SEGMENT_COUNTERS
 _NONE = np.iinfo(np.int64).max
 
@@ -87,15 +87,6 @@ class _Slot:
     pinned_out: _Pinned
     segments: cl.Buffer
     buffers: dict
-    # The chunk in flight: where it is, and what the device said of it.
-    state: str = "idle"
-    n: int = 0
-    first: int = 0
-    m: int = 0
-    offset: int = 0
-    count: np.ndarray = field(default_factory=lambda: np.zeros(1, np.int64))
-    total: np.ndarray = field(default_factory=lambda: np.zeros(_WIDTH + 1, np.int64))
-    events: list = field(default_factory=list)
     # The last copy out of `pinned_in`: its staging memory is free once that is done.
     staged: cl.Event | None = None
 
@@ -119,7 +110,7 @@ def _device_buffers(context: cl.Context, capacity: int, real: Any) -> dict:
 
     return {"result": buffer(6 * item * size), "keep": buffer(8 * size),
             "position": buffer(8 * size), "counters": buffer(8 * _WIDTH * MAX_GROUPS),
-            "first_bad": buffer(8 * MAX_GROUPS), "total": buffer(8 * (_WIDTH + 1)),
+            "first_bad": buffer(8 * MAX_GROUPS), "total": buffer(8 * (_WIDTH + 2)),
             "pieces": buffer(4 * item * size), "source": buffer(8 * size),
             "t": buffer(2 * item * size), "window": buffer(4 * size)}
 
@@ -185,7 +176,11 @@ class SegmentRun:
 
     def clip(self, queue: cl.CommandQueue, segments: cl.Buffer, n: int, first: int,
              buffers: dict, wait_for: list) -> cl.Event:
-        """Enqueue the clip, scan and counter reduction of items first..first+n-1."""
+        """Enqueue the clip, scan and counter reduction of items first..first+n-1.
+
+        Returns the reduction's event: after it, ``buffers["total"]`` holds the counters,
+        the first non-finite item and the count of pieces (one row to read back).
+        """
         real = self.real
         groups = groups_for(n, self.local_size)
         clip = self.kernels.clip_segments(
@@ -199,9 +194,10 @@ class SegmentRun:
         scan = self.scan(keep, position, queue=queue, size=n, wait_for=[clip])
         reduce = self.kernels.reduce_counters(
             queue, ((_WIDTH + 1) * self.local_size,), (self.local_size,), buffers["counters"],
-            buffers["first_bad"], np.int64(groups), buffers["total"], wait_for=[clip])
+            buffers["first_bad"], np.int64(groups), buffers["position"], np.int64(n),
+            buffers["total"], wait_for=[scan])
         self.kernel_events += [clip, scan, reduce]
-        return scan
+        return reduce
 
     def write(self, queue: cl.CommandQueue, n: int, first: int, buffers: dict,
               segment_base: int, out: dict) -> cl.Event:
@@ -296,6 +292,21 @@ def upload_whole(run: SegmentRun, staging: Staging, array: np.ndarray,
     return buffer
 
 
+@dataclass
+class _Chunk:
+    """One chunk of a pipelined call: its items, its slot, and what came back of it."""
+
+    slot: _Slot
+    n: int
+    first: int
+    # Its counter row as the device reduced it: SEGMENT_COUNTERS counters, the first
+    # non-finite item, and the count of pieces (`reduce_counters`).
+    row: np.ndarray = field(default_factory=lambda: np.zeros(_WIDTH + 2, np.int64))
+    m: int = 0
+    offset: int = 0
+    events: list = field(default_factory=list)
+
+
 def clip_host(run: SegmentRun, staging: Staging, data: np.ndarray | None,
               chunk: int, pairs: int = 0,
               segments: cl.Buffer | None = None) -> tuple[HostOutputs, np.ndarray, int]:
@@ -307,80 +318,79 @@ def clip_host(run: SegmentRun, staging: Staging, data: np.ndarray | None,
     chunks are `pairs` items long. Returns the caller's arrays (shrunk), the counter
     totals of each chunk (rows of SEGMENT_COUNTERS + 1, the last the call's first
     non-finite item, or the largest int) and the count of pieces.
+
+    Chunk c, in the slot c % 2: its input is copied into the slot's staging buffer and
+    sent up, and its kernels enqueued; then chunk c - 1's count is awaited and its
+    pieces written and sent down; then chunk c - 2's pieces, down by now, are copied
+    into the caller's arrays, while the device works on chunks c and c - 1.
     """
     n = data.shape[0] if data is not None else pairs
     slots = staging.slots_for(run.real, min(max(n, 1), chunk))
     outputs = HostOutputs.empty(n, run.want_source, run.want_t, run.pairs)
-    totals: list[np.ndarray] = []
+    chunks: list[_Chunk] = []
     m = 0
     chunk = slots[0].capacity
-    starts = list(range(0, n, chunk))
-    for c, start in enumerate(starts):
+    for c, start in enumerate(range(0, n, chunk)):
         slot = slots[c % len(slots)]
-        if slot.state == "downloading":
-            _drain(slot, outputs)
-        count = min(chunk, n - start)
+        item = _Chunk(slot, min(chunk, n - start), start)
         if data is not None:
-            staged = slot.stage(data[start:start + count])
+            staged = slot.stage(data[start:start + item.n])
             slot.staged = run.upload(slot.queue, slot.segments, staged)
-            _start(run, slot, slot.segments, count, start, [slot.staged])
+            _start(run, item, slot.segments, [slot.staged])
         else:
             assert segments is not None
-            _start(run, slot, segments, count, start, [])
-        previous = slots[(c - 1) % len(slots)]
-        if c and previous.state == "clipping":
-            m = _finish(run, previous, m, totals)
-    for c in range(max(0, len(starts) - 1), len(starts)):
-        slot = slots[c % len(slots)]
-        if slot.state == "clipping":
-            m = _finish(run, slot, m, totals)
-    for slot in slots:
-        if slot.state == "downloading":
-            _drain(slot, outputs)
+            _start(run, item, segments, [])
+        chunks.append(item)
+        if c >= 1:
+            m = _finish(run, chunks[c - 1], m)
+        if c >= 2:
+            _drain(chunks[c - 2], outputs)
+    if chunks:
+        m = _finish(run, chunks[-1], m)
+    for item in chunks[-2:]:
+        _drain(item, outputs)
     outputs.shrink(m)
-    return outputs, np.array(totals, np.int64).reshape(-1, _WIDTH + 1), m
+    totals = np.array([item.row[:_WIDTH + 1] for item in chunks], np.int64)
+    return outputs, totals.reshape(-1, _WIDTH + 1), m
 
 
-def _start(run: SegmentRun, slot: _Slot, segments: cl.Buffer, n: int, first: int,
-           wait_for: list) -> None:
-    scan = run.clip(slot.queue, segments, n, first if run.pairs else 0, slot.buffers,
-                    wait_for)
-    slot.events = [
-        run.download(slot.queue, slot.count, slot.buffers["position"], wait_for=[scan],
-                     offset=8 * (n - 1)),
-        run.download(slot.queue, slot.total, slot.buffers["total"])]
-    slot.state, slot.n, slot.first = "clipping", n, first
+def _start(run: SegmentRun, chunk: _Chunk, segments: cl.Buffer, wait_for: list) -> None:
+    """Enqueue the chunk's clip, scan and reduction, and the download of its row."""
+    slot = chunk.slot
+    reduced = run.clip(slot.queue, segments, chunk.n, chunk.first if run.pairs else 0,
+                       slot.buffers, wait_for)
+    chunk.events = [run.download(slot.queue, chunk.row, slot.buffers["total"],
+                                 wait_for=[reduced])]
 
 
-def _finish(run: SegmentRun, slot: _Slot, m: int, totals: list) -> int:
-    """Wait for the slot's count, enqueue its write and downloads; return the new count."""
-    cl.wait_for_events(slot.events)
-    total = slot.total.copy()
+def _finish(run: SegmentRun, chunk: _Chunk, m: int) -> int:
+    """Wait for the chunk's row, enqueue its write and downloads; return the new count."""
+    cl.wait_for_events(chunk.events)
+    row = chunk.row
     # The call's index of the chunk's first non-finite item, or none (the largest int).
-    total[_WIDTH] = total[_WIDTH] + slot.first if total[_WIDTH] < slot.n else _NONE
-    totals.append(total)
-    slot.m = int(slot.count[0])
-    slot.offset = m
-    slot.events = []
-    if slot.m:
-        base = 0 if run.pairs else slot.first
-        write = run.write(slot.queue, slot.n, slot.first, slot.buffers, base, slot.buffers)
-        views = _out_views(slot, slot.m)
+    row[_WIDTH] = row[_WIDTH] + chunk.first if row[_WIDTH] < chunk.n else _NONE
+    chunk.m = int(row[_WIDTH + 1])
+    chunk.offset = m
+    chunk.events = []
+    slot = chunk.slot
+    if chunk.m:
+        base = 0 if run.pairs else chunk.first
+        write = run.write(slot.queue, chunk.n, chunk.first, slot.buffers, base, slot.buffers)
+        views = _out_views(slot, chunk.m)
         wanted = ["pieces"] + (["source"] if run.want_source else []) + (
             ["t"] if run.want_t else []) + (["window"] if run.pairs else [])
-        slot.events = [run.download(slot.queue, views[name], slot.buffers[name],
-                                    wait_for=[write]) for name in wanted]
-    slot.state = "downloading"
-    return m + slot.m
+        chunk.events = [run.download(slot.queue, views[name], slot.buffers[name],
+                                     wait_for=[write]) for name in wanted]
+    return m + chunk.m
 
 
-def _drain(slot: _Slot, outputs: HostOutputs) -> None:
-    """Wait for the slot's downloads and copy its pieces into the caller's arrays."""
-    if slot.events:
-        cl.wait_for_events(slot.events)
-    m, a = slot.m, slot.offset
+def _drain(chunk: _Chunk, outputs: HostOutputs) -> None:
+    """Wait for the chunk's downloads and copy its pieces into the caller's arrays."""
+    if chunk.events:
+        cl.wait_for_events(chunk.events)
+    m, a = chunk.m, chunk.offset
     if m:
-        views = _out_views(slot, m)
+        views = _out_views(chunk.slot, m)
         _land(outputs.pieces[a:a + m], views["pieces"])
         if outputs.source is not None:
             copy_into(outputs.source[a:a + m], views["source"])
@@ -388,7 +398,7 @@ def _drain(slot: _Slot, outputs: HostOutputs) -> None:
             _land(outputs.t[a:a + m], views["t"])
         if outputs.window is not None:
             copy_into(outputs.window[a:a + m], views["window"])
-    slot.state, slot.events = "idle", []
+    chunk.events = []
 
 
 def _land(target: np.ndarray, staged: np.ndarray) -> None:
@@ -414,17 +424,14 @@ def clip_device(run: SegmentRun, queue: cl.CommandQueue, segments: cl_array.Arra
 
     buffers = {"result": scratch(6 * item * size), "keep": scratch(8 * size),
                "position": scratch(8 * size), "counters": scratch(8 * _WIDTH * MAX_GROUPS),
-               "first_bad": scratch(8 * MAX_GROUPS), "total": scratch(8 * (_WIDTH + 1))}
-    count = np.zeros(1, np.int64)
-    total = np.zeros(_WIDTH + 1, np.int64)
+               "first_bad": scratch(8 * MAX_GROUPS), "total": scratch(8 * (_WIDTH + 2))}
+    row = np.zeros(_WIDTH + 2, np.int64)
+    row[_WIDTH] = n
     m = 0
     if n:
-        scan = run.clip(queue, segments.data, n, 0, buffers, [])
-        events = [run.download(queue, count, buffers["position"], wait_for=[scan],
-                               offset=8 * (n - 1)),
-                  run.download(queue, total, buffers["total"])]
-        cl.wait_for_events(events)
-        m = int(count[0])
+        reduced = run.clip(queue, segments.data, n, 0, buffers, [])
+        run.download(queue, row, buffers["total"], wait_for=[reduced]).wait()
+        m = int(row[_WIDTH + 1])
     out_arrays = {
         "pieces": cl_array.empty(queue, (m, 4), run.real, allocator=allocator),
         "source": cl_array.empty(queue, m, np.int64, allocator=allocator)
@@ -437,4 +444,4 @@ def clip_device(run: SegmentRun, queue: cl.CommandQueue, segments: cl_array.Arra
         out = {name: (array.data if array is not None and array.size else run.nowhere)
                for name, array in out_arrays.items()}
         run.write(queue, n, 0, buffers, 0, out).wait()
-    return out_arrays, total.reshape(1, -1), m
+    return out_arrays, row[:_WIDTH + 1].reshape(1, -1), m

@@ -242,18 +242,18 @@ def test_stats_count_the_transfers_and_their_bytes(opencl, rng):
     real = 8 if opencl.precision is Precision.FLOAT64 else 4
     m = len(r)
     assert d.device == opencl.name and d.precision == opencl.precision.value
-    # Up: the window and the segments. Down: the count, the counter row reduced on the
-    # device (41 counters and the first non-finite segment), the pieces, sources, t.
-    assert d.transfers == 7
+    # Up: the window and the segments. Down: the row reduced on the device (41 counters,
+    # the first non-finite segment and the count of pieces), the pieces, sources, t.
+    assert d.transfers == 6
     assert d.bytes_to_device == 4 * real + 1000 * 4 * real
-    assert d.bytes_from_device == 8 + 42 * 8 + m * (4 * real + 8 + 2 * real)
+    assert d.bytes_from_device == 43 * 8 + m * (4 * real + 8 + 2 * real)
     assert d.kernel_seconds > 0 and d.transfer_seconds > 0
 
 
 def test_nothing_kept_brings_back_only_the_counters(opencl):
     r = clip_segments([[20.0, 30.0, 40.0, 50.0]], W, backend="opencl")
     assert len(r) == 0 and r.stats.rejected == 1
-    assert r.stats.device.transfers == 4  # window, segments up; count, counters down
+    assert r.stats.device.transfers == 3  # window, segments up; the counter row down
 
 
 def test_empty_input_moves_nothing_but_the_counters(opencl):

@@ -123,7 +123,7 @@ def test_device_input_gives_device_output_equal_to_the_host_call(small_chunks, r
     assert dataclasses.replace(got.stats, device=None) == expected.stats
     # Nothing crossed the bus but the window, the count and the counters.
     assert got.stats.device.bytes_to_device == 4 * 8
-    assert got.stats.device.bytes_from_device == 8 + 42 * 8
+    assert got.stats.device.bytes_from_device == 43 * 8
     # A pipeline step on the device: the pieces clipped again, to a smaller window.
     again = clip_segments(got.segments, (300.0, 300.0, 700.0, 700.0), backend="opencl",
                           outputs=("segments",))

@@ -137,7 +137,7 @@ def _chunk_sizes(table: Table, segs: np.ndarray, label: str) -> None:
 
     kept = S.CHUNK_SEGMENTS
     try:
-        for shift in (18, 19, 20, 21, 22, 23):
+        for shift in (20, 21, 22, 23):
             S.CHUNK_SEGMENTS = 1 << shift
             to, ro = _best(lambda: rnsca.clip_segments(segs, W, backend="opencl"), 2)
             table.add(f"  chunk 2**{shift} ({label})", None, to, _split(ro, to), None,

@@ -243,6 +243,8 @@ class _Device:
     # allocation per call.
     allocator: cl.tools.MemoryPool | None = None
     scans: dict = field(default_factory=dict)
+    # An 8-byte buffer for the kernels' unused buffer arguments.
+    nowhere: cl.Buffer | None = None
     lock: threading.Lock = field(default_factory=threading.Lock)
     # Kernel objects hold their arguments and are shared by every backend on this
     # device: one call at a time sets and enqueues them.
@@ -325,7 +327,8 @@ def _device(entry: dict) -> _Device:
             _DEVICES[entry["id"]] = _Device(
                 f"{entry['platform']} / {entry['device']}", context, queues[0],
                 second_queue=queues[1], staging=_segments.Staging(context, queues),
-                allocator=cl.tools.MemoryPool(cl.tools.ImmediateAllocator(queues[0])))
+                allocator=cl.tools.MemoryPool(cl.tools.ImmediateAllocator(queues[0])),
+                nowhere=cl.Buffer(context, cl.mem_flags.READ_WRITE, 8))
         return _DEVICES[entry["id"]]
 
 
@@ -548,11 +551,10 @@ class OpenCLBackend:
         windows = np.ascontiguousarray(bounds if bounds is not None else [], dtype=real
                                        ).reshape(-1)
         run = _segments.SegmentRun(
-            kernels, device.scan(), real, LOCAL_SIZE,
-            cl.Buffer(device.context, cl.mem_flags.READ_ONLY, max(8, windows.nbytes)),
+            kernels, device.scan(), real, LOCAL_SIZE, device.allocator(max(8, windows.nbytes)),
             METHOD_ID[options.method], options.n, options.max_depth, options.tolerance,
-            int(options.mode is Mode.EXACT), source, t,
-            nowhere=cl.Buffer(device.context, cl.mem_flags.READ_WRITE, 8))
+            int(options.mode is Mode.EXACT), source, t, nowhere=device.nowhere,
+            allocator=device.allocator)
         if windows.size:
             run.ready.append(run.upload(device.queue, run.windows, windows))
         return run

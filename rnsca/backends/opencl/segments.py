@@ -144,6 +144,21 @@ class Staging:
 
 
 @dataclass
+class _Raw:
+    """A buffer as pyopencl's scan takes an array argument, without an `Array` object.
+
+    (An `Array` checks its shape with NumPy on creation: about 40 us each, eight per call,
+    most of a small device-resident call's host time.)
+    """
+
+    base_data: cl.Buffer
+    queue: cl.CommandQueue
+    allocator: Any
+    offset: int = 0
+    events: tuple = ()
+
+
+@dataclass
 class SegmentRun:
     """One clip call's kernels and settings: everything but the data."""
 
@@ -162,6 +177,8 @@ class SegmentRun:
     pair_segment: cl.Buffer | None = None
     pair_window: cl.Buffer | None = None
     nowhere: cl.Buffer | None = None
+    # Where the scan's scratch and the device outputs come from (the device's pool).
+    allocator: Any = None
     # The uploads every clip waits for (the window table), whichever queue it runs on.
     ready: list = field(default_factory=list)
     kernel_events: list = field(default_factory=list)
@@ -189,9 +206,10 @@ class SegmentRun:
             np.int32(self.method), np.int32(self.n_fixed), np.int32(self.max_depth),
             real(self.tolerance), np.int32(self.exact), buffers["result"], buffers["keep"],
             buffers["counters"], buffers["first_bad"], wait_for=wait_for + self.ready)
-        keep = cl_array.Array(queue, n, np.int64, data=buffers["keep"])
-        position = cl_array.Array(queue, n, np.int64, data=buffers["position"])
-        scan = self.scan(keep, position, queue=queue, size=n, wait_for=[clip])
+        keep = _Raw(buffers["keep"], queue, self.allocator)
+        position = _Raw(buffers["position"], queue, self.allocator)
+        scan = self.scan(keep, position, queue=queue, size=n, allocator=self.allocator,
+                         wait_for=[clip])
         reduce = self.kernels.reduce_counters(
             queue, ((_WIDTH + 1) * self.local_size,), (self.local_size,), buffers["counters"],
             buffers["first_bad"], np.int64(groups), buffers["position"], np.int64(n),
@@ -420,7 +438,7 @@ def clip_device(run: SegmentRun, queue: cl.CommandQueue, segments: cl_array.Arra
     size = max(1, n)
 
     def scratch(nbytes: int) -> cl.Buffer:
-        return cl_array.empty(queue, max(8, nbytes), np.uint8, allocator=allocator).data
+        return allocator(max(8, nbytes))
 
     buffers = {"result": scratch(6 * item * size), "keep": scratch(8 * size),
                "position": scratch(8 * size), "counters": scratch(8 * _WIDTH * MAX_GROUPS),

@@ -360,12 +360,21 @@ class NumbaBackend:
 
 
 def warm_up_segments(backend: ClipBackend) -> None:
-    """Clip segments on `backend` with every method, through both drivers of the Numba one."""
+    """Clip segments on `backend` with every method, through both drivers of the Numba one.
+
+    Then against many windows: a grid (found by arithmetic) and a set of two (a sweep).
+    """
     window = Window(0.0, 0.0, 1.0, 1.0)
     for n in (1, BLOCK_SIZE * (SERIAL_BLOCKS + 1)):  # the serial and the parallel driver
         segments = np.tile([[-1.0, 0.5, 2.0, 0.5]], (n, 1))
         for method in Method:
             backend.clip_segments(segments, window, SegmentOptions.resolve(window, method=method))
+    segments = np.array([[-1.0, 0.5, 2.0, 0.5], [0.2, 0.2, 0.8, 0.3]])
+    grid = np.array([[0.0, 0.0, 0.5, 1.0], [0.5, 0.0, 1.0, 1.0]])
+    for windows in (grid, grid[[0, 0]] + [[0.0, 0.0, 0.0, 0.5], [0.1, 0.0, 0.0, 0.0]]):
+        for method in (Method.RNSCA, Method.LIANG_BARSKY):
+            backend.clip_segment_windows(segments, windows,
+                                         SegmentOptions.resolve(window, method=method))
 
 
 def warm_up_paths(backend: ClipBackend) -> None:

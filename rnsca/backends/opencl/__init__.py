@@ -83,6 +83,7 @@ from rnsca.backends.numba_cpu import (
     polyline_layout,
     warm_up_geometry,
     warm_up_paths,
+    warm_up_segments,
 )
 from rnsca.backends.opencl import segments as _segments
 from rnsca.errors import BackendUnavailableError, InvalidGeometryError, InvalidWindowError
@@ -909,10 +910,7 @@ class OpenCLBackend:
         Also compiles (or loads from Numba's cache) the host kernels that assemble lines
         and polygons, and those that clip and flatten curves from the device's decisions.
         """
-        window = Window(0.0, 0.0, 1.0, 1.0)
-        segments = np.array([[-1.0, 0.5, 2.0, 0.5], [0.2, 0.2, 0.8, 0.8]])
-        for method in Method:
-            self.clip_segments(segments, window, SegmentOptions.resolve(window, method=method))
+        warm_up_segments(self)
         warm_up_geometry(self)
         # Curves: every flatten choice of the device, and the host kernel that reads
         # the device's decisions (compiled or loaded here).

@@ -187,12 +187,16 @@ class NumbaBackend:
             if start != m:
                 K.move_rows(out, start, m, count)
             m += count
-        rows = out.source[:m]
+        rows = out.source[:m]  # each piece's pair
         window = (np.searchsorted(pairs.window_offsets, rows, side="right") - 1).astype(np.int32)
         window_offsets = np.zeros(windows.shape[0] + 1, dtype=np.int64)
         np.cumsum(np.bincount(window, minlength=windows.shape[0]), out=window_offsets[1:])
-        return SegmentPieces(out.pieces[:m].copy(), pairs.segment[rows] if source else None,
-                             out.t[:m].copy() if t else None,
+        sources = pairs.segment[rows] if source else None
+        pieces, ts = out.pieces, out.t
+        if m < p:  # new arrays no one else holds: realloc shrinks them where they are
+            pieces.resize((m, 4), refcheck=False)
+            ts.resize((m, 2), refcheck=False)
+        return SegmentPieces(pieces, sources, ts if t else None,
                              ClipStats.from_counters(out.counters, p, m), window,
                              window_offsets)
 

@@ -145,6 +145,10 @@ def _svg() -> None:
 
 def _opencl() -> None:
     get_backend(Backend.OPENCL).warm_up()
+    # backend="auto": the calibration here, not in the first request that asks for it.
+    from rnsca.backends.auto import calibration
+
+    calibration()
 
 
 #: Every step, in the order they are done: segments first (the cheapest, so the first

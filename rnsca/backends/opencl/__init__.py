@@ -639,11 +639,53 @@ class OpenCLBackend:
         ring_polygon = np.repeat(np.arange(n_polygons, dtype=np.int64),
                                  np.diff(polygon_offsets))
         ring_window = np.ascontiguousarray(polygon_window[ring_polygon])
-        active = (polygon_class[ring_polygon] == PG.AMBIGUOUS).astype(np.uint8)
-        tables, device_counters, device_stats = self._prune(
-            xy, ring_offsets, ring_window, windows.bounds, options, True, active)
+        active = polygon_class[ring_polygon] == PG.AMBIGUOUS
+        tables, device_counters, device_stats = self._prune_rings(
+            xy, ring_offsets, ring_window, windows.bounds, options, active)
         return _HOST.clip_polygons(polygons, windows, options, device=DevicePolygons(
             polygon_class, PL.Decisions(True, *tables), device_counters, device_stats))
+
+    def _prune_rings(self, xy: np.ndarray, ring_offsets: np.ndarray, ring_window: np.ndarray,
+                     windows: np.ndarray, options: SegmentOptions, active: np.ndarray,
+                     ) -> tuple[tuple[np.ndarray, ...], np.ndarray, DeviceStats]:
+        """Prune the `active` rings on the device: `_prune` of those rings only.
+
+        Only the rings of ambiguous polygons go to the device (their vertices gathered
+        on the host); the tables come back laid out for every ring, the others' chunks
+        rejected, as `_prune` with an `active` mask gives them. The polygons wholly
+        inside or outside the window are most of a large input (1M scattered stars: 84%),
+        and their vertices were most of the call's transfers.
+        """
+        rings = np.flatnonzero(active)
+        sizes = np.diff(ring_offsets)[rings]
+        sub_offsets = np.zeros(rings.shape[0] + 1, dtype=np.int64)
+        np.cumsum(sizes, out=sub_offsets[1:])
+        rows = np.repeat(ring_offsets[rings] - sub_offsets[:-1], sizes) + np.arange(
+            sub_offsets[-1], dtype=np.int64)
+        sub_tables, counters, device_stats = self._prune(
+            np.ascontiguousarray(xy[rows]), sub_offsets, ring_window[rings], windows, options,
+            True, None)
+        _, sub_decision, _, kept, pieces = sub_tables
+        segments = np.maximum(np.diff(ring_offsets), 1) - 1
+        chunks_per_ring = -(-segments // PL.RUN_LEAF_SEGMENTS)
+        chunk_start = exclusive_sum(chunks_per_ring)
+        decision = np.full(int(chunk_start[-1]), PL.CHUNK_REJECTED, dtype=np.uint8)
+        active_chunks = chunks_per_ring[rings]
+        decision[np.repeat(chunk_start[rings] - exclusive_sum(active_chunks)[:-1],
+                           active_chunks) + np.arange(int(active_chunks.sum()))] = sub_decision
+        # Each chunk's first row among the pieces: the segmented chunks' lengths, in order.
+        chunk_ring = np.repeat(np.arange(ring_offsets.shape[0] - 1, dtype=np.int64),
+                               chunks_per_ring)
+        chunk_first = (ring_offsets[chunk_ring]
+                       + (np.arange(decision.shape[0]) - chunk_start[chunk_ring])
+                       * PL.RUN_LEAF_SEGMENTS)
+        chunk_length = np.minimum(chunk_first + PL.RUN_LEAF_SEGMENTS,
+                                  ring_offsets[chunk_ring + 1] - 1) - chunk_first
+        segmented_rows = np.where(decision == PL.CHUNK_SEGMENTED, chunk_length, 0)
+        piece_start = np.zeros(decision.shape[0], dtype=np.int64)
+        np.cumsum(segmented_rows[:-1], out=piece_start[1:])
+        return ((chunk_start[:-1].copy(), decision, piece_start, kept, pieces), counters,
+                device_stats)
 
     def _prune(self, xy: np.ndarray, part_offsets: np.ndarray, part_window: np.ndarray,
                windows: np.ndarray, options: SegmentOptions, drop_edge_runs: bool,

@@ -226,10 +226,14 @@ def _assign_share(segments, finder, t, n_threads, table, pairs, write):
 
 @parallel
 def gather_rows(source, rows, target):
-    """``target[j] = source[rows[j]]`` for (n, 4) rows, on every core."""
+    """Set ``target[j] = source[rows[j]]`` for 2-D rows, on every core.
+
+    (NumPy's fancy indexing runs on one.)
+    """
+    columns = source.shape[1]
     for j in prange(rows.shape[0]):
         r = rows[j]
-        for c in range(4):
+        for c in range(columns):
             target[j, c] = source[r, c]
 
 

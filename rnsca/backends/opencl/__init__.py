@@ -92,6 +92,7 @@ from rnsca.kernels import counters as C
 from rnsca.kernels import polygons as PG
 from rnsca.kernels import polylines as PL
 from rnsca.kernels import records as R
+from rnsca.kernels import windows as WK
 from rnsca.kernels.outcode import BOTTOM, LEFT, RIGHT, TOP
 from rnsca.many_windows import assign
 from rnsca.options import Backend, Curves, Method, Mode, PathOptions, Precision, SegmentOptions
@@ -662,9 +663,10 @@ class OpenCLBackend:
         np.cumsum(sizes, out=sub_offsets[1:])
         rows = np.repeat(ring_offsets[rings] - sub_offsets[:-1], sizes) + np.arange(
             sub_offsets[-1], dtype=np.int64)
+        sub_xy = np.empty((rows.shape[0], 2))
+        WK.gather_rows(np.ascontiguousarray(xy, dtype=np.float64), rows, sub_xy)
         sub_tables, counters, device_stats = self._prune(
-            np.ascontiguousarray(xy[rows]), sub_offsets, ring_window[rings], windows, options,
-            True, None)
+            sub_xy, sub_offsets, ring_window[rings], windows, options, True, None)
         _, sub_decision, _, kept, pieces = sub_tables
         segments = np.maximum(np.diff(ring_offsets), 1) - 1
         chunks_per_ring = -(-segments // PL.RUN_LEAF_SEGMENTS)

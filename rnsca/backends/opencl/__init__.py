@@ -338,17 +338,35 @@ class _Ledger:
     """Transfers and kernel runs of one call, timed by OpenCL event profiling."""
 
     def __init__(self) -> None:
-        self.transfers = 0
         self.bytes_to_device = 0
         self.bytes_from_device = 0
         self.copy_events: list[cl.Event] = []
         self.kernel_events: list[cl.Event] = []
+        # Uploads on the other queue (`staged`), which the first kernels wait for.
+        self.ready: list[cl.Event] = []
+
+    @property
+    def transfers(self) -> int:
+        """Return the number of host-device copies so far."""
+        return len(self.copy_events)
+
+    def staged(self, device: _Device, array: np.ndarray, chunk: int) -> cl_array.Array:
+        """Copy a large `array` to the device through the pinned staging buffers.
+
+        On every core into page-locked memory, then at full bus speed, in pieces that
+        alternate between the device's two queues (`segments.upload_whole`); a small
+        one directly. The kernels that read it wait for ``ready``.
+        """
+        queue = device.queue
+        if array.nbytes < (1 << 20) or device.staging is None:
+            return self.to_device(queue, array)
+        buffer = _segments.upload_whole(self, device.staging, array, chunk, np.float64)
+        return cl_array.Array(queue, array.shape, array.dtype, data=buffer)
 
     def to_device(self, queue: cl.CommandQueue, array: np.ndarray) -> cl_array.Array:
         buffer = cl_array.empty(queue, array.shape, array.dtype)
         if array.nbytes:
             self.copy_events.append(cl.enqueue_copy(queue, _data(buffer), array))
-            self.transfers += 1
             self.bytes_to_device += array.nbytes
         return buffer
 
@@ -357,7 +375,6 @@ class _Ledger:
         if out.nbytes:
             self.copy_events.append(cl.enqueue_copy(queue, out, cast(cl.Buffer, buffer.base_data),
                                                     src_offset=buffer.offset))
-            self.transfers += 1
             self.bytes_from_device += out.nbytes
         return out
 
@@ -724,7 +741,7 @@ class OpenCLBackend:
         n_runs = options.n if options.n > 0 else PL.RUN_N_AUTO
         with self._device.call_lock:
             kernels = self._device.program(real is np.float64)
-            d_xy = ledger.to_device(queue, data.reshape(-1))
+            d_xy = ledger.staged(self._device, data.reshape(-1), _segments.CHUNK_SEGMENTS)
             d_offsets = ledger.to_device(queue, np.ascontiguousarray(part_offsets, np.int64))
             d_chunk_start = ledger.to_device(queue, chunk_start)
             d_chunk_part = ledger.to_device(queue, chunk_part)
@@ -740,13 +757,15 @@ class OpenCLBackend:
             if n_chunks:
                 ledger.kernel_events.append(kernels.chunk_boxes(
                     queue, (n_chunks,), None, _data(d_xy), _data(d_offsets),
-                    _data(d_chunk_start), _data(d_chunk_part), np.int64(n_chunks), _data(boxes)))
+                    _data(d_chunk_start), _data(d_chunk_part), np.int64(n_chunks), _data(boxes),
+                    wait_for=ledger.ready))
             ledger.kernel_events.append(kernels.classify_runs(
                 queue, (part_groups * LOCAL_SIZE,), (LOCAL_SIZE,), _data(boxes), _data(d_offsets),
                 _data(d_chunk_start), _data(d_part_window), _data(d_windows),
                 np.int64(n_parts), np.int32(n_runs), np.int32(drop_edge_runs),
                 np.int32(options.method is Method.RNSCA), _data(d_active),
-                np.int32(active is None), _data(decision), _data(segmented), _data(run_counters)))
+                np.int32(active is None), _data(decision), _data(segmented), _data(run_counters),
+                wait_for=ledger.ready))
             total = 0
             position = segmented
             if n_chunks:

@@ -288,14 +288,17 @@ def _out_views(slot: _Slot, m: int) -> dict[str, np.ndarray]:
             "window": slot.pinned_out.array((6 * item + 8) * c, np.int32, m)}
 
 
-def upload_whole(run: SegmentRun, staging: Staging, array: np.ndarray,
-                 chunk: int) -> cl.Buffer:
+def upload_whole(run: Any, staging: Staging, array: np.ndarray, chunk: int,
+                 real: Any = None) -> cl.Buffer:
     """Return a device copy of `array`, streamed through the slots' staging buffers.
+
+    `run` records the copies (``copy_events``, ``bytes_to_device``, ``ready``): a
+    `SegmentRun`, or another call's ledger, which then names the slots' `real`.
 
     The copies of successive pieces alternate between the slots' queues (one piece's
     host copy overlaps the other's transfer); the clips wait for them (``run.ready``).
     """
-    slots = staging.slots_for(run.real, chunk)
+    slots = staging.slots_for(real or run.real, chunk)
     raw = np.ascontiguousarray(array).reshape(-1).view(np.uint8)
     buffer = cl.Buffer(staging.context, cl.mem_flags.READ_ONLY, max(8, raw.nbytes))
     step = slots[0].pinned_in.nbytes

@@ -1,6 +1,6 @@
 """The GPU issue's workloads: Numba on every host core against OpenCL, in one process.
 
-Run on a machine with an OpenCL GPU (DEVELOPERS.md, "Measuring on a GPU")::
+Run on a machine with an OpenCL GPU (README, "Development"; `benchmarks/gpu_host.sh`)::
 
     python -m benchmarks.gpu                  # every workload, the sizes of the issue
     python -m benchmarks.gpu --small          # the same at toy sizes (a CPU check)

@@ -324,6 +324,8 @@ def main(argv: list[str] | None = None) -> dict:
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--skip-cold-start", action="store_true")
     parser.add_argument("--only", default="", help="comma-separated workload families")
+    parser.add_argument("--out", type=Path, default=HERE / "results",
+                        help="directory of the JSON (default benchmarks/results)")
     parser.add_argument("--skip-calibration", action="store_true",
                         help="skip backend='auto''s calibration (its crossover sizes)")
     parser.add_argument("--profile", action="store_true",
@@ -365,7 +367,7 @@ def main(argv: list[str] | None = None) -> dict:
     if args.profile:
         report["profiles"] = _profiles(small)
     stamp = datetime.now(timezone.utc).strftime("%Y%m%dT%H%M%SZ")
-    paths = [HERE / "results" / f"gpu-{stamp}.json"]
+    paths = [args.out / f"gpu-{stamp}.json"]
     if os.environ.get("OUT"):
         paths.append(Path(os.environ["OUT"]) / "gpu.json")
     for path in paths:

@@ -367,8 +367,8 @@ def test_the_gpu_benchmark_runs_and_checks_every_result(opencl, tmp_path):
     """`python -m benchmarks.gpu --small`: every workload on both backends, equal."""
     run = subprocess.run(
         [sys.executable, "-m", "benchmarks.gpu", "--small", "--skip-cold-start",
-         "--repeats", "1", "--out", str(tmp_path)], cwd=ROOT, capture_output=True, text=True, timeout=900,
-        env={**os.environ, "OUT": str(tmp_path),
+         "--repeats", "1", "--out", str(tmp_path)], cwd=ROOT, capture_output=True,
+        text=True, timeout=900, env={**os.environ, "OUT": str(tmp_path),
              "RNSCA_CACHE_DIR": str(tmp_path / "cache")})
     assert run.returncode == 0, run.stderr[-3000:]
     report = json.loads((tmp_path / "gpu.json").read_text())

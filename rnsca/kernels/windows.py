@@ -33,14 +33,7 @@ from numba import prange
 
 from rnsca.kernels.jit import borrowing, inlined, parallel, scalar
 from rnsca.kernels.records import Window
-from rnsca.kernels.segments import (
-    INVALID_BLOCK,
-    RNSCA,
-    _rnsca_block,
-    _write_piece,
-    clip_one,
-    finite_span,
-)
+from rnsca.kernels.segments import clip_block_rows
 
 __all__ = ["WindowFinder", "assign_counts", "assign_write", "clip_pairs", "gather_rows"]
 
@@ -242,31 +235,12 @@ def _clip_pair_block(blk, segments, windows, block_window, block_first, block_en
                      out):
     """Clip the rows ``block_first[blk]:block_end[blk]`` to window ``block_window[blk]``.
 
-    As `segments._clip_block`, from row ``out.block_start[blk]`` on.
+    As `segments._clip_block` does, from row ``out.block_start[blk]`` on.
     """
-    st = out.counters[blk]
-    first = block_first[blk]
-    last = block_end[blk]
     w = block_window[blk]
-    window = Window(windows[w, 0], windows[w, 1], windows[w, 2], windows[w, 3])
-    k = out.block_start[blk]
-    if options.method == RNSCA:
-        k = _rnsca_block(segments, first, last, window, options, st, k, out)
-        if k == INVALID_BLOCK:
-            out.block_count[blk] = INVALID_BLOCK
-            return
-    else:
-        for i in range(first, last):
-            if not finite_span(segments[i, 0], segments[i, 1], segments[i, 2], segments[i, 3]):
-                out.block_count[blk] = INVALID_BLOCK
-                return
-            keep, t0, t1, ax, ay, bx, by = clip_one(
-                segments[i, 0], segments[i, 1], segments[i, 2], segments[i, 3],
-                window, options, st)
-            if keep:
-                _write_piece(out, k, i, t0, t1, ax, ay, bx, by, window)
-                k += 1
-    out.block_count[blk] = k - out.block_start[blk]
+    clip_block_rows(blk, segments, block_first[blk], block_end[blk],
+                    Window(windows[w, 0], windows[w, 1], windows[w, 2], windows[w, 3]),
+                    options, out)
 
 
 @scalar

@@ -30,7 +30,7 @@ import numpy as np
 import pyarrow as pa
 import shapely
 
-from rnsca.arrays import GeometryKind
+from rnsca.arrays import GeometryKind, to_shapely
 from rnsca.errors import ParseError, UnsupportedGeometryError
 
 __all__ = ["GeoArrowEncoding", "CoordLayout", "GeoArrowColumn", "WKB_COLUMN_NAME",
@@ -376,6 +376,7 @@ def _read_serialized(column: pa.Array, field: pa.Field,
         row = next(i for i, v in enumerate(values) if not _parses(parse, v))
         raise ParseError(f"column {field.name!r}, row {row}: not valid "
                          f"{encoding.value.upper()}") from None
+    geometries = _without_empty_points(geometries)
     present = ~null & ~shapely.is_empty(geometries)
     rows = np.flatnonzero(present).astype(np.int64)
     geometries = geometries[rows]
@@ -395,6 +396,31 @@ def _read_serialized(column: pa.Array, field: pa.Field,
     return GeoArrowColumn(kind, coords, tuple(offsets), rows, len(column), null, field,
                           encoding, partial_z=bool(has_z.any() and not has_z.all()),
                           single=single)
+
+
+def _without_empty_points(geometries: np.ndarray) -> np.ndarray:
+    """Return `geometries` with the empty points of multipoints dropped.
+
+    WKB and WKT allow ``MULTIPOINT (EMPTY, (1 2))``. ``shapely.to_ragged_array`` counts
+    such a point in the offsets but writes no coordinates for it, so the arrays would not
+    agree; an empty point adds nothing to a multipoint, so it goes. (A multipoint's
+    points each have one coordinate unless empty: the counts find them.)
+    """
+    multi = shapely.get_type_id(geometries) == shapely.GeometryType.MULTIPOINT
+    if not multi.any():
+        return geometries
+    holed = multi & (shapely.get_num_coordinates(geometries)
+                     != shapely.get_num_geometries(geometries))
+    if not holed.any():
+        return geometries
+    rows = np.flatnonzero(holed)
+    points, index = shapely.get_parts(geometries[rows], return_index=True)
+    kept = ~shapely.is_empty(points)
+    rebuilt = np.full(rows.shape[0], shapely.from_wkt("MULTIPOINT EMPTY"), dtype=object)
+    shapely.multipoints(points[kept], indices=index[kept], out=rebuilt)
+    geometries = geometries.copy()
+    geometries[rows] = rebuilt
+    return geometries
 
 
 def _parses(parse: Callable[[Any], Any], value: Any) -> bool:
@@ -495,10 +521,7 @@ def _list_array(offsets: np.ndarray, values: pa.Array, child: str, mask: pa.Arra
 def _write_serialized(read: GeoArrowColumn, kind: GeometryKind, coords: np.ndarray,
                       offsets: tuple, source: np.ndarray,
                       rows: np.ndarray) -> tuple[pa.Array, pa.Field]:
-    if coords.shape[0]:
-        geometries = shapely.from_ragged_array(kind.shapely_type, coords, offsets)
-    else:
-        geometries = np.full(len(rows), shapely.from_wkt(f"{kind.name} EMPTY"))
+    geometries = to_shapely(kind, coords, offsets)
     if kind is GeometryKind.POINT:
         geometries[np.isnan(coords[:, :2]).any(axis=1)] = shapely.from_wkt("POINT EMPTY")
     # A single geometry left in one part is written as its own kind again.

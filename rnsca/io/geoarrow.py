@@ -116,6 +116,10 @@ class GeoArrowColumn:
     single : ndarray of bool or None
         WKB and WKT: whether each geometry was a single kind (POINT, LINESTRING,
         POLYGON), so that a clip left in one part is written as that kind again.
+    with_z : ndarray of bool or None
+        WKB and WKT: whether each geometry has Z. WKB and WKT carry the dimension of
+        each value, so each is written back in its own (a 2D one beside 3D ones stays
+        2D); a native column has one dimension for all its rows.
     large_offsets : bool
         Native: the lists are ``large_list`` (int64 offsets), and are written so again.
     """
@@ -131,6 +135,7 @@ class GeoArrowColumn:
     coord_layout: CoordLayout | None = None
     partial_z: bool = False
     single: np.ndarray | None = None
+    with_z: np.ndarray | None = None
     large_offsets: bool = False
 
     @property
@@ -377,8 +382,14 @@ def _read_serialized(column: pa.Array, field: pa.Field,
         raise ParseError(f"column {field.name!r}, row {row}: not valid "
                          f"{encoding.value.upper()}") from None
     geometries = _without_empty_points(geometries)
-    present = ~null & ~shapely.is_empty(geometries)
-    rows = np.flatnonzero(present).astype(np.int64)
+    empty = shapely.is_empty(geometries)
+    rows = np.flatnonzero(~null & ~empty).astype(np.int64)
+    if rows.shape[0] == 0:
+        # Every row null or empty (or no rows): nothing to clip, whatever the kind.
+        kind = _kind_of_empties(geometries[~null])
+        nothing = tuple(np.zeros(1, dtype=np.int64) for _ in range(kind.depth))
+        return GeoArrowColumn(kind, np.empty((0, 2)), nothing, rows, len(column), null,
+                              field, encoding, single=np.empty(0, dtype=bool))
     geometries = geometries[rows]
     has_z = shapely.has_z(geometries)
     try:
@@ -391,11 +402,30 @@ def _read_serialized(column: pa.Array, field: pa.Field,
             f"column {field.name!r}: the geometries must be of one kind (points, lines or "
             f"polygons, single or multi), found {', '.join(types)} ({exc})") from None
     single = np.isin(shapely.get_type_id(geometries), [0, 1, 3])
-    # Shapely widens a mix of single and multi kinds to multi; an empty column is points.
+    # Shapely widens a mix of single and multi kinds to multi.
     kind = GeometryKind.of(shapely.GeometryType(kind_id))
+    partial_z = bool(has_z.any() and not has_z.all())
     return GeoArrowColumn(kind, coords, tuple(offsets), rows, len(column), null, field,
-                          encoding, partial_z=bool(has_z.any() and not has_z.all()),
-                          single=single)
+                          encoding, partial_z=partial_z, single=single,
+                          with_z=has_z if partial_z else None)
+
+
+#: The kinds of each family, single first, by Shapely type id.
+_FAMILIES = ({0, 4}, {1, 5}, {3, 6})
+
+
+def _kind_of_empties(geometries: np.ndarray) -> GeometryKind:
+    """Return the kind of a column whose values are all empty: points if they are none.
+
+    Empty values of one family are that family's kind (its multi kind beside a multi
+    one, as Shapely widens them); of several families or collections, points: no
+    kind fits them all, and no value has a coordinate to clip.
+    """
+    types = {int(t) for t in np.unique(shapely.get_type_id(geometries))}
+    for family in _FAMILIES:
+        if types and types <= family:
+            return GeometryKind.of(shapely.GeometryType(max(types)))
+    return GeometryKind.POINT
 
 
 def _without_empty_points(geometries: np.ndarray) -> np.ndarray:
@@ -528,6 +558,11 @@ def _write_serialized(read: GeoArrowColumn, kind: GeometryKind, coords: np.ndarr
     assert read.single is not None  # read from WKB or WKT
     single = read.single[source] & (shapely.get_num_geometries(geometries) == 1)
     geometries[single] = shapely.get_geometry(geometries[single], 0)
+    if read.with_z is not None:
+        # 2D values beside 3D ones: their NaN Z goes (`to_wkb` and `to_wkt` then write
+        # each value in its own dimension, at most `dimension`).
+        flat = ~read.with_z[source]
+        geometries[flat] = shapely.force_2d(geometries[flat])
     values = np.full(read.row_count, None, dtype=object)
     values[~read.null] = shapely.from_wkt(f"{kind.name} EMPTY")  # rows left without one
     values[rows] = geometries

@@ -293,11 +293,52 @@ def test_a_line_of_one_position_is_422_naming_the_row(client):
 
 def test_wkb_with_empty_parts_is_clipped_without_them(client):
     wkts = ["MULTIPOLYGON (EMPTY, ((-5 -5, 5 -5, 5 5, -5 5, -5 -5)))",
-            "MULTIPOINT (EMPTY, (1 1), EMPTY)"]
-    for wkt, expected in zip(wkts, [CLIPPED_SQUARE, shapely.Point(1, 1)], strict=True):
+            "MULTIPOINT (EMPTY, (1 1), EMPTY)", "MULTIPOINT (EMPTY)"]
+    for wkt, expected in zip(wkts, [CLIPPED_SQUARE, shapely.Point(1, 1), None], strict=True):
         body = to_stream(table([shapely.from_wkt(wkt)], "wkb", "wkb", False))
         r = post(client, body, keep_empty="true")
         assert r.status_code == 200, (wkt, r.text)
         got = from_stream(r.content)
         [clipped] = decode(got.column("geometry"), got.schema.field("geometry"))
         assert clipped.is_empty if expected is None else shapely.equals(clipped, expected)
+
+
+# --- columns without a geometry, and WKB that mixes 2D and 3D ---------------------------
+
+@pytest.mark.parametrize("encoding", ["separated", "interleaved", "wkb"])
+@pytest.mark.parametrize("keep_empty", ["false", "true"])
+def test_an_all_null_column_is_answered_as_nulls_are_in_any_column(client, encoding,
+                                                                   keep_empty):
+    body = to_stream(table([None, None, None], "polygon", encoding, False))
+    r = post(client, body, keep_empty=keep_empty)
+    assert r.status_code == 200, r.text
+    got = from_stream(r.content)
+    # Null rows are dropped, or kept as nulls with keep_empty, as beside present rows.
+    expected = [0, 1, 2] if keep_empty == "true" else []
+    assert got.column("id").to_pylist() == expected and r.headers["X-Rnsca-Rows"] == str(
+        len(expected))
+    assert got.column("geometry").null_count == len(expected)
+
+
+def test_a_wkb_column_of_empty_values_is_answered_with_empties(client):
+    body = to_stream(table([shapely.Polygon(), None], "polygon", "wkb", False))
+    r = post(client, body, keep_empty="true")
+    assert r.status_code == 200, r.text
+    got = from_stream(r.content)
+    empty, null = decode(got.column("geometry"), got.schema.field("geometry"))
+    assert empty.is_empty and null is None
+
+
+def test_wkb_values_keep_their_own_dimension_when_2d_and_3d_are_mixed(client):
+    lines = shapely.from_wkt(["LINESTRING (-5 1, 15 1)", "LINESTRING Z (-5 2 7, 15 2 9)"])
+    body = to_stream(table(list(lines), "linestring", "wkb", True))  # written with Z...
+    t = from_stream(body)
+    wkb = pa.array(list(shapely.to_wkb(lines, output_dimension=3)), pa.binary())  # ...or not
+    body = to_stream(t.set_column(2, t.schema.field("geometry"), wkb))
+    r = post(client, body)
+    assert r.status_code == 200, r.text
+    got = from_stream(r.content)
+    flat, with_z = decode(got.column("geometry"), got.schema.field("geometry"))
+    assert shapely.to_wkt(flat) == "LINESTRING (0 1, 10 1)"
+    assert shapely.to_wkt(with_z) == "LINESTRING Z (0 2 7.5, 10 2 8.5)"
+    assert orjson.loads(r.headers["X-Rnsca-Verification"])["passed"] is True

@@ -186,6 +186,7 @@ def clip_segments(segments: npt.ArrayLike, window: Window | Iterable[float] | No
         table = as_windows(windows)
         smallest = int(np.argmin((table[:, 2] - table[:, 0]) * (table[:, 3] - table[:, 1])))
         window = Window(*table[smallest].tolist())
+    assert window is not None
     window = Window.of(window)
     options = SegmentOptions.resolve(window, method=method, n=n, max_depth=max_depth,
                                      tolerance=tolerance, mode=mode, resolution=resolution)
@@ -199,7 +200,7 @@ def clip_segments(segments: npt.ArrayLike, window: Window | Iterable[float] | No
             raise InvalidGeometryError(
                 "segments in a pyopencl array are on an OpenCL device: clip them with "
                 "backend='opencl', or bring them to the host (.get())")
-        array = segments
+        array: Any = segments
     else:
         array = as_segments(segments, check_values=False)
     if table is not None:

@@ -465,25 +465,26 @@ class OpenCLBackend:
         """
         real = self.real
         on_device = isinstance(segments, cl_array.Array)
-        if on_device:
+        host_data: np.ndarray | None = None
+        if isinstance(segments, cl_array.Array):
             self._check_device_segments(segments)
-            data = segments
+            n = int(segments.shape[0])
         else:
             with np.errstate(over="ignore"):  # float32: checked below, with the row named
-                data = np.ascontiguousarray(segments, dtype=real)
-        n = int(data.shape[0])
+                host_data = np.ascontiguousarray(segments, dtype=real)
+            n = int(host_data.shape[0])
         bounds: np.ndarray = np.array(window.bounds, dtype=real)
-        if real is np.float32 and not on_device:
-            _check_float32(data, bounds)
+        if real is np.float32 and host_data is not None:
+            _check_float32(host_data, bounds)
         device = self._device
         with device.call_lock:
             run = self._segment_run(bounds if n else None, options, source, t)
-            if on_device:
-                outputs, totals, m = _segments.clip_device(run, device.queue, data, n,
+            if isinstance(segments, cl_array.Array):
+                outputs, totals, m = _segments.clip_device(run, device.queue, segments, n,
                                                            device.allocator)
             else:
                 assert device.staging is not None
-                host, totals, m = _segments.clip_host(run, device.staging, data,
+                host, totals, m = _segments.clip_host(run, device.staging, host_data,
                                                       _segments.CHUNK_SEGMENTS)
             device_stats = self._run_stats(run)
         bad = totals[:, -1].min() if totals.shape[0] else n
@@ -520,8 +521,8 @@ class OpenCLBackend:
         check_segment_values(segments)  # the assignment reads the boxes
         real = self.real
         with np.errstate(over="ignore"):
-            data = np.ascontiguousarray(segments, dtype=real)
-            bounds = np.ascontiguousarray(windows, dtype=real)
+            data: np.ndarray = np.ascontiguousarray(segments, dtype=real)
+            bounds: np.ndarray = np.ascontiguousarray(windows, dtype=real)
         if real is np.float32:
             _check_float32(data, bounds[0])
             _check_float32_lines(data.reshape(-1, 2), bounds)
@@ -567,10 +568,12 @@ class OpenCLBackend:
         device = self._device
         real = self.real
         kernels = device.program(real is np.float64)
-        windows = np.ascontiguousarray(bounds if bounds is not None else [], dtype=real
-                                       ).reshape(-1)
+        windows: np.ndarray = np.ascontiguousarray(
+            bounds if bounds is not None else [], dtype=real).reshape(-1)
+        assert device.allocator is not None
         run = _segments.SegmentRun(
-            kernels, device.scan(), real, LOCAL_SIZE, device.allocator(max(8, windows.nbytes)),
+            kernels, device.scan(), real, LOCAL_SIZE,
+            cast(cl.Buffer, device.allocator(max(8, windows.nbytes))),
             METHOD_ID[options.method], options.n, options.max_depth, options.tolerance,
             int(options.mode is Mode.EXACT), source, t, nowhere=device.nowhere,
             allocator=device.allocator)

@@ -26,7 +26,7 @@ An item is a segment and the window, or a (segment, window) pair of a many-windo
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 import pyopencl as cl
@@ -66,9 +66,10 @@ class _Pinned:
                                 self.nbytes)
         # Kept mapped: its host pointer is the source and target of the transfers
         # (the pattern NVIDIA's OpenCL guide gives for pinned staging).
-        self.view, _ = cl.enqueue_map_buffer(
-            queue, self.buffer, cl.map_flags.READ | cl.map_flags.WRITE, 0, (self.nbytes,),
-            np.uint8, is_blocking=True)
+        mapped = cl.enqueue_map_buffer(
+            queue, self.buffer, cast(cl.map_flags, cl.map_flags.READ | cl.map_flags.WRITE), 0,
+            (self.nbytes,), np.dtype(np.uint8), is_blocking=True)
+        self.view: np.ndarray = mapped[0]
 
     def array(self, offset: int, dtype: Any, count: int) -> np.ndarray:
         """Return `count` items of `dtype` from byte `offset` on, a view."""
@@ -450,7 +451,7 @@ def clip_device(run: SegmentRun, queue: cl.CommandQueue, segments: cl_array.Arra
     row[_WIDTH] = n
     m = 0
     if n:
-        reduced = run.clip(queue, segments.data, n, 0, buffers, [])
+        reduced = run.clip(queue, cast(cl.Buffer, segments.data), n, 0, buffers, [])
         run.download(queue, row, buffers["total"], wait_for=[reduced]).wait()
         m = int(row[_WIDTH + 1])
     out_arrays = {

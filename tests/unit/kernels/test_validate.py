@@ -49,8 +49,8 @@ def test_first_invalid_segment_across_parallel_blocks():
     assert first_invalid_segment(segments) == BLOCK_SIZE + 3
 
 
-@pytest.mark.parametrize("where", [0, (1 << 20) - 1, 1 << 20, 3 * (1 << 20) + 7, -1])
-@pytest.mark.parametrize("value", [np.nan, np.inf, -np.inf])
+@pytest.mark.parametrize("where, value", [(0, np.nan), ((1 << 20) - 1, np.inf),
+                                          (3 * (1 << 20) + 7, -np.inf), (-1, np.nan)])
 def test_all_finite_in_parallel_blocks_finds_any_value(where, value):
     from rnsca.kernels.validate import FINITE_BLOCK, all_finite
 

@@ -9,15 +9,17 @@ and the host's copies overlap. Per chunk, on the device:
 1. ``clip_segments``: each item's result and a 0/1 keep count, the counters summed per
    work-group (few groups: a grid-stride loop), the first non-finite segment;
 2. an inclusive scan of the counts (the slots of the kept pieces);
-3. ``reduce_counters``: the groups' counter rows to one row;
+3. ``reduce_counters``: the groups' counter rows to one row, with the first non-finite
+   item and the count of kept items;
 4. ``write_pieces``: the kept results to their slots, in the output's dtype and layout
    (``source`` and ``t`` only where asked for).
 
-Only the count and one counter row come back before the pieces. The host copies between
-the caller's arrays and the staging buffers on every core (`rnsca.kernels.copies`).
+Only that row comes back before the pieces (`clip_host` says in which order the chunks'
+steps interleave). The host copies between the caller's arrays and the staging buffers
+on every core (`rnsca.kernels.copies`).
 
 A call on a `pyopencl.array.Array` of segments runs the same kernels in one pass and
-returns device arrays: nothing crosses the bus but the count and the counters.
+returns device arrays: nothing crosses the bus but the window and the row.
 
 An item is a segment and the window, or a (segment, window) pair of a many-window call
 (``pairs``): the kernels read the window of each pair from a table on the device.

@@ -7,7 +7,6 @@ import numpy as np
 import pytest
 import shapely
 
-import rnsca
 from rnsca.errors import (
     InvalidGeometryError,
     InvalidOptionError,

@@ -238,8 +238,9 @@ def input_format(path: str | Path) -> InputFormat | None:
 def find_inputs(spec: str) -> list[Path]:
     """Return the input files of `spec`: a file, a folder (searched through) or a glob.
 
-    Files of a folder or glob are sorted by path; in a folder, those of other kinds and
-    those whose name starts with ``.`` or ``_`` are left out.
+    Files of a folder or glob are sorted by path; names starting with ``.`` or ``_``
+    (hidden files, dataset metadata such as ``_metadata``) are left out, and so, in a
+    folder, are files of other kinds.
 
     Raises
     ------
@@ -255,7 +256,8 @@ def find_inputs(spec: str) -> list[Path]:
                                    for part in p.relative_to(path).parts)
                        and input_format(p) is not None)
     else:
-        files = sorted(Path(p) for p in glob.glob(spec, recursive=True) if Path(p).is_file())
+        files = sorted(Path(p) for p in glob.glob(spec, recursive=True)
+                       if Path(p).is_file() and not Path(p).name.startswith("_"))
     if not files:
         raise InvalidOptionError(f"{spec}: no such file, and no GeoParquet, FlatGeobuf or "
                                  "GeoJSON text sequence file found there")

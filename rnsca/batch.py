@@ -181,12 +181,16 @@ class Job:
 
 @dataclass(frozen=True)
 class PartitionReport:
-    """What one task did: rows read and written, and its time in seconds."""
+    """What one task did: rows read and written, and its time in seconds (in all, and
+    reading, clipping and writing)."""
 
     name: str
     rows_in: int
     rows_out: int
     seconds: float
+    read_s: float = 0.0
+    clip_s: float = 0.0
+    write_s: float = 0.0
 
 
 @dataclass
@@ -456,6 +460,7 @@ def run_partition(partition: Partition, job: Job) -> PartitionReport:
             else f": rows {partition.start}-{partition.stop - 1}"
         raise PartitionError(f"{partition.path}{rows}: cannot read: "
                              f"{type(exc).__name__}: {exc}", partition.path) from None
+    read = time.perf_counter()
     try:
         clipped = clip_frame(frame, job.window, keep_empty=job.keep_empty, **job.options)
     except InvalidGeometryError as exc:
@@ -467,14 +472,16 @@ def run_partition(partition: Partition, job: Job) -> PartitionReport:
                              row) from None
     except RnscaError as exc:
         raise PartitionError(f"{partition.path}: {exc}", partition.path) from None
+    clipped_at = time.perf_counter()
     target = job.target(partition)
     try:
         _write(clipped, target, job.encoding, keep_index, frame)
     except (OSError, ValueError, TypeError) as exc:
         raise PartitionError(f"{partition.path}: cannot write {target}: {exc}",
                              partition.path) from None
-    return PartitionReport(partition.name, len(frame), len(clipped),
-                           time.perf_counter() - started)
+    done = time.perf_counter()
+    return PartitionReport(partition.name, len(frame), len(clipped), done - started,
+                           read - started, clipped_at - read, done - clipped_at)
 
 
 def _read(partition: Partition) -> tuple[Any, bool]:

@@ -13,8 +13,9 @@ quarter of its extent:
 Every contender writes the same files; each gets a warm-up (kernels loaded, a small
 partition clipped) before it is timed, and the cluster's start is measured apart. The
 ratio ``dask-2 / direct`` is the Dask job's overhead on the same cores. Per-partition
-costs (read, clip, write) are reported from the tasks' own reports, for the design note
-in benchmarks/README.md. Results: ``benchmarks/results/dask_batch-<UTC timestamp>.json``.
+costs (read, clip, write) are reported from the tasks' own reports, and each worker's
+peak memory, for the design note in benchmarks/README.md. Results:
+``benchmarks/results/dask_batch-<UTC timestamp>.json``.
 
     .venv/bin/python -m benchmarks.dask_batch --features 2000000
     .venv/bin/python -m benchmarks.dask_batch --quick      # 40,000 features, a smoke run
@@ -100,6 +101,13 @@ def _warm_up() -> None:
     clip_frame(frame, WINDOW)
 
 
+def _peak_rss() -> int:
+    """Return this process's peak resident memory in bytes (Linux: ru_maxrss in KiB)."""
+    import resource
+
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
+
+
 def time_direct(job, partitions) -> dict:
     import rnsca.batch
 
@@ -127,8 +135,9 @@ def time_dask(job, partitions, workers: int) -> dict:
         report = rnsca.batch.run(job, partitions, client)
         if report.failed:
             raise RuntimeError(report.failed)
+        peaks = client.run(_peak_rss)
         return {"seconds": report.seconds, "cluster_start_s": start_s,
-                "reports": report.written}
+                "worker_peak_rss_bytes": max(peaks.values()), "reports": report.written}
     finally:
         cluster.close()
         client.close()
@@ -144,6 +153,8 @@ def _summary(result: dict, features: int, vertices: int) -> dict:
         values = [getattr(r, name) for r in reports]
         result[f"partition_{name}_median"] = statistics.median(values)
     result["partition_rows_median"] = statistics.median(r.rows_in for r in reports)
+    result["partition_features_per_s_median"] = statistics.median(
+        r.rows_in / r.seconds for r in reports)
     return result
 
 

@@ -421,9 +421,9 @@ def batch(
     with _reporting(EXIT_DATA):
         cluster = None if scheduler else jobs.local_cluster(workers)
         client = Client(scheduler) if scheduler else Client(cluster)
-    bar = _PartitionBar(progress, len(partitions))
+    typer.echo(f"dashboard: {client.dashboard_link}", err=True)
+    bar = _PartitionBar(progress, len(todo))
     try:
-        typer.echo(f"dashboard: {client.dashboard_link}", err=True)
         with _reporting(EXIT_DATA):
             report = jobs.run(job, partitions, client, on_done=bar.done)
     finally:

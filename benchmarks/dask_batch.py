@@ -24,6 +24,7 @@ peak memory, for the design note in benchmarks/README.md. Results:
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import os
 import shutil
@@ -132,6 +133,7 @@ def time_dask(job, partitions, workers: int) -> dict:
     try:
         client.run(_warm_up)
         _fresh(Path(job.output))
+        job = dataclasses.replace(job, threads=rnsca.batch.threads_per_task(workers))
         report = rnsca.batch.run(job, partitions, client)
         if report.failed:
             raise RuntimeError(report.failed)

@@ -49,7 +49,7 @@ from rnsca.io.geojson_seq import Framing, framing_of_path, parse_record, split_r
 
 __all__ = ["Encoding", "InputFormat", "Partition", "Job", "PartitionReport", "BatchReport",
            "PartitionError", "MANIFEST", "find_inputs", "plan", "pending", "run_partition",
-           "run", "local_cluster"]
+           "run", "local_cluster", "threads_per_task"]
 
 #: The job's record in the output folder (dataset readers skip names starting with ``_``).
 MANIFEST = "_rnsca_batch.json"
@@ -166,6 +166,12 @@ class Job:
     keep_empty : bool
         Keep rows clipped to nothing, with an empty geometry (see `rnsca.dask.clip`).
     encoding : Encoding
+    threads : int or None
+        Threads of each task's kernels (Numba's, and pyarrow's pool); None leaves the
+        worker's (Numba: ``NUMBA_NUM_THREADS``, read when Numba is first imported, which
+        in a worker may be before a nanny's ``env`` is applied). `local_cluster`'s
+        `threads_per_task` gives each worker its share of the cores. Not part of the
+        job's identity: it changes no output.
     """
 
     output: str
@@ -173,6 +179,7 @@ class Job:
     options: dict[str, Any] = field(default_factory=dict)
     keep_empty: bool = False
     encoding: Encoding = Encoding.WKB
+    threads: int | None = None
 
     def target(self, partition: Partition) -> str:
         """Return the path of `partition`'s output file."""
@@ -453,6 +460,8 @@ def run_partition(partition: Partition, job: Job) -> PartitionReport:
         clipped, or the output file that cannot be written.
     """
     started = time.perf_counter()
+    if job.threads is not None:
+        _use_threads(job.threads)
     try:
         frame, keep_index = _read(partition)
     except PartitionError:
@@ -484,6 +493,15 @@ def run_partition(partition: Partition, job: Job) -> PartitionReport:
     done = time.perf_counter()
     return PartitionReport(partition.name, len(frame), len(clipped), done - started,
                            read - started, clipped_at - read, done - clipped_at)
+
+
+def _use_threads(threads: int) -> None:
+    """Run this thread's parallel kernels on `threads` threads, and pyarrow's pool too."""
+    import numba
+    import pyarrow
+
+    numba.set_num_threads(max(1, min(threads, numba.config.NUMBA_NUM_THREADS)))
+    pyarrow.set_cpu_count(max(1, threads))
 
 
 def _read(partition: Partition) -> tuple[Any, bool]:
@@ -720,16 +738,23 @@ def local_cluster(workers: int | None = None, *, dashboard_address: str | None =
                   **kwargs: Any) -> Any:
     """Return a ``distributed.LocalCluster`` of worker processes on loopback.
 
-    One process per core by default, one task thread each, and Numba's kernels in each
-    given the cores divided among the processes (``NUMBA_NUM_THREADS``), so the workers
-    do not oversubscribe the machine.
+    One process per core by default, one task thread each, and each process's share of
+    the cores (`threads_per_task`) in its environment (``NUMBA_NUM_THREADS``,
+    ``OMP_NUM_THREADS``, which Dask's nannies otherwise set to 1); give the same share to
+    the job (`Job.threads`), since a worker may have imported Numba before its
+    environment was set.
     """
     from distributed import LocalCluster
 
-    cores = os.cpu_count() or 1
-    workers = workers or cores
-    env = {"NUMBA_NUM_THREADS": str(max(1, cores // workers))}
+    workers = workers or os.cpu_count() or 1
+    share = str(threads_per_task(workers))
+    env = {"NUMBA_NUM_THREADS": share, "OMP_NUM_THREADS": share}
     return LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
                         host="127.0.0.1", dashboard_address=dashboard_address,
                         env=env, **kwargs)
 
+
+
+def threads_per_task(workers: int) -> int:
+    """Return each of `workers` single-threaded worker processes' share of this machine."""
+    return max(1, (os.cpu_count() or 1) // max(1, workers))

@@ -12,6 +12,7 @@ command line (options, window, the kind of input) or 1 for input that cannot be 
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 import json
 import re
@@ -421,6 +422,8 @@ def batch(
     with _reporting(EXIT_DATA):
         cluster = None if scheduler else jobs.local_cluster(workers)
         client = Client(scheduler) if scheduler else Client(cluster)
+    if cluster is not None:
+        job = dataclasses.replace(job, threads=jobs.threads_per_task(len(cluster.workers)))
     typer.echo(f"dashboard: {client.dashboard_link}", err=True)
     bar = _PartitionBar(progress, len(todo))
     try:

@@ -204,3 +204,30 @@ def test_segment_arrays_need_four_columns_and_known_chunks(segments):
         rnsca.dask.clip(unknown, WINDOW)
     with pytest.raises(InvalidOptionError):
         rnsca.dask.clip(da.from_array(segments), WINDOW, mode="sideways")
+
+
+def test_a_worker_killed_mid_compute_changes_nothing(client, rng):
+    import os
+
+    import dask_geopandas
+    from distributed import as_completed
+
+    import rnsca.dask
+
+    data = frame(rng, 12_000)
+    lazy = dask_geopandas.from_geopandas(data, npartitions=12)
+    parts = client.compute([rnsca.dask.clip(lazy, WINDOW).get_partition(number)
+                            for number in range(12)])
+    killed = []
+    for _ in as_completed(parts):
+        busy = [address for address, keys in client.processing().items() if keys]
+        if not killed and busy:
+            pid = client.run(os.getpid, workers=busy[:1])[busy[0]]
+            os.kill(pid, 9)
+            killed.append(pid)
+    assert killed, "no worker was busy to kill"
+    import pandas as pd
+
+    got = pd.concat(client.gather(parts))
+    assert_same_frames(got, reference(lazy.compute()))
+    client.wait_for_workers(2, timeout=120)

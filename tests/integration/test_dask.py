@@ -210,6 +210,7 @@ def test_a_worker_killed_mid_compute_changes_nothing(client, rng):
     import os
 
     import dask_geopandas
+    import pandas as pd
     from distributed import as_completed
 
     import rnsca.dask
@@ -226,8 +227,6 @@ def test_a_worker_killed_mid_compute_changes_nothing(client, rng):
             os.kill(pid, 9)
             killed.append(pid)
     assert killed, "no worker was busy to kill"
-    import pandas as pd
-
     got = pd.concat(client.gather(parts))
     assert_same_frames(got, reference(lazy.compute()))
     client.wait_for_workers(2, timeout=120)

@@ -10,6 +10,7 @@ import numpy as np
 import numpy.typing as npt
 
 from rnsca.arrays import GeometryKind, check_segment_values, geometry_error
+from rnsca.kernels.validate import all_finite
 from rnsca.backends.auto import backend_for
 from rnsca.errors import (
     InvalidGeometryError,
@@ -219,6 +220,27 @@ def clip_segments(segments: npt.ArrayLike, window: Window | Iterable[float] | No
                              out.window_offsets)
 
 
+def _check_decided_finite(geometries: np.ndarray, rows: np.ndarray, include_z: bool) -> None:
+    """Raise `InvalidGeometryError` for a geometry decided by its box that is not finite.
+
+    GEOS leaves NaN coordinates out of a geometry's bounds, so a line with a NaN vertex
+    can have finite bounds inside (or beyond) the window and never reach the ragged
+    arrays' check: its coordinates are checked here.
+    """
+    import shapely
+
+    if rows.shape[0] == 0:
+        return
+    decided = geometries[rows]
+    coords = shapely.get_coordinates(decided, include_z=include_z)
+    if all_finite(np.ascontiguousarray(coords)):
+        return
+    bad = int(np.argmax(~np.isfinite(coords).all(axis=1)))
+    ends = np.cumsum(shapely.get_num_coordinates(decided))
+    row = int(rows[int(np.searchsorted(ends, bad, side="right"))])
+    raise geometry_error(row, f" has a non-finite coordinate ({coords[bad].tolist()})")
+
+
 def _rows(segments: Any) -> int:
     """Return the number of segments (for ``backend="auto"``), 0 if unknown yet."""
     shape = getattr(segments, "shape", None)
@@ -352,6 +374,7 @@ def _clip_geometries(geometries: np.ndarray,
                             | (box[:, 3] < win[:, 1]) | (box[:, 1] > win[:, 3]))
         inside = finite & ((box[:, 0] > win[:, 0]) & (box[:, 2] < win[:, 2])
                            & (box[:, 1] > win[:, 1]) & (box[:, 3] < win[:, 3]))
+        _check_decided_finite(geometries, rows[outside | inside], include_z)
         out[rows[outside]] = empty_geometry
         kept = geometries[rows[inside]]
         if "POLYGON" in input_name:

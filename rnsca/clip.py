@@ -10,7 +10,6 @@ import numpy as np
 import numpy.typing as npt
 
 from rnsca.arrays import GeometryKind, check_segment_values, geometry_error
-from rnsca.kernels.validate import all_finite
 from rnsca.backends.auto import backend_for
 from rnsca.errors import (
     InvalidGeometryError,
@@ -18,6 +17,7 @@ from rnsca.errors import (
     InvalidWindowError,
     UnsupportedGeometryError,
 )
+from rnsca.kernels.validate import all_finite
 from rnsca.many_windows import as_windows
 from rnsca.options import Backend, Method, Mode, SegmentOptions
 from rnsca.ragged import clip_ragged, resolve_geometry_options

@@ -6,7 +6,15 @@ The public API lives here; see README.md for a tour.
 from rnsca.arrays import GeometryKind, PathArrays, Ragged
 from rnsca.clip import SegmentClipResult, clip, clip_segments
 from rnsca.clip_geojson import GeoJSONClipResult, clip_geojson
-from rnsca.clip_svg import Curves, Fill, PathClipResult, clip_paths, clip_svg, flatten_paths
+from rnsca.clip_svg import (
+    Curves,
+    Fill,
+    FillOutput,
+    PathClipResult,
+    clip_paths,
+    clip_svg,
+    flatten_paths,
+)
 from rnsca.clip_svgdoc import FillMode, clip_svg_document
 from rnsca.errors import (
     BackendUnavailableError,
@@ -34,6 +42,7 @@ __all__ = [
     "ClipStats",
     "Curves",
     "Fill",
+    "FillOutput",
     "FillMode",
     "GeoJSONClipResult",
     "GeometryKind",

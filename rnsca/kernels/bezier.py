@@ -147,6 +147,8 @@ class Options(NamedTuple):
     n_split: int        # N: pieces per split
     leaf_depth: int     # deepest split level
     tolerance: float    # flatness of lines (flatten); smallest piece (approx)
+    split_touches: bool  # end a visible piece where it touches an edge and turns back in
+                         # (clean fills: `fill_rings` cuts rings at boundary vertices only)
 
 
 class Curve(NamedTuple):
@@ -764,6 +766,12 @@ def _emit_exact(out, state, work, opts, window, c):
         if _code(mx, my, window) == 0:
             if open_k < 0:
                 open_k = k
+            elif opts.split_touches and brk_e[k] != 0:
+                # It touches an edge at break k and stays inside: two pieces, meeting
+                # there exactly (both ends snapped onto the edge).
+                _emit_stretch(out, state, opts, window, c, brk_t[open_k], brk_t[k],
+                              brk_e[open_k], brk_e[k])
+                open_k = k
             continue
         if open_k >= 0:
             _emit_stretch(out, state, opts, window, c, brk_t[open_k], brk_t[k], brk_e[open_k],
@@ -778,9 +786,14 @@ def _emit_exact(out, state, work, opts, window, c):
 
 
 @borrowing
-def _pend(state, a, b, edges_a, edges_b):
-    """Mark [a, b] visible; return whether it continues the pending interval."""
-    if state.ints[_PEND] == 1 and state.floats[_PEND_B] == a:
+def _pend(state, a, b, edges_a, edges_b, split_touches):
+    """Mark [a, b] visible; return whether it continues the pending interval.
+
+    With `split_touches`, an interval starting where the curve touches an edge
+    (`edges_a` non-zero) does not continue it: the touching point ends a piece.
+    """
+    if state.ints[_PEND] == 1 and state.floats[_PEND_B] == a and not (
+            split_touches and edges_a != 0):
         state.floats[_PEND_B] = b
         state.ints[_PEND_EB] = edges_b
         return True
@@ -793,7 +806,7 @@ def _visible(out, state, opts, window, c, a, b, edges_a, edges_b):
 
     It extends the pending one if it continues it; otherwise that one is output first.
     """
-    if _pend(state, a, b, edges_a, edges_b):
+    if _pend(state, a, b, edges_a, edges_b, opts.split_touches):
         return
     _flush(out, state, opts, window, c)
     si = state.ints

@@ -1,0 +1,855 @@
+"""Clean fills: rebuild the clip of each filled path as closed subpaths whose rings are simple.
+
+The fill clip (`bezier.clip_path_blocks` with ``fill``) replaces every part of a filled
+subpath that lies outside the window by its clamp onto the window's boundary. Each input
+subpath gives one closed output subpath; together they paint the right region under either
+fill rule, but a subpath may run along an edge several times, back and forth, and touch
+itself there (a polygoniser or a font editor would have to repair it). Here each path's
+output is rebuilt from the same pieces, in four steps:
+
+1. **Cut** (`_cut`). Every output subpath is cut at its vertices on the window's boundary.
+   The pieces between two such vertices are *edge lines* (all control points on one edge
+   line: the clamped outside parts, and visible parts lying on an edge) or *chains*
+   (visible parts through the window, from one boundary point to another). A subpath
+   with no vertex on the boundary is a *loop*, kept as it is. Segments of zero length
+   are dropped.
+2. **Count** (`_lane_counts`). The edge lines are replaced by their net count along the
+   boundary: on each stretch between two boundary points, ``m`` = (times run
+   counter-clockwise) - (times run clockwise), counter-clockwise meaning with the window's
+   inside on the left (in y-up axes: along the bottom edge towards +x). A point just
+   outside the window winds 0 times around the output, and stepping across a stretch run
+   ``m`` times changes the winding number by ``m``: ``m`` is the winding number just
+   inside the window. It steps by +1 where a chain ends on the boundary and by -1 where
+   one starts.
+3. **Match** (`_match`). The chains are joined by *lanes* along the boundary that carry
+   that count. The chains' ends are ordered along the boundary, counter-clockwise from
+   (xmin, ymin), and ends at one point by the angle at which their chains leave it (as if
+   each lay a little further along the boundary, by its angle: the ends of a chain that
+   touches the edge and turns back are then taken in the order that keeps rings apart).
+   Walking counter-clockwise from a stretch of least ``|m|``, a chain ending where the
+   count is >= 0 starts a lane counter-clockwise, and the next chain starting where it
+   is > 0 takes the innermost open lane (a stack, as parentheses match); where the count
+   is negative the lanes run clockwise, from a chain's end back to a start met earlier.
+   The stretch of least ``|m|`` carries ``|m|`` lanes all around: that many copies of the
+   window's outline.
+4. **Rings** (`_trace`, `_put_ring`). Chain, lane, chain, ... are followed into closed
+   walks; a walk is cut into rings at every boundary point it passes twice (so no ring
+   meets itself), and each ring's lanes are written as one line per edge.
+
+The chains and loops are the clip's own pieces (curves stay curves, of their degree);
+only the lines along the edges are new, and their endpoints are the pieces' boundary
+points or the window's corners, exact: positions along the boundary are compared as
+(edge, coordinate along the edge), never by a perimeter distance. The output winds
+around every point off the boundary as often as the fill clip's does, so both fill rules
+paint the same region with it; its rings meet only at boundary points or where the
+input's own outlines meet. The closing line of a ring is left to ``Z`` (not written).
+
+Two passes over one body per path (`clean_fill_paths`, ``prange`` over paths): the count
+pass sizes each path's output, the write pass writes it from its place.
+"""
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+from numba import prange
+
+from rnsca.kernels.jit import allocating, borrowing, parallel, scalar
+
+__all__ = ["FillPaths", "RingLayout", "RingOutput", "clean_fill_paths"]
+
+# Segment kinds (`_segment_kind`): an edge line's kind is _EDGE + its edge.
+_PIECE = 0
+_POINT = 1
+_EDGE = 2
+# Edges in counter-clockwise order from (xmin, ymin). A corner belongs to the edge that
+# starts there, so a stretch from one boundary position to the next lies on the edge of
+# the first.
+_BOTTOM = 0
+_RIGHT = 1
+_TOP = 2
+_LEFT = 3
+# Steps of a walk (`_trace`): a chain (its index, >= 0), or one stretch of a lane.
+_FORWARD = -1     # counter-clockwise, from vertex v to v + 1
+_BACKWARD = -2    # clockwise, from vertex v to v - 1
+# Chain ends (events).
+_ARRIVE = 0       # a chain ends here
+_DEPART = 1       # a chain starts here
+
+
+class FillPaths(NamedTuple):
+    """The fill clip's output (`rnsca.arrays.PathArrays` layout, every subpath closed)."""
+
+    controls: np.ndarray         # float64 (m, 4, 2)
+    degree: np.ndarray           # int8 (m,)
+    subpath_offsets: np.ndarray  # int64 (k + 1,)
+    path_offsets: np.ndarray     # int64 (n + 1,)
+
+
+class RingLayout(NamedTuple):
+    """Each path's output: its size (count pass) and its place (write pass)."""
+
+    n_segments: np.ndarray       # int64 (n,)
+    n_rings: np.ndarray          # int64 (n,)
+    segment_start: np.ndarray    # int64 (n,) first output segment (write pass)
+    ring_start: np.ndarray       # int64 (n,) first output subpath (write pass)
+
+
+class RingOutput(NamedTuple):
+    """The rings; without `write` (the count pass), empty and untouched."""
+
+    write: bool
+    controls: np.ndarray         # float64 (M, 4, 2)
+    degree: np.ndarray           # int8 (M,)
+    first: np.ndarray            # int64 (K + 1,) each ring's first segment
+    start: np.ndarray            # float64 (K, 2)
+
+
+class Cut(NamedTuple):
+    """One path's pieces after cutting at the boundary (scratch; see step 1)."""
+
+    kind: np.ndarray             # int64 (m,) per segment of the path (index - first one)
+    chain_first: np.ndarray      # int64 (c,) each chain's first segment
+    chain_count: np.ndarray      # int64 (c,) its segments, cyclic within its subpath
+    chain_sub: np.ndarray        # int64 (c,) its subpath
+    edge_segment: np.ndarray     # int64 (e,) each edge line
+    edge_side: np.ndarray        # int64 (e,) the edge it lies on
+    sub_chains: np.ndarray       # int64 (k + 1,) chain offsets of the path's subpaths
+    sub_loop: np.ndarray         # bool (k,) a subpath with no vertex on the boundary
+
+
+class Boundary(NamedTuple):
+    """The boundary points of one path (scratch; see steps 2 and 3).
+
+    Points (chain ends, edge line ends, the four corners) have positions (distinct
+    boundary points, in counter-clockwise order); positions where a chain ends or that
+    are corners are *vertices*, the only points the rings pass on the boundary.
+    """
+
+    point_edge: np.ndarray       # int64 (q,)
+    point_along: np.ndarray      # float64 (q,)
+    point_vertex: np.ndarray     # bool (q,)
+    point_position: np.ndarray   # int64 (q,)
+    position_vertex: np.ndarray  # int64 (q,) a position's vertex, or -1
+    position_count: np.ndarray   # int64 (q + 1,) net count difference (then the count)
+    vertex_edge: np.ndarray      # int64 (q,)
+    vertex_along: np.ndarray     # float64 (q,)
+    vertex_count: np.ndarray     # int64 (q,) m on the stretch from vertex v to v + 1
+
+
+class Lanes(NamedTuple):
+    """Where each chain goes next (scratch; see step 3)."""
+
+    next_chain: np.ndarray       # int64 (c,) the chain its lane leads to
+    lane_steps: np.ndarray       # int64 (c,) vertices the lane passes
+    lane_step: np.ndarray        # int64 (c,) _FORWARD or _BACKWARD
+    end_vertex: np.ndarray       # int64 (c,) the vertex where the chain ends
+    start_vertex: np.ndarray     # int64 (c,) the vertex where it starts
+
+
+class Walk(NamedTuple):
+    """The walk being cut into rings (scratch; see step 4)."""
+
+    step: np.ndarray             # int64 (w,) a chain, _FORWARD or _BACKWARD
+    origin: np.ndarray           # int64 (w,) the vertex the step starts at
+    seen: np.ndarray             # int64 (vertices,) the step that starts at a vertex, or -1
+    visited: np.ndarray          # bool (c,) chains already in a walk
+
+
+@scalar
+def _on_boundary(x, y, window):
+    return x == window.xmin or x == window.xmax or y == window.ymin or y == window.ymax
+
+
+@borrowing
+def _segment_kind(controls, g, window):
+    """Return _POINT (no length), _EDGE + edge (on that edge's line) or _PIECE."""
+    x0 = controls[g, 0, 0]
+    y0 = controls[g, 0, 1]
+    same_x = True
+    same_y = True
+    for k in range(1, 4):  # unused rows repeat the end: all four rows are on the curve's hull
+        same_x = same_x and controls[g, k, 0] == x0
+        same_y = same_y and controls[g, k, 1] == y0
+    if same_x and same_y:
+        return _POINT
+    if same_x and x0 == window.xmin:
+        return _EDGE + _LEFT
+    if same_x and x0 == window.xmax:
+        return _EDGE + _RIGHT
+    if same_y and y0 == window.ymin:
+        return _EDGE + _BOTTOM
+    if same_y and y0 == window.ymax:
+        return _EDGE + _TOP
+    return _PIECE
+
+
+@scalar
+def _along(edge, x, y):
+    """Return the coordinate of (x, y) that grows counter-clockwise along `edge`."""
+    if edge == _BOTTOM:
+        return x
+    if edge == _RIGHT:
+        return y
+    if edge == _TOP:
+        return -x
+    return -y
+
+
+@scalar
+def _position(x, y, window):
+    """Return (edge, along): where the boundary point (x, y) lies, counter-clockwise.
+
+    A corner belongs to the edge that starts there; (xmin, ymin) is the first position.
+    The points given are exactly on the boundary; one that were not (it cannot be: every
+    point comes from an edge line or a vertex found on the boundary) is put on the edge
+    nearest to it.
+    """
+    if y == window.ymin and x != window.xmax:
+        return _BOTTOM, x
+    if x == window.xmax and y != window.ymax:
+        return _RIGHT, y
+    if y == window.ymax and x != window.xmin:
+        return _TOP, -x
+    if x == window.xmin:
+        return _LEFT, -y
+    gaps = (y - window.ymin, window.xmax - x, window.ymax - y, x - window.xmin)
+    edge = 0
+    for e in range(1, 4):
+        if gaps[e] < gaps[edge]:
+            edge = e
+    return edge, _along(edge, x, y)
+
+
+@scalar
+def _point_of(edge, along, window):
+    """Return the boundary point at `along` on `edge` (the inverse of `_position`)."""
+    if edge == _BOTTOM:
+        return along, window.ymin
+    if edge == _RIGHT:
+        return window.xmax, along
+    if edge == _TOP:
+        return -along, window.ymax
+    return window.xmin, -along
+
+
+@scalar
+def _angle(edge, dx, dy):
+    """Return the angle of direction (dx, dy) into the window at a point of `edge`.
+
+    From the edge's counter-clockwise direction towards the inward normal: 0 along the
+    boundary ahead, pi/2 straight in (at a corner: back along the previous edge), pi
+    along the boundary behind. Ends at one point are ordered by it, largest first.
+    """
+    ux = 1.0 if edge == _BOTTOM else (-1.0 if edge == _TOP else 0.0)
+    uy = 1.0 if edge == _RIGHT else (-1.0 if edge == _LEFT else 0.0)
+    return math.atan2(dy * ux - dx * uy, dx * ux + dy * uy)
+
+
+@borrowing
+def _chain_segment(paths, cut, c, j):
+    """Return the path-array index of segment j of chain c (cyclic within its subpath)."""
+    a = paths.subpath_offsets[cut.chain_sub[c]]
+    n = paths.subpath_offsets[cut.chain_sub[c] + 1] - a
+    return a + (cut.chain_first[c] - a + j) % n
+
+
+@borrowing
+def _chain_direction(paths, cut, c, at_start):
+    """Return the direction in which chain c leaves its start (or its end, backwards)."""
+    count = cut.chain_count[c]
+    controls = paths.controls
+    for q in range(count):
+        g = _chain_segment(paths, cut, c, q if at_start else count - 1 - q)
+        if at_start:
+            x0 = controls[g, 0, 0]
+            y0 = controls[g, 0, 1]
+            for k in range(1, 4):
+                dx = controls[g, k, 0] - x0
+                dy = controls[g, k, 1] - y0
+                if dx != 0.0 or dy != 0.0:
+                    return dx, dy
+        else:
+            x3 = controls[g, 3, 0]
+            y3 = controls[g, 3, 1]
+            for k in range(2, -1, -1):
+                dx = controls[g, k, 0] - x3
+                dy = controls[g, k, 1] - y3
+                if dx != 0.0 or dy != 0.0:
+                    return dx, dy
+    return 0.0, 0.0
+
+
+@borrowing
+def _cut(paths, window, s_lo, s_hi, g_lo, cut):
+    """Step 1: cut the subpaths s_lo..s_hi-1; return (chains, edge lines)."""
+    controls = paths.controls
+    n_chains = 0
+    n_edges = 0
+    for s in range(s_lo, s_hi):
+        cut.sub_chains[s - s_lo] = n_chains
+        a = paths.subpath_offsets[s]
+        n = paths.subpath_offsets[s + 1] - a
+        cut.sub_loop[s - s_lo] = False
+        j0 = -1
+        for t in range(n):
+            if _on_boundary(controls[a + t, 0, 0], controls[a + t, 0, 1], window):
+                j0 = t
+                break
+        if j0 < 0:
+            cut.sub_loop[s - s_lo] = n > 0
+            continue
+        # From a vertex on the boundary, once around: a chain runs from the first piece
+        # after a boundary vertex to the next boundary vertex.
+        open_at = -1
+        for t in range(n):
+            g = a + (j0 + t) % n
+            if open_at >= 0 and _on_boundary(controls[g, 0, 0], controls[g, 0, 1], window):
+                cut.chain_count[n_chains] = t - open_at
+                n_chains += 1
+                open_at = -1
+            kind = cut.kind[g - g_lo]
+            if kind >= _EDGE:
+                cut.edge_segment[n_edges] = g
+                cut.edge_side[n_edges] = kind - _EDGE
+                n_edges += 1
+            elif kind == _PIECE and open_at < 0:
+                open_at = t
+                cut.chain_first[n_chains] = g
+                cut.chain_sub[n_chains] = s
+        if open_at >= 0:
+            cut.chain_count[n_chains] = n - open_at
+            n_chains += 1
+    cut.sub_chains[s_hi - s_lo] = n_chains
+    return n_chains, n_edges
+
+
+@borrowing
+def _add_point(bd, q, x, y, vertex, window):
+    edge, along = _position(x, y, window)
+    bd.point_edge[q] = edge
+    bd.point_along[q] = along
+    bd.point_vertex[q] = vertex
+    return q + 1
+
+
+@allocating
+def _boundary_points(paths, window, cut, n_chains, n_edges, bd):
+    """Step 2, first half: place the points; return (positions, vertices).
+
+    Points 2c and 2c + 1 are chain c's start and end, then come the edge lines' ends
+    (2 n_chains + 2e, + 1) and the corners. Sorted by (edge, along), exactly: along each
+    edge first (a stable sort), then by edge (a stable counting sort).
+    """
+    controls = paths.controls
+    q = 0
+    for c in range(n_chains):
+        g0 = cut.chain_first[c]
+        g1 = _chain_segment(paths, cut, c, cut.chain_count[c] - 1)
+        q = _add_point(bd, q, controls[g0, 0, 0], controls[g0, 0, 1], True, window)
+        q = _add_point(bd, q, controls[g1, 3, 0], controls[g1, 3, 1], True, window)
+    for e in range(n_edges):
+        g = cut.edge_segment[e]
+        q = _add_point(bd, q, controls[g, 0, 0], controls[g, 0, 1], False, window)
+        q = _add_point(bd, q, controls[g, 3, 0], controls[g, 3, 1], False, window)
+    q = _add_point(bd, q, window.xmin, window.ymin, True, window)
+    q = _add_point(bd, q, window.xmax, window.ymin, True, window)
+    q = _add_point(bd, q, window.xmax, window.ymax, True, window)
+    q = _add_point(bd, q, window.xmin, window.ymax, True, window)
+    by_along = np.argsort(bd.point_along[:q], kind="mergesort")
+    per_edge = np.zeros(5, dtype=np.int64)
+    for i in range(q):
+        per_edge[bd.point_edge[i] + 1] += 1
+    for e in range(4):
+        per_edge[e + 1] += per_edge[e]
+    order = np.empty(q, dtype=np.int64)
+    for i in range(q):
+        p = by_along[i]
+        e = bd.point_edge[p]
+        order[per_edge[e]] = p
+        per_edge[e] += 1
+    n_positions = 0
+    n_vertices = 0
+    for i in range(q):
+        p = order[i]
+        if i == 0 or bd.point_edge[p] != bd.point_edge[order[i - 1]] or \
+                bd.point_along[p] != bd.point_along[order[i - 1]]:
+            bd.position_vertex[n_positions] = -1
+            n_positions += 1
+        bd.point_position[p] = n_positions - 1
+        if bd.point_vertex[p] and bd.position_vertex[n_positions - 1] < 0:
+            bd.position_vertex[n_positions - 1] = n_vertices
+            bd.vertex_edge[n_vertices] = bd.point_edge[p]
+            bd.vertex_along[n_vertices] = bd.point_along[p]
+            n_vertices += 1
+    return n_positions, n_vertices
+
+
+
+@borrowing
+def _lane_counts(paths, cut, n_chains, n_edges, n_positions, bd):
+    """Step 2, second half: the count m on each stretch from a vertex to the next.
+
+    Each edge line adds +1 (counter-clockwise) or -1 (clockwise) to the stretches it
+    runs over, as a difference array over the positions; one that runs through the
+    first position, (xmin, ymin), covers the stretches after its start and before its
+    end: the base then counts it for all of them, and the differences take it off the
+    ones in between.
+    """
+    controls = paths.controls
+    diff = bd.position_count
+    for i in range(n_positions + 1):
+        diff[i] = 0
+    base = 0
+    for e in range(n_edges):
+        g = cut.edge_segment[e]
+        ia = bd.point_position[2 * n_chains + 2 * e]
+        ib = bd.point_position[2 * n_chains + 2 * e + 1]
+        if ia == ib:
+            continue  # back where it began (a curve on the edge line turning back)
+        edge = cut.edge_side[e]
+        if _along(edge, controls[g, 3, 0], controls[g, 3, 1]) > \
+                _along(edge, controls[g, 0, 0], controls[g, 0, 1]):
+            diff[ia] += 1
+            diff[ib] -= 1
+            if ib < ia:
+                base += 1
+        else:
+            diff[ib] -= 1
+            diff[ia] += 1
+            if ia < ib:
+                base -= 1
+    running = base
+    for i in range(n_positions):
+        running += diff[i]
+        v = bd.position_vertex[i]
+        if v >= 0:
+            bd.vertex_count[v] = running
+
+
+@borrowing
+def _link(lanes, arriving, departing, steps, step):
+    """Make chain `arriving` continue, after a lane of `steps` vertices, with `departing`."""
+    lanes.next_chain[arriving] = departing
+    lanes.lane_steps[arriving] = steps
+    lanes.lane_step[arriving] = step
+
+
+@allocating
+def _match(paths, cut, n_chains, n_vertices, bd, lanes):
+    """Step 3: join every chain's end to a chain's start by a lane.
+
+    Returns ``(base, consistent)``: the count on the stretch of least ``|m|`` (lanes all
+    around the window, counter-clockwise if positive), and whether the counts of the
+    edge lines agree with the chains' ends (they do for any closed output: False would
+    be a bug upstream).
+
+    End e is chain ``e // 2``'s start (``e`` even) or end (odd).
+    """
+    n_ends = 2 * n_chains
+    if n_ends == 0:
+        base = bd.vertex_count[0]
+        consistent = True
+        for v in range(n_vertices):
+            consistent = consistent and bd.vertex_count[v] == base
+        return base, consistent
+    vertex = np.empty(n_ends, dtype=np.int64)
+    angle = np.empty(n_ends, dtype=np.float64)  # negated: sorted ascending
+    kind = np.empty(n_ends, dtype=np.int64)
+    for c in range(n_chains):
+        vs = bd.position_vertex[bd.point_position[2 * c]]
+        ve = bd.position_vertex[bd.point_position[2 * c + 1]]
+        lanes.start_vertex[c] = vs
+        lanes.end_vertex[c] = ve
+        dx, dy = _chain_direction(paths, cut, c, True)
+        vertex[2 * c] = vs
+        angle[2 * c] = -_angle(bd.vertex_edge[vs], dx, dy)
+        kind[2 * c] = _DEPART
+        dx, dy = _chain_direction(paths, cut, c, False)
+        vertex[2 * c + 1] = ve
+        angle[2 * c + 1] = -_angle(bd.vertex_edge[ve], dx, dy)
+        kind[2 * c + 1] = _ARRIVE
+    # By vertex, then angle (largest first), then arrivals first: three stable sorts.
+    order = np.argsort(kind, kind="mergesort")
+    order = order[np.argsort(angle[order], kind="mergesort")]
+    order = order[np.argsort(vertex[order], kind="mergesort")]
+    # The count after each end in that order, from the stretch before the first end.
+    count = bd.vertex_count[(vertex[order[0]] - 1) % n_vertices]
+    after = np.empty(n_ends, dtype=np.int64)
+    best = 0
+    consistent = True
+    for i in range(n_ends):
+        e = order[i]
+        count += 1 if kind[e] == _ARRIVE else -1
+        after[i] = count
+        if abs(count) < abs(after[best]):
+            best = i
+        if i == n_ends - 1 or vertex[order[i + 1]] != vertex[e]:
+            consistent = consistent and count == bd.vertex_count[vertex[e]]
+    base = after[best]
+    # Once around from the stretch after end `best`, matching ends like parentheses.
+    # `unrolled` numbers the vertices passed from there (+ n_vertices after a wrap), so
+    # a lane's length is a difference of two.
+    stack = np.empty(n_ends, dtype=np.int64)
+    unrolled = np.empty(n_ends, dtype=np.int64)
+    top = 0
+    count = base
+    wraps = 0
+    previous = vertex[order[best]]
+    for q in range(1, n_ends + 1):
+        e = order[(best + q) % n_ends]
+        v = vertex[e]
+        if v < previous:
+            wraps += 1
+        previous = v
+        unrolled[e] = v + n_vertices * wraps
+        if kind[e] == _ARRIVE:
+            if count >= 0:  # a lane starts here, counter-clockwise
+                stack[top] = e
+                top += 1
+            else:           # the innermost clockwise lane ends at a start met before
+                top -= 1
+                d = stack[top]
+                _link(lanes, e // 2, d // 2, unrolled[e] - unrolled[d], _BACKWARD)
+            count += 1
+        else:
+            if count > 0:   # the innermost counter-clockwise lane ends here
+                top -= 1
+                a = stack[top]
+                _link(lanes, a // 2, e // 2, unrolled[e] - unrolled[a], _FORWARD)
+            else:           # a clockwise lane will end here
+                stack[top] = e
+                top += 1
+            count -= 1
+    return base, consistent
+
+
+@borrowing
+def _put_segment(out, v, paths, g):
+    for k in range(4):
+        out.controls[v, k, 0] = paths.controls[g, k, 0]
+        out.controls[v, k, 1] = paths.controls[g, k, 1]
+    out.degree[v] = paths.degree[g]
+
+
+@borrowing
+def _put_line(out, v, x0, y0, x1, y1):
+    out.controls[v, 0, 0] = x0
+    out.controls[v, 0, 1] = y0
+    for k in range(1, 4):
+        out.controls[v, k, 0] = x1
+        out.controls[v, k, 1] = y1
+    out.degree[v] = 1
+
+
+@borrowing
+def _is_point(controls, g):
+    x0 = controls[g, 0, 0]
+    y0 = controls[g, 0, 1]
+    for k in range(1, 4):
+        if controls[g, k, 0] != x0 or controls[g, k, 1] != y0:
+            return False
+    return True
+
+
+@scalar
+def _kept(n_segments, last_is_line):
+    """Return how many of a ring's segments are written: its closing line is left to Z."""
+    return n_segments - 1 if (n_segments >= 2 and last_is_line) else n_segments
+
+
+@borrowing
+def _put_loop(paths, out, s, v, r):
+    """Count or write subpath s as it is (no zero-length segment, no closing line)."""
+    a = paths.subpath_offsets[s]
+    b = paths.subpath_offsets[s + 1]
+    n = 0
+    first = -1
+    last_is_line = False
+    for g in range(a, b):
+        if not _is_point(paths.controls, g):
+            n += 1
+            last_is_line = paths.degree[g] == 1
+            if first < 0:
+                first = g
+    n = _kept(n, last_is_line)
+    if n == 0:
+        return v, r
+    if out.write:
+        out.first[r] = v
+        out.start[r, 0] = paths.controls[first, 0, 0]
+        out.start[r, 1] = paths.controls[first, 0, 1]
+        w = v
+        for g in range(a, b):
+            if w < v + n and not _is_point(paths.controls, g):
+                _put_segment(out, w, paths, g)
+                w += 1
+    return v + n, r + 1
+
+
+@borrowing
+def _put_window(out, window, counter_clockwise, v, r):
+    """Count or write the window's outline from (xmin, ymin) (its closing line left to Z)."""
+    if out.write:
+        out.first[r] = v
+        out.start[r, 0] = window.xmin
+        out.start[r, 1] = window.ymin
+        if counter_clockwise:
+            _put_line(out, v, window.xmin, window.ymin, window.xmax, window.ymin)
+            _put_line(out, v + 1, window.xmax, window.ymin, window.xmax, window.ymax)
+            _put_line(out, v + 2, window.xmax, window.ymax, window.xmin, window.ymax)
+        else:
+            _put_line(out, v, window.xmin, window.ymin, window.xmin, window.ymax)
+            _put_line(out, v + 1, window.xmin, window.ymax, window.xmax, window.ymax)
+            _put_line(out, v + 2, window.xmax, window.ymax, window.xmax, window.ymin)
+    return v + 3, r + 1
+
+
+@borrowing
+def _step_edge(walk, bd, t, n_vertices):
+    """Return the edge a lane step lies on: that of its counter-clockwise-first vertex."""
+    o = walk.origin[t]
+    return bd.vertex_edge[o if walk.step[t] == _FORWARD else (o - 1) % n_vertices]
+
+
+@borrowing
+def _vertex_point(bd, window, v):
+    return _point_of(bd.vertex_edge[v], bd.vertex_along[v], window)
+
+
+@borrowing
+def _emit(paths, window, cut, bd, walk, ring, out, v, limit):
+    """Count a ring's segments, writing the first `limit` of them from v.
+
+    `ring` is (first step, end step, the step it starts at). Each chain's segments are
+    copied (zero-length ones dropped); each lane's steps along one edge, in one
+    direction, become one line. Returns (segments, whether the last one is a line).
+    """
+    i, top, first = ring
+    n_steps = top - i
+    n = 0
+    last_is_line = False
+    if walk.step[first] >= 0:
+        g = cut.chain_first[walk.step[first]]
+        cx = paths.controls[g, 0, 0]
+        cy = paths.controls[g, 0, 1]
+    else:
+        cx, cy = _vertex_point(bd, window, walk.origin[first])
+    n_vertices = walk.seen.shape[0]
+    run_to = -1   # the vertex the pending line along an edge goes to (-1: none)
+    run_edge = -1
+    run_step = 0
+    for q in range(n_steps + 1):
+        t = i + (first - i + q) % n_steps
+        step = walk.step[t] if q < n_steps else 0
+        edge = -1
+        if q < n_steps and step < 0:
+            edge = _step_edge(walk, bd, t, n_vertices)
+        if run_to >= 0 and (q == n_steps or step >= 0 or edge != run_edge
+                            or step != run_step):
+            x, y = _vertex_point(bd, window, run_to)
+            if n < limit:
+                _put_line(out, v + n, cx, cy, x, y)
+            n += 1
+            last_is_line = True
+            cx = x
+            cy = y
+            run_to = -1
+        if q == n_steps:
+            break
+        if step >= 0:
+            for j in range(cut.chain_count[step]):
+                g = _chain_segment(paths, cut, step, j)
+                if _is_point(paths.controls, g):
+                    continue
+                if n < limit:
+                    _put_segment(out, v + n, paths, g)
+                n += 1
+                last_is_line = paths.degree[g] == 1
+                cx = paths.controls[g, 3, 0]
+                cy = paths.controls[g, 3, 1]
+        else:
+            o = walk.origin[t]
+            run_to = (o + 1) % n_vertices if step == _FORWARD else (o - 1) % n_vertices
+            run_edge = edge
+            run_step = step
+    return n, last_is_line
+
+
+@borrowing
+def _put_ring(paths, window, cut, bd, walk, i, top, out, v, r):
+    """Count or write the ring of walk steps i..top-1; return the next (v, r).
+
+    It starts at its first chain; a ring of lanes only (the window's outline) at a
+    corner.
+    """
+    n_vertices = walk.seen.shape[0]
+    first = -1
+    for t in range(i, top):
+        if walk.step[t] >= 0:
+            first = t
+            break
+    if first < 0:
+        for t in range(i, top):
+            p = t - 1 if t > i else top - 1
+            if _step_edge(walk, bd, t, n_vertices) != _step_edge(walk, bd, p, n_vertices):
+                first = t
+                break
+        if first < 0:
+            first = i
+    ring = (i, top, first)
+    n, last_is_line = _emit(paths, window, cut, bd, walk, ring, out, v, 0)
+    n = _kept(n, last_is_line)
+    if n == 0:
+        return v, r
+    if out.write:
+        _emit(paths, window, cut, bd, walk, ring, out, v, n)
+        out.first[r] = v
+        out.start[r, 0] = out.controls[v, 0, 0]
+        out.start[r, 1] = out.controls[v, 0, 1]
+    return v + n, r + 1
+
+
+@borrowing
+def _arrive(paths, window, cut, bd, walk, here, top, out, v, r):
+    """Step 4: the walk reaches vertex `here`; cut off the ring it closes, if any.
+
+    Returns (top, v, r).
+    """
+    i = walk.seen[here]
+    if i < 0:
+        walk.seen[here] = top
+        return top, v, r
+    v, r = _put_ring(paths, window, cut, bd, walk, i, top, out, v, r)
+    for t in range(i, top):
+        walk.seen[walk.origin[t]] = -1
+    walk.seen[here] = i
+    return i, v, r
+
+
+@borrowing
+def _trace(paths, window, cut, bd, lanes, walk, c0, out, v, r):
+    """Step 4: follow chains and lanes from chain c0 round to it, writing rings on the way."""
+    n_vertices = walk.seen.shape[0]
+    here = lanes.start_vertex[c0]
+    walk.seen[here] = 0
+    top = 0
+    c = c0
+    while True:
+        walk.visited[c] = True
+        walk.step[top] = c
+        walk.origin[top] = here
+        top += 1
+        here = lanes.end_vertex[c]
+        top, v, r = _arrive(paths, window, cut, bd, walk, here, top, out, v, r)
+        step = lanes.lane_step[c]
+        for _ in range(lanes.lane_steps[c]):
+            walk.step[top] = step
+            walk.origin[top] = here
+            top += 1
+            here = (here + 1) % n_vertices if step == _FORWARD else (here - 1) % n_vertices
+            top, v, r = _arrive(paths, window, cut, bd, walk, here, top, out, v, r)
+        c = lanes.next_chain[c]
+        if c == c0:
+            break
+    walk.seen[here] = -1
+    return v, r
+
+
+@scalar
+def _clean_path(paths, window, out, p, v, r):
+    """Count or write path p's rings from segment v and ring r; return their counts.
+
+    (-1, -1): the edge lines' counts disagree with the chains' ends (never, for the
+    output of the fill clip).
+    """
+    controls = paths.controls
+    s_lo = paths.path_offsets[p]
+    s_hi = paths.path_offsets[p + 1]
+    g_lo = paths.subpath_offsets[s_lo]
+    g_hi = paths.subpath_offsets[s_hi]
+    v0 = v
+    r0 = r
+    touches = False
+    for g in range(g_lo, g_hi):
+        if _on_boundary(controls[g, 0, 0], controls[g, 0, 1], window):
+            touches = True
+            break
+    if not touches:  # no vertex on the boundary: every subpath is a loop
+        for s in range(s_lo, s_hi):
+            v, r = _put_loop(paths, out, s, v, r)
+        return v - v0, r - r0
+    m = g_hi - g_lo
+    k = s_hi - s_lo
+    cut = Cut(np.empty(m, dtype=np.int64), np.empty(m, dtype=np.int64),
+              np.empty(m, dtype=np.int64), np.empty(m, dtype=np.int64),
+              np.empty(m, dtype=np.int64), np.empty(m, dtype=np.int64),
+              np.empty(k + 1, dtype=np.int64), np.empty(k, dtype=np.bool_))
+    for g in range(g_lo, g_hi):
+        cut.kind[g - g_lo] = _segment_kind(controls, g, window)
+    n_chains, n_edges = _cut(paths, window, s_lo, s_hi, g_lo, cut)
+    q = 2 * (n_chains + n_edges) + 4
+    bd = Boundary(np.empty(q, dtype=np.int64), np.empty(q, dtype=np.float64),
+                  np.empty(q, dtype=np.bool_), np.empty(q, dtype=np.int64),
+                  np.empty(q, dtype=np.int64), np.empty(q + 1, dtype=np.int64),
+                  np.empty(q, dtype=np.int64), np.empty(q, dtype=np.float64),
+                  np.empty(q, dtype=np.int64))
+    n_positions, n_vertices = _boundary_points(paths, window, cut, n_chains, n_edges, bd)
+    _lane_counts(paths, cut, n_chains, n_edges, n_positions, bd)
+    lanes = Lanes(np.empty(n_chains, dtype=np.int64), np.empty(n_chains, dtype=np.int64),
+                  np.empty(n_chains, dtype=np.int64), np.empty(n_chains, dtype=np.int64),
+                  np.empty(n_chains, dtype=np.int64))
+    base, consistent = _match(paths, cut, n_chains, n_vertices, bd, lanes)
+    if not consistent:
+        return -1, -1
+    for _ in range(abs(base)):
+        v, r = _put_window(out, window, base > 0, v, r)
+    steps = n_chains
+    for c in range(n_chains):
+        steps += lanes.lane_steps[c]
+    walk = Walk(np.empty(steps, dtype=np.int64), np.empty(steps, dtype=np.int64),
+                np.full(n_vertices, -1, dtype=np.int64), np.zeros(n_chains, dtype=np.bool_))
+    for s in range(s_lo, s_hi):
+        if cut.sub_loop[s - s_lo]:
+            v, r = _put_loop(paths, out, s, v, r)
+            continue
+        for c in range(cut.sub_chains[s - s_lo], cut.sub_chains[s - s_lo + 1]):
+            if not walk.visited[c]:
+                v, r = _trace(paths, window, cut, bd, lanes, walk, c, out, v, r)
+    return v - v0, r - r0
+
+
+@scalar
+def _clean_paths(paths, window, layout, out, p0, p1):
+    """Count or write the rings of paths p0..p1-1 (one block)."""
+    for p in range(p0, p1):
+        v = 0
+        r = 0
+        if out.write:
+            v = layout.segment_start[p]
+            r = layout.ring_start[p]
+        n_segments, n_rings = _clean_path(paths, window, out, p, v, r)
+        if not out.write:
+            layout.n_segments[p] = n_segments
+            layout.n_rings[p] = n_rings
+
+
+@parallel
+def clean_fill_paths(paths, window, layout, out, block_size):
+    """Count (``out.write`` False) or write the clean rings of each filled path.
+
+    `paths` (`FillPaths`) is the fill clip's output for `window` (`records.Window`):
+    closed subpaths inside the closed window, each segment starting where the one
+    before it ends and the last ending at its subpath's start. The count pass stores
+    each path's output size in ``layout.n_segments`` and ``layout.n_rings`` (-1 for a
+    path whose edge lines do not add up: a bug upstream); the write pass writes path
+    p's rings from ``layout.segment_start[p]`` and ``layout.ring_start[p]`` on: control
+    points, degrees, and each ring's first segment and start point (every ring is
+    closed; its closing line is implicit). Paths go `block_size` to a block, blocks in
+    parallel.
+    """
+    n = paths.path_offsets.shape[0] - 1
+    n_blocks = (n + block_size - 1) // block_size
+    for blk in prange(n_blocks):
+        _clean_paths(paths, window, layout, out, blk * block_size,
+                     min(n, (blk + 1) * block_size))

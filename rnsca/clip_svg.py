@@ -193,7 +193,11 @@ def clip_svg(d: str | Sequence[str], window: Window | Iterable[float], *,
     >>> clip_svg(d, (0, 0, 10, 10), precision=6)[0]
     'M0 7.97398C3.17644 9.00867 6.82356 9.00867 10 7.97398'
     >>> clip_svg(d, (0, 0, 10, 10), fill="nonzero", precision=6)[0]
-    'M0 5V7.97398C3.17644 9.00867 6.82356 9.00867 10 7.97398V5H0Z'
+    'M0 7.97398C3.17644 9.00867 6.82356 9.00867 10 7.97398V5H0Z'
+    >>> clip_svg("M2 -1L1 1L3 -1L1 -1Z", (0, 0, 10, 10), fill="nonzero")[0]
+    'M1.5 0 1 1 2 0Z'
+    >>> clip_svg("M2 -1L1 1L3 -1L1 -1Z", (0, 0, 10, 10), fill="nonzero", fill_output="raw")[0]
+    'M2 0H1.5L1 1 2 0Z'
     """
     single = isinstance(d, str)
     if not single and not isinstance(d, Sequence):

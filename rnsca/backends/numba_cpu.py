@@ -33,7 +33,16 @@ from rnsca.kernels import polylines as PL
 from rnsca.kernels import records as R
 from rnsca.kernels import segments as K
 from rnsca.kernels.validate import all_finite
-from rnsca.options import Backend, Curves, FillOutput, Method, Mode, PathOptions, SegmentOptions
+from rnsca.options import (
+    Backend,
+    Curves,
+    Fill,
+    FillOutput,
+    Method,
+    Mode,
+    PathOptions,
+    SegmentOptions,
+)
 from rnsca.stats import ClipStats, DeviceStats
 from rnsca.window import Window, WindowTable
 
@@ -286,7 +295,7 @@ class NumbaBackend:
                                          subpath_offsets=out_first, closed=out_closed,
                                          start=out_start, path_offsets=path_offsets)
         if clean:
-            clipped = clean_fills(clipped, window)
+            clipped = clean_fills(clipped, window, options.fill is Fill.EVENODD)
         segments_in = paths.degree.shape[0] + BZ.closing_edges(
             paths.controls, paths.subpath_offsets, paths.closed, paths.start,
             options.fill is not None)
@@ -345,7 +354,7 @@ def warm_up_paths(backend: ClipBackend) -> None:
     backend.flatten_paths(paths, 1e-3, True)
 
 
-def clean_fills(clipped: PathArrays, window: Window) -> PathArrays:
+def clean_fills(clipped: PathArrays, window: Window, evenodd: bool) -> PathArrays:
     """Return the fill clip's output rebuilt as simple rings (`kernels.fill_rings`).
 
     The same count, prefix-sum, write passes as the clip, over paths. Host code for both
@@ -361,7 +370,7 @@ def clean_fills(clipped: PathArrays, window: Window) -> PathArrays:
     block = max(1, min(_PATH_BLOCK, n // _PATH_MIN_BLOCKS))
     FR.clean_fill_paths(*kernel_input, FR.RingLayout(n_segments, n_rings, nothing, nothing),
                         FR.RingOutput(False, np.empty((0, 4, 2)), np.empty(0, np.int8),
-                                      nothing, np.empty((0, 2))), block)
+                                      nothing, np.empty((0, 2))), block, evenodd)
     if (n_rings < 0).any():  # the edge lines of a path do not add up: a bug, not the input
         raise RuntimeError(f"clean fill: the clip of path {int(np.argmax(n_rings < 0))} is "
                            "not closed along the window's boundary (please report)")
@@ -376,7 +385,7 @@ def clean_fills(clipped: PathArrays, window: Window) -> PathArrays:
     start = np.empty((k, 2))
     FR.clean_fill_paths(*kernel_input,
                         FR.RingLayout(n_segments, n_rings, segment_start, ring_start),
-                        FR.RingOutput(True, controls, degree, first, start), block)
+                        FR.RingOutput(True, controls, degree, first, start), block, evenodd)
     return PathArrays.from_kernel(controls=controls, degree=degree, subpath_offsets=first,
                                   closed=np.ones(k, dtype=bool), start=start,
                                   path_offsets=ring_start)

@@ -54,6 +54,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import prange
 
+from rnsca.kernels.bezier import piece_values
 from rnsca.kernels.jit import allocating, borrowing, parallel, scalar
 
 __all__ = ["FillPaths", "RingLayout", "RingOutput", "clean_fill_paths"]
@@ -138,13 +139,15 @@ class Boundary(NamedTuple):
 
 
 class Lanes(NamedTuple):
-    """Where each chain goes next (scratch; see step 3)."""
+    """The lane from each chain end to another (scratch; see step 3).
 
-    next_chain: np.ndarray       # int64 (c,) the chain its lane leads to
-    lane_steps: np.ndarray       # int64 (c,) vertices the lane passes
-    lane_step: np.ndarray        # int64 (c,) _FORWARD or _BACKWARD
-    end_vertex: np.ndarray       # int64 (c,) the vertex where the chain ends
-    start_vertex: np.ndarray     # int64 (c,) the vertex where it starts
+    End ``2c`` is chain c's start, ``2c + 1`` its end.
+    """
+
+    partner: np.ndarray          # int64 (2c,) the end the lane leads to
+    lane_steps: np.ndarray       # int64 (2c,) the stretches (vertex to vertex) it runs
+    lane_step: np.ndarray        # int64 (2c,) _FORWARD or _BACKWARD, from this end
+    vertex: np.ndarray           # int64 (2c,) the vertex where the end lies
 
 
 class Walk(NamedTuple):
@@ -428,23 +431,30 @@ def _lane_counts(paths, cut, n_chains, n_edges, n_positions, bd):
 
 
 @borrowing
-def _link(lanes, arriving, departing, steps, step):
-    """Make chain `arriving` continue, after a lane of `steps` vertices, with `departing`."""
-    lanes.next_chain[arriving] = departing
-    lanes.lane_steps[arriving] = steps
-    lanes.lane_step[arriving] = step
+def _link(lanes, a, b, steps, step):
+    """Join chain ends a and b by a lane of `steps` stretches, run `step`-wise from a."""
+    lanes.partner[a] = b
+    lanes.partner[b] = a
+    lanes.lane_steps[a] = steps
+    lanes.lane_steps[b] = steps
+    lanes.lane_step[a] = step
+    lanes.lane_step[b] = _BACKWARD if step == _FORWARD else _FORWARD
 
 
 @allocating
-def _match(paths, cut, n_chains, n_vertices, bd, lanes):
-    """Step 3: join every chain's end to a chain's start by a lane.
+def _match(paths, cut, n_chains, n_vertices, bd, lanes, evenodd):
+    """Step 3: join every chain's end to another chain end by a lane.
 
-    Returns ``(base, consistent)``: the count on the stretch of least ``|m|`` (lanes all
-    around the window, counter-clockwise if positive), and whether the counts of the
-    edge lines agree with the chains' ends (they do for any closed output: False would
-    be a bug upstream).
+    Returns ``(base, consistent)``: the number of lanes all around the window
+    (counter-clockwise if positive), and whether the counts of the edge lines agree with
+    the chains' ends (they do for any closed output: False would be a bug upstream).
 
-    End e is chain ``e // 2``'s start (``e`` even) or end (odd).
+    Nonzero keeps the winding numbers: a chain's end is joined to a chain's start (see
+    the module's docstring). With `evenodd` only their parity matters, and every chain
+    separates an odd side from an even one (crossing or not): from a stretch where the
+    count is even, the ends are joined in pairs, counter-clockwise, each lane over a
+    stretch where it is odd, and chains are run either way. No stretch then carries
+    two lanes.
     """
     n_ends = 2 * n_chains
     if n_ends == 0:
@@ -452,15 +462,15 @@ def _match(paths, cut, n_chains, n_vertices, bd, lanes):
         consistent = True
         for v in range(n_vertices):
             consistent = consistent and bd.vertex_count[v] == base
-        return base, consistent
+        return (base % 2 if evenodd else base), consistent
     vertex = np.empty(n_ends, dtype=np.int64)
     angle = np.empty(n_ends, dtype=np.float64)  # negated: sorted ascending
     kind = np.empty(n_ends, dtype=np.int64)
     for c in range(n_chains):
         vs = bd.position_vertex[bd.point_position[2 * c]]
         ve = bd.position_vertex[bd.point_position[2 * c + 1]]
-        lanes.start_vertex[c] = vs
-        lanes.end_vertex[c] = ve
+        lanes.vertex[2 * c] = vs
+        lanes.vertex[2 * c + 1] = ve
         dx, dy = _chain_direction(paths, cut, c, True)
         vertex[2 * c] = vs
         angle[2 * c] = -_angle(bd.vertex_edge[vs], dx, dy)
@@ -486,23 +496,37 @@ def _match(paths, cut, n_chains, n_vertices, bd, lanes):
             best = i
         if i == n_ends - 1 or vertex[order[i + 1]] != vertex[e]:
             consistent = consistent and count == bd.vertex_count[vertex[e]]
+    if evenodd:
+        for i in range(n_ends):
+            if after[i] % 2 == 0:
+                best = i
+                break
     base = after[best]
-    # Once around from the stretch after end `best`, matching ends like parentheses.
     # `unrolled` numbers the vertices passed from there (+ n_vertices after a wrap), so
     # a lane's length is a difference of two.
-    stack = np.empty(n_ends, dtype=np.int64)
+    # Once around from the stretch after end `best`. `unrolled` numbers the vertices
+    # passed from there (+ n_vertices after a wrap): a lane's length is a difference.
     unrolled = np.empty(n_ends, dtype=np.int64)
-    top = 0
-    count = base
     wraps = 0
     previous = vertex[order[best]]
     for q in range(1, n_ends + 1):
         e = order[(best + q) % n_ends]
-        v = vertex[e]
-        if v < previous:
+        if vertex[e] < previous:
             wraps += 1
-        previous = v
-        unrolled[e] = v + n_vertices * wraps
+        previous = vertex[e]
+        unrolled[e] = vertex[e] + n_vertices * wraps
+    if evenodd:
+        for q in range(1, n_ends + 1, 2):
+            a = order[(best + q) % n_ends]
+            b = order[(best + q + 1) % n_ends]
+            _link(lanes, a, b, unrolled[b] - unrolled[a], _FORWARD)
+        return 0, consistent
+    # Matching ends like parentheses.
+    stack = np.empty(n_ends, dtype=np.int64)
+    top = 0
+    count = base
+    for q in range(1, n_ends + 1):
+        e = order[(best + q) % n_ends]
         if kind[e] == _ARRIVE:
             if count >= 0:  # a lane starts here, counter-clockwise
                 stack[top] = e
@@ -510,13 +534,13 @@ def _match(paths, cut, n_chains, n_vertices, bd, lanes):
             else:           # the innermost clockwise lane ends at a start met before
                 top -= 1
                 d = stack[top]
-                _link(lanes, e // 2, d // 2, unrolled[e] - unrolled[d], _BACKWARD)
+                _link(lanes, e, d, unrolled[e] - unrolled[d], _BACKWARD)
             count += 1
         else:
             if count > 0:   # the innermost counter-clockwise lane ends here
                 top -= 1
                 a = stack[top]
-                _link(lanes, a // 2, e // 2, unrolled[e] - unrolled[a], _FORWARD)
+                _link(lanes, a, e, unrolled[e] - unrolled[a], _FORWARD)
             else:           # a clockwise lane will end here
                 stack[top] = e
                 top += 1
@@ -525,10 +549,15 @@ def _match(paths, cut, n_chains, n_vertices, bd, lanes):
 
 
 @borrowing
-def _put_segment(out, v, paths, g):
+def _put_segment(out, v, paths, g, backwards):
+    """Write segment g (`backwards`: run from its end: its control points reversed)."""
+    d = np.int64(paths.degree[g])
     for k in range(4):
-        out.controls[v, k, 0] = paths.controls[g, k, 0]
-        out.controls[v, k, 1] = paths.controls[g, k, 1]
+        src = k
+        if backwards:
+            src = d - k if k <= d else 0  # unused rows repeat the end: here, g's start
+        out.controls[v, k, 0] = paths.controls[g, src, 0]
+        out.controls[v, k, 1] = paths.controls[g, src, 1]
     out.degree[v] = paths.degree[g]
 
 
@@ -582,7 +611,7 @@ def _put_loop(paths, out, s, v, r):
         w = v
         for g in range(a, b):
             if w < v + n and not _is_point(paths.controls, g):
-                _put_segment(out, w, paths, g)
+                _put_segment(out, w, paths, g, False)
                 w += 1
     return v + n, r + 1
 
@@ -622,17 +651,24 @@ def _emit(paths, window, cut, bd, walk, ring, out, v, limit):
     """Count a ring's segments, writing the first `limit` of them from v.
 
     `ring` is (first step, end step, the step it starts at). Each chain's segments are
-    copied (zero-length ones dropped); each lane's steps along one edge, in one
-    direction, become one line. Returns (segments, whether the last one is a line).
+    copied (zero-length ones dropped; a chain run backwards, reversed); each lane's
+    steps along one edge, in one direction, become one line. Returns (segments, whether
+    the last one is a line).
     """
     i, top, first = ring
     n_steps = top - i
     n = 0
     last_is_line = False
     if walk.step[first] >= 0:
-        g = cut.chain_first[walk.step[first]]
-        cx = paths.controls[g, 0, 0]
-        cy = paths.controls[g, 0, 1]
+        c = walk.step[first] >> 1
+        if walk.step[first] & 1:
+            g = _chain_segment(paths, cut, c, cut.chain_count[c] - 1)
+            cx = paths.controls[g, 3, 0]
+            cy = paths.controls[g, 3, 1]
+        else:
+            g = cut.chain_first[c]
+            cx = paths.controls[g, 0, 0]
+            cy = paths.controls[g, 0, 1]
     else:
         cx, cy = _vertex_point(bd, window, walk.origin[first])
     n_vertices = walk.seen.shape[0]
@@ -658,16 +694,19 @@ def _emit(paths, window, cut, bd, walk, ring, out, v, limit):
         if q == n_steps:
             break
         if step >= 0:
-            for j in range(cut.chain_count[step]):
-                g = _chain_segment(paths, cut, step, j)
+            c = step >> 1
+            backwards = (step & 1) == 1
+            count = cut.chain_count[c]
+            for j in range(count):
+                g = _chain_segment(paths, cut, c, count - 1 - j if backwards else j)
                 if _is_point(paths.controls, g):
                     continue
                 if n < limit:
-                    _put_segment(out, v + n, paths, g)
+                    _put_segment(out, v + n, paths, g, backwards)
                 n += 1
                 last_is_line = paths.degree[g] == 1
-                cx = paths.controls[g, 3, 0]
-                cy = paths.controls[g, 3, 1]
+                cx = paths.controls[g, 0 if backwards else 3, 0]
+                cy = paths.controls[g, 0 if backwards else 3, 1]
         else:
             o = walk.origin[t]
             run_to = (o + 1) % n_vertices if step == _FORWARD else (o - 1) % n_vertices
@@ -728,38 +767,227 @@ def _arrive(paths, window, cut, bd, walk, here, top, out, v, r):
 
 
 @borrowing
-def _trace(paths, window, cut, bd, lanes, walk, c0, out, v, r):
-    """Step 4: follow chains and lanes from chain c0 round to it, writing rings on the way."""
+def _trace(paths, window, cut, bd, lanes, walk, c0, out, v, r, evenodd):
+    """Step 4: follow chains and lanes from chain c0 round to it, writing rings on the way.
+
+    A chain entered at its end runs backwards (evenodd only: nonzero's lanes join a
+    chain's end to a chain's start). With `evenodd`, chain c0 is entered so that the
+    lane after it runs counter-clockwise: the rings then have the painted side on their
+    left (a pairing by parity runs every lane counter-clockwise from its first end).
+    """
     n_vertices = walk.seen.shape[0]
-    here = lanes.start_vertex[c0]
+    entry = 2 * c0
+    if evenodd and lanes.lane_step[entry + 1] != _FORWARD:
+        entry += 1
+    here = lanes.vertex[entry]
     walk.seen[here] = 0
     top = 0
-    c = c0
+    e = entry
     while True:
-        walk.visited[c] = True
-        walk.step[top] = c
+        walk.visited[e >> 1] = True
+        walk.step[top] = e  # 2c + 1: chain c entered at its end, run backwards
         walk.origin[top] = here
         top += 1
-        here = lanes.end_vertex[c]
+        out_end = e ^ 1
+        here = lanes.vertex[out_end]
         top, v, r = _arrive(paths, window, cut, bd, walk, here, top, out, v, r)
-        step = lanes.lane_step[c]
-        for _ in range(lanes.lane_steps[c]):
+        step = lanes.lane_step[out_end]
+        for _ in range(lanes.lane_steps[out_end]):
             walk.step[top] = step
             walk.origin[top] = here
             top += 1
             here = (here + 1) % n_vertices if step == _FORWARD else (here - 1) % n_vertices
             top, v, r = _arrive(paths, window, cut, bd, walk, here, top, out, v, r)
-        c = lanes.next_chain[c]
-        if c == c0:
+        e = lanes.partner[out_end]
+        if e == entry:
             break
     walk.seen[here] = -1
     return v, r
 
 
+# Two curves are taken to cross once the boxes of their pieces still overlap after this
+# many halvings of both (or after the test's budget of piece pairs is spent): a test
+# that only errs towards "crossing", whose cost is a rebuild subpath by subpath.
+_CROSS_DEPTH = 24
+_CROSS_BUDGET = 4096
+_CROSS_STACK = 4 * _CROSS_DEPTH + 4
+
+
+@borrowing
+def _may_cross(paths, g1, g2, stack):
+    """Return whether segments g1 and g2 may meet: their pieces' boxes never part.
+
+    Both are halved in turn (depth-first, with `stack`) while the control-point boxes of
+    their pieces overlap (touching counts); pieces whose boxes part cannot meet (a curve
+    lies in the hull of its control points).
+    """
+    controls = paths.controls
+    d1 = np.int64(paths.degree[g1])
+    d2 = np.int64(paths.degree[g2])
+    stack[0, 0] = 0.0
+    stack[0, 1] = 1.0
+    stack[0, 2] = 0.0
+    stack[0, 3] = 1.0
+    stack[0, 4] = 0.0
+    top = 1
+    budget = _CROSS_BUDGET
+    while top > 0:
+        top -= 1
+        a0 = stack[top, 0]
+        a1 = stack[top, 1]
+        b0 = stack[top, 2]
+        b1 = stack[top, 3]
+        depth = stack[top, 4]
+        p = _box(d1, controls, g1, a0, a1)
+        q = _box(d2, controls, g2, b0, b1)
+        if p[2] < q[0] or q[2] < p[0] or p[3] < q[1] or q[3] < p[1]:
+            continue
+        budget -= 1
+        if depth >= _CROSS_DEPTH or budget <= 0 or top + 4 > stack.shape[0]:
+            return True
+        am = 0.5 * (a0 + a1)
+        bm = 0.5 * (b0 + b1)
+        for k in range(4):
+            stack[top, 0] = a0 if k < 2 else am
+            stack[top, 1] = am if k < 2 else a1
+            stack[top, 2] = b0 if k % 2 == 0 else bm
+            stack[top, 3] = bm if k % 2 == 0 else b1
+            stack[top, 4] = depth + 1.0
+            top += 1
+    return False
+
+
+@borrowing
+def _box(degree, controls, g, a, b):
+    """Return the box (lo_x, lo_y, hi_x, hi_y) of the control points of piece [a, b] of g."""
+    x0, x1, x2, x3 = piece_values(degree, controls[g, 0, 0], controls[g, 1, 0],
+                                  controls[g, 2, 0], controls[g, 3, 0], a, b)
+    y0, y1, y2, y3 = piece_values(degree, controls[g, 0, 1], controls[g, 1, 1],
+                                  controls[g, 2, 1], controls[g, 3, 1], a, b)
+    return (min(min(x0, x1), min(x2, x3)), min(min(y0, y1), min(y2, y3)),
+            max(max(x0, x1), max(x2, x3)), max(max(y0, y1), max(y2, y3)))
+
+
+@allocating
+def _outlines_cross(paths, cut, n_chains, lanes):
+    """Return whether two chains of different subpaths, in one walk, may cross.
+
+    A walk joins chains by the lanes whatever subpath they come from; where two input
+    outlines cross each other inside the window, a ring through both would cross
+    itself. Chains of one outline never cross (the outline is taken to be simple).
+    """
+    if n_chains < 2:
+        return False
+    walk_of = np.full(n_chains, -1, dtype=np.int64)
+    n_walks = 0
+    mixed = False
+    for c0 in range(n_chains):
+        if walk_of[c0] >= 0:
+            continue
+        e = 2 * c0
+        while walk_of[e >> 1] < 0:
+            walk_of[e >> 1] = n_walks
+            mixed = mixed or cut.chain_sub[e >> 1] != cut.chain_sub[c0]
+            e = lanes.partner[e ^ 1]
+        n_walks += 1
+    if not mixed:
+        return False
+    box = np.empty((n_chains, 4), dtype=np.float64)
+    for c in range(n_chains):
+        box[c, 0] = np.inf
+        box[c, 1] = np.inf
+        box[c, 2] = -np.inf
+        box[c, 3] = -np.inf
+        for j in range(cut.chain_count[c]):
+            g = _chain_segment(paths, cut, c, j)
+            for k in range(4):
+                box[c, 0] = min(box[c, 0], paths.controls[g, k, 0])
+                box[c, 1] = min(box[c, 1], paths.controls[g, k, 1])
+                box[c, 2] = max(box[c, 2], paths.controls[g, k, 0])
+                box[c, 3] = max(box[c, 3], paths.controls[g, k, 1])
+    stack = np.empty((_CROSS_STACK, 5), dtype=np.float64)
+    for c1 in range(n_chains):
+        for c2 in range(c1 + 1, n_chains):
+            if walk_of[c1] != walk_of[c2] or cut.chain_sub[c1] == cut.chain_sub[c2]:
+                continue
+            if box[c1, 2] < box[c2, 0] or box[c2, 2] < box[c1, 0] or \
+                    box[c1, 3] < box[c2, 1] or box[c2, 3] < box[c1, 1]:
+                continue
+            for j1 in range(cut.chain_count[c1]):
+                g1 = _chain_segment(paths, cut, c1, j1)
+                for j2 in range(cut.chain_count[c2]):
+                    g2 = _chain_segment(paths, cut, c2, j2)
+                    if _may_cross(paths, g1, g2, stack):
+                        return True
+    return False
+
+
+# What `_clean_subpaths` found.
+_DONE = 0
+_CROSSED = 1         # outlines of different subpaths may cross: nothing written
+_INCONSISTENT = 2    # the edge lines do not add up (a bug upstream): nothing written
+
+
+@allocating
+def _clean_subpaths(paths, window, out, s_lo, s_hi, whole, v, r, evenodd):
+    """Count or write the rings of subpaths s_lo..s_hi-1 from segment v and ring r.
+
+    Returns (status, v, r). With `whole` (the path's subpaths together), nothing is
+    written when two outlines may cross (`_CROSSED`): the caller then takes them one
+    by one.
+    """
+    controls = paths.controls
+    g_lo = paths.subpath_offsets[s_lo]
+    g_hi = paths.subpath_offsets[s_hi]
+    m = g_hi - g_lo
+    k = s_hi - s_lo
+    cut = Cut(np.empty(m, dtype=np.int64), np.empty(m, dtype=np.int64),
+              np.empty(m, dtype=np.int64), np.empty(m, dtype=np.int64),
+              np.empty(m, dtype=np.int64), np.empty(m, dtype=np.int64),
+              np.empty(k + 1, dtype=np.int64), np.empty(k, dtype=np.bool_))
+    for g in range(g_lo, g_hi):
+        cut.kind[g - g_lo] = _segment_kind(controls, g, window)
+    n_chains, n_edges = _cut(paths, window, s_lo, s_hi, g_lo, cut)
+    q = 2 * (n_chains + n_edges) + 4
+    bd = Boundary(np.empty(q, dtype=np.int64), np.empty(q, dtype=np.float64),
+                  np.empty(q, dtype=np.bool_), np.empty(q, dtype=np.int64),
+                  np.empty(q, dtype=np.int64), np.empty(q + 1, dtype=np.int64),
+                  np.empty(q, dtype=np.int64), np.empty(q, dtype=np.float64),
+                  np.empty(q, dtype=np.int64))
+    n_positions, n_vertices = _boundary_points(paths, window, cut, n_chains, n_edges, bd)
+    _lane_counts(paths, cut, n_chains, n_edges, n_positions, bd)
+    lanes = Lanes(np.empty(2 * n_chains, dtype=np.int64),
+                  np.empty(2 * n_chains, dtype=np.int64),
+                  np.empty(2 * n_chains, dtype=np.int64),
+                  np.empty(2 * n_chains, dtype=np.int64))
+    base, consistent = _match(paths, cut, n_chains, n_vertices, bd, lanes, evenodd)
+    if not consistent:
+        return _INCONSISTENT, v, r
+    if whole and k > 1 and _outlines_cross(paths, cut, n_chains, lanes):
+        return _CROSSED, v, r
+    for _ in range(abs(base)):
+        v, r = _put_window(out, window, base > 0, v, r)
+    steps = n_chains
+    for c in range(n_chains):
+        steps += max(lanes.lane_steps[2 * c], lanes.lane_steps[2 * c + 1])
+    walk = Walk(np.empty(steps, dtype=np.int64), np.empty(steps, dtype=np.int64),
+                np.full(n_vertices, -1, dtype=np.int64), np.zeros(n_chains, dtype=np.bool_))
+    for s in range(s_lo, s_hi):
+        if cut.sub_loop[s - s_lo]:
+            v, r = _put_loop(paths, out, s, v, r)
+            continue
+        for c in range(cut.sub_chains[s - s_lo], cut.sub_chains[s - s_lo + 1]):
+            if not walk.visited[c]:
+                v, r = _trace(paths, window, cut, bd, lanes, walk, c, out, v, r, evenodd)
+    return _DONE, v, r
+
+
 @scalar
-def _clean_path(paths, window, out, p, v, r):
+def _clean_path(paths, window, out, p, v, r, evenodd):
     """Count or write path p's rings from segment v and ring r; return their counts.
 
+    The path's subpaths together (their boundary runs add up: a hole open to the edge
+    joins its shell's ring), or one by one where two of their outlines may cross.
     (-1, -1): the edge lines' counts disagree with the chains' ends (never, for the
     output of the fill clip).
     """
@@ -779,48 +1007,19 @@ def _clean_path(paths, window, out, p, v, r):
         for s in range(s_lo, s_hi):
             v, r = _put_loop(paths, out, s, v, r)
         return v - v0, r - r0
-    m = g_hi - g_lo
-    k = s_hi - s_lo
-    cut = Cut(np.empty(m, dtype=np.int64), np.empty(m, dtype=np.int64),
-              np.empty(m, dtype=np.int64), np.empty(m, dtype=np.int64),
-              np.empty(m, dtype=np.int64), np.empty(m, dtype=np.int64),
-              np.empty(k + 1, dtype=np.int64), np.empty(k, dtype=np.bool_))
-    for g in range(g_lo, g_hi):
-        cut.kind[g - g_lo] = _segment_kind(controls, g, window)
-    n_chains, n_edges = _cut(paths, window, s_lo, s_hi, g_lo, cut)
-    q = 2 * (n_chains + n_edges) + 4
-    bd = Boundary(np.empty(q, dtype=np.int64), np.empty(q, dtype=np.float64),
-                  np.empty(q, dtype=np.bool_), np.empty(q, dtype=np.int64),
-                  np.empty(q, dtype=np.int64), np.empty(q + 1, dtype=np.int64),
-                  np.empty(q, dtype=np.int64), np.empty(q, dtype=np.float64),
-                  np.empty(q, dtype=np.int64))
-    n_positions, n_vertices = _boundary_points(paths, window, cut, n_chains, n_edges, bd)
-    _lane_counts(paths, cut, n_chains, n_edges, n_positions, bd)
-    lanes = Lanes(np.empty(n_chains, dtype=np.int64), np.empty(n_chains, dtype=np.int64),
-                  np.empty(n_chains, dtype=np.int64), np.empty(n_chains, dtype=np.int64),
-                  np.empty(n_chains, dtype=np.int64))
-    base, consistent = _match(paths, cut, n_chains, n_vertices, bd, lanes)
-    if not consistent:
+    status, v, r = _clean_subpaths(paths, window, out, s_lo, s_hi, True, v, r, evenodd)
+    if status == _CROSSED:
+        for s in range(s_lo, s_hi):
+            status, v, r = _clean_subpaths(paths, window, out, s, s + 1, False, v, r, evenodd)
+            if status != _DONE:
+                break
+    if status == _INCONSISTENT:
         return -1, -1
-    for _ in range(abs(base)):
-        v, r = _put_window(out, window, base > 0, v, r)
-    steps = n_chains
-    for c in range(n_chains):
-        steps += lanes.lane_steps[c]
-    walk = Walk(np.empty(steps, dtype=np.int64), np.empty(steps, dtype=np.int64),
-                np.full(n_vertices, -1, dtype=np.int64), np.zeros(n_chains, dtype=np.bool_))
-    for s in range(s_lo, s_hi):
-        if cut.sub_loop[s - s_lo]:
-            v, r = _put_loop(paths, out, s, v, r)
-            continue
-        for c in range(cut.sub_chains[s - s_lo], cut.sub_chains[s - s_lo + 1]):
-            if not walk.visited[c]:
-                v, r = _trace(paths, window, cut, bd, lanes, walk, c, out, v, r)
     return v - v0, r - r0
 
 
 @scalar
-def _clean_paths(paths, window, layout, out, p0, p1):
+def _clean_paths(paths, window, layout, out, p0, p1, evenodd):
     """Count or write the rings of paths p0..p1-1 (one block)."""
     for p in range(p0, p1):
         v = 0
@@ -828,14 +1027,14 @@ def _clean_paths(paths, window, layout, out, p0, p1):
         if out.write:
             v = layout.segment_start[p]
             r = layout.ring_start[p]
-        n_segments, n_rings = _clean_path(paths, window, out, p, v, r)
+        n_segments, n_rings = _clean_path(paths, window, out, p, v, r, evenodd)
         if not out.write:
             layout.n_segments[p] = n_segments
             layout.n_rings[p] = n_rings
 
 
 @parallel
-def clean_fill_paths(paths, window, layout, out, block_size):
+def clean_fill_paths(paths, window, layout, out, block_size, evenodd):
     """Count (``out.write`` False) or write the clean rings of each filled path.
 
     `paths` (`FillPaths`) is the fill clip's output for `window` (`records.Window`):
@@ -845,11 +1044,13 @@ def clean_fill_paths(paths, window, layout, out, block_size):
     path whose edge lines do not add up: a bug upstream); the write pass writes path
     p's rings from ``layout.segment_start[p]`` and ``layout.ring_start[p]`` on: control
     points, degrees, and each ring's first segment and start point (every ring is
-    closed; its closing line is implicit). Paths go `block_size` to a block, blocks in
-    parallel.
+    closed; its closing line is implicit). `evenodd`: the paths are filled by the
+    even-odd rule (the rings need keep only the parity of winding numbers), else by the
+    nonzero rule (they keep the winding numbers). Paths go `block_size` to a block,
+    blocks in parallel.
     """
     n = paths.path_offsets.shape[0] - 1
     n_blocks = (n + block_size - 1) // block_size
     for blk in prange(n_blocks):
         _clean_paths(paths, window, layout, out, blk * block_size,
-                     min(n, (blk + 1) * block_size))
+                     min(n, (blk + 1) * block_size), evenodd)

@@ -20,32 +20,47 @@ output is rebuilt from the same pieces, in four steps:
    outside the window winds 0 times around the output, and stepping across a stretch run
    ``m`` times changes the winding number by ``m``: ``m`` is the winding number just
    inside the window. It steps by +1 where a chain ends on the boundary and by -1 where
-   one starts.
-3. **Match** (`_match`). The chains are joined by *lanes* along the boundary that carry
-   that count. The chains' ends are ordered along the boundary, counter-clockwise from
-   (xmin, ymin), and ends at one point by the angle at which their chains leave it (as if
-   each lay a little further along the boundary, by its angle: the ends of a chain that
-   touches the edge and turns back are then taken in the order that keeps rings apart).
-   Walking counter-clockwise from a stretch of least ``|m|``, a chain ending where the
-   count is >= 0 starts a lane counter-clockwise, and the next chain starting where it
-   is > 0 takes the innermost open lane (a stack, as parentheses match); where the count
-   is negative the lanes run clockwise, from a chain's end back to a start met earlier.
-   The stretch of least ``|m|`` carries ``|m|`` lanes all around: that many copies of the
-   window's outline.
+   one starts (the fill clip's output is closed).
+3. **Match** (`_match`). The chains are joined by *lanes* along the boundary. The
+   chains' ends are ordered along the boundary, counter-clockwise from (xmin, ymin), and
+   ends at one point by the angle at which their chains leave it (as if each lay a
+   little further along the boundary, by its angle: the two ends of a chain that
+   touches an edge and turns back are then taken in the order that keeps rings apart).
+   *Nonzero* keeps the winding numbers: the lanes carry the count. Walking
+   counter-clockwise from a stretch of least ``|m|``, a chain ending where the count is
+   >= 0 starts a lane counter-clockwise, and the next chain starting where it is > 0
+   takes the innermost open lane (a stack, as parentheses match); where the count is
+   negative the lanes run clockwise, from a chain's end back to a start met earlier.
+   The stretch of least ``|m|`` carries ``|m|`` lanes all around: that many copies of
+   the window's outline. *Evenodd* keeps only the parity, and every chain separates an
+   odd side from an even one: from a stretch where the count is even the ends are
+   joined in pairs, each by one lane counter-clockwise over a stretch where it is odd,
+   and a chain may be run backwards. No stretch carries two lanes, and the rings have
+   the painted side on their left (for outlines that do not cross).
 4. **Rings** (`_trace`, `_put_ring`). Chain, lane, chain, ... are followed into closed
    walks; a walk is cut into rings at every boundary point it passes twice (so no ring
-   meets itself), and each ring's lanes are written as one line per edge.
+   meets itself there), and each ring's lanes are written as one line per edge.
 
-The chains and loops are the clip's own pieces (curves stay curves, of their degree);
-only the lines along the edges are new, and their endpoints are the pieces' boundary
-points or the window's corners, exact: positions along the boundary are compared as
-(edge, coordinate along the edge), never by a perimeter distance. The output winds
-around every point off the boundary as often as the fill clip's does, so both fill rules
-paint the same region with it; its rings meet only at boundary points or where the
-input's own outlines meet. The closing line of a ring is left to ``Z`` (not written).
+A walk joins chains of different subpaths (a counter open to the edge joins its shell's
+ring). Where two outlines of a path cross each other inside the window, such a ring would
+cross itself: when the control-point boxes of two such chains' pieces still overlap after
+halving both many times (`_outlines_cross`, a test that errs only towards "may cross"),
+the path is rebuilt subpath by subpath instead (each subpath's clip is closed on its
+own). Every ring is then simple when its subpath's outline is (does not cross or touch
+itself); overlapping outlines give overlapping rings.
 
-Two passes over one body per path (`clean_fill_paths`, ``prange`` over paths): the count
-pass sizes each path's output, the write pass writes it from its place.
+The chains and loops are the clip's own pieces (curves stay curves, of their degree; a
+piece that touches an edge and turns back in is cut there by the clip, ``split_touches``
+of `bezier.Options`); only the lines along the edges are new, and their ends are the
+pieces' boundary points or the window's corners, exact: positions along the boundary are
+compared as (edge, coordinate along the edge), never by a perimeter distance. Nonzero
+output winds around every point off the boundary as often as the fill clip's does;
+evenodd output as often modulo 2: each paints the same region under its rule. The closing
+line of a ring is left to ``Z`` (not written).
+
+Two passes over one body per path (`clean_fill_paths`, ``prange`` over blocks of paths):
+the count pass sizes each path's output, the write pass writes it from its place. A path
+with no vertex on the boundary is copied (its loops) without any scratch.
 """
 
 import math
@@ -70,7 +85,8 @@ _BOTTOM = 0
 _RIGHT = 1
 _TOP = 2
 _LEFT = 3
-# Steps of a walk (`_trace`): a chain (its index, >= 0), or one stretch of a lane.
+# Steps of a walk (`_trace`): a chain, by the end it is entered at (2c: run from its
+# start; 2c + 1: from its end, backwards), or one stretch of a lane.
 _FORWARD = -1     # counter-clockwise, from vertex v to v + 1
 _BACKWARD = -2    # clockwise, from vertex v to v - 1
 # Chain ends (events).
@@ -153,7 +169,7 @@ class Lanes(NamedTuple):
 class Walk(NamedTuple):
     """The walk being cut into rings (scratch; see step 4)."""
 
-    step: np.ndarray             # int64 (w,) a chain, _FORWARD or _BACKWARD
+    step: np.ndarray             # int64 (w,) a chain's entry end, _FORWARD or _BACKWARD
     origin: np.ndarray           # int64 (w,) the vertex the step starts at
     seen: np.ndarray             # int64 (vertices,) the step that starts at a vertex, or -1
     visited: np.ndarray          # bool (c,) chains already in a walk

@@ -12,7 +12,8 @@ output is rebuilt from the same pieces, in four steps:
    line: the clamped outside parts, and visible parts lying on an edge) or *chains*
    (visible parts through the window, from one boundary point to another). A subpath
    with no vertex on the boundary is a *loop*, kept as it is. Segments of zero length
-   are dropped.
+   are dropped, and so are chains that run out and back along one line to the point
+   they started from (`_spike`: they enclose nothing).
 2. **Count** (`_lane_counts`). The edge lines are replaced by their net count along the
    boundary: on each stretch between two boundary points, ``m`` = (times run
    counter-clockwise) - (times run clockwise), counter-clockwise meaning with the window's
@@ -325,7 +326,8 @@ def _cut(paths, window, s_lo, s_hi, g_lo, cut):
             g = a + (j0 + t) % n
             if open_at >= 0 and _on_boundary(controls[g, 0, 0], controls[g, 0, 1], window):
                 cut.chain_count[n_chains] = t - open_at
-                n_chains += 1
+                if not _spike(paths, cut, n_chains):
+                    n_chains += 1
                 open_at = -1
             kind = cut.kind[g - g_lo]
             if kind >= _EDGE:
@@ -338,9 +340,41 @@ def _cut(paths, window, s_lo, s_hi, g_lo, cut):
                 cut.chain_sub[n_chains] = s
         if open_at >= 0:
             cut.chain_count[n_chains] = n - open_at
-            n_chains += 1
+            if not _spike(paths, cut, n_chains):
+                n_chains += 1
     cut.sub_chains[s_hi - s_lo] = n_chains
     return n_chains, n_edges
+
+
+@borrowing
+def _spike(paths, cut, c):
+    """Return whether chain c goes out and back along one line to where it started.
+
+    Such a chain encloses nothing (every point off the line winds around it 0 times):
+    it is dropped. The fill clip leaves one where rounding takes a stretch an ulp
+    outside an edge for visible (its middle rounds onto the edge): it runs from the
+    edge an ulp out and back.
+    """
+    controls = paths.controls
+    g0 = cut.chain_first[c]
+    g1 = _chain_segment(paths, cut, c, cut.chain_count[c] - 1)
+    x0 = controls[g0, 0, 0]
+    y0 = controls[g0, 0, 1]
+    if controls[g1, 3, 0] != x0 or controls[g1, 3, 1] != y0:
+        return False
+    dx = 0.0
+    dy = 0.0
+    for j in range(cut.chain_count[c]):
+        g = _chain_segment(paths, cut, c, j)
+        for k in range(1, 4):
+            ex = controls[g, k, 0] - x0
+            ey = controls[g, k, 1] - y0
+            if dx == 0.0 and dy == 0.0:
+                dx = ex
+                dy = ey
+            elif ex * dy - ey * dx != 0.0:
+                return False
+    return True
 
 
 @borrowing

@@ -147,11 +147,11 @@ def clip_paths(paths: PathArrays, window: Window | Iterable[float], *,
                                     geometries_in=len(paths), geometries_out=non_empty,
                                     vertices_in=int(paths.controls.shape[0]),
                                     vertices_out=m, device=out.device)
-    filled = options.fill is not None
+    fill = options.fill
     return PathClipResult(out.paths, stats, options.curves.value,
-                          options.fill.value if filled else None,
+                          None if fill is None else fill.value,
                           options.mode.value, options.tolerance,
-                          options.fill_output.value if filled else None)
+                          None if fill is None else options.fill_output.value)
 
 
 def clip_svg(d: str | Sequence[str], window: Window | Iterable[float], *,

@@ -60,7 +60,8 @@ def simple_ring_problems(paths: PathArrays, steps: int = 64) -> list[str]:
             continue
         linear = shapely.LinearRing(ring)
         if not linear.is_simple:
-            problems.append(f"subpath {j}: not simple ({shapely.is_valid_reason(shapely.Polygon(ring))})")
+            reason = shapely.is_valid_reason(shapely.Polygon(ring))
+            problems.append(f"subpath {j}: not simple ({reason})")
         elif shapely.Polygon(ring).area == 0.0:
             problems.append(f"subpath {j}: no area")
     return problems

@@ -61,8 +61,8 @@ from tests.ring_checks import (
     polygonised,
     relative_difference,
     simple_ring_problems,
-    window_edge_runs,
     winding_painted,
+    window_edge_runs,
 )
 
 #: Glyphs with counters (a e g o B & @ 8), none (S), composites with accents (é Å) and

@@ -30,8 +30,8 @@ from tests.ring_checks import (
     polygonised,
     relative_difference,
     simple_ring_problems,
-    window_edge_runs,
     winding_painted,
+    window_edge_runs,
 )
 
 PEER = Path(__file__).resolve().parents[1] / "data" / "peer"

@@ -42,8 +42,8 @@ from tests.ring_checks import (
     polygonised,
     relative_difference,
     simple_ring_problems,
-    window_edge_runs,
     winding_painted,
+    window_edge_runs,
 )
 
 RULES = [Fill.NONZERO, Fill.EVENODD]

@@ -16,8 +16,8 @@ from tests.curve_checks import signed_area
 from tests.ring_checks import (
     relative_difference,
     simple_ring_problems,
-    window_edge_runs,
     winding_painted,
+    window_edge_runs,
 )
 
 W = (0, 0, 10, 10)

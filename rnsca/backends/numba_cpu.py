@@ -262,7 +262,7 @@ class NumbaBackend:
             BZ.Options(fill=options.fill is not None, flatten=options.curves is Curves.FLATTEN,
                        exact=options.mode is Mode.EXACT, n_split=int(options.n_split),
                        leaf_depth=int(options.leaf_depth), tolerance=float(options.tolerance),
-                       split_touches=clean),
+                       clean=clean),
             BZ.Decisions(decided, device.run_decisions, device.segment_class,
                          device.point_start, device.points))
         nothing = np.empty(0, dtype=np.int64)

@@ -51,8 +51,8 @@ own). Every ring is then simple when its subpath's outline is (does not cross or
 itself); overlapping outlines give overlapping rings.
 
 The chains and loops are the clip's own pieces (curves stay curves, of their degree; a
-piece that touches an edge and turns back in is cut there by the clip, ``split_touches``
-of `bezier.Options`); only the lines along the edges are new, and their ends are the
+piece that touches an edge and turns back in is cut there by the clip, and the ends of
+its pieces lie in the closed window: ``clean`` of `bezier.Options`); only the lines along the edges are new, and their ends are the
 pieces' boundary points or the window's corners, exact: positions along the boundary are
 compared as (edge, coordinate along the edge), never by a perimeter distance. Nonzero
 output winds around every point off the boundary as often as the fill clip's does;

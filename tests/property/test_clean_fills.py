@@ -177,7 +177,21 @@ def scalloped_band(draw):
     return d, (xmin, ymin, xmax, ymax)
 
 
+def apart_from_edges(d: str, window) -> bool:
+    """Return whether every control coordinate is on a window line or 1e-9 from it.
+
+    A curve within an ulp of an edge line over a stretch makes a ring an ulp wide:
+    simple, but its flattened points round onto the edge line, where the oracle would
+    see the ring touch itself. Exact touches (a coordinate on the line) stay in.
+    """
+    controls = parse_paths([d]).controls
+    xs, ys = controls[..., 0], controls[..., 1]
+    return all(((v == bound) | (np.abs(v - bound) > 1e-9)).all()
+               for v, bounds in ((xs, window[0::2]), (ys, window[1::2])) for bound in bounds)
+
+
 def check_curves(d: str, window, rule: Fill):
+    assume(apart_from_edges(d, window))
     clean, raw = check_rings(d, window, rule)
     assert relative_difference(winding_painted(clean, rule, FINE_STEPS),
                                winding_painted(raw, rule, FINE_STEPS)) <= FLATTENED

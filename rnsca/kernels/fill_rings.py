@@ -263,7 +263,12 @@ def _angle(edge, dx, dy):
     """
     ux = 1.0 if edge == _BOTTOM else (-1.0 if edge == _TOP else 0.0)
     uy = 1.0 if edge == _RIGHT else (-1.0 if edge == _LEFT else 0.0)
-    return math.atan2(dy * ux - dx * uy, dx * ux + dy * uy)
+    inward = dy * ux - dx * uy
+    if not inward > 0.0:
+        # Along the boundary (or an ulp out): +0, so that straight back is pi, not -pi
+        # (atan2(-0.0, -1) is -pi: a -0.0 here would put it ahead of everything).
+        inward = 0.0
+    return math.atan2(inward, dx * ux + dy * uy)
 
 
 @borrowing
@@ -555,16 +560,12 @@ def _match(paths, cut, n_chains, n_vertices, bd, lanes, evenodd):
     # `unrolled` numbers the vertices passed from there (+ n_vertices after a wrap), so
     # a lane's length is a difference of two.
     # Once around from the stretch after end `best`. `unrolled` numbers the vertices
-    # passed from there (+ n_vertices after a wrap): a lane's length is a difference.
+    # passed from there: the ends sorted up to `best` come after the wrap (+ n_vertices),
+    # also those at the vertex where the walk starts, so a lane's length is a difference.
     unrolled = np.empty(n_ends, dtype=np.int64)
-    wraps = 0
-    previous = vertex[order[best]]
-    for q in range(1, n_ends + 1):
-        e = order[(best + q) % n_ends]
-        if vertex[e] < previous:
-            wraps += 1
-        previous = vertex[e]
-        unrolled[e] = vertex[e] + n_vertices * wraps
+    for i in range(n_ends):
+        e = order[i]
+        unrolled[e] = vertex[e] + (n_vertices if i <= best else 0)
     if evenodd:
         for q in range(1, n_ends + 1, 2):
             a = order[(best + q) % n_ends]

@@ -127,12 +127,13 @@ def test_evenodd_hole_of_the_same_turning_leaves_two_strips():
         assert_clean_and_same_region(d, rule)
 
 
-def circle(r, cy=5.0):
-    """Return a counter-clockwise circle of radius r about (0, cy), in four cubics."""
+def circle(r, cy=5.0, cx=0.0):
+    """Return a counter-clockwise circle of radius r about (cx, cy), in four cubics."""
     k = 0.5522847498 * r
-    return (f"M{r} {cy}C{r} {cy + k} {k} {cy + r} 0 {cy + r}"
-            f"C{-k} {cy + r} {-r} {cy + k} {-r} {cy}C{-r} {cy - k} {-k} {cy - r} 0 {cy - r}"
-            f"C{k} {cy - r} {r} {cy - k} {r} {cy}Z")
+    x0, x1, xm, xk, xl = cx + r, cx - r, cx, cx + k, cx - k
+    return (f"M{x0} {cy}C{x0} {cy + k} {xk} {cy + r} {xm} {cy + r}"
+            f"C{xl} {cy + r} {x1} {cy + k} {x1} {cy}C{x1} {cy - k} {xl} {cy - r} {xm} {cy - r}"
+            f"C{xk} {cy - r} {x0} {cy - k} {x0} {cy}Z")
 
 
 def test_evenodd_donut_cut_through_its_hole_is_one_ring():
@@ -141,6 +142,20 @@ def test_evenodd_donut_cut_through_its_hole_is_one_ring():
     assert out.closed.shape[0] == 1  # the right half of the annulus, a C
     out, _ = assert_clean_and_same_region(d, "nonzero")
     assert out.closed.shape[0] == 2  # winding 1 and 2: the two half discs
+
+
+def test_a_counter_touching_an_edge_at_one_point_inside_a_shape_around_the_window():
+    # Every chain end is at one point, (10, 5): the lane of the outer shape runs all the
+    # way round from it back to it (the walk is cut there into the window and the
+    # circle). The circle leaves straight up the edge and comes back straight down it.
+    d = "M-5 -5 H15 V15 H-5 Z " + circle(1.0, 5.0, 9.0)
+    ring = "M10 5C10 5.55228 9.55228 6 9 6S8 5.55228 8 5 8.44772 4 9 4 10 4.44772 10 5Z"
+    assert clean(d, "nonzero") == "M0 0H10V10H0Z" + ring
+    # Evenodd: the circle is a hole, turned with the painted side on its left.
+    out, _ = assert_clean_and_same_region(d, "evenodd")
+    assert out.closed.shape[0] == 2
+    assert signed_area(out) == pytest.approx(100.0 - np.pi, rel=1e-3)
+    assert_clean_and_same_region(d, "nonzero")
 
 
 @pytest.mark.parametrize("rule", RULES)

@@ -391,13 +391,56 @@ def _add_point(bd, q, x, y, vertex, window):
     return q + 1
 
 
+@borrowing
+def _key_less(a, b, first, second, third):
+    """Return whether item a comes before item b: by `first`, then `second`, then `third`."""
+    if first[a] != first[b]:
+        return first[a] < first[b]
+    if second[a] != second[b]:
+        return second[a] < second[b]
+    return third[a] < third[b]
+
+
+@borrowing
+def _sort_by_keys(order, first, second, third, scratch):
+    """Sort the items `order` by (`first`, `second`, `third`), in place: a merge sort.
+
+    Bottom-up, stable; `scratch` is as long as `order`. One function for the boundary
+    points (edge, along) and the chain ends (vertex, angle, kind): NumPy's argsort would
+    compile once per key type and a lexsort is not in Numba.
+    """
+    n = order.shape[0]
+    src = order
+    dst = scratch
+    in_scratch = False
+    width = 1
+    while width < n:
+        for lo in range(0, n, 2 * width):
+            mid = min(lo + width, n)
+            hi = min(lo + 2 * width, n)
+            i = lo
+            j = mid
+            for k in range(lo, hi):
+                if i < mid and (j >= hi or not _key_less(src[j], src[i], first, second, third)):
+                    dst[k] = src[i]
+                    i += 1
+                else:
+                    dst[k] = src[j]
+                    j += 1
+        src, dst = dst, src
+        in_scratch = not in_scratch
+        width *= 2
+    if in_scratch:
+        for k in range(n):
+            order[k] = scratch[k]
+
+
 @allocating
 def _boundary_points(paths, window, cut, n_chains, n_edges, bd):
     """Step 2, first half: place the points; return (positions, vertices).
 
     Points 2c and 2c + 1 are chain c's start and end, then come the edge lines' ends
-    (2 n_chains + 2e, + 1) and the corners. Sorted by (edge, along), exactly: along each
-    edge first (a stable sort), then by edge (a stable counting sort).
+    (2 n_chains + 2e, + 1) and the corners. Sorted by (edge, along), exactly.
     """
     controls = paths.controls
     q = 0
@@ -414,18 +457,8 @@ def _boundary_points(paths, window, cut, n_chains, n_edges, bd):
     q = _add_point(bd, q, window.xmax, window.ymin, True, window)
     q = _add_point(bd, q, window.xmax, window.ymax, True, window)
     q = _add_point(bd, q, window.xmin, window.ymax, True, window)
-    by_along = np.argsort(bd.point_along[:q], kind="mergesort")
-    per_edge = np.zeros(5, dtype=np.int64)
-    for i in range(q):
-        per_edge[bd.point_edge[i] + 1] += 1
-    for e in range(4):
-        per_edge[e + 1] += per_edge[e]
-    order = np.empty(q, dtype=np.int64)
-    for i in range(q):
-        p = by_along[i]
-        e = bd.point_edge[p]
-        order[per_edge[e]] = p
-        per_edge[e] += 1
+    order = np.arange(q)
+    _sort_by_keys(order, bd.point_edge, bd.point_along, bd.point_edge, np.empty(q, np.int64))
     n_positions = 0
     n_vertices = 0
     for i in range(q):
@@ -534,10 +567,9 @@ def _match(paths, cut, n_chains, n_vertices, bd, lanes, evenodd):
         vertex[2 * c + 1] = ve
         angle[2 * c + 1] = -_angle(bd.vertex_edge[ve], dx, dy)
         kind[2 * c + 1] = _ARRIVE
-    # By vertex, then angle (largest first), then arrivals first: three stable sorts.
-    order = np.argsort(kind, kind="mergesort")
-    order = order[np.argsort(angle[order], kind="mergesort")]
-    order = order[np.argsort(vertex[order], kind="mergesort")]
+    # By vertex, then angle (largest first: `angle` is negated), then arrivals first.
+    order = np.arange(n_ends)
+    _sort_by_keys(order, vertex, angle, kind, np.empty(n_ends, np.int64))
     # The count after each end in that order, from the stretch before the first end.
     count = bd.vertex_count[(vertex[order[0]] - 1) % n_vertices]
     after = np.empty(n_ends, dtype=np.int64)
@@ -1033,7 +1065,7 @@ def _clean_subpaths(paths, window, out, s_lo, s_hi, whole, v, r, evenodd):
     return _DONE, v, r
 
 
-@scalar
+@borrowing
 def _clean_path(paths, window, out, p, v, r, evenodd):
     """Count or write path p's rings from segment v and ring r; return their counts.
 
@@ -1069,7 +1101,7 @@ def _clean_path(paths, window, out, p, v, r, evenodd):
     return v - v0, r - r0
 
 
-@scalar
+@borrowing
 def _clean_paths(paths, window, layout, out, p0, p1, evenodd):
     """Count or write the rings of paths p0..p1-1 (one block)."""
     for p in range(p0, p1):

@@ -889,10 +889,13 @@ def _trace(paths, window, cut, bd, lanes, walk, c0, out, v, r, evenodd):
 
 
 # Two curves are taken to cross once the boxes of their pieces still overlap after this
-# many halvings of both (or after the test's budget of piece pairs is spent): a test
-# that only errs towards "crossing", whose cost is a rebuild subpath by subpath.
-_CROSS_DEPTH = 24
-_CROSS_BUDGET = 4096
+# many halvings of both (pieces 1/65536 of the segment), or after the test's budget of
+# piece pairs is spent: a test that only errs towards "crossing", whose cost is a
+# rebuild subpath by subpath. Measured on the glyph page (3000 glyph-like paths whose
+# contours overlap, evenodd, 1 thread): depth 24 and 4096 pairs took the clean pass
+# from 0.9 ms without the test to 5.6 ms; depth 16 and 1024 pairs, to 1.5 ms.
+_CROSS_DEPTH = 16
+_CROSS_BUDGET = 1024
 _CROSS_STACK = 4 * _CROSS_DEPTH + 4
 
 

@@ -62,8 +62,8 @@ def main() -> None:
     print(f"threads: {numba.get_num_threads()}")
     for name, paths, win in workloads:
         for rule in ("nonzero", "evenodd"):
-            calls = {output: (lambda output=output: clip_paths(paths, win, fill=rule,
-                                                               fill_output=output))
+            calls = {output: (lambda output=output, paths=paths, win=win, rule=rule:
+                              clip_paths(paths, win, fill=rule, fill_output=output))
                      for output in ("raw", "clean")}
             best = _best(calls, args.repeats)
             raw, clean = best["raw"], best["clean"]

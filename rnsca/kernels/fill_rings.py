@@ -52,9 +52,10 @@ itself); overlapping outlines give overlapping rings.
 
 The chains and loops are the clip's own pieces (curves stay curves, of their degree; a
 piece that touches an edge and turns back in is cut there by the clip, and the ends of
-its pieces lie in the closed window: ``clean`` of `bezier.Options`); only the lines along the edges are new, and their ends are the
-pieces' boundary points or the window's corners, exact: positions along the boundary are
-compared as (edge, coordinate along the edge), never by a perimeter distance. Nonzero
+its pieces lie in the closed window: ``clean`` of `bezier.Options`); only the lines
+along the edges are new, and their ends are the pieces' boundary points or the window's
+corners, exact: positions along the boundary are compared as (edge, coordinate along
+the edge), never by a perimeter distance. Nonzero
 output winds around every point off the boundary as often as the fill clip's does;
 evenodd output as often modulo 2: each paints the same region under its rule. The closing
 line of a ring is left to ``Z`` (not written).
@@ -583,14 +584,12 @@ def _match(paths, cut, n_chains, n_vertices, bd, lanes, evenodd):
             best = i
         if i == n_ends - 1 or vertex[order[i + 1]] != vertex[e]:
             consistent = consistent and count == bd.vertex_count[vertex[e]]
-    if evenodd:
+    if evenodd:  # from a stretch of even count (half of them are)
         for i in range(n_ends):
             if after[i] % 2 == 0:
                 best = i
                 break
     base = after[best]
-    # `unrolled` numbers the vertices passed from there (+ n_vertices after a wrap), so
-    # a lane's length is a difference of two.
     # Once around from the stretch after end `best`. `unrolled` numbers the vertices
     # passed from there: the ends sorted up to `best` come after the wrap (+ n_vertices),
     # also those at the vertex where the walk starts, so a lane's length is a difference.

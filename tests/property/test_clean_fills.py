@@ -231,8 +231,9 @@ def convex_blob(draw):
              f"{num(cy)}Z")
         return d, (cx, cy, r)
     n = draw(st.integers(3, 9))
-    angles = sorted(draw(st.lists(floats(0.0, 2 * math.pi, exclude_max=True),
-                                  min_size=n, max_size=n, unique=True)))
+    # One vertex per sector of the circle, rays apart: a convex polygon, a simple spline.
+    jitter = draw(st.lists(floats(0.05, 0.95), min_size=n, max_size=n))
+    angles = [2 * math.pi * (i + u) / n for i, u in enumerate(jitter)]
     off = [(cx + r * math.cos(a), cy + r * math.sin(a)) for a in angles]  # on a circle
     mid = [((ax + bx) / 2, (ay + by) / 2) for (ax, ay), (bx, by)
            in zip(off, off[1:] + off[:1], strict=True)]

@@ -25,8 +25,9 @@ round-robin (best of repeats):
 
 T is 1e-4 of the window's longer side: the flattened baselines are within T of the
 curves, preserve mode within about 1e-15 of the parameter (equal or better accuracy).
-Strokes (``fill=None``): the baselines clip lines, not regions. A fill row
-(``rnsca:preserve:fill``) is timed on the glyphs for reference.
+Strokes (``fill=None``): the baselines clip lines, not regions. Two fill rows are timed
+on the glyphs for reference: ``rnsca:preserve:fill`` (clean rings, the default) and
+``rnsca:preserve:fill-raw`` (``fill_output="raw"``).
 """
 
 from __future__ import annotations
@@ -210,7 +211,9 @@ def run_curves(plan: CurvePlan, log: Callable[[str], None] = print) -> list[dict
     """Time every workload; return one dict per workload and window."""
     results = []
     glyphs, window = glyph_page(plan.n_glyphs)
-    fill = [("rnsca:preserve:fill", lambda: clip_paths(glyphs, window, fill="nonzero"))]
+    fill = [("rnsca:preserve:fill", lambda: clip_paths(glyphs, window, fill="nonzero")),
+            ("rnsca:preserve:fill-raw", lambda: clip_paths(glyphs, window, fill="nonzero",
+                                                           fill_output="raw"))]
     results.append(_workload(f"glyphs-{plan.n_glyphs}", glyphs, window, plan.policy, log,
                              fill))
     gc.collect()

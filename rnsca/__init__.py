@@ -7,7 +7,15 @@ from rnsca.arrays import GeometryKind, PathArrays, Ragged
 from rnsca.clip import SegmentClipResult, clip, clip_segments
 from rnsca.clip_geojson import GeoJSONClipResult, clip_geojson
 from rnsca.clip_geojson_seq import RecordsClipResult, SequenceClip, clip_geojson_seq, clip_records
-from rnsca.clip_svg import Curves, Fill, PathClipResult, clip_paths, clip_svg, flatten_paths
+from rnsca.clip_svg import (
+    Curves,
+    Fill,
+    FillOutput,
+    PathClipResult,
+    clip_paths,
+    clip_svg,
+    flatten_paths,
+)
 from rnsca.clip_svgdoc import FillMode, clip_svg_document
 from rnsca.errors import (
     BackendUnavailableError,
@@ -36,6 +44,7 @@ __all__ = [
     "ClipStats",
     "Curves",
     "Fill",
+    "FillOutput",
     "FillMode",
     "FontError",
     "GeoJSONClipResult",

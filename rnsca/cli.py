@@ -237,6 +237,10 @@ def clip(
     fill: Annotated[str, typer.Option(
         help="SVG: auto (each shape as a fill if its fill is not none, else as a stroke), "
              "stroke or fill")] = "auto",
+    fill_output: Annotated[str, typer.Option(
+        help="SVG fills: clean (subpaths that are simple rings, joined along the window's "
+             "edges) or raw (each subpath clamped onto the edges: faster, paints the "
+             "same)")] = "clean",
     precision: Annotated[int | None, typer.Option(
         help="SVG: significant digits of the written path data [default: exact]")] = None,
     framing: Annotated[str | None, typer.Option(
@@ -275,7 +279,7 @@ def clip(
                 "--verify with --mode approx needs --approx-bound (the largest deviation "
                 "to accept)")
         clip_svg_document("<svg/>", bounds, curves=curves, fill_mode=fill,
-                          precision=precision)   # checks the SVG options
+                          fill_output=fill_output, precision=precision)  # checks them
     name, path = _input(source)
     with _reporting(EXIT_USAGE):
         chosen = None if framing is None else Framing(framing)
@@ -303,6 +307,7 @@ def clip(
                                 "--indent": indent}
                 text, report = _clip_svg(data, bounds, options, geojson_only,
                                          curves=curves, fill_mode=fill,
+                                         fill_output=fill_output,
                                          precision=precision, keep_empty=keep_empty)
             else:
                 document = loads(_json_text(data, name))

@@ -22,6 +22,7 @@ from rnsca.options import (
     Backend,
     Curves,
     Fill,
+    FillOutput,
     Method,
     Mode,
     PathOptions,
@@ -32,6 +33,7 @@ from rnsca.window import Window
 __all__ = [
     "Curves",
     "Fill",
+    "FillOutput",
     "PathClipResult",
     "clip_paths",
     "clip_svg",
@@ -54,6 +56,8 @@ class PathClipResult:
         outcodes of their control points.
     curves, fill, mode : str or None
         The options the clip ran with (``fill`` None for strokes), for `rnsca.verify`.
+    fill_output : str or None
+        How the fill was written (``"clean"`` or ``"raw"``); None for strokes.
     tolerance : float
         The clip's tolerance (flattening, approx leaves), user units.
     """
@@ -64,6 +68,7 @@ class PathClipResult:
     fill: str | None = None
     mode: str = "exact"
     tolerance: float = 0.0
+    fill_output: str | None = None
 
 
 def clip_paths(paths: PathArrays, window: Window | Iterable[float], *,
@@ -71,7 +76,8 @@ def clip_paths(paths: PathArrays, window: Window | Iterable[float], *,
                tolerance: float | None = None, method: Method | str = "rnsca",
                n: SupportsIndex | str = "auto", max_depth: SupportsIndex | None = None,
                mode: Mode | str = "exact", backend: Backend | str = "numba",
-               resolution: float | str | None = None) -> PathClipResult:
+               resolution: float | str | None = None,
+               fill_output: FillOutput | str = "clean") -> PathClipResult:
     """Return paths clipped to a rectangular window, keeping curves as curves.
 
     Parameters
@@ -90,6 +96,18 @@ def clip_paths(paths: PathArrays, window: Window | Iterable[float], *,
         gives one closed subpath whose fill inside the window, under that rule, is
         the input's (outside parts are replaced by runs along the window's edge);
         subpaths that leave nothing are dropped.
+    fill_output : {"clean", "raw"}
+        How a fill is written; both paint the same region under either rule (the
+        output winds around every point off the window's boundary as often as the
+        input). "clean" (default): closed subpaths whose rings are simple, so any
+        polygoniser gives the painted region: each path's visible parts joined along the
+        window's edges by one line per edge run, never along an edge twice, no spike
+        along an edge, no closing line drawn (Z closes); a visible part that touches
+        an edge is cut there, and rings meet only at such points (or where the input's
+        own outlines meet). Overlapping outlines stay overlapping rings. "raw": one
+        closed subpath per input subpath, its outside parts clamped onto the edges:
+        faster (no ring building), but a subpath may run along an edge several times,
+        back and forth, and touch itself. Strokes ignore it.
     tolerance : float, optional
         Flattening accuracy and approx mode's smallest piece, in user units; default
         `CURVE_RELATIVE_TOLERANCE` times the window's longer side.
@@ -119,7 +137,7 @@ def clip_paths(paths: PathArrays, window: Window | Iterable[float], *,
     window = Window.of(window)
     options = PathOptions.resolve(window, curves=curves, fill=fill, tolerance=tolerance,
                                   method=method, n=n, max_depth=max_depth, mode=mode,
-                                  resolution=resolution)
+                                  resolution=resolution, fill_output=fill_output)
     engine = backend_for(backend, "paths", paths.degree.shape[0])
     engine.capabilities.require(Operation.PATHS, options.mode)
     out = engine.clip_paths(paths, window, options)
@@ -129,9 +147,11 @@ def clip_paths(paths: PathArrays, window: Window | Iterable[float], *,
                                     geometries_in=len(paths), geometries_out=non_empty,
                                     vertices_in=int(paths.controls.shape[0]),
                                     vertices_out=m, device=out.device)
+    fill = options.fill
     return PathClipResult(out.paths, stats, options.curves.value,
-                          None if options.fill is None else options.fill.value,
-                          options.mode.value, options.tolerance)
+                          None if fill is None else fill.value,
+                          options.mode.value, options.tolerance,
+                          None if fill is None else options.fill_output.value)
 
 
 def clip_svg(d: str | Sequence[str], window: Window | Iterable[float], *,
@@ -148,7 +168,7 @@ def clip_svg(d: str | Sequence[str], window: Window | Iterable[float], *,
         The closed window ``(xmin, ymin, xmax, ymax)``, in the path's user units.
     curves, fill, tolerance, **options
         As for `clip_paths` (``method``, ``n``, ``max_depth``, ``mode``,
-        ``backend``). Arcs are read as cubics within `tolerance` (default: 1e-9 of
+        ``backend``, ``fill_output``). Arcs are read as cubics within `tolerance` (default: 1e-9 of
         each arc's radius).
     precision : int or None
         Significant digits of the written numbers; None (default) writes each number
@@ -173,7 +193,11 @@ def clip_svg(d: str | Sequence[str], window: Window | Iterable[float], *,
     >>> clip_svg(d, (0, 0, 10, 10), precision=6)[0]
     'M0 7.97398C3.17644 9.00867 6.82356 9.00867 10 7.97398'
     >>> clip_svg(d, (0, 0, 10, 10), fill="nonzero", precision=6)[0]
-    'M0 5V7.97398C3.17644 9.00867 6.82356 9.00867 10 7.97398V5H0Z'
+    'M0 7.97398C3.17644 9.00867 6.82356 9.00867 10 7.97398V5H0Z'
+    >>> clip_svg("M2 -1L1 1L3 -1L1 -1Z", (0, 0, 10, 10), fill="nonzero")[0]
+    'M1.5 0 1 1 2 0Z'
+    >>> clip_svg("M2 -1L1 1L3 -1L1 -1Z", (0, 0, 10, 10), fill="nonzero", fill_output="raw")[0]
+    'M2 0H1.5L1 1 2 0Z'
     """
     single = isinstance(d, str)
     if not single and not isinstance(d, Sequence):

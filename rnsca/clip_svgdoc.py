@@ -99,8 +99,8 @@ def clip_svg_document(document: str | bytes, window: Window | Iterable[float], *
     keep_empty : bool
         Keep shapes whose clip is empty as ``<path d="">`` instead of removing them.
     **options
-        ``method``, ``n``, ``max_depth``, ``mode``, ``backend``: as for
-        `rnsca.clip_paths`.
+        ``method``, ``n``, ``max_depth``, ``mode``, ``backend``, ``fill_output``: as
+        for `rnsca.clip_paths` (``fill_output`` applies to the shapes clipped as fills).
 
     Returns
     -------

@@ -12,7 +12,7 @@ from rnsca.errors import InvalidOptionError
 from rnsca.window import Window
 
 __all__ = ["Method", "Mode", "Backend", "Boundary", "Precision", "SegmentOptions", "Curves",
-           "Fill", "PathOptions", "N_MIN", "N_MAX", "MAX_DEPTH_LIMIT",
+           "Fill", "FillOutput", "PathOptions", "N_MIN", "N_MAX", "MAX_DEPTH_LIMIT",
            "CURVE_RELATIVE_TOLERANCE", "APPROX_DEFAULT_PIXELS", "approx_tolerance",
            "Units"]
 
@@ -266,6 +266,28 @@ class Fill(str, Enum):
             f"fill must be 'nonzero', 'evenodd' or None (strokes), got {value!r}")
 
 
+class FillOutput(_ChoiceEnum):
+    """How a filled path's clip is written: both paint the same region, under either rule."""
+
+    CLEAN = "clean"
+    """Closed subpaths whose rings are simple: the visible parts joined by one line per
+    window edge run, no run along an edge twice, no zero-area spike; rings meet only at
+    points (or where the input's own outlines meet). Any polygoniser gives the painted
+    region (default)."""
+    RAW = "raw"
+    """One closed subpath per input subpath, its outside parts clamped onto the window's
+    edges: faster, but a subpath may run along an edge several times, back and forth,
+    and touch itself there."""
+
+    @classmethod
+    def _missing_(cls, value: object) -> FillOutput:
+        try:
+            return super()._missing_(value)  # type: ignore[return-value]
+        except InvalidOptionError:
+            raise InvalidOptionError(f"fill_output must be one of 'clean', 'raw', got "
+                                     f"{value!r}") from None
+
+
 @dataclass(frozen=True, slots=True)
 class PathOptions:
     """Validated options for one path clipping call.
@@ -275,6 +297,8 @@ class PathOptions:
     curves : Curves
     fill : Fill or None
         None: strokes.
+    fill_output : FillOutput
+        How fills are written (strokes ignore it).
     mode : Mode
     n_split : int
         Pieces per subdivision of an ambiguous curve.
@@ -286,6 +310,7 @@ class PathOptions:
 
     curves: Curves
     fill: Fill | None
+    fill_output: FillOutput
     mode: Mode
     n_split: int
     leaf_depth: int
@@ -297,7 +322,8 @@ class PathOptions:
                 method: Method | str = "rnsca", n: SupportsIndex | str = "auto",
                 max_depth: SupportsIndex | None = None,
                 mode: Mode | str = "exact",
-                resolution: float | str | None = None) -> PathOptions:
+                resolution: float | str | None = None,
+                fill_output: FillOutput | str = "clean") -> PathOptions:
         """Return checked options, with defaults filled in for `window`.
 
         Defaults: N = `bezier.CURVE_N_AUTO` for ``n="auto"``; depth
@@ -311,6 +337,7 @@ class PathOptions:
 
         curves = Curves(curves)
         fill = Fill.of(fill)
+        output = FillOutput(fill_output)
         mode = Mode(mode)
         if Method(method) is not Method.RNSCA:
             raise InvalidOptionError(
@@ -332,4 +359,4 @@ class PathOptions:
         else:
             tol = window.size * CURVE_RELATIVE_TOLERANCE if tolerance is None else \
                 positive_tolerance(tolerance, finite=True)
-        return cls(curves, fill, mode, n_split, depth, tol)
+        return cls(curves, fill, output, mode, n_split, depth, tol)

@@ -511,7 +511,7 @@ def clip_svg(body: bytes, settings: Settings, deadline: float | None = None) -> 
                    settings.work_budget)
         started = time.perf_counter()
         result = rnsca.clip_paths(paths, window, curves=options.curves, fill=options.fill,
-                                  **arguments)
+                                  fill_output=options.fill_output, **arguments)
         clip_seconds = time.perf_counter() - started
     except RnscaError as exc:
         if getattr(exc, "path_index", None) is not None:  # `position` is within that path

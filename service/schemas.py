@@ -109,6 +109,15 @@ class SVGOptions(ClipOptions):
         "preserve", description="Keep Bézier segments as curves, or flatten them to lines.")
     fill: Literal["nonzero", "evenodd"] | None = Field(
         None, description="Clip as filled areas with this fill rule, or as strokes (null).")
+    fill_output: Literal["clean", "raw"] = Field(
+        "clean", description="How fills are written (strokes ignore it); both paint the "
+                             "same region. `clean`: closed subpaths whose rings are simple "
+                             "(the visible parts joined along the window's edges, one line "
+                             "per edge run, never along an edge twice), so any "
+                             "polygoniser gives the painted region. `raw`: one closed "
+                             "subpath per input subpath, its outside parts clamped onto "
+                             "the edges: faster, but it may run along an edge back and "
+                             "forth and touch itself.")
 
 
 _VERIFY = Field(None, description="Compare with Shapely's exact intersection. true: "

@@ -27,6 +27,7 @@ from rnsca.backends.base import (
 from rnsca.errors import LimitExceededError
 from rnsca.kernels import bezier as BZ
 from rnsca.kernels import counters as C
+from rnsca.kernels import fill_rings as FR
 from rnsca.kernels import polygons as PG
 from rnsca.kernels import polylines as PL
 from rnsca.kernels import records as R
@@ -34,7 +35,16 @@ from rnsca.kernels import segments as K
 from rnsca.kernels import windows as WK
 from rnsca.kernels.validate import all_finite
 from rnsca.many_windows import assign
-from rnsca.options import Backend, Curves, Method, Mode, PathOptions, SegmentOptions
+from rnsca.options import (
+    Backend,
+    Curves,
+    Fill,
+    FillOutput,
+    Method,
+    Mode,
+    PathOptions,
+    SegmentOptions,
+)
 from rnsca.stats import ClipStats, DeviceStats
 from rnsca.window import Window, WindowTable
 
@@ -290,6 +300,7 @@ class NumbaBackend:
         Without it, the kernel decides everything itself.
         """
         decided = device is not None
+        clean = options.fill is not None and options.fill_output is FillOutput.CLEAN
         if device is None:
             # The kernel decides each run in its count pass and keeps the decision here.
             device = DevicePaths(np.empty(paths.degree.shape[0], dtype=np.int8),
@@ -308,7 +319,8 @@ class NumbaBackend:
             R.Window(window.xmin, window.ymin, window.xmax, window.ymax),
             BZ.Options(fill=options.fill is not None, flatten=options.curves is Curves.FLATTEN,
                        exact=options.mode is Mode.EXACT, n_split=int(options.n_split),
-                       leaf_depth=int(options.leaf_depth), tolerance=float(options.tolerance)),
+                       leaf_depth=int(options.leaf_depth), tolerance=float(options.tolerance),
+                       clean=clean),
             BZ.Decisions(decided, device.run_decisions, device.segment_class,
                          device.point_start, device.points))
         nothing = np.empty(0, dtype=np.int64)
@@ -340,6 +352,8 @@ class NumbaBackend:
         clipped = PathArrays.from_kernel(controls=out_ctrl, degree=out_deg,
                                          subpath_offsets=out_first, closed=out_closed,
                                          start=out_start, path_offsets=path_offsets)
+        if clean:
+            clipped = clean_fills(clipped, window, options.fill is Fill.EVENODD)
         segments_in = paths.degree.shape[0] + BZ.closing_edges(
             paths.controls, paths.subpath_offsets, paths.closed, paths.start,
             options.fill is not None)
@@ -405,6 +419,43 @@ def warm_up_paths(backend: ClipBackend) -> None:
         backend.clip_paths(paths, window, PathOptions.resolve(window, curves=curves,
                                                               fill=fill, mode=mode))
     backend.flatten_paths(paths, 1e-3, True)
+
+
+def clean_fills(clipped: PathArrays, window: Window, evenodd: bool) -> PathArrays:
+    """Return the fill clip's output rebuilt as simple rings (`kernels.fill_rings`).
+
+    The same count, prefix-sum, write passes as the clip, over paths. Host code for both
+    backends: the OpenCL backend's paths are assembled by `NumbaBackend.clip_paths` too.
+    """
+    n = len(clipped)
+    kernel_input = (FR.FillPaths(clipped.controls, clipped.degree, clipped.subpath_offsets,
+                                 clipped.path_offsets),
+                    R.Window(window.xmin, window.ymin, window.xmax, window.ymax))
+    n_segments = np.zeros(n, dtype=np.int64)
+    n_rings = np.zeros(n, dtype=np.int64)
+    nothing = np.empty(0, dtype=np.int64)
+    block = max(1, min(_PATH_BLOCK, n // _PATH_MIN_BLOCKS))
+    FR.clean_fill_paths(*kernel_input, FR.RingLayout(n_segments, n_rings, nothing, nothing),
+                        FR.RingOutput(False, np.empty((0, 4, 2)), np.empty(0, np.int8),
+                                      nothing, np.empty((0, 2))), block, evenodd)
+    if (n_rings < 0).any():  # the edge lines of a path do not add up: a bug, not the input
+        raise RuntimeError(f"clean fill: the clip of path {int(np.argmax(n_rings < 0))} is "
+                           "not closed along the window's boundary (please report)")
+    segment_start = exclusive_sum(n_segments)
+    ring_start = exclusive_sum(n_rings)
+    m = int(segment_start[-1])
+    k = int(ring_start[-1])
+    controls = np.empty((m, 4, 2))
+    degree = np.empty(m, dtype=np.int8)
+    first = np.empty(k + 1, dtype=np.int64)
+    first[k] = m
+    start = np.empty((k, 2))
+    FR.clean_fill_paths(*kernel_input,
+                        FR.RingLayout(n_segments, n_rings, segment_start, ring_start),
+                        FR.RingOutput(True, controls, degree, first, start), block, evenodd)
+    return PathArrays.from_kernel(controls=controls, degree=degree, subpath_offsets=first,
+                                  closed=np.ones(k, dtype=bool), start=start,
+                                  path_offsets=ring_start)
 
 
 def polyline_layout(paths: PathArrays, segment_points: np.ndarray,

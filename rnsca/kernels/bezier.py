@@ -147,6 +147,9 @@ class Options(NamedTuple):
     n_split: int        # N: pieces per split
     leaf_depth: int     # deepest split level
     tolerance: float    # flatness of lines (flatten); smallest piece (approx)
+    clean: bool         # pieces for clean fills (`fill_rings`, which cuts rings at
+                        # boundary vertices only): a visible piece ends where it touches
+                        # an edge and turns back in, and its ends lie in the window
 
 
 class Curve(NamedTuple):
@@ -718,8 +721,8 @@ def _flush(out, state, opts, window, c):
 def _emit_flat_stretch(out, state, opts, window, c, a, b, edges_a, edges_b):
     """Output the visible stretch [a, b] of a curve as lines within the tolerance."""
     q = _piece(c, a, b)
-    sx, sy = _snap(q.x[0], q.y[0], edges_a, window)
-    ex, ey = _snap(q.x[3], q.y[3], edges_b, window)
+    sx, sy = _inside(_snap(q.x[0], q.y[0], edges_a, window), opts, window)
+    ex, ey = _inside(_snap(q.x[3], q.y[3], edges_b, window), opts, window)
     steps = flatten_count(q.degree, *q.x, *q.y, opts.tolerance)
     prev_x = sx
     prev_y = sy
@@ -728,19 +731,35 @@ def _emit_flat_stretch(out, state, opts, window, c, a, b, edges_a, edges_b):
             nx = ex
             ny = ey
         else:
-            nx, ny = _point(c, a + (b - a) * k / steps)
+            nx, ny = _inside(_point(c, a + (b - a) * k / steps), opts, window)
         _emit_piece(out, state, opts, _line(prev_x, prev_y, nx, ny))
         prev_x = nx
         prev_y = ny
+
+
+@scalar
+def _inside(point, opts, window):
+    """Return `point`, moved into the window for clean fills (``opts.clean``).
+
+    A stretch between two breaks lies in one of the nine regions; one taken for visible
+    (its middle in the window) is inside up to rounding, but its ends may round an ulp
+    past an edge (an input vertex an ulp outside, or a root an ulp off): clean rings
+    are built from points on the boundary or inside it, so such an end is clamped.
+    """
+    x, y = point
+    if opts.clean:
+        x = clamp(x, window.xmin, window.xmax)
+        y = clamp(y, window.ymin, window.ymax)
+    return x, y
 
 
 @borrowing
 def _emit_stretch(out, state, opts, window, c, a, b, edges_a, edges_b):
     """Output the visible stretch [a, b] of a segment as a piece of its degree."""
     q = _piece(c, a, b)
-    sx, sy = _snap(q.x[0], q.y[0], edges_a, window)
+    sx, sy = _inside(_snap(q.x[0], q.y[0], edges_a, window), opts, window)
     # piece_values repeats the end in the unused slots: q.x[3], q.y[3] is the end.
-    ex, ey = _snap(q.x[3], q.y[3], edges_b, window)
+    ex, ey = _inside(_snap(q.x[3], q.y[3], edges_b, window), opts, window)
     d = c.degree
     _emit_piece(out, state, opts,
                 Curve(d, (sx, ex if d == 1 else q.x[1], q.x[2] if d == 3 else ex, ex),
@@ -764,6 +783,12 @@ def _emit_exact(out, state, work, opts, window, c):
         if _code(mx, my, window) == 0:
             if open_k < 0:
                 open_k = k
+            elif opts.clean and brk_e[k] != 0:
+                # It touches an edge at break k and stays inside: two pieces, meeting
+                # there exactly (both ends snapped onto the edge).
+                _emit_stretch(out, state, opts, window, c, brk_t[open_k], brk_t[k],
+                              brk_e[open_k], brk_e[k])
+                open_k = k
             continue
         if open_k >= 0:
             _emit_stretch(out, state, opts, window, c, brk_t[open_k], brk_t[k], brk_e[open_k],
@@ -778,9 +803,14 @@ def _emit_exact(out, state, work, opts, window, c):
 
 
 @borrowing
-def _pend(state, a, b, edges_a, edges_b):
-    """Mark [a, b] visible; return whether it continues the pending interval."""
-    if state.ints[_PEND] == 1 and state.floats[_PEND_B] == a:
+def _pend(state, a, b, edges_a, edges_b, split_touches):
+    """Mark [a, b] visible; return whether it continues the pending interval.
+
+    With `split_touches` (``Options.clean``), an interval starting where the curve
+    touches an edge (`edges_a` non-zero) does not continue it: the touch ends a piece.
+    """
+    if state.ints[_PEND] == 1 and state.floats[_PEND_B] == a and not (
+            split_touches and edges_a != 0):
         state.floats[_PEND_B] = b
         state.ints[_PEND_EB] = edges_b
         return True
@@ -793,7 +823,7 @@ def _visible(out, state, opts, window, c, a, b, edges_a, edges_b):
 
     It extends the pending one if it continues it; otherwise that one is output first.
     """
-    if _pend(state, a, b, edges_a, edges_b):
+    if _pend(state, a, b, edges_a, edges_b, opts.clean):
         return
     _flush(out, state, opts, window, c)
     si = state.ints

@@ -145,6 +145,15 @@ def test_clip_svg_fill(client):
     assert result.paths == list(local) and result.verification.passed
 
 
+@pytest.mark.parametrize("fill_output", ["clean", "raw"])
+def test_clip_svg_fill_output_is_passed_on(client, fill_output):
+    # Runs along the bottom edge back and forth: raw keeps them, clean does not.
+    notch = "M2 -1L1 1L3 -1L1 -1Z"
+    result = client.clip_svg(notch, WINDOW, fill="nonzero", fill_output=fill_output)
+    local, _ = rnsca.clip_svg([notch], WINDOW, fill="nonzero", fill_output=fill_output)
+    assert result.paths == list(local)
+
+
 # --- segments -----------------------------------------------------------------------------
 
 

@@ -21,6 +21,19 @@ glyph's area). fontTools' ``AreaPen`` integrates the exact curves (Green's theor
 integral of the clipped path's winding number is the sum over input rings of their signed
 areas inside the window, up to the oracle's ``T P``, and quarters of a glyph add up to the
 whole glyph to rounding.
+
+Clean fills (``fill_output="clean"``, the default; the raw fill is tested above as it
+was) run on every cutting window and the whole one, under both rules, curves kept, and
+on the flatten, approx and deeper-split clips of `SOME_CUTTING`: every output subpath is a
+simple ring (`tests.ring_checks`, curves at 64 equal steps), no two lines of a ring
+overlap along a window edge, and the rings' polygonisation (evenodd: the symmetric
+difference of their polygons; nonzero: the faces of the noded rings by winding number)
+is the region the raw fill paints within 1e-9 of its area, both flattened alike (the
+same pieces); against the glyph's own Shapely region the flattening band above applies
+(sub-curves flattened by themselves). For the issue's '@' (DejaVu Sans, window
+``(0, 500, 2000, 1100)``, nonzero) the glyph and the rings are flattened within 1e-10 em,
+where the painted regions agree within 1e-9 of the area; the ``slow`` test does the same
+for every glyph in its off-grid window.
 """
 
 from __future__ import annotations
@@ -42,6 +55,14 @@ from tests.fonts import (
     flat_rings,
     load_glyph,
     require_font,
+)
+from tests.ring_checks import (
+    painted,
+    polygonised,
+    relative_difference,
+    simple_ring_problems,
+    winding_painted,
+    window_edge_runs,
 )
 
 #: Glyphs with counters (a e g o B & @ 8), none (S), composites with accents (é Å) and
@@ -222,7 +243,8 @@ def test_oracle_regions_agree(font, char):
 @pytest.mark.parametrize("rule", RULES)
 @pytest.mark.parametrize(("font", "char", "window_name"), cases(CUTTING))
 def test_fill_keeps_the_glyph_area_inside_the_window(font, char, window_name, rule):
-    g, window, result = clip(font, char, window_name, fill=rule)
+    # The raw fill: each contour clamped onto the window, its winding numbers kept.
+    g, window, result = clip(font, char, window_name, fill=rule, fill_output="raw")
     paths = result.paths
     # Degree kept: TrueType quadratics stay quadratics, CFF cubics stay cubics.
     assert set(np.unique(paths.degree)) <= {1, FONTS[font].degree}
@@ -239,11 +261,13 @@ def test_fill_keeps_the_glyph_area_inside_the_window(font, char, window_name, ru
     assert_verified(g.d, result, window)
 
 
+@pytest.mark.parametrize("fill_output", ["clean", "raw"])
 @pytest.mark.parametrize(("font", "char"), GLYPHS)
-def test_window_holding_the_whole_glyph_returns_it_unchanged(font, char):
-    g, window, result = clip(font, char, "whole", fill="nonzero")
-    # A filled subpath comes out closed by a drawn line where Z's line was implicit.
-    original = parse_paths([g.d_closed])
+def test_window_holding_the_whole_glyph_returns_it_unchanged(font, char, fill_output):
+    g, window, result = clip(font, char, "whole", fill="nonzero", fill_output=fill_output)
+    # Raw: a filled subpath comes out closed by a drawn line where Z's line was implicit;
+    # clean leaves a closing line to Z.
+    original = parse_paths([g.d_closed if fill_output == "raw" else g.d])
     assert Counter(result.paths.degree.tolist()) == Counter(original.degree.tolist())
     assert np.array_equal(result.paths.controls, original.controls)
     assert exact_signed_area(result.paths) == pytest.approx(g.signed_area, rel=1e-12)
@@ -346,3 +370,103 @@ def test_approx_mode_stays_inside_and_loses_little(font, char, window_name):
     assert got <= expected + 2 * g.tolerance * g.perimeter, (got, expected)
     # Each end of a visible part moves by at most one dropped piece: 2 * tolerance.
     assert_verified(g.d, result, window, approx_bound=2 * result.tolerance)
+
+
+# --- clean fills --------------------------------------------------------------------------
+
+#: Painted regions of the clean rings and of the raw fill, flattened alike, agree this
+#: closely (relative to the area); so do the glyph's and the rings' at a fine flattening.
+SAME_REGION = 1e-9
+#: The flattening (em) at which the rings and the glyph's region are compared directly.
+FINE = 1e-10
+
+
+def assert_clean_rings(g, window: Window, rule: str, clean, raw) -> None:
+    """Each subpath a simple ring, no edge run twice, the raw fill's region painted."""
+    problems = simple_ring_problems(clean)
+    assert not problems, problems
+    assert window_edge_runs(clean, window.bounds) == 0
+    assert clean.closed.all()
+    rings = flat_rings(clean, g.tolerance)
+    if rings:
+        assert_inside(np.concatenate(rings), window, INSIDE)
+    # The same pieces flattened alike: the regions agree to rounding.
+    assert relative_difference(painted(clean, rule), winding_painted(raw, rule)) \
+        <= SAME_REGION
+
+
+@pytest.mark.parametrize("rule", RULES)
+@pytest.mark.parametrize(("font", "char", "window_name"), cases([*CUTTING, "whole"]))
+def test_clean_fill_is_simple_rings_painting_the_glyph(font, char, window_name, rule):
+    g, window, result = clip(font, char, window_name, fill=rule)
+    _, _, raw = clip(font, char, window_name, fill=rule, fill_output="raw")
+    assert set(np.unique(result.paths.degree)) <= {1, FONTS[font].degree}
+    assert_clean_rings(g, window, rule, result.paths, raw.paths)
+    # Against the glyph's region: sub-curves are flattened by themselves (the band).
+    rings = flat_rings(result.paths, g.tolerance)
+    got = polygonised(rings, rule) if rings else shapely.MultiPolygon()
+    expected = shapely.intersection(region(font, char, rule), shapely.box(*window.bounds))
+    assert shapely.area(shapely.symmetric_difference(got, expected)) <= \
+        2 * g.tolerance * g.perimeter
+    # The exact curves: nonzero keeps the winding numbers, so their integral is the raw
+    # fill's. (Evenodd keeps their parity only: its rings along the edges turn with the
+    # painted side on their left, contours never cut keep their own direction.)
+    if rule == "nonzero":
+        assert exact_signed_area(result.paths) == pytest.approx(
+            exact_signed_area(raw.paths), rel=1e-9, abs=1e-9 * window.size ** 2)
+    assert_verified(g.d, result, window)
+
+
+@pytest.mark.parametrize("options", [{"curves": "flatten"}, {"mode": "approx"},
+                                     {"max_depth": 3}], ids=["flatten", "approx", "depth-3"])
+@pytest.mark.parametrize(("font", "char", "window_name"), cases(SOME_CUTTING))
+def test_clean_fill_in_other_modes_is_simple_rings(font, char, window_name, options):
+    rule = SOME_CUTTING[window_name]
+    g, window, result = clip(font, char, window_name, fill=rule, **options)
+    _, _, raw = clip(font, char, window_name, fill=rule, fill_output="raw", **options)
+    assert_clean_rings(g, window, rule, result.paths, raw.paths)
+
+
+def _fine_region(font: str, char: str, rule: str, window: Window):
+    """Return the glyph's painted region in `window`, flattened within `FINE` em."""
+    fine = load_glyph(font, char, FINE)
+    polygons = [shapely.Polygon(r) for r in fine.rings]
+    if rule == "evenodd":
+        whole = reduce(shapely.symmetric_difference, polygons)
+    else:
+        whole = filled_region(list(fine.rings), Fill.NONZERO)
+    return fine, shapely.intersection(whole, shapely.box(*window.bounds))
+
+
+def assert_paints_the_glyph_finely(font: str, char: str, window, rule: str) -> None:
+    g = glyph_of(font, char)
+    result = rnsca.clip_paths(parse_paths([g.d]), window, fill=rule)
+    window = Window.of(window)
+    fine, expected = _fine_region(font, char, rule, window)
+    got = polygonised(flat_rings(result.paths, fine.tolerance), rule)
+    assert relative_difference(got, expected) <= SAME_REGION
+
+
+def test_the_issues_at_sign_is_simple_rings_painting_the_glyph():
+    """Issue 17: '@' of DejaVu Sans, window (0, 500, 2000, 1100), nonzero."""
+    window = (0.0, 500.0, 2000.0, 1100.0)
+    g = glyph_of("dejavu-sans", "@")
+    source = parse_paths([g.d])
+    raw = rnsca.clip_paths(source, window, fill="nonzero", fill_output="raw").paths
+    clean = rnsca.clip_paths(source, window, fill="nonzero").paths
+    # The raw fill's second subpath runs along y = 500 and y = 1100 over itself.
+    assert window_edge_runs(raw, window) > 0
+    assert simple_ring_problems(raw)
+    assert_clean_rings(g, Window.of(window), "nonzero", clean, raw)
+    # Three pieces of the band: the bowl with the stem (the counter opens onto the
+    # bottom edge: one ring), and the outer arc's left and right parts.
+    assert clean.closed.shape[0] == 3
+    for rule in RULES:
+        assert_paints_the_glyph_finely("dejavu-sans", "@", window, rule)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("rule", RULES)
+@pytest.mark.parametrize(("font", "char"), GLYPHS)
+def test_clean_fill_paints_the_glyph_finely(font, char, rule):
+    assert_paints_the_glyph_finely(font, char, windows(font, char)["off-grid"], rule)

@@ -240,6 +240,24 @@ def test_svg_path_text_is_read_once_and_verified_from_the_arrays(monkeypatch):
     assert len(calls) == 1
 
 
+@pytest.mark.parametrize("fill_output, expected", [
+    (None, "M1.5 0 1 1 2 0Z"), ("clean", "M1.5 0 1 1 2 0Z"), ("raw", "M2 0H1.5L1 1 2 0Z")])
+def test_svg_fill_output_is_clean_by_default_and_raw_on_request(fill_output, expected):
+    options = {"fill": "nonzero"} | ({} if fill_output is None else
+                                     {"fill_output": fill_output})
+    with make_client(warm_up=False) as client:
+        r = client.post("/v1/clip/svg", json={"window": [0, 0, 10, 10], "verify": True,
+                                              "paths": ["M2 -1L1 1L3 -1L1 -1Z"],
+                                              "options": options})
+        assert r.status_code == 200, r.text
+        assert r.json()["paths"] == [expected]
+        assert r.json()["verification"]["passed"] is True
+        r = client.post("/v1/clip/svg", json={"window": [0, 0, 10, 10], "paths": ["M0 0H1"],
+                                              "options": {"fill_output": "tidy"}})
+        assert r.status_code == 422, r.text
+        assert r.json()["path"].endswith("fill_output")
+
+
 def _gzip_members(member: bytes, count: int) -> bytes:
     return b"".join([member] * count)
 

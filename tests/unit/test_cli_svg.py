@@ -26,7 +26,7 @@ DRAWING = """<?xml version="1.0" encoding="UTF-8"?>
 CLIPPED = """<?xml version="1.0" encoding="UTF-8"?>
 <svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 10 10">
   <!-- two shapes and a label -->
-  <path id="r" d="M0 2H5V6H0V2Z" style="stroke:red" />
+  <path id="r" d="M0 2H5V6H0Z" style="stroke:red" />
   <g transform="translate(20 0)">
   </g>
   <path id="curve" fill="none" d="M0 7.97C3.18 9.01 6.82 9.01 10 7.97" />
@@ -113,7 +113,8 @@ def test_clip_writes_svg_stats_to_a_file(runner, drawing, tmp_path):
 
 @pytest.mark.parametrize("args, d", [
     (["--fill", "stroke"], "M0 2H5V6H0"),
-    (["--fill", "fill"], "M0 2H5V6H0V2Z"),
+    (["--fill", "fill"], "M0 2H5V6H0Z"),
+    (["--fill", "fill", "--fill-output", "raw"], "M0 2H5V6H0V2Z"),
     (["--curves", "flatten", "--tolerance", "0.5"], None),
     (["--mode", "approx", "--n", "3", "--max-depth", "6"], None),
 ])
@@ -121,7 +122,8 @@ def test_clip_passes_the_svg_options_on(runner, drawing, args, d):
     result = run(runner, str(drawing), *WINDOW, *args)
     assert result.exit_code == 0, result.output
     options = {"fill": "fill_mode", "curves": "curves", "tolerance": "tolerance",
-               "mode": "mode", "n": "n", "max-depth": "max_depth"}
+               "mode": "mode", "n": "n", "max-depth": "max_depth",
+               "fill-output": "fill_output"}
     kwargs = {options[flag[2:]]: value for flag, value in zip(args[::2], args[1::2],
                                                                strict=True)}
     for name in ("tolerance", "n", "max_depth"):
@@ -151,6 +153,7 @@ def test_clip_refuses_geojson_only_flags_for_svg(runner, drawing, flag):
 @pytest.mark.parametrize("options, message", [
     (["--fill", "outline"], "fill_mode must be one of 'auto', 'stroke', 'fill'"),
     (["--curves", "bent"], "curves must be one of"),
+    (["--fill-output", "tidy"], "fill_output must be one of 'clean', 'raw'"),
     (["--precision", "0"], "precision must be None or an int from 1 to 17"),
 ])
 def test_clip_reports_a_bad_svg_option_before_reading(runner, options, message):

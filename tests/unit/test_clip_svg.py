@@ -48,13 +48,23 @@ def test_subpaths_outside_leave_nothing():
 
 @pytest.mark.parametrize("fill", ["nonzero", "evenodd"])
 def test_fill_closes_the_visible_part_along_the_window_edge(fill):
-    assert clipped("M-5 5 C0 10 10 10 15 5", fill=fill) == \
+    # Clean (the default): the ring starts with the visible curve; Z draws the last line.
+    # Nonzero keeps the outline's direction (the winding numbers); evenodd turns every
+    # ring with the painted side on its left (counter-clockwise, y up): here backwards.
+    expected = ("M0 7.97398C3.17644 9.00867 6.82356 9.00867 10 7.97398V5H0Z"
+                if fill == "nonzero" else
+                "M10 7.97398C6.82356 9.00867 3.17644 9.00867 0 7.97398V5H10Z")
+    assert clipped("M-5 5 C0 10 10 10 15 5", fill=fill) == expected
+    # Raw: the clamped subpath, from the clamped start, closed by a drawn line.
+    assert clipped("M-5 5 C0 10 10 10 15 5", fill=fill, fill_output="raw") == \
         "M0 5V7.97398C3.17644 9.00867 6.82356 9.00867 10 7.97398V5H0Z"
 
 
 def test_fill_of_a_shape_around_the_window_is_the_window():
-    assert clipped("M-20 -20 h50 v50 h-50 z", fill="nonzero") == "M0 0H10V10H0V0Z"
-    assert clipped("M-20 -20 h50 v50 h-50 z", fill="evenodd") == "M0 0H10V10H0V0Z"
+    assert clipped("M-20 -20 h50 v50 h-50 z", fill="nonzero") == "M0 0H10V10H0Z"
+    assert clipped("M-20 -20 h50 v50 h-50 z", fill="evenodd") == "M0 0H10V10H0Z"
+    assert clipped("M-20 -20 h50 v50 h-50 z", fill="nonzero", fill_output="raw") == \
+        "M0 0H10V10H0V0Z"
     assert clipped("M-20 -20 h50 v50 h-50 z") == ""  # its outline is not in the window
 
 
@@ -67,7 +77,8 @@ def test_fill_of_a_ring_whose_hole_holds_the_window_paints_nothing(fill):
 
 
 def test_fill_inside_the_window_is_the_shape_closed():
-    assert clipped("M2 2 h6 v5 h-6 z", fill="nonzero") == "M2 2H8V7H2V2Z"
+    assert clipped("M2 2 h6 v5 h-6 z", fill="nonzero") == "M2 2H8V7H2Z"
+    assert clipped("M2 2 h6 v5 h-6 z", fill="nonzero", fill_output="raw") == "M2 2H8V7H2V2Z"
 
 
 def test_fill_of_a_shape_beside_the_window_is_dropped():
@@ -123,6 +134,7 @@ def test_quadratics_stay_quadratics_and_cubics_cubics():
 @pytest.mark.parametrize("options, message", [
     ({"curves": "bezier"}, "curves must be one of"),
     ({"fill": "winding"}, "fill must be"),
+    ({"fill": "nonzero", "fill_output": "tidy"}, "fill_output must be one of 'clean', 'raw'"),
     ({"method": "liang_barsky"}, "method='rnsca' only"),
     ({"n": 1}, "n must be"),
     ({"max_depth": 40}, "max_depth"),
@@ -165,9 +177,16 @@ def test_the_public_names_are_exported():
 def test_a_boundary_run_that_grows_then_vanishes_is_not_written(fill):
     # The run along the bottom edge goes (2,0) -> (3,0), grows to (1,0), then comes back
     # to (2,0) and is dropped: the write pass must not write past the counted output.
-    assert clipped("M2 -1L1 1L3 -1L1 -1Z", fill=fill) == "M2 0H1.5L1 1 2 0Z"
+    raw = {"fill": fill, "fill_output": "raw"}
+    assert clipped("M2 -1L1 1L3 -1L1 -1Z", **raw) == "M2 0H1.5L1 1 2 0Z"
+    assert clip_svg("M2 -1L1 1L3 -1L1 -1Z", W, curves="flatten", precision=6,
+                    **raw)[0] == "M2 0H1.5L1 1 2 0Z"
+    # Clean: the run along the edge is the one line from (2, 0) back to (1.5, 0), drawn
+    # by Z (nonzero keeps the outline's turning; evenodd turns rings counter-clockwise).
+    expected = "M1.5 0 1 1 2 0Z" if fill == "nonzero" else "M2 0 1 1 1.5 0Z"
+    assert clipped("M2 -1L1 1L3 -1L1 -1Z", fill=fill) == expected
     assert clip_svg("M2 -1L1 1L3 -1L1 -1Z", W, fill=fill, curves="flatten",
-                    precision=6)[0] == "M2 0H1.5L1 1 2 0Z"
+                    precision=6)[0] == expected
 
 
 def test_a_closed_subpath_visible_whole_with_an_implicit_closing_line():
@@ -190,6 +209,8 @@ def _blobs(rng, n):
 
 
 @pytest.mark.parametrize("options", [{}, {"fill": "nonzero"}, {"fill": "evenodd"},
+                                     {"fill": "nonzero", "fill_output": "raw"},
+                                     {"fill": "evenodd", "mode": "approx"},
                                      {"curves": "flatten", "tolerance": 1e-3},
                                      {"mode": "approx"}, {"max_depth": 3}])
 def test_the_output_keeps_the_path_layout(options):

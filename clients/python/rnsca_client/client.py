@@ -376,8 +376,8 @@ class Client:
         return plan.assemble(pieces)
 
     def clip_svg(self, paths: str | Sequence[str], window: Any, *, curves: str | None = None,
-                 fill: str | None = None, verify: bool | str | None = None,
-                 **options: Any) -> SVGResult:
+                 fill: str | None = None, fill_output: str | None = None,
+                 verify: bool | str | None = None, **options: Any) -> SVGResult:
         """Return SVG path data clipped to `window`, one string per path.
 
         Parameters
@@ -390,6 +390,10 @@ class Client:
             Keep Bézier segments as curves (default) or flatten them to lines.
         fill : {"nonzero", "evenodd"}, optional
             Clip as filled areas with this rule; default: as strokes.
+        fill_output : {"clean", "raw"}, optional
+            How fills come back (the server's default: ``"clean"``, subpaths that are
+            simple rings); ``"raw"``: each subpath clamped onto the window's edges
+            (faster, paints the same).
         verify : bool or "all", optional
             Compare with Shapely on the server (``"all"``: every input, no sample, within
             the request's time limit).
@@ -402,7 +406,8 @@ class Client:
             ``paths``, ``stats``, ``verification``.
         """
         return self.send(calls.clip_svg(paths, window, verify=verify,
-                                        options={**options, "curves": curves, "fill": fill}))
+                                        options={**options, "curves": curves, "fill": fill,
+                                                 "fill_output": fill_output}))
 
     def clip_segments(self, segments: Any, window: Any, *, binary: bool | None = None,
                       verify: bool | str | None = None, **options: Any) -> SegmentsResult:
@@ -703,10 +708,12 @@ class AsyncClient:
 
     async def clip_svg(self, paths: str | Sequence[str], window: Any, *,
                        curves: str | None = None, fill: str | None = None,
-                       verify: bool | str | None = None, **options: Any) -> SVGResult:
+                       fill_output: str | None = None, verify: bool | str | None = None,
+                       **options: Any) -> SVGResult:
         """Return SVG path data clipped to `window` (see `Client.clip_svg`)."""
         return await self.send(calls.clip_svg(
-            paths, window, verify=verify, options={**options, "curves": curves, "fill": fill}))
+            paths, window, verify=verify, options={**options, "curves": curves, "fill": fill,
+                                                   "fill_output": fill_output}))
 
     async def clip_segments(self, segments: Any, window: Any, *, binary: bool | None = None,
                             verify: bool | str | None = None, **options: Any) -> SegmentsResult:

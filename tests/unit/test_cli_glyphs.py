@@ -64,7 +64,7 @@ def test_writes_an_svg_document_of_the_clipped_glyphs_to_a_file(runner, font, tm
     assert root.get("viewBox") == "0 -10 15 10"
     assert (group.get("fill-rule"), group.get("transform")) == ("nonzero", None)
     assert [(p.get("data-glyph"), p.get("d")) for p in paths] == [
-        ("square", "M1 0H5V-4H1V0Z"), ("bump", "M6 0H10Q10-3 8-3T6 0Z")]
+        ("square", "M5 0V-4H1V0Z"), ("bump", "M10 0Q10-3 8-3T6 0Z")]
     parse_paths([p.get("d") for p in paths])
     stats = json.loads(result.stderr.strip().splitlines()[-1])["stats"]
     assert (stats["geometries_in"], stats["geometries_out"]) == (2, 2)
@@ -77,7 +77,7 @@ def test_writes_to_stdout_what_the_library_writes(runner, font):
     assert result.stdout == expected.svg()
     _, group, paths = document(result.stdout)
     assert group.get("transform") == "matrix(1 0 0 -1 0 200)"  # font units: y up
-    assert [p.get("d") for p in paths] == ["M100 0H300V200H100V0Z"]
+    assert [p.get("d") for p in paths] == ["M100 200V0H300V200Z"]
 
 
 @pytest.mark.parametrize(("args", "kwargs"), [
@@ -141,4 +141,4 @@ def test_runs_as_a_process(font):
          "--window", "0,0,300,200"], capture_output=True, timeout=300)
     assert done.returncode == 0, done.stderr.decode()
     _, _, paths = document(done.stdout.decode())
-    assert [p.get("d") for p in paths] == ["M100 0H300V200H100V0Z"]
+    assert [p.get("d") for p in paths] == ["M100 200V0H300V200Z"]

@@ -285,6 +285,56 @@ class Ragged:
             return self.offsets[1], self.offsets[2]
         raise UnsupportedGeometryError(f"{self.kind.value} has no parts or polygons")
 
+    def vertex_offsets(self) -> np.ndarray:
+        """Return the int64 vertex offsets of the geometries.
+
+        Geometry ``g`` is coordinate rows ``[g]:[g + 1]`` (points: one row each).
+
+        Examples
+        --------
+        >>> import shapely
+        >>> polygons = shapely.box([0, 5], [0, 5], [1, 6], [1, 6])
+        >>> Ragged.from_shapely(polygons).vertex_offsets().tolist()
+        [0, 5, 10]
+        """
+        if self.kind.depth == 0:
+            return np.arange(self.coords.shape[0] + 1, dtype=np.int64)
+        offsets = self.offsets[-1]
+        for level in reversed(self.offsets[:-1]):
+            offsets = level[offsets]
+        return np.ascontiguousarray(offsets, dtype=np.int64)
+
+    def take(self, index: npt.ArrayLike) -> Ragged:
+        """Return the geometries at `index` (int, any order, repeats allowed), as a Ragged.
+
+        Vectorised level by level, outermost first: each level's items of the geometries
+        taken are whole ranges of the level below, gathered without a loop per geometry.
+
+        Examples
+        --------
+        >>> import shapely
+        >>> lines = Ragged.from_shapely([shapely.LineString([(0, 0), (1, 1)]),
+        ...                              shapely.LineString([(5, 5), (6, 6), (7, 5)])])
+        >>> taken = lines.take([1, 1, 0])
+        >>> taken.offsets[0].tolist(), taken.coords[:, 0].tolist()
+        ([0, 3, 6, 8], [5.0, 6.0, 7.0, 5.0, 6.0, 7.0, 0.0, 1.0])
+        """
+        items = np.ascontiguousarray(index, dtype=np.int64)
+        if self.kind.depth == 0:
+            return Ragged(self.kind, np.ascontiguousarray(self.coords[items]), (),
+                          self.partial_z)
+        levels = []
+        for level in reversed(self.offsets):  # outermost first
+            starts = level[items]
+            counts = level[items + 1] - starts
+            taken = exclusive_sum(counts)
+            levels.append(taken)
+            # The items below: ranges starts[j]..starts[j] + counts[j], back to back.
+            items = (np.arange(int(taken[-1]), dtype=np.int64)
+                     + np.repeat(starts - taken[:-1], counts))
+        return Ragged(self.kind, np.ascontiguousarray(self.coords[items]),
+                      tuple(reversed(levels)), self.partial_z)
+
     def to_shapely(self) -> np.ndarray:
         """Return the geometries as a Shapely array.
 

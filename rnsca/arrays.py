@@ -335,6 +335,24 @@ class Ragged:
         return Ragged(self.kind, np.ascontiguousarray(self.coords[items]),
                       tuple(reversed(levels)), self.partial_z)
 
+    def concat(self, other: Ragged) -> Ragged:
+        """Return the geometries of `self` then those of `other` (of the same kind).
+
+        Examples
+        --------
+        >>> import shapely
+        >>> a = Ragged.from_shapely([shapely.LineString([(0, 0), (1, 1)])])
+        >>> a.concat(a).offsets[0].tolist()
+        [0, 2, 4]
+        """
+        levels = []
+        shift = self.coords.shape[0]
+        for mine, theirs in zip(self.offsets, other.offsets, strict=True):
+            levels.append(np.concatenate([mine, theirs[1:] + shift]))
+            shift = mine.shape[0] - 1
+        return Ragged(self.kind, np.concatenate([self.coords, other.coords]), tuple(levels),
+                      self.partial_z or other.partial_z)
+
     def to_shapely(self) -> np.ndarray:
         """Return the geometries as a Shapely array.
 

@@ -1,0 +1,229 @@
+"""One zoom's clipped geometry as MVT tiles: quantised, checked, encoded, framed.
+
+`encode_zoom` takes the three `Level` s of a zoom (points, lines, polygons) and returns
+each tile's bytes (a ``Tile`` with one layer):
+
+1. Quantise: world coordinates to integer tile units, ``round((X * 2**z - x) * extent)``
+   (y down, as MVT counts), all vertices at once.
+2. Valid polygons (``validate``): rounding can make a polygon invalid (a spike folded
+   onto itself, rings that touch along an edge); those GEOS finds invalid are snapped to
+   the integer grid by ``shapely.set_precision`` (snap-rounding, valid by construction),
+   from their unrounded coordinates.
+3. Features in tile order, then source order (`rnsca.kernels.mvt.Features`); each
+   feature's tags are its properties' keys and values, numbered per tile (each key and
+   value once per layer, as the spec asks), all tiles at once with one sort.
+4. The features' messages, geometry commands included, are written by the kernels
+   (`rnsca.kernels.mvt.feature_sizes`, `write_features`): degenerate parts are dropped
+   and the winding the spec asks for is written there.
+5. Each tile's layer is framed by the protobuf library: the features', keys' and
+   values' fields are merged into a ``Tile.Layer`` that gets its name, version and
+   extent, and the ``Tile`` is serialized.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import shapely
+
+from rnsca.arrays import GeometryKind, Ragged, exclusive_sum
+from rnsca.kernels import mvt as K
+from rnsca.tiles.features import FeatureTable
+from rnsca.tiles.pyramid import Level
+from rnsca.tiles.vector_tile import Tile
+
+__all__ = ["ZoomTiles", "encode_zoom", "quantise"]
+
+_KIND_CODE = {GeometryKind.MULTIPOINT: K.POINT, GeometryKind.MULTILINESTRING: K.LINESTRING,
+              GeometryKind.MULTIPOLYGON: K.POLYGON}
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class ZoomTiles:
+    """The tiles of one zoom that hold a feature.
+
+    Attributes
+    ----------
+    zoom : int
+    x, y : ndarray of int64
+        The tiles, in (x, y) order.
+    data : list of bytes
+        Each tile's ``Tile`` message (uncompressed).
+    features : ndarray of int64
+        How many features each tile holds.
+    """
+
+    zoom: int
+    x: np.ndarray
+    y: np.ndarray
+    data: list
+    features: np.ndarray
+
+    def __len__(self) -> int:
+        return self.x.shape[0]
+
+
+def quantise(level: Level, extent: int) -> np.ndarray:
+    """Return the level's vertices in integer tile units of their tile, int64 (v, 2)."""
+    ragged = level.ragged
+    scale = float(2**level.zoom)
+    per_vertex = np.diff(ragged.vertex_offsets())
+    tile = level.geometry_tile
+    origin_x = np.repeat(level.tile_x[tile], per_vertex).astype(np.float64)
+    origin_y = np.repeat(level.tile_y[tile], per_vertex).astype(np.float64)
+    q = np.empty((ragged.coords.shape[0], 2), dtype=np.int64)
+    q[:, 0] = np.floor((ragged.coords[:, 0] * scale - origin_x) * extent + 0.5)
+    q[:, 1] = np.floor((ragged.coords[:, 1] * scale - origin_y) * extent + 0.5)
+    return q
+
+
+def _shapes(level: Level, q: np.ndarray) -> K.Shapes:
+    offsets = list(level.ragged.offsets) + [np.empty(0, dtype=np.int64)] * 3
+    return K.Shapes(q, *offsets[:3])
+
+
+def _valid_polygons(level: Level, extent: int) -> tuple[Level, np.ndarray]:
+    """Return the polygons, those invalid once rounded snapped to the grid, and their q.
+
+    The level returned holds tile units (integers, as float) instead of world
+    coordinates; only its offsets, sources and tiles are read after this.
+    """
+    q = quantise(level, extent)
+    ragged = level.ragged
+    rounded = Ragged(ragged.kind, q.astype(np.float64), ragged.offsets)
+    if ragged.count == 0:
+        return level, q
+    bad = np.flatnonzero(~shapely.is_valid(rounded.to_shapely()))
+    if bad.shape[0] == 0:
+        return level, q
+    # Snap-round the unrounded polygons, in tile units, onto the integer grid (GEOS's
+    # snap-rounding noder: valid output whose vertices are on the grid).
+    scale = float(2**level.zoom)
+    taken = ragged.take(bad)
+    tile = np.repeat(level.geometry_tile[bad], np.diff(taken.vertex_offsets()))
+    units = np.empty_like(taken.coords)
+    units[:, 0] = (taken.coords[:, 0] * scale - level.tile_x[tile]) * extent
+    units[:, 1] = (taken.coords[:, 1] * scale - level.tile_y[tile]) * extent
+    snapped = shapely.set_precision(Ragged(ragged.kind, units, taken.offsets).to_shapely(),
+                                    1.0)
+    # Only the polygonal parts (snapping may collapse a sliver to a line).
+    parts, part_of = shapely.get_parts(snapped, return_index=True)
+    polygonal = shapely.get_type_id(parts) == shapely.GeometryType.POLYGON
+    fixed = np.array([shapely.MultiPolygon()] * bad.shape[0], dtype=object)
+    if polygonal.any():
+        shapely.multipolygons(parts[polygonal], indices=part_of[polygonal], out=fixed)
+    fixed_ragged = Ragged.from_shapely(fixed) if shapely.get_num_coordinates(
+        fixed).sum() else Ragged(ragged.kind, np.empty((0, 2)), (
+            np.zeros(1, np.int64), np.zeros(1, np.int64), np.zeros(bad.shape[0] + 1,
+                                                                   np.int64)))
+    keep = np.flatnonzero(np.isin(np.arange(ragged.count), bad, invert=True))
+    merged = rounded.take(keep).concat(fixed_ragged)
+    order = np.concatenate([keep, bad])
+    # Back to tile order, then source order (the fixed ones were put last).
+    back = np.lexsort((level.source[order], level.geometry_tile[order]))
+    merged = merged.take(back)
+    return (Level(level.zoom, merged, level.source[order][back], level.tile_offsets,
+                  level.tile_x, level.tile_y), merged.coords.astype(np.int64))
+
+
+def encode_zoom(levels: list[Level], table: FeatureTable, *, extent: int, layer: str,
+                validate: bool = True) -> ZoomTiles:
+    """Return the MVT tiles of one zoom from its points, lines and polygons `levels`."""
+    zoom = levels[0].zoom
+    shapes, kinds, indices, sources, keys = [], [], [], [], []
+    side = np.int64(2**zoom)
+    for level in levels:
+        if level.ragged.kind is GeometryKind.MULTIPOLYGON and validate:
+            level, q = _valid_polygons(level, extent)
+        else:
+            q = quantise(level, extent)
+        shapes.append(_shapes(level, q))
+        count = level.ragged.count
+        kinds.append(np.full(count, _KIND_CODE[level.ragged.kind], dtype=np.int8))
+        indices.append(np.arange(count, dtype=np.int64))
+        sources.append(level.source)
+        tile = level.geometry_tile
+        keys.append(level.tile_x[tile] * side + level.tile_y[tile])
+    kind = np.concatenate(kinds)
+    index = np.concatenate(indices)
+    source = np.concatenate(sources)
+    key = np.concatenate(keys)
+    order = np.lexsort((kind, source, key))
+    kind, index, source, key = kind[order], index[order], source[order], key[order]
+    tile_keys, tile_first = np.unique(key, return_index=True)
+    feature_tile = np.repeat(np.arange(tile_keys.shape[0], dtype=np.int64),
+                             np.diff(np.append(tile_first, key.shape[0])))
+    tags = table.tags
+    # Each feature's (key, value) pairs, numbered per tile.
+    counts = tags.tag_offsets[source + 1] - tags.tag_offsets[source]
+    tag_offsets = exclusive_sum(counts)
+    rows = np.arange(int(tag_offsets[-1]), dtype=np.int64) + np.repeat(
+        tags.tag_offsets[source] - tag_offsets[:-1], counts)
+    tag_tile = np.repeat(feature_tile, counts)
+    local_key, tile_keys_used, key_starts = _number_per_tile(
+        tag_tile, tags.tag_key[rows], len(tags.keys), tile_keys.shape[0])
+    local_value, tile_values_used, value_starts = _number_per_tile(
+        tag_tile, tags.tag_value[rows], tags.value_field_offsets.shape[0] - 1,
+        tile_keys.shape[0])
+    pairs = np.empty(2 * local_key.shape[0], dtype=np.uint32)
+    pairs[0::2] = local_key
+    pairs[1::2] = local_value
+    features = K.Features(kind, index, table.ids[source], 2 * tag_offsets, pairs)
+    sizes = np.empty(kind.shape[0], dtype=np.int64)
+    geometry_bytes = np.empty(kind.shape[0], dtype=np.int64)
+    K.feature_sizes(features, *shapes, sizes, geometry_bytes)
+    starts = exclusive_sum(sizes)
+    out = np.empty(int(starts[-1]), dtype=np.uint8)
+    K.write_features(features, *shapes, starts, sizes, geometry_bytes, out)
+    tile_end = np.append(tile_first, key.shape[0])
+    byte_start = starts[tile_end]
+    key_blob, key_offsets = _gather_fields(tags.key_fields, tags.key_field_offsets,
+                                           tile_keys_used, key_starts)
+    value_blob, value_offsets = _gather_fields(tags.value_fields, tags.value_field_offsets,
+                                               tile_values_used, value_starts)
+    written = np.add.reduceat(sizes > 0, tile_first) if key.shape[0] else np.zeros(0, int)
+    data = []
+    payload = out.tobytes()
+    keys_bytes = key_blob.tobytes()
+    values_bytes = value_blob.tobytes()
+    x = tile_keys // side
+    y = tile_keys % side
+    holding = np.flatnonzero(written > 0)
+    for t in holding.tolist():
+        tile = Tile()
+        message = tile.layers.add()
+        message.MergeFromString(
+            payload[byte_start[t]:byte_start[t + 1]]
+            + keys_bytes[key_offsets[t]:key_offsets[t + 1]]
+            + values_bytes[value_offsets[t]:value_offsets[t + 1]])
+        message.name = layer
+        message.version = 2
+        message.extent = extent
+        data.append(tile.SerializeToString())
+    return ZoomTiles(zoom, x[holding], y[holding], data, written[holding])
+
+
+def _number_per_tile(tag_tile: np.ndarray, ids: np.ndarray, n_ids: int, n_tiles: int,
+                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Return each tag's id numbered within its tile, the ids each tile uses, and starts.
+
+    Tile ``t`` uses ids ``used[starts[t]:starts[t + 1]]`` (increasing); a tag whose id
+    is ``used[starts[t] + k]`` gets ``k``.
+    """
+    combined = tag_tile * np.int64(max(n_ids, 1)) + ids
+    unique, inverse = np.unique(combined, return_inverse=True)
+    unique_tile = unique // max(n_ids, 1)
+    starts = np.searchsorted(unique_tile, np.arange(n_tiles + 1))
+    local = inverse - starts[tag_tile]
+    return local.astype(np.uint32), (unique % max(n_ids, 1)).astype(np.int64), starts
+
+
+def _gather_fields(blob: np.ndarray, offsets: np.ndarray, used: np.ndarray,
+                   starts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Return the fields `used` (by id) back to back, and each tile's byte offsets."""
+    lengths = offsets[used + 1] - offsets[used]
+    out_offsets = exclusive_sum(lengths)
+    rows = np.arange(int(out_offsets[-1]), dtype=np.int64) + np.repeat(
+        offsets[used] - out_offsets[:-1], lengths)
+    return blob[rows], out_offsets[starts]

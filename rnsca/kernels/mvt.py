@@ -32,8 +32,9 @@ from numba import prange
 
 from rnsca.kernels.jit import borrowing, parallel
 
-__all__ = ["Features", "Shapes", "feature_sizes", "write_features", "MOVE_TO", "LINE_TO",
-           "CLOSE_PATH", "POINT", "LINESTRING", "POLYGON"]
+__all__ = ["Features", "Shapes", "feature_sizes", "write_features", "tile_sizes",
+           "write_tiles", "MOVE_TO", "LINE_TO", "CLOSE_PATH", "POINT", "LINESTRING",
+           "POLYGON"]
 
 MOVE_TO, LINE_TO, CLOSE_PATH = 1, 2, 7
 #: Feature kinds (``Tile.GeomType``).
@@ -292,3 +293,50 @@ def write_features(features, points, lines, polygons, starts, sizes, geometry_by
         pos = _varint(geometry_bytes[i], True, out, pos + 3)
         _geometry(features.kind[i], features.index[i], points, lines, polygons, cursor, True,
                   out, pos)
+
+
+@parallel
+def tile_sizes(head, tail, ranges, sizes):
+    """Write the size of each tile's ``Tile`` message in ``sizes``.
+
+    Tile ``t`` has one layer: the `head` bytes (its name field), its features' bytes
+    ``ranges[t, 0]:ranges[t, 1]`` (of `write_features`' output), its keys' fields
+    ``ranges[t, 2]:ranges[t, 3]`` and its values' fields ``ranges[t, 4]:ranges[t, 5]``
+    (of their blobs), and the `tail` bytes (its extent and version fields): the fields
+    in field-number order, as protobuf writes them.
+    """
+    for t in prange(sizes.shape[0]):
+        layer = _layer_size(head, tail, ranges, t)
+        sizes[t] = 1 + _varint_size(layer) + layer
+
+
+@borrowing
+def _layer_size(head, tail, ranges, t):
+    return (head.shape[0] + tail.shape[0] + ranges[t, 1] - ranges[t, 0]
+            + ranges[t, 3] - ranges[t, 2] + ranges[t, 5] - ranges[t, 4])
+
+
+@parallel
+def write_tiles(head, tail, features, keys, values, ranges, tile_start, out):
+    """Write each tile's ``Tile`` message at ``out[tile_start[t]:]`` (see `tile_sizes`).
+
+    ``Tile.layers`` is field 3, length-delimited (tag 0x1A).
+    """
+    for t in prange(tile_start.shape[0] - 1):
+        pos = tile_start[t]
+        out[pos] = np.uint8(0x1A)
+        pos = _varint(_layer_size(head, tail, ranges, t), True, out, pos + 1)
+        pos = _copy(head, 0, head.shape[0], out, pos)
+        pos = _copy(features, ranges[t, 0], ranges[t, 1], out, pos)
+        pos = _copy(keys, ranges[t, 2], ranges[t, 3], out, pos)
+        pos = _copy(values, ranges[t, 4], ranges[t, 5], out, pos)
+        _copy(tail, 0, tail.shape[0], out, pos)
+
+
+@borrowing
+def _copy(source, first, last, out, pos):
+    """Copy ``source[first:last]`` to ``out[pos:]``; return the position after."""
+    for k in range(first, last):
+        out[pos] = source[k]
+        pos += 1
+    return pos

@@ -30,12 +30,12 @@ from rnsca.tiles.archive import (
     write_directory,
     write_pmtiles,
 )
-from rnsca.tiles.encode import ZoomTiles, encode_zoom
+from rnsca.tiles.encode import Framing, ZoomTiles, encode_zoom
 from rnsca.tiles.features import FeatureTable
 from rnsca.tiles.mercator import Crs
 from rnsca.tiles.pyramid import cascade, root
 
-__all__ = ["ArchiveSummary", "Compression", "Crs", "FeatureTable", "ZoomTiles",
+__all__ = ["ArchiveSummary", "Compression", "Crs", "FeatureTable", "Framing", "ZoomTiles",
            "MAX_ZOOM", "tile_features", "tile_table", "tile_ids", "write_directory",
            "write_pmtiles"]
 
@@ -65,7 +65,8 @@ def tile_features(geometries: Any, properties: Sequence[Mapping[str, Any] | None
 def tile_table(table: FeatureTable, *, minzoom: int = 0, maxzoom: int = 14,
                extent: int = 4096, buffer: int = 64, layer: str = "features",
                mode: Mode | str = Mode.EXACT, validate: bool = True,
-               backend: Backend | str = Backend.NUMBA) -> Iterator[ZoomTiles]:
+               backend: Backend | str = Backend.NUMBA,
+               framing: Framing | str = Framing.DIRECT) -> Iterator[ZoomTiles]:
     """Yield the MVT tiles of a `FeatureTable`, one `ZoomTiles` per zoom, in order.
 
     Parameters
@@ -89,6 +90,9 @@ def tile_table(table: FeatureTable, *, minzoom: int = 0, maxzoom: int = 14,
     validate : bool
         Snap polygons that quantisation made invalid onto the grid (GEOS), default True.
     backend : {"numba", "opencl", "auto"}
+    framing : {"direct", "protobuf"}
+        Who puts each tile's message together (`rnsca.tiles.encode.Framing`; the same
+        bytes).
 
     Raises
     ------
@@ -96,6 +100,7 @@ def tile_table(table: FeatureTable, *, minzoom: int = 0, maxzoom: int = 14,
         For zooms, extent or buffer out of range, or approx mode without a buffer.
     """
     mode = Mode(mode)
+    framing = Framing(framing)
     if not (isinstance(minzoom, int) and isinstance(maxzoom, int)
             and 0 <= minzoom <= maxzoom <= MAX_ZOOM):
         raise InvalidOptionError(
@@ -115,4 +120,5 @@ def tile_table(table: FeatureTable, *, minzoom: int = 0, maxzoom: int = 14,
         if zoom > 0:
             levels = [cascade(level, pad_units, mode, extent, backend) for level in levels]
         if zoom >= minzoom:
-            yield encode_zoom(levels, table, extent=extent, layer=layer, validate=validate)
+            yield encode_zoom(levels, table, extent=extent, layer=layer, validate=validate,
+                              framing=framing)

@@ -10,8 +10,8 @@ PMTiles and tippecanoe writes), in a pool of threads (zlib releases the GIL).
 
 from __future__ import annotations
 
-import gzip
 import math
+import zlib
 from collections.abc import Callable, Iterable, Iterator
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
@@ -85,15 +85,30 @@ def tile_ids(zoom: int, x: np.ndarray, y: np.ndarray) -> np.ndarray:
     return acc.astype(np.uint64)
 
 
-def _compressor(compression: Compression) -> Callable[[bytes], bytes]:
+def _compressor(compression: Compression) -> Callable[[bytes], bytes] | None:
     if compression is Compression.GZIP:
-        return lambda data: gzip.compress(data, compresslevel=6, mtime=0)
-    return lambda data: data
+        # zlib's gzip wrapper (wbits 31) with no name and mtime 0: gzip.compress's bytes.
+        return lambda data: zlib.compress(data, 6, wbits=31)
+    return None
 
 
-def _stored(zoom: ZoomTiles, compress: Callable[[bytes], bytes],
+def _stored(zoom: ZoomTiles, compress: Callable[[bytes], bytes] | None,
             pool: ThreadPoolExecutor) -> list[bytes]:
-    return list(pool.map(compress, zoom.data, chunksize=64))
+    """Return the tiles' stored bytes, compressed in chunks of tiles across the pool.
+
+    One task per chunk, not per tile: a future per tile cost more than the compression
+    of a small tile.
+    """
+    if compress is None:
+        return zoom.data
+    data = zoom.data
+    n = len(data)
+    chunks = max(1, min(64, n // 256))
+
+    def chunk(k: int) -> list[bytes]:
+        return [compress(d) for d in data[k * n // chunks:(k + 1) * n // chunks]]
+
+    return [d for part in pool.map(chunk, range(chunks)) for d in part]
 
 
 def write_pmtiles(path: str | Path, zooms: Iterable[ZoomTiles], *, layer: str,

@@ -358,3 +358,12 @@ def test_directory_archive_holds_z_x_y_mvt(tmp_path, tiles):
     x, y = int(zoom.x[0]), int(zoom.y[0])
     assert (tmp_path / "tiles" / str(zoom.zoom) / str(x) / f"{y}.mvt").read_bytes() == \
         zoom.data[0]
+
+
+def test_direct_framing_gives_protobuf_s_bytes(dataset):
+    geometries, properties = dataset
+    options = dict(minzoom=2, maxzoom=4)
+    direct = list(tile_features(geometries, properties, **options))
+    framed = list(tile_features(geometries, properties, framing="protobuf", **options))
+    for a, b in zip(direct, framed, strict=True):
+        assert a.data == b.data and a.x.tolist() == b.x.tolist()

@@ -10,8 +10,8 @@ PMTiles and tippecanoe writes), in a pool of threads (zlib releases the GIL).
 
 from __future__ import annotations
 
+import gzip
 import math
-import zlib
 from collections.abc import Callable, Iterable, Iterator
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
@@ -87,8 +87,7 @@ def tile_ids(zoom: int, x: np.ndarray, y: np.ndarray) -> np.ndarray:
 
 def _compressor(compression: Compression) -> Callable[[bytes], bytes] | None:
     if compression is Compression.GZIP:
-        # zlib's gzip wrapper (wbits 31) with no name and mtime 0: gzip.compress's bytes.
-        return lambda data: zlib.compress(data, 6, wbits=31)
+        return lambda data: gzip.compress(data, compresslevel=6, mtime=0)
     return None
 
 

@@ -21,6 +21,7 @@ import numpy.typing as npt
 import shapely
 
 from rnsca.errors import InvalidGeometryError, UnsupportedGeometryError
+from rnsca.kernels.copies import copy_ranges
 from rnsca.kernels.validate import (
     LAYOUT_MESSAGES,
     all_finite,
@@ -324,16 +325,20 @@ class Ragged:
             return Ragged(self.kind, np.ascontiguousarray(self.coords[items]), (),
                           self.partial_z)
         levels = []
-        for level in reversed(self.offsets):  # outermost first
+        for depth, level in enumerate(reversed(self.offsets)):  # outermost first
             starts = level[items]
             counts = level[items + 1] - starts
             taken = exclusive_sum(counts)
             levels.append(taken)
+            if depth == len(self.offsets) - 1:
+                # The coordinates: whole ranges copied on every core, no index array.
+                coords = np.empty((int(taken[-1]), self.coords.shape[1]))
+                copy_ranges(self.coords, starts, counts, taken, coords)
+                return Ragged(self.kind, coords, tuple(reversed(levels)), self.partial_z)
             # The items below: ranges starts[j]..starts[j] + counts[j], back to back.
             items = (np.arange(int(taken[-1]), dtype=np.int64)
                      + np.repeat(starts - taken[:-1], counts))
-        return Ragged(self.kind, np.ascontiguousarray(self.coords[items]),
-                      tuple(reversed(levels)), self.partial_z)
+        raise AssertionError("unreachable: a kind with offsets has a coordinate level")
 
     def concat(self, other: Ragged) -> Ragged:
         """Return the geometries of `self` then those of `other` (of the same kind).

@@ -23,7 +23,8 @@ from numba import prange
 
 from rnsca.kernels.jit import borrowing, parallel
 
-__all__ = ["cascade_counts", "cascade_write", "unwrap_rings", "unwrap_runs"]
+__all__ = ["MAX_EDGES", "cascade_counts", "cascade_write", "polygons_at_risk", "quantise",
+           "unwrap_rings", "unwrap_runs"]
 
 
 @borrowing
@@ -127,3 +128,155 @@ def unwrap_rings(lon, original, ring_offsets, polygon_rings):
                 if shift != 0.0:
                     for v in range(first, last):
                         lon[v] += shift
+
+
+@parallel
+def quantise(coords, vertex_offsets, tile_offsets, tile_x, tile_y, scale, extent, q):
+    """Write each vertex in integer units of its tile: ``q`` int64 (v, 2).
+
+    ``round((X * scale - x) * extent)`` (half up, as ``floor(u + 1/2)``) with the tile
+    ``(x, y)`` of the vertex's geometry: tile ``t``'s geometries are
+    ``tile_offsets[t]:tile_offsets[t + 1]``, geometry ``g``'s vertices
+    ``vertex_offsets[g]:vertex_offsets[g + 1]``; `scale` is ``2**zoom``.
+    """
+    for t in prange(tile_x.shape[0]):
+        ox = np.float64(tile_x[t])
+        oy = np.float64(tile_y[t])
+        for v in range(vertex_offsets[tile_offsets[t]], vertex_offsets[tile_offsets[t + 1]]):
+            q[v, 0] = np.int64(np.floor((coords[v, 0] * scale - ox) * extent + 0.5))
+            q[v, 1] = np.int64(np.floor((coords[v, 1] * scale - oy) * extent + 0.5))
+
+
+@borrowing
+def _orient(q, a, b, c):
+    """Return the sign of the turn a -> b -> c (exact: int64 tile units, |q| < 2**30)."""
+    d = (q[b, 0] - q[a, 0]) * (q[c, 1] - q[a, 1]) - (q[b, 1] - q[a, 1]) * (q[c, 0] - q[a, 0])
+    return (d > 0) - (d < 0)
+
+
+@borrowing
+def _within(q, a, b, c):
+    """Whether c, collinear with a and b, lies in their bounding box (on the segment)."""
+    return (min(q[a, 0], q[b, 0]) <= q[c, 0] <= max(q[a, 0], q[b, 0])
+            and min(q[a, 1], q[b, 1]) <= q[c, 1] <= max(q[a, 1], q[b, 1]))
+
+
+@borrowing
+def _touch(q, a, b, c, d):
+    """Whether segments ab and cd share a point (crossing, touching or overlapping)."""
+    o1 = _orient(q, a, b, c)
+    o2 = _orient(q, a, b, d)
+    o3 = _orient(q, c, d, a)
+    o4 = _orient(q, c, d, b)
+    if o1 * o2 < 0 and o3 * o4 < 0:
+        return True
+    return ((o1 == 0 and _within(q, a, b, c)) or (o2 == 0 and _within(q, a, b, d))
+            or (o3 == 0 and _within(q, c, d, a)) or (o4 == 0 and _within(q, c, d, b)))
+
+
+@borrowing
+def _next_edge(q, first, last, i):
+    """Return the next edge of positive length after edge i of the ring, cyclically."""
+    n = last - 1  # edges first..last-2: (v, v + 1); the ring is closed
+    j = i
+    for _ in range(n - first):
+        j = j + 1 if j + 1 < n else first
+        if q[j, 0] != q[j + 1, 0] or q[j, 1] != q[j + 1, 1]:
+            return j
+    return i
+
+
+@borrowing
+def _inside(q, first, last, p):
+    """Return 1 if position p is strictly inside the ring, 0 outside, -1 on it."""
+    inside = False
+    for v in range(first, last - 1):
+        w = v + 1
+        if _orient(q, v, w, p) == 0 and _within(q, v, w, p):
+            return -1
+        if (q[v, 1] > q[p, 1]) != (q[w, 1] > q[p, 1]):
+            # The edge crosses the horizontal line through p: left or right of p?
+            side = _orient(q, v, w, p) if q[w, 1] > q[v, 1] else -_orient(q, v, w, p)
+            if side > 0:
+                inside = not inside
+    return 1 if inside else 0
+
+
+#: Most edges `polygons_at_risk` compares pairwise in one geometry; past it the
+#: geometry is marked (GEOS checks it).
+MAX_EDGES = 512
+
+
+@borrowing
+def _suspect(q, ring_offsets, polygon_rings, first_polygon, last_polygon):
+    """Whether one geometry's rounded polygons may be invalid (see `polygons_at_risk`)."""
+    first_ring = polygon_rings[first_polygon]
+    last_ring = polygon_rings[last_polygon]
+    if ring_offsets[last_ring] - ring_offsets[first_ring] > MAX_EDGES:
+        return True
+    for r in range(first_ring, last_ring):
+        first = ring_offsets[r]
+        last = ring_offsets[r + 1]
+        if last - first < 4:
+            return True
+        area = 0
+        for v in range(first, last - 1):
+            area += q[v, 0] * q[v + 1, 1] - q[v + 1, 0] * q[v, 1]
+        if area == 0:
+            return True
+    # Every pair of edges of positive length: adjacent ones may not fold back onto each
+    # other, others may not meet at all.
+    for r in range(first_ring, last_ring):
+        first = ring_offsets[r]
+        last = ring_offsets[r + 1]
+        for i in range(first, last - 1):
+            if q[i, 0] == q[i + 1, 0] and q[i, 1] == q[i + 1, 1]:
+                continue
+            nxt = _next_edge(q, first, last, i)
+            # The shared position is i + 1 = nxt: a spike if the two edges go back along
+            # one line.
+            if _orient(q, i, i + 1, nxt + 1) == 0 and (
+                    (q[i, 0] - q[i + 1, 0]) * (q[nxt + 1, 0] - q[nxt, 0])
+                    + (q[i, 1] - q[i + 1, 1]) * (q[nxt + 1, 1] - q[nxt, 1])) > 0:
+                return True
+            for s in range(r, last_ring):
+                s_first = ring_offsets[s]
+                s_last = ring_offsets[s + 1]
+                for j in range(i + 1 if s == r else s_first, s_last - 1):
+                    if q[j, 0] == q[j + 1, 0] and q[j, 1] == q[j + 1, 1]:
+                        continue
+                    if s == r and (j == nxt or i == _next_edge(q, first, last, j)):
+                        continue
+                    if _touch(q, i, i + 1, j, j + 1):
+                        return True
+    # No edges meet: each hole is wholly inside its shell or wholly outside, and each
+    # polygon wholly inside another's shell or wholly outside it.
+    for p in range(first_polygon, last_polygon):
+        shell = polygon_rings[p]
+        for h in range(shell + 1, polygon_rings[p + 1]):
+            if _inside(q, ring_offsets[shell], ring_offsets[shell + 1], ring_offsets[h]) != 1:
+                return True
+        for o in range(first_polygon, last_polygon):
+            other = polygon_rings[o]
+            if o != p and _inside(q, ring_offsets[other], ring_offsets[other + 1],
+                                  ring_offsets[shell]) != 0:
+                return True
+    return False
+
+
+@parallel
+def polygons_at_risk(q, ring_offsets, polygon_rings, geometry_polygons, at_risk):
+    """Mark the geometries whose rounded polygons may be invalid (``at_risk[g]``).
+
+    A geometry is not marked only when its rounded rings are proved fine here, exactly
+    in integer arithmetic: every ring has 4 or more positions and non-zero area; no two
+    edges of positive length meet (crossing, touching or overlapping) except adjacent
+    ones at their shared position, and no two adjacent ones fold back along one line;
+    every hole lies inside its shell and no polygon's shell inside another's. Then the
+    rings are simple and properly nested: the polygons are valid. Anything else (or more
+    than `MAX_EDGES` edges, where the O(E^2) test would cost more than GEOS) is marked,
+    and the caller checks it with GEOS. Repeated positions are allowed, as in GEOS.
+    """
+    for g in prange(geometry_polygons.shape[0] - 1):
+        at_risk[g] = _suspect(q, ring_offsets, polygon_rings, geometry_polygons[g],
+                              geometry_polygons[g + 1])

@@ -30,12 +30,13 @@ from rnsca.tiles.archive import (
     write_directory,
     write_pmtiles,
 )
-from rnsca.tiles.encode import Framing, ZoomTiles, encode_zoom
+from rnsca.tiles.encode import Framing, Validation, ZoomTiles, encode_zoom
 from rnsca.tiles.features import FeatureTable
 from rnsca.tiles.mercator import Crs
 from rnsca.tiles.pyramid import cascade, root
 
-__all__ = ["ArchiveSummary", "Compression", "Crs", "FeatureTable", "Framing", "ZoomTiles",
+__all__ = ["ArchiveSummary", "Compression", "Crs", "FeatureTable", "Framing", "Validation",
+           "ZoomTiles",
            "MAX_ZOOM", "tile_features", "tile_table", "tile_ids", "write_directory",
            "write_pmtiles"]
 
@@ -64,7 +65,8 @@ def tile_features(geometries: Any, properties: Sequence[Mapping[str, Any] | None
 
 def tile_table(table: FeatureTable, *, minzoom: int = 0, maxzoom: int = 14,
                extent: int = 4096, buffer: int = 64, layer: str = "features",
-               mode: Mode | str = Mode.EXACT, validate: bool = True,
+               mode: Mode | str = Mode.EXACT,
+               validate: Validation | str = Validation.AT_RISK,
                backend: Backend | str = Backend.NUMBA,
                framing: Framing | str = Framing.DIRECT) -> Iterator[ZoomTiles]:
     """Yield the MVT tiles of a `FeatureTable`, one `ZoomTiles` per zoom, in order.
@@ -87,8 +89,10 @@ def tile_table(table: FeatureTable, *, minzoom: int = 0, maxzoom: int = 14,
         unit of the padded edge, inside the buffer (the visible tile is the same;
         needs ``buffer >= 1``). Points and polygons are clipped exactly in both modes
         (valid polygons need the exact crossings).
-    validate : bool
-        Snap polygons that quantisation made invalid onto the grid (GEOS), default True.
+    validate : {"at-risk", "all", "none"}
+        Which polygons are checked once rounded (GEOS), those invalid snapped onto the
+        grid (`rnsca.tiles.encode.Validation`): those a kernel cannot prove valid
+        (default), all, or none.
     backend : {"numba", "opencl", "auto"}
     framing : {"direct", "protobuf"}
         Who puts each tile's message together (`rnsca.tiles.encode.Framing`; the same
@@ -101,6 +105,7 @@ def tile_table(table: FeatureTable, *, minzoom: int = 0, maxzoom: int = 14,
     """
     mode = Mode(mode)
     framing = Framing(framing)
+    validate = Validation(validate)
     if not (isinstance(minzoom, int) and isinstance(maxzoom, int)
             and 0 <= minzoom <= maxzoom <= MAX_ZOOM):
         raise InvalidOptionError(

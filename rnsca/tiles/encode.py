@@ -5,10 +5,11 @@ each tile's bytes (a ``Tile`` with one layer):
 
 1. Quantise: world coordinates to integer tile units, ``round((X * 2**z - x) * extent)``
    (y down, as MVT counts), all vertices at once.
-2. Valid polygons (``validate``): rounding can make a polygon invalid (a spike folded
-   onto itself, rings that touch along an edge); those GEOS finds invalid are snapped to
-   the integer grid by ``shapely.set_precision`` (snap-rounding, valid by construction),
-   from their unrounded coordinates.
+2. Valid polygons (`Validation`): rounding can make a polygon invalid (a spike folded
+   onto itself, rings that touch along an edge); of the polygons a kernel cannot prove
+   valid, those GEOS finds invalid are snapped to the integer grid by
+   ``shapely.set_precision`` (snap-rounding, valid by construction), from their
+   unrounded coordinates.
 3. Features in tile order, then source order (`rnsca.kernels.mvt.Features`); each
    feature's tags are its properties' keys and values, numbered per tile (each key and
    value once per layer, as the spec asks), all tiles at once with one sort.
@@ -29,12 +30,13 @@ import shapely
 
 from rnsca.arrays import GeometryKind, Ragged, exclusive_sum
 from rnsca.kernels import mvt as K
+from rnsca.kernels import tiles as KT
 from rnsca.options import _ChoiceEnum
 from rnsca.tiles.features import FeatureTable
 from rnsca.tiles.pyramid import Level
 from rnsca.tiles.vector_tile import Layer, Tile
 
-__all__ = ["Framing", "ZoomTiles", "encode_zoom", "quantise"]
+__all__ = ["Framing", "Validation", "ZoomTiles", "encode_zoom", "quantise"]
 
 _KIND_CODE = {GeometryKind.MULTIPOINT: K.POINT, GeometryKind.MULTILINESTRING: K.LINESTRING,
               GeometryKind.MULTIPOLYGON: K.POLYGON}
@@ -68,15 +70,23 @@ class ZoomTiles:
 def quantise(level: Level, extent: int) -> np.ndarray:
     """Return the level's vertices in integer tile units of their tile, int64 (v, 2)."""
     ragged = level.ragged
-    scale = float(2**level.zoom)
-    per_vertex = np.diff(ragged.vertex_offsets())
-    tile = level.geometry_tile
-    origin_x = np.repeat(level.tile_x[tile], per_vertex).astype(np.float64)
-    origin_y = np.repeat(level.tile_y[tile], per_vertex).astype(np.float64)
     q = np.empty((ragged.coords.shape[0], 2), dtype=np.int64)
-    q[:, 0] = np.floor((ragged.coords[:, 0] * scale - origin_x) * extent + 0.5)
-    q[:, 1] = np.floor((ragged.coords[:, 1] * scale - origin_y) * extent + 0.5)
+    KT.quantise(ragged.coords, ragged.vertex_offsets(), level.tile_offsets, level.tile_x,
+                level.tile_y, float(2**level.zoom), float(extent), q)
     return q
+
+
+class Validation(_ChoiceEnum):
+    """Which polygons are checked (GEOS ``is_valid``) once rounded, and snapped if invalid."""
+
+    AT_RISK = "at-risk"
+    """Those a kernel cannot prove valid (`rnsca.kernels.tiles.polygons_at_risk`: exact
+    integer tests of the rounded rings: no edges meeting, holes inside their shells);
+    the same result as ALL, for less."""
+    ALL = "all"
+    """Every polygon."""
+    NONE = "none"
+    """None: rounding may leave invalid polygons (degenerate rings are still dropped)."""
 
 
 def _shapes(level: Level, q: np.ndarray) -> K.Shapes:
@@ -84,7 +94,8 @@ def _shapes(level: Level, q: np.ndarray) -> K.Shapes:
     return K.Shapes(q, *offsets[:3])
 
 
-def _valid_polygons(level: Level, extent: int) -> tuple[Level, np.ndarray]:
+def _valid_polygons(level: Level, extent: int, validation: Validation,
+                    ) -> tuple[Level, np.ndarray]:
     """Return the polygons, those invalid once rounded snapped to the grid, and their q.
 
     The level returned holds tile units (integers, as float) instead of world
@@ -92,22 +103,39 @@ def _valid_polygons(level: Level, extent: int) -> tuple[Level, np.ndarray]:
     """
     q = quantise(level, extent)
     ragged = level.ragged
-    rounded = Ragged(ragged.kind, q.astype(np.float64), ragged.offsets)
-    if ragged.count == 0:
+    if ragged.count == 0 or validation is Validation.NONE:
         return level, q
-    bad = np.flatnonzero(~shapely.is_valid(rounded.to_shapely()))
+    rounded = Ragged(ragged.kind, q.astype(np.float64), ragged.offsets)
+    if validation is Validation.ALL:
+        candidates = np.arange(ragged.count, dtype=np.int64)
+    else:
+        at_risk = np.empty(ragged.count, dtype=np.bool_)
+        KT.polygons_at_risk(q, *ragged.offsets, at_risk)
+        candidates = np.flatnonzero(at_risk)
+    if candidates.shape[0] == 0:
+        return level, q
+    bad = candidates[~shapely.is_valid(rounded.take(candidates).to_shapely())]
     if bad.shape[0] == 0:
         return level, q
-    # Snap-round the unrounded polygons, in tile units, onto the integer grid (GEOS's
-    # snap-rounding noder: valid output whose vertices are on the grid).
-    scale = float(2**level.zoom)
-    taken = ragged.take(bad)
-    tile = np.repeat(level.geometry_tile[bad], np.diff(taken.vertex_offsets()))
-    units = np.empty_like(taken.coords)
-    units[:, 0] = (taken.coords[:, 0] * scale - level.tile_x[tile]) * extent
-    units[:, 1] = (taken.coords[:, 1] * scale - level.tile_y[tile]) * extent
-    snapped = shapely.set_precision(Ragged(ragged.kind, units, taken.offsets).to_shapely(),
-                                    1.0)
+    # First the cheap repair: GEOS's make_valid (structure) of the rounded polygon, its
+    # new vertices (where edges crossed) rounded; what that leaves invalid is snapped
+    # from its unrounded coordinates in tile units onto the integer grid by GEOS's
+    # snap-rounding (set_precision: valid output whose vertices are on the grid).
+    # Measured on 3,650 invalid small stars: 0.6 s repaired, 0.95 s snapped, and 24
+    # left to snap after the repair.
+    snapped = shapely.set_precision(
+        shapely.make_valid(rounded.take(bad).to_shapely(), method="structure",
+                           keep_collapsed=False), 1.0, mode="pointwise")
+    still = np.flatnonzero(~shapely.is_valid(snapped))
+    if still.shape[0]:
+        scale = float(2**level.zoom)
+        taken = ragged.take(bad[still])
+        tile = np.repeat(level.geometry_tile[bad[still]], np.diff(taken.vertex_offsets()))
+        units = np.empty_like(taken.coords)
+        units[:, 0] = (taken.coords[:, 0] * scale - level.tile_x[tile]) * extent
+        units[:, 1] = (taken.coords[:, 1] * scale - level.tile_y[tile]) * extent
+        snapped[still] = shapely.set_precision(
+            Ragged(ragged.kind, units, taken.offsets).to_shapely(), 1.0)
     # Only the polygonal parts (snapping may collapse a sliver to a line).
     parts, part_of = shapely.get_parts(snapped, return_index=True)
     polygonal = shapely.get_type_id(parts) == shapely.GeometryType.POLYGON
@@ -141,15 +169,17 @@ class Framing(_ChoiceEnum):
 
 
 def encode_zoom(levels: list[Level], table: FeatureTable, *, extent: int, layer: str,
-                validate: bool = True, framing: Framing | str = Framing.DIRECT) -> ZoomTiles:
+                validate: Validation | str = Validation.AT_RISK,
+                framing: Framing | str = Framing.DIRECT) -> ZoomTiles:
     """Return the MVT tiles of one zoom from its points, lines and polygons `levels`."""
     framing = Framing(framing)
+    validation = Validation(validate)
     zoom = levels[0].zoom
     shapes, kinds, indices, sources, keys = [], [], [], [], []
     side = np.int64(2**zoom)
     for level in levels:
-        if level.ragged.kind is GeometryKind.MULTIPOLYGON and validate:
-            level, q = _valid_polygons(level, extent)
+        if level.ragged.kind is GeometryKind.MULTIPOLYGON:
+            level, q = _valid_polygons(level, extent, validation)
         else:
             q = quantise(level, extent)
         shapes.append(_shapes(level, q))

@@ -10,6 +10,7 @@ import mapbox_vector_tile
 import numpy as np
 import pytest
 import shapely
+import shapely.affinity
 import shapely.geometry
 
 from rnsca import clip_ragged
@@ -367,3 +368,36 @@ def test_direct_framing_gives_protobuf_s_bytes(dataset):
     framed = list(tile_features(geometries, properties, framing="protobuf", **options))
     for a, b in zip(direct, framed, strict=True):
         assert a.data == b.data and a.x.tolist() == b.x.tolist()
+
+
+def test_polygons_proved_valid_by_the_kernel_are_valid(rng):
+    """`polygons_at_risk` leaves unmarked only polygons GEOS finds valid once rounded."""
+    from rnsca.arrays import Ragged
+    from rnsca.kernels.tiles import polygons_at_risk
+
+    shapes = []
+    for scale in (0.8, 2.0, 5.0, 40.0):
+        for star in _stars(rng, 150):
+            # A star of radius 1..12 scaled to a few units: rounding breaks many.
+            shapes.append(shapely.affinity.scale(star, scale, scale, origin=(0, 0)))
+        shapes += [shapely.MultiPolygon([a, b]) for a, b in zip(
+            _stars(rng, 40), _stars(rng, 40), strict=True)
+            if a.disjoint(b)]
+    parts, index = shapely.get_parts(np.asarray(shapes, dtype=object), return_index=True)
+    ragged = Ragged.from_shapely(shapely.multipolygons(parts, indices=index))
+    rounded = Ragged(ragged.kind, np.round(ragged.coords), ragged.offsets)
+    at_risk = np.empty(rounded.count, dtype=bool)
+    polygons_at_risk(rounded.coords.astype(np.int64), *rounded.offsets, at_risk)
+    valid = shapely.is_valid(rounded.to_shapely())
+    assert valid[~at_risk].all()
+    assert (~at_risk).sum() > 100 and (~valid).sum() > 50
+
+
+def test_validating_at_risk_polygons_gives_what_validating_all_gives(dataset):
+    geometries, properties = dataset
+    polygons = [shapely.affinity.scale(g, 0.05, 0.05) for g in geometries[30:60]]
+    options = dict(minzoom=0, maxzoom=4)
+    at_risk = list(tile_features(polygons, **options))
+    every = list(tile_features(polygons, validate="all", **options))
+    for a, b in zip(at_risk, every, strict=True):
+        assert a.data == b.data

@@ -208,25 +208,45 @@ MAX_EDGES = 512
 
 
 @borrowing
-def _suspect(q, ring_offsets, polygon_rings, first_polygon, last_polygon):
-    """Whether one geometry's rounded polygons may be invalid (see `polygons_at_risk`)."""
+def _area2(q, first, last):
+    area = 0
+    for v in range(first, last - 1):
+        area += q[v, 0] * q[v + 1, 1] - q[v + 1, 0] * q[v, 1]
+    return area
+
+
+@borrowing
+def _boxes_meet(q, a, b, c, d):
+    return (max(q[a, 0], q[b, 0]) >= min(q[c, 0], q[d, 0])
+            and max(q[c, 0], q[d, 0]) >= min(q[a, 0], q[b, 0])
+            and max(q[a, 1], q[b, 1]) >= min(q[c, 1], q[d, 1])
+            and max(q[c, 1], q[d, 1]) >= min(q[a, 1], q[b, 1]))
+
+
+@borrowing
+def _suspect(q, ring_offsets, polygon_rings, first_polygon, last_polygon, kept):
+    """Whether one geometry's rounded polygons may be invalid (see `polygons_at_risk`).
+
+    `kept` is scratch, one flag per ring of the whole array.
+    """
     first_ring = polygon_rings[first_polygon]
     last_ring = polygon_rings[last_polygon]
     if ring_offsets[last_ring] - ring_offsets[first_ring] > MAX_EDGES:
         return True
-    for r in range(first_ring, last_ring):
-        first = ring_offsets[r]
-        last = ring_offsets[r + 1]
-        if last - first < 4:
-            return True
-        area = 0
-        for v in range(first, last - 1):
-            area += q[v, 0] * q[v + 1, 1] - q[v + 1, 0] * q[v, 1]
-        if area == 0:
-            return True
+    # The rings the encoder writes: non-zero area, and a shell written (the others are
+    # dropped whole, so they cannot make the output invalid).
+    for p in range(first_polygon, last_polygon):
+        shell_kept = False
+        for r in range(polygon_rings[p], polygon_rings[p + 1]):
+            kept[r] = (_area2(q, ring_offsets[r], ring_offsets[r + 1]) != 0
+                       and (r == polygon_rings[p] or shell_kept))
+            if r == polygon_rings[p]:
+                shell_kept = kept[r]
     # Every pair of edges of positive length: adjacent ones may not fold back onto each
     # other, others may not meet at all.
     for r in range(first_ring, last_ring):
+        if not kept[r]:
+            continue
         first = ring_offsets[r]
         last = ring_offsets[r + 1]
         for i in range(first, last - 1):
@@ -240,9 +260,13 @@ def _suspect(q, ring_offsets, polygon_rings, first_polygon, last_polygon):
                     + (q[i, 1] - q[i + 1, 1]) * (q[nxt + 1, 1] - q[nxt, 1])) > 0:
                 return True
             for s in range(r, last_ring):
+                if not kept[s]:
+                    continue
                 s_first = ring_offsets[s]
                 s_last = ring_offsets[s + 1]
                 for j in range(i + 1 if s == r else s_first, s_last - 1):
+                    if not _boxes_meet(q, i, i + 1, j, j + 1):
+                        continue
                     if q[j, 0] == q[j + 1, 0] and q[j, 1] == q[j + 1, 1]:
                         continue
                     if s == r and (j == nxt or i == _next_edge(q, first, last, j)):
@@ -253,13 +277,17 @@ def _suspect(q, ring_offsets, polygon_rings, first_polygon, last_polygon):
     # polygon wholly inside another's shell or wholly outside it.
     for p in range(first_polygon, last_polygon):
         shell = polygon_rings[p]
+        if not kept[shell]:
+            continue
         for h in range(shell + 1, polygon_rings[p + 1]):
-            if _inside(q, ring_offsets[shell], ring_offsets[shell + 1], ring_offsets[h]) != 1:
+            if kept[h] and _inside(q, ring_offsets[shell], ring_offsets[shell + 1],
+                                   ring_offsets[h]) != 1:
                 return True
         for o in range(first_polygon, last_polygon):
             other = polygon_rings[o]
-            if o != p and _inside(q, ring_offsets[other], ring_offsets[other + 1],
-                                  ring_offsets[shell]) != 0:
+            if o != p and kept[other] and _inside(
+                    q, ring_offsets[other], ring_offsets[other + 1],
+                    ring_offsets[shell]) != 0:
                 return True
     return False
 
@@ -268,8 +296,10 @@ def _suspect(q, ring_offsets, polygon_rings, first_polygon, last_polygon):
 def polygons_at_risk(q, ring_offsets, polygon_rings, geometry_polygons, at_risk):
     """Mark the geometries whose rounded polygons may be invalid (``at_risk[g]``).
 
-    A geometry is not marked only when its rounded rings are proved fine here, exactly
-    in integer arithmetic: every ring has 4 or more positions and non-zero area; no two
+    Only the rings the encoder writes count (`rnsca.kernels.mvt`: a ring of zero area
+    is dropped, a shell with its holes): rounding collapses most small polygons of low
+    zooms, which then need no check. A geometry is not marked only when those rings are
+    proved fine here, exactly in integer arithmetic: no two
     edges of positive length meet (crossing, touching or overlapping) except adjacent
     ones at their shared position, and no two adjacent ones fold back along one line;
     every hole lies inside its shell and no polygon's shell inside another's. Then the
@@ -277,6 +307,7 @@ def polygons_at_risk(q, ring_offsets, polygon_rings, geometry_polygons, at_risk)
     than `MAX_EDGES` edges, where the O(E^2) test would cost more than GEOS) is marked,
     and the caller checks it with GEOS. Repeated positions are allowed, as in GEOS.
     """
+    kept = np.empty(ring_offsets.shape[0] - 1, dtype=np.bool_)
     for g in prange(geometry_polygons.shape[0] - 1):
         at_risk[g] = _suspect(q, ring_offsets, polygon_rings, geometry_polygons[g],
-                              geometry_polygons[g + 1])
+                              geometry_polygons[g + 1], kept)

@@ -389,8 +389,20 @@ def test_polygons_proved_valid_by_the_kernel_are_valid(rng):
     at_risk = np.empty(rounded.count, dtype=bool)
     polygons_at_risk(rounded.coords.astype(np.int64), *rounded.offsets, at_risk)
     valid = shapely.is_valid(rounded.to_shapely())
-    assert valid[~at_risk].all()
     assert (~at_risk).sum() > 100 and (~valid).sum() > 50
+
+    def written(geometry):
+        """What the encoder writes: rings of zero area dropped, a shell's with its holes."""
+        polygons = []
+        for polygon in shapely.get_parts(geometry):
+            shell, holes = polygon.exterior, list(polygon.interiors)
+            if shapely.Polygon(shell).area == 0:
+                continue
+            polygons.append(shapely.Polygon(shell, [h for h in holes
+                                                    if shapely.Polygon(h).area > 0]))
+        return shapely.MultiPolygon(polygons)
+    for geometry in rounded.to_shapely()[~at_risk]:
+        assert written(geometry).is_valid, geometry.wkt
 
 
 def test_validating_at_risk_polygons_gives_what_validating_all_gives(dataset):

@@ -447,8 +447,7 @@ def tiles(
     with _reporting(EXIT_DATA):
         features = read_features(source)
         read_seconds = time.perf_counter() - started
-        table = T.FeatureTable.of(features.geometries, features.properties, features.ids,
-                                  crs=T.Crs(crs) if crs else features.crs)
+        table = features.table(T.Crs(crs) if crs else None)
         name = layer or source.stem
         zooms = T.tile_table(table, minzoom=minzoom, maxzoom=maxzoom, extent=extent,
                              buffer=buffer, layer=name, mode=mode)

@@ -197,11 +197,6 @@ class FeatureTable:
         if array.ndim != 1:
             array = array.reshape(-1)
         n = array.shape[0]
-        if properties is not None and len(properties) != n:
-            raise InvalidGeometryError(f"{len(properties)} properties for {n} geometries")
-        if ids is not None and len(ids) != n:
-            raise InvalidGeometryError(f"{len(ids)} ids for {n} geometries")
-        crs = Crs(crs)
         parts, part_source = shapely.get_parts(array, return_index=True)
         dims = shapely.get_dimensions(parts)
         keep = ~shapely.is_empty(parts)
@@ -210,21 +205,43 @@ class FeatureTable:
         ragged, sources = [], []
         for dimension, kind in enumerate(kinds):
             rows = np.flatnonzero(keep & (dims == dimension))
-            world, taken = to_world(_ragged_of(parts[rows], kind), crs)
-            ragged.append(world)
-            sources.append(part_source[rows][taken].astype(np.int64))
+            ragged.append(_ragged_of(parts[rows], kind))
+            sources.append(part_source[rows].astype(np.int64))
+        return cls.from_ragged(ragged, sources, n, properties, ids, crs)
+
+    @classmethod
+    def from_ragged(cls, ragged: Sequence[Ragged], sources: Sequence[np.ndarray], count: int,
+                    properties: Sequence[Mapping[str, Any] | None] | None = None,
+                    ids: Sequence[Any] | None = None,
+                    crs: Crs | str = Crs.EPSG_4326) -> FeatureTable:
+        """Return the table of three ragged arrays (MULTIPOINT, MULTILINESTRING, MULTIPOLYGON).
+
+        `sources` gives the feature (0..count - 1) of each geometry of each array; Z is
+        dropped. Otherwise as `of`.
+        """
+        if properties is not None and len(properties) != count:
+            raise InvalidGeometryError(f"{len(properties)} properties for {count} features")
+        if ids is not None and len(ids) != count:
+            raise InvalidGeometryError(f"{len(ids)} ids for {count} features")
+        crs = Crs(crs)
+        world, world_sources = [], []
+        for array, source in zip(ragged, sources, strict=True):
+            flat = Ragged(array.kind, np.ascontiguousarray(array.coords[:, :2]), array.offsets)
+            projected, taken = to_world(flat, crs)
+            world.append(projected)
+            world_sources.append(np.asarray(source, dtype=np.int64)[taken])
         # Collections and the antimeridian may give a feature several geometries of a
         # kind: in source order, as the tiles' features are.
-        (points, lines, polygons), sources = _regroup(ragged, sources)
-        feature_ids = np.full(n, -1, dtype=np.int64)
+        (points, lines, polygons), world_sources = _regroup(world, world_sources)
+        feature_ids = np.full(count, -1, dtype=np.int64)
         if ids is not None:
             for i, value in enumerate(ids):
                 if isinstance(value, (int, np.integer)) and not isinstance(value, bool) \
                         and 0 <= int(value) < 2**63:
                     feature_ids[i] = int(value)
-        tags = tag_table(properties if properties is not None else [None] * n)
-        return cls(points, lines, polygons, sources[0], sources[1], sources[2], feature_ids,
-                   tags, n)
+        tags = tag_table(properties if properties is not None else [None] * count)
+        return cls(points, lines, polygons, world_sources[0], world_sources[1],
+                   world_sources[2], feature_ids, tags, count)
 
 
 def _ragged_of(parts: np.ndarray, kind: GeometryKind) -> Ragged:

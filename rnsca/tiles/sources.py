@@ -25,7 +25,10 @@ import numpy as np
 import orjson
 import shapely
 
-from rnsca.errors import ParseError, UnsupportedGeometryError
+from rnsca.arrays import Ragged
+from rnsca.errors import InvalidGeometryError, ParseError, UnsupportedGeometryError
+from rnsca.io.geojson import from_geojson
+from rnsca.tiles.features import FeatureTable
 from rnsca.tiles.mercator import Crs
 
 __all__ = ["Features", "read_features", "SUFFIXES"]
@@ -40,12 +43,27 @@ SUFFIXES = _GEOJSON + _SEQUENCE + _PARQUET + _FLATGEOBUF
 
 @dataclass(frozen=True, slots=True, eq=False)
 class Features:
-    """Geometries (Shapely array), properties (list of dict), ids (list) and their CRS."""
+    """Features read: their geometry, properties (list of dict), ids (list) and CRS.
 
-    geometries: np.ndarray
+    The geometry is either `geometries` (a Shapely array, one per feature) or `ragged`
+    (MULTIPOINT, MULTILINESTRING and MULTIPOLYGON ragged arrays) with `sources` (the
+    feature of each of their geometries); `table` builds the `FeatureTable` of either.
+    """
+
+    geometries: np.ndarray | None
     properties: list
     ids: list
     crs: Crs
+    ragged: tuple | None = None
+    sources: tuple | None = None
+
+    def table(self, crs: Crs | None = None) -> FeatureTable:
+        """Return the features as a `FeatureTable` (in `crs`, default the file's)."""
+        crs = crs or self.crs
+        if self.ragged is not None and self.sources is not None:
+            return FeatureTable.from_ragged(self.ragged, self.sources, len(self.properties),
+                                            self.properties, self.ids, crs)
+        return FeatureTable.of(self.geometries, self.properties, self.ids, crs=crs)
 
 
 def read_features(path: str | Path) -> Features:
@@ -97,7 +115,37 @@ def _features_of(document: Any) -> list:
     return [{"type": "Feature", "geometry": document, "properties": None}]
 
 
+#: Feature geometry types and the array of `rnsca.io.geojson.from_geojson` they go to.
+_KIND = {"Point": 0, "MultiPoint": 0, "LineString": 1, "MultiLineString": 1, "Polygon": 2,
+         "MultiPolygon": 2}
+
+
 def _of_features(features: list, path: Path) -> Features:
+    """Return features read by the library's GeoJSON reader (bulk, no object per geometry).
+
+    Each feature's geometry is the next one of its kind in the reader's arrays; a
+    GeometryCollection (several kinds, or none) goes through Shapely instead.
+    """
+    kinds = np.array([_KIND.get(str(f["geometry"].get("type")), -1)
+                      if isinstance(f, dict) and isinstance(f.get("geometry"), dict) else -2
+                      for f in features], dtype=np.int64)
+    collections = any(isinstance(f, dict) and isinstance(f.get("geometry"), dict)
+                      and f["geometry"].get("type") not in _KIND for f in features)
+    if not collections:
+        try:
+            layout = from_geojson({"type": "FeatureCollection", "features": features})
+        except InvalidGeometryError as exc:
+            raise ParseError(f"{path}: {exc}") from None
+        ragged = tuple(Ragged.of(*getattr(layout, kind), partial_z=layout.partial_z)
+                       for kind in ("points", "lines", "polygons"))
+        sources = tuple(np.flatnonzero(kinds == k) for k in range(3))
+        properties = [f.get("properties") for f in features]
+        ids = [f.get("id") for f in features]
+        return Features(None, properties, ids, Crs.EPSG_4326, ragged, sources)
+    return _of_shapely(features, path)
+
+
+def _of_shapely(features: list, path: Path) -> Features:
     texts = [orjson.dumps(f.get("geometry")) if isinstance(f, dict) else b"null"
              for f in features]
     try:

@@ -34,11 +34,14 @@ from rnsca.kernels.jit import borrowing, parallel
 
 __all__ = ["Features", "Shapes", "feature_sizes", "write_features", "tile_sizes",
            "write_tiles", "MOVE_TO", "LINE_TO", "CLOSE_PATH", "POINT", "LINESTRING",
-           "POLYGON"]
+           "POLYGON", "REPAIRED"]
 
 MOVE_TO, LINE_TO, CLOSE_PATH = 1, 2, 7
 #: Feature kinds (``Tile.GeomType``).
 POINT, LINESTRING, POLYGON = 1, 2, 3
+#: A polygon read from the second polygon `Shapes` (those repaired after rounding);
+#: written as a POLYGON.
+REPAIRED = 4
 
 
 class Shapes(NamedTuple):
@@ -59,7 +62,8 @@ class Shapes(NamedTuple):
 class Features(NamedTuple):
     """The features to write, in order: kind, geometry in its kind's `Shapes`, id, tags.
 
-    `kind` int8 (f,) (`POINT`, `LINESTRING`, `POLYGON`); `index` int64 (f,); `fid` int64
+    `kind` int8 (f,) (`POINT`, `LINESTRING`, `POLYGON`, `REPAIRED`); `index` int64 (f,)
+    into its kind's `Shapes`; `fid` int64
     (f,), -1 for none; feature ``i``'s tags are ``tags[tag_offsets[i]:tag_offsets[i +
     1]]`` (uint32 key and value indices, interleaved).
     """
@@ -181,7 +185,7 @@ def _walk(q, first, b, e, backwards, m, close, cursor, write, out, pos):
 
 
 @borrowing
-def _geometry(kind, g, points, lines, polygons, cursor, write, out, pos):
+def _geometry(kind, g, points, lines, polygons, repaired, cursor, write, out, pos):
     """Emit geometry `g` of `kind` from `pos`; return the position after (pos: nothing)."""
     cursor[0] = 0
     cursor[1] = 0
@@ -208,6 +212,8 @@ def _geometry(kind, g, points, lines, polygons, cursor, write, out, pos):
                 pos = _walk(q, first, first + 1, e, False, m, False, cursor, write, out,
                             pos)
         return pos
+    if kind == REPAIRED:
+        polygons = repaired
     q = polygons.q
     for polygon in range(polygons.o2[g], polygons.o2[g + 1]):
         for r in range(polygons.o1[polygon], polygons.o1[polygon + 1]):
@@ -249,7 +255,7 @@ def _body_size(features, i, geometry_bytes, tag_bytes):
 
 
 @parallel
-def feature_sizes(features, points, lines, polygons, sizes, geometry_bytes):
+def feature_sizes(features, points, lines, polygons, repaired, sizes, geometry_bytes):
     """Write each feature's message size in ``sizes`` (0: no geometry left, not written).
 
     ``geometry_bytes`` gets the size of its packed geometry, for `write_features`.
@@ -257,8 +263,8 @@ def feature_sizes(features, points, lines, polygons, sizes, geometry_bytes):
     nothing = np.empty(0, dtype=np.uint8)
     for i in prange(features.kind.shape[0]):
         cursor = np.zeros(2, dtype=np.int64)
-        g = _geometry(features.kind[i], features.index[i], points, lines, polygons, cursor,
-                      False, nothing, 0)
+        g = _geometry(features.kind[i], features.index[i], points, lines, polygons, repaired,
+                      cursor, False, nothing, 0)
         geometry_bytes[i] = g
         if g == 0:
             sizes[i] = 0
@@ -268,7 +274,8 @@ def feature_sizes(features, points, lines, polygons, sizes, geometry_bytes):
 
 
 @parallel
-def write_features(features, points, lines, polygons, starts, sizes, geometry_bytes, out):
+def write_features(features, points, lines, polygons, repaired, starts, sizes, geometry_bytes,
+                   out):
     """Write each feature of non-zero size at ``out[starts[i]:]`` (a Layer.features entry)."""
     for i in prange(features.kind.shape[0]):
         if sizes[i] == 0:
@@ -288,11 +295,11 @@ def write_features(features, points, lines, polygons, starts, sizes, geometry_by
             for t in range(features.tag_offsets[i], features.tag_offsets[i + 1]):
                 pos = _varint(features.tags[t], True, out, pos)
         out[pos] = np.uint8(0x18)  # Feature.type, varint
-        out[pos + 1] = np.uint8(features.kind[i])
+        out[pos + 1] = np.uint8(min(features.kind[i], POLYGON))
         out[pos + 2] = np.uint8(0x22)  # Feature.geometry, packed
         pos = _varint(geometry_bytes[i], True, out, pos + 3)
-        _geometry(features.kind[i], features.index[i], points, lines, polygons, cursor, True,
-                  out, pos)
+        _geometry(features.kind[i], features.index[i], points, lines, polygons, repaired,
+                  cursor, True, out, pos)
 
 
 @parallel

@@ -112,16 +112,17 @@ def _threaded(function: Any, geometries: np.ndarray, **options: Any) -> np.ndarr
 
 
 def _valid_polygons(level: Level, extent: int, validation: Validation,
-                    ) -> tuple[Level, np.ndarray]:
-    """Return the polygons, those invalid once rounded snapped to the grid, and their q.
+                    ) -> tuple[np.ndarray, np.ndarray, K.Shapes]:
+    """Return the rounded polygons (q), those invalid once rounded, and their repairs.
 
-    The level returned holds tile units (integers, as float) instead of world
-    coordinates; only its offsets, sources and tiles are read after this.
+    The repairs are `Shapes` in tile units, one geometry per invalid polygon (in the
+    order of `bad`), written instead of the rounded ones (`rnsca.kernels.mvt.REPAIRED`).
     """
     q = quantise(level, extent)
     ragged = level.ragged
+    nothing = np.empty(0, dtype=np.int64)
     if ragged.count == 0 or validation is Validation.NONE:
-        return level, q
+        return q, nothing, _no_polygons()
     rounded = Ragged(ragged.kind, q.astype(np.float64), ragged.offsets)
     if validation is Validation.ALL:
         candidates = np.arange(ragged.count, dtype=np.int64)
@@ -130,10 +131,10 @@ def _valid_polygons(level: Level, extent: int, validation: Validation,
         KT.polygons_at_risk(q, *ragged.offsets, at_risk)
         candidates = np.flatnonzero(at_risk)
     if candidates.shape[0] == 0:
-        return level, q
+        return q, nothing, _no_polygons()
     bad = candidates[~_threaded(shapely.is_valid, rounded.take(candidates).to_shapely())]
     if bad.shape[0] == 0:
-        return level, q
+        return q, nothing, _no_polygons()
     # First the cheap repair: GEOS's make_valid (structure) of the rounded polygon, its
     # new vertices (where edges crossed) rounded; what that leaves invalid is snapped
     # from its unrounded coordinates in tile units onto the integer grid by GEOS's
@@ -160,18 +161,20 @@ def _valid_polygons(level: Level, extent: int, validation: Validation,
     fixed = np.array([shapely.MultiPolygon()] * bad.shape[0], dtype=object)
     if polygonal.any():
         shapely.multipolygons(parts[polygonal], indices=part_of[polygonal], out=fixed)
-    fixed_ragged = Ragged.from_shapely(fixed) if shapely.get_num_coordinates(
-        fixed).sum() else Ragged(ragged.kind, np.empty((0, 2)), (
-            np.zeros(1, np.int64), np.zeros(1, np.int64), np.zeros(bad.shape[0] + 1,
-                                                                   np.int64)))
-    keep = np.flatnonzero(np.isin(np.arange(ragged.count), bad, invert=True))
-    merged = rounded.take(keep).concat(fixed_ragged)
-    order = np.concatenate([keep, bad])
-    # Back to tile order, then source order (the fixed ones were put last).
-    back = np.lexsort((level.source[order], level.geometry_tile[order]))
-    merged = merged.take(back)
-    return (Level(level.zoom, merged, level.source[order][back], level.tile_offsets,
-                  level.tile_x, level.tile_y), merged.coords.astype(np.int64))
+    if shapely.get_num_coordinates(fixed).sum():
+        _, coords, offsets = shapely.to_ragged_array(fixed)
+        repaired = K.Shapes(coords.astype(np.int64),
+                            *(np.asarray(o, dtype=np.int64) for o in offsets))
+    else:
+        repaired = _no_polygons(bad.shape[0])
+    return q, bad, repaired
+
+
+def _no_polygons(count: int = 0) -> K.Shapes:
+    """Return polygon `Shapes` of `count` empty geometries."""
+    none = np.zeros(1, dtype=np.int64)
+    return K.Shapes(np.empty((0, 2), dtype=np.int64), none, none,
+                    np.zeros(count + 1, dtype=np.int64))
 
 
 class Framing(_ChoiceEnum):
@@ -195,18 +198,30 @@ def encode_zoom(levels: list[Level], table: FeatureTable, *, extent: int, layer:
     zoom = levels[0].zoom
     shapes, kinds, indices, sources, keys = [], [], [], [], []
     side = np.int64(2**zoom)
+    repaired = _no_polygons()
     for level in levels:
+        tile = level.geometry_tile
+        key = level.tile_x[tile] * side + level.tile_y[tile]
+        count = level.ragged.count
+        index = np.arange(count, dtype=np.int64)
         if level.ragged.kind is GeometryKind.MULTIPOLYGON:
-            level, q = _valid_polygons(level, extent, validation)
+            q, bad, repaired = _valid_polygons(level, extent, validation)
+            if bad.shape[0]:
+                # The repaired polygons are written from their own shapes instead.
+                kinds.append(np.full(bad.shape[0], K.REPAIRED, dtype=np.int8))
+                indices.append(np.arange(bad.shape[0], dtype=np.int64))
+                sources.append(level.source[bad])
+                keys.append(key[bad])
+                good = np.ones(count, dtype=bool)
+                good[bad] = False
+                index = index[good]
         else:
             q = quantise(level, extent)
         shapes.append(_shapes(level, q))
-        count = level.ragged.count
-        kinds.append(np.full(count, _KIND_CODE[level.ragged.kind], dtype=np.int8))
-        indices.append(np.arange(count, dtype=np.int64))
-        sources.append(level.source)
-        tile = level.geometry_tile
-        keys.append(level.tile_x[tile] * side + level.tile_y[tile])
+        kinds.append(np.full(index.shape[0], _KIND_CODE[level.ragged.kind], dtype=np.int8))
+        indices.append(index)
+        sources.append(level.source[index])
+        keys.append(key[index])
     kind = np.concatenate(kinds)
     index = np.concatenate(indices)
     source = np.concatenate(sources)
@@ -234,10 +249,10 @@ def encode_zoom(levels: list[Level], table: FeatureTable, *, extent: int, layer:
     features = K.Features(kind, index, table.ids[source], 2 * tag_offsets, pairs)
     sizes = np.empty(kind.shape[0], dtype=np.int64)
     geometry_bytes = np.empty(kind.shape[0], dtype=np.int64)
-    K.feature_sizes(features, *shapes, sizes, geometry_bytes)
+    K.feature_sizes(features, *shapes, repaired, sizes, geometry_bytes)
     starts = exclusive_sum(sizes)
     out = np.empty(int(starts[-1]), dtype=np.uint8)
-    K.write_features(features, *shapes, starts, sizes, geometry_bytes, out)
+    K.write_features(features, *shapes, repaired, starts, sizes, geometry_bytes, out)
     byte_start = starts[np.append(tile_first, key.shape[0])]
     key_blob, key_offsets = _gather_fields(tags.key_fields, tags.key_field_offsets,
                                            tile_keys_used, key_starts)

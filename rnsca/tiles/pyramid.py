@@ -6,7 +6,8 @@ a tile in source order. `cascade` makes zoom z + 1 from zoom z in one pass: each
 geometry is paired with those of its tile's four children whose padded box its
 bounding box touches (`rnsca.kernels.tiles.cascade_counts`, by arithmetic on the tile
 grid), the pairs' geometries are gathered (`Ragged.take`) and clipped in one call, each
-against its child's padded box (`rnsca.clip_ragged` with one window per pair). A child
+against its child's padded box (`rnsca.clip_ragged` with one window per pair; a
+geometry whose box lies inside its child's padded box is copied instead). A child
 sees only its parent's clipped geometry, so the work of a zoom follows its output; and
 as a child's padded box lies inside its parent's, cascading gives the tiles a direct
 clip of the input gives (to rounding). A polygon covering a whole tile comes out as the
@@ -112,14 +113,28 @@ def cascade(level: Level, pad_units: float, mode: Mode, extent: int,
     child_y = 2 * level.tile_y[children // 4] + (children % 4 >> 1)
     pair_child = np.repeat(np.arange(children.shape[0], dtype=np.int64), per_child[children])
     windows = tile_windows(zoom, child_x, child_y, pad_units)
-    taken = ragged.take(pairs)
+    # A geometry whose box lies inside its child's padded box is its own clip: it is
+    # copied, not clipped (most of them, once tiles are larger than the geometries).
+    box = boxes[pairs]
+    window = windows[pair_child]
+    inside = ((box[:, 0] >= window[:, 0]) & (box[:, 2] <= window[:, 2])
+              & (box[:, 1] >= window[:, 1]) & (box[:, 3] <= window[:, 3]))
+    crossing = np.flatnonzero(~inside)
+    taken = ragged.take(pairs[crossing])
     approx = mode is Mode.APPROX and ragged.kind.dimension == 1
-    result = clip_ragged(ragged.kind, taken.coords, taken.offsets, windows[pair_child],
+    result = clip_ragged(ragged.kind, taken.coords, taken.offsets, window[crossing],
                          backend=backend, mode=Mode.APPROX if approx else Mode.EXACT,
                          tolerance=cell / extent if approx else None)
-    out_child = pair_child[result.source]
+    clipped = Ragged(ragged.kind, result.coords, result.offsets)
+    kept_pairs = crossing[result.source]
+    if crossing.shape[0] < pairs.shape[0]:
+        whole = np.flatnonzero(inside)
+        # Back in pair order (children in quadkey order, sources in order in each).
+        order = np.argsort(np.concatenate([whole, kept_pairs]), kind="stable")
+        clipped = ragged.take(pairs[whole]).concat(clipped).take(order)
+        kept_pairs = np.concatenate([whole, kept_pairs])[order]
+    out_child = pair_child[kept_pairs]
     per_tile = np.bincount(out_child, minlength=children.shape[0])
     kept = per_tile > 0
-    return Level(zoom, Ragged(ragged.kind, result.coords, result.offsets),
-                 level.source[pairs[result.source]], exclusive_sum(per_tile[kept]),
-                 child_x[kept], child_y[kept])
+    return Level(zoom, clipped, level.source[pairs[kept_pairs]],
+                 exclusive_sum(per_tile[kept]), child_x[kept], child_y[kept])

@@ -156,6 +156,12 @@ def end_to_end(name: str, geometries, maxzoom: int, work: Path, rng) -> dict:
               "vertices": int(shapely.get_num_coordinates(geometries).sum()),
               "zooms": [0, maxzoom], "rnsca_seconds": ours_seconds, "rnsca_summary": summary,
               "geojson_bytes": source.stat().st_size}
+    if name == "polygons":
+        # What the validity pass costs: the same without it (polygons may be invalid).
+        record["rnsca_validate_none_seconds"] = _run(
+            [sys.executable, "-m", "rnsca.cli", "tiles", str(source), "-o", str(ours_path),
+             "--maxzoom", str(maxzoom), "--no-progress", "--layer", name, "--validate",
+             "none"])
     if Path(tippecanoe).exists():
         record["tippecanoe_seconds"] = _run(
             [tippecanoe, "-o", str(theirs_path), "-Z0", f"-z{maxzoom}", "-l", name,

@@ -422,6 +422,9 @@ def tiles(
         help="EPSG:4326 or EPSG:3857 [default: the input's; GeoJSON is EPSG:4326]")] = None,
     compression: Annotated[str | None, typer.Option(
         help="gzip or none [default: gzip for PMTiles, none for a directory]")] = None,
+    validate: Annotated[str, typer.Option(
+        help="polygons checked once rounded, invalid ones snapped: at-risk (those not "
+             "proved valid), all, or none")] = "at-risk",
     progress: Annotated[bool, typer.Option(help="a progress bar per zoom")] = True,
     summary_json: Annotated[Path | None, typer.Option(
         "--summary-json", help="also write the summary as JSON here")] = None,
@@ -450,7 +453,7 @@ def tiles(
         table = features.table(T.Crs(crs) if crs else None)
         name = layer or source.stem
         zooms = T.tile_table(table, minzoom=minzoom, maxzoom=maxzoom, extent=extent,
-                             buffer=buffer, layer=name, mode=mode)
+                             buffer=buffer, layer=name, mode=mode, validate=validate)
         pmtiles = output.suffix.lower() == ".pmtiles"
         with Progress(TextColumn("zoom {task.fields[zoom]:>2}"), BarColumn(),
                       TextColumn("{task.completed}/{task.total} zooms, {task.fields[tiles]} "

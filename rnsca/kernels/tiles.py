@@ -151,7 +151,7 @@ def quantise(coords, vertex_offsets, tile_offsets, tile_x, tile_y, scale, extent
 def _orient(q, a, b, c):
     """Return the sign of the turn a -> b -> c (exact: int64 tile units, |q| < 2**30)."""
     d = (q[b, 0] - q[a, 0]) * (q[c, 1] - q[a, 1]) - (q[b, 1] - q[a, 1]) * (q[c, 0] - q[a, 0])
-    return (d > 0) - (d < 0)
+    return 1 if d > 0 else (-1 if d < 0 else 0)
 
 
 @borrowing

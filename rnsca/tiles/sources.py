@@ -146,10 +146,14 @@ def _of_features(features: list, path: Path) -> Features:
 
 
 def _of_shapely(features: list, path: Path) -> Features:
-    texts = [orjson.dumps(f.get("geometry")) if isinstance(f, dict) else b"null"
-             for f in features]
+    """Return features whose geometries Shapely reads (GeometryCollections among them)."""
+    present = [i for i, f in enumerate(features)
+               if isinstance(f, dict) and isinstance(f.get("geometry"), dict)]
+    geometries = np.full(len(features), None, dtype=object)
     try:
-        geometries = shapely.from_geojson(np.array(texts, dtype=object), on_invalid="raise")
+        geometries[present] = shapely.from_geojson(
+            np.array([orjson.dumps(features[i]["geometry"]) for i in present],
+                     dtype=object), on_invalid="raise")
     except shapely.errors.GEOSException as exc:
         raise ParseError(f"{path}: invalid GeoJSON geometry: {exc}") from None
     properties = [f.get("properties") if isinstance(f, dict) else None for f in features]

@@ -117,3 +117,21 @@ def test_unreadable_input_exits_1(tmp_path):
     assert result.exit_code == 1 and "not JSON" in result.output
     result = runner.invoke(app, ["tiles", str(tmp_path / "a.txt"), "-o", "o.pmtiles"])
     assert result.exit_code != 0
+
+
+def test_collections_and_null_geometries(tmp_path):
+    source = tmp_path / "gc.ndjson"
+    source.write_text("\n".join([
+        '{"type":"Feature","id":1,"properties":{"a":1},"geometry":{"type":'
+        '"GeometryCollection","geometries":[{"type":"Point","coordinates":[1,1]},'
+        '{"type":"LineString","coordinates":[[0,0],[5,5]]}]}}',
+        '{"type":"Feature","properties":{"a":2},"geometry":null}',
+        '{"type":"Polygon","coordinates":[[[0,0],[3,0],[3,3],[0,0]]]}']))
+    out = tmp_path / "gc.pmtiles"
+    result = runner.invoke(app, ["tiles", str(source), "-o", str(out), "--maxzoom", "0",
+                                 "--no-progress"])
+    assert result.exit_code == 0, result.output
+    features = mapbox_vector_tile.decode(_tiles_of(out)[(0, 0, 0)])["gc"]["features"]
+    # A collection's members are features of their own, with its id and properties.
+    assert sorted((f["geometry"]["type"], f["properties"].get("a")) for f in features) == [
+        ("LineString", 1), ("Point", 1), ("Polygon", None)]

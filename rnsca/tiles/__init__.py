@@ -21,8 +21,12 @@ from __future__ import annotations
 from collections.abc import Iterator, Mapping, Sequence
 from typing import Any
 
+import numpy as np
+
+from rnsca.arrays import Ragged
 from rnsca.errors import InvalidOptionError
 from rnsca.options import Backend, Mode
+from rnsca.ragged import clip_ragged
 from rnsca.tiles.archive import (
     ArchiveSummary,
     Compression,
@@ -33,12 +37,12 @@ from rnsca.tiles.archive import (
 from rnsca.tiles.encode import Framing, Validation, ZoomTiles, encode_zoom
 from rnsca.tiles.features import FeatureTable
 from rnsca.tiles.mercator import Crs
-from rnsca.tiles.pyramid import cascade, root
+from rnsca.tiles.pyramid import Level, cascade, root, tile_windows
 
 __all__ = ["ArchiveSummary", "Compression", "Crs", "FeatureTable", "Framing", "Validation",
            "ZoomTiles",
-           "MAX_ZOOM", "tile_features", "tile_table", "tile_ids", "write_directory",
-           "write_pmtiles"]
+           "MAX_ZOOM", "tile_features", "tile_one", "tile_table", "tile_ids",
+           "write_directory", "write_pmtiles"]
 
 #: The deepest zoom: world coordinates in float64 keep 2**-52 of the world, so tile
 #: units (2**-(z + 12) at extent 4096) stay exact to 2**-16 of a unit up to zoom 24.
@@ -61,6 +65,57 @@ def tile_features(geometries: Any, properties: Sequence[Mapping[str, Any] | None
         Of `tile_table`.
     """
     yield from tile_table(FeatureTable.of(geometries, properties, ids, crs=crs), **options)
+
+
+def _check_options(minzoom: int, maxzoom: int, extent: int, buffer: int, mode: Mode) -> None:
+    if not (isinstance(minzoom, int) and isinstance(maxzoom, int)
+            and 0 <= minzoom <= maxzoom <= MAX_ZOOM):
+        raise InvalidOptionError(
+            f"zooms must satisfy 0 <= minzoom <= maxzoom <= {MAX_ZOOM}, got {minzoom}, "
+            f"{maxzoom}")
+    if not (isinstance(extent, int) and 1 <= extent <= 2**20):
+        raise InvalidOptionError(f"extent must be an int in 1..{2**20}, got {extent!r}")
+    if not (isinstance(buffer, int) and 0 <= buffer <= extent):
+        raise InvalidOptionError(f"buffer must be an int in 0..extent, got {buffer!r}")
+    if mode is Mode.APPROX and buffer < 1:
+        raise InvalidOptionError("approx mode cuts within one tile unit of the padded "
+                                 "edge: it needs buffer >= 1")
+
+
+def tile_one(table: FeatureTable, zoom: int, x: int, y: int, *, extent: int = 4096,
+             buffer: int = 64, layer: str = "features", mode: Mode | str = Mode.EXACT,
+             validate: Validation | str = Validation.AT_RISK) -> bytes | None:
+    """Return tile ``(zoom, x, y)`` of a `FeatureTable` (a ``Tile`` message), None if empty.
+
+    The features are clipped to the one padded tile directly (no cascade); otherwise as
+    `tile_table`, whose tile it equals.
+
+    Raises
+    ------
+    InvalidOptionError
+        For a tile outside the zoom's grid, or options out of range.
+    """
+    mode = Mode(mode)
+    _check_options(zoom, zoom, extent, buffer, mode)
+    if not (isinstance(x, int) and isinstance(y, int) and 0 <= x < 2**zoom
+            and 0 <= y < 2**zoom):
+        raise InvalidOptionError(f"tile {zoom}/{x}/{y} is outside zoom {zoom}'s grid "
+                                 f"(x and y in 0..{2**zoom - 1})")
+    window = tile_windows(zoom, np.array([x]), np.array([y]), buffer / extent)[0]
+    levels = []
+    for ragged, source in ((table.points, table.points_source),
+                           (table.lines, table.lines_source),
+                           (table.polygons, table.polygons_source)):
+        approx = mode is Mode.APPROX and ragged.kind.dimension == 1
+        result = clip_ragged(ragged.kind, ragged.coords, ragged.offsets, window,
+                             mode=mode if approx else Mode.EXACT,
+                             tolerance=2.0**-zoom / extent if approx else None)
+        levels.append(Level(zoom, Ragged(ragged.kind, result.coords, result.offsets),
+                            source[result.source],
+                            np.array([0, len(result)], dtype=np.int64),
+                            np.array([x], dtype=np.int64), np.array([y], dtype=np.int64)))
+    tiles = encode_zoom(levels, table, extent=extent, layer=layer, validate=validate)
+    return tiles.data[0] if len(tiles) else None
 
 
 def tile_table(table: FeatureTable, *, minzoom: int = 0, maxzoom: int = 14,
@@ -106,18 +161,7 @@ def tile_table(table: FeatureTable, *, minzoom: int = 0, maxzoom: int = 14,
     mode = Mode(mode)
     framing = Framing(framing)
     validate = Validation(validate)
-    if not (isinstance(minzoom, int) and isinstance(maxzoom, int)
-            and 0 <= minzoom <= maxzoom <= MAX_ZOOM):
-        raise InvalidOptionError(
-            f"zooms must satisfy 0 <= minzoom <= maxzoom <= {MAX_ZOOM}, got {minzoom}, "
-            f"{maxzoom}")
-    if not (isinstance(extent, int) and 1 <= extent <= 2**20):
-        raise InvalidOptionError(f"extent must be an int in 1..{2**20}, got {extent!r}")
-    if not (isinstance(buffer, int) and 0 <= buffer <= extent):
-        raise InvalidOptionError(f"buffer must be an int in 0..extent, got {buffer!r}")
-    if mode is Mode.APPROX and buffer < 1:
-        raise InvalidOptionError("approx mode cuts within one tile unit of the padded "
-                                 "edge: it needs buffer >= 1")
+    _check_options(minzoom, maxzoom, extent, buffer, mode)
     pad_units = buffer / extent
     levels = [root(table.points, table.points_source), root(table.lines, table.lines_source),
               root(table.polygons, table.polygons_source)]

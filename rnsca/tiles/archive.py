@@ -14,9 +14,10 @@ import gzip
 import math
 from collections.abc import Callable, Iterable, Iterator
 from concurrent.futures import ThreadPoolExecutor
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, BinaryIO
 
 import numpy as np
 
@@ -110,11 +111,13 @@ def _stored(zoom: ZoomTiles, compress: Callable[[bytes], bytes] | None,
     return [d for part in pool.map(chunk, range(chunks)) for d in part]
 
 
-def write_pmtiles(path: str | Path, zooms: Iterable[ZoomTiles], *, layer: str,
+def write_pmtiles(path: str | Path | BinaryIO, zooms: Iterable[ZoomTiles], *, layer: str,
                   compression: Compression | str = Compression.GZIP,
                   metadata: dict[str, Any] | None = None,
                   on_zoom: Callable[[ZoomTiles, int], None] | None = None) -> ArchiveSummary:
     """Write the zooms' tiles as a PMTiles v3 archive at `path`; return the summary.
+
+    `path` may be a binary file open for writing (it is not closed).
 
     `on_zoom(zoom_tiles, stored_bytes)` is called after each zoom is written (progress).
     The metadata has ``vector_layers`` (the one layer, its zooms), and any `metadata`.
@@ -128,7 +131,7 @@ def write_pmtiles(path: str | Path, zooms: Iterable[ZoomTiles], *, layer: str,
     summary = ArchiveSummary()
     bounds = [math.inf, math.inf, -math.inf, -math.inf]
     zoom_range: list[int] = []
-    with open(path, "wb") as f, ThreadPoolExecutor() as pool:
+    with _opened(path) as f, ThreadPoolExecutor() as pool:
         writer = Writer(f)
         for zoom in _timed(zooms, summary):
             if len(zoom) == 0:
@@ -163,6 +166,15 @@ def write_pmtiles(path: str | Path, zooms: Iterable[ZoomTiles], *, layer: str,
         meta.update(metadata or {})
         writer.finalize(header, meta)
     return summary
+
+
+@contextmanager
+def _opened(path: str | Path | BinaryIO) -> Iterator[BinaryIO]:
+    if isinstance(path, (str, Path)):
+        with open(path, "wb") as f:
+            yield f
+        return
+    yield path
 
 
 def _extend_bounds(bounds: list, zoom: ZoomTiles) -> None:

@@ -31,7 +31,7 @@ from rnsca.io.geojson import from_geojson
 from rnsca.tiles.features import FeatureTable
 from rnsca.tiles.mercator import Crs
 
-__all__ = ["Features", "read_features", "SUFFIXES"]
+__all__ = ["Features", "features_of_geojson", "read_features", "SUFFIXES"]
 
 _GEOJSON = (".geojson", ".json")
 _SEQUENCE = (".geojsons", ".geojsonl", ".geojsonseq", ".ndjson", ".jsonl")
@@ -102,6 +102,11 @@ def read_features(path: str | Path) -> Features:
         return _read_ogr(path)
     raise UnsupportedGeometryError(
         f"{path}: unknown suffix {suffix!r}; rnsca tiles reads {', '.join(SUFFIXES)}")
+
+
+def features_of_geojson(document: Any) -> Features:
+    """Return the features of a parsed GeoJSON object (FeatureCollection, Feature, Geometry)."""
+    return _of_features(_features_of(document), Path("<geojson>"))
 
 
 def _features_of(document: Any) -> list:

@@ -413,3 +413,22 @@ def test_validating_at_risk_polygons_gives_what_validating_all_gives(dataset):
     every = list(tile_features(polygons, validate="all", **options))
     for a, b in zip(at_risk, every, strict=True):
         assert a.data == b.data
+
+
+def test_one_tile_equals_the_pyramid_s(dataset):
+    """A tile clipped directly equals the cascade's to rounding: within one unit."""
+    from rnsca.tiles import tile_one
+
+    geometries, properties = dataset
+    table = FeatureTable.of(geometries, properties, ids=list(range(len(geometries))))
+    zoom = list(tile_table(table, minzoom=4, maxzoom=4))[0]
+    for x, y, data in zip(zoom.x.tolist(), zoom.y.tolist(), zoom.data, strict=True):
+        direct, cascaded = _decode(tile_one(table, 4, x, y)), _decode(data)
+        assert [f["id"] for f in direct] == [f["id"] for f in cascaded]
+        for a, b in zip(direct, cascaded, strict=True):
+            assert a["properties"] == b["properties"]
+            assert shapely.hausdorff_distance(shapely.geometry.shape(a["geometry"]),
+                                              shapely.geometry.shape(b["geometry"])) <= 1
+    assert tile_one(table, 4, 0, 0) is None  # the far north-west: nothing there
+    with pytest.raises(InvalidOptionError, match="outside"):
+        tile_one(table, 2, 4, 0)

@@ -13,6 +13,7 @@ import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 import orjson
@@ -24,6 +25,7 @@ from rnsca.clip import SegmentClipResult, as_segments
 from rnsca.clip_geojson import combine_stats
 from rnsca.errors import (
     InvalidGeometryError,
+    InvalidOptionError,
     LimitExceededError,
     RnscaError,
 )
@@ -606,3 +608,58 @@ def _clip_svg_windows(request: ClipSVGRequest, settings: Settings) -> Outcome:
     payload = {"paths": [rnsca.write_paths(r.paths, precision=None) for r in results],
                "stats": stats.to_dict(), "verification": None}
     return Outcome(orjson.dumps(payload, option=_JSON), stats)
+
+
+# --- Vector tiles ---------------------------------------------------------------------
+
+
+def _tile_features(body: bytes, options: Any, zooms: int, settings: Settings) -> Any:
+    """Return the `FeatureTable` of a GeoJSON body, within the vertex limit and budget.
+
+    The work budget counts every vertex once per zoom cut.
+    """
+    from rnsca.io.geojson import loads
+    from rnsca.tiles import Crs
+    from rnsca.tiles.sources import features_of_geojson
+
+    features = features_of_geojson(loads(body))
+    table = features.table(Crs(options.crs))
+    vertices = sum(r.coords.shape[0] for r in (table.points, table.lines, table.polygons))
+    check_vertices(vertices, settings.max_vertices)
+    check_work(vertices * zooms, settings.work_budget)
+    return table
+
+
+def tile_one(body: bytes, z: int, x: int, y: int, options: Any,
+             settings: Settings) -> Outcome:
+    """Answer ``POST /v1/tiles/{z}/{x}/{y}``: the tile's bytes (empty: no feature)."""
+    from rnsca.tiles import tile_one as one
+
+    table = _tile_features(body, options, 1, settings)
+    data = one(table, z, x, y, extent=options.extent, buffer=options.buffer,
+               layer=options.layer, mode=options.mode)
+    return Outcome(data or b"", None, "application/vnd.mapbox-vector-tile",
+                   {"X-Rnsca-Features": str(table.count)})
+
+
+def tile_pyramid(body: bytes, options: Any, settings: Settings) -> Outcome:
+    """Answer ``POST /v1/tiles``: a PMTiles archive of zooms minzoom..maxzoom."""
+    import io
+
+    from rnsca.tiles import tile_table, write_pmtiles
+
+    if options.minzoom > options.maxzoom:
+        raise InvalidOptionError(f"minzoom {options.minzoom} is above maxzoom "
+                                 f"{options.maxzoom}")
+    table = _tile_features(body, options, options.maxzoom + 1, settings)
+    zooms = tile_table(table, minzoom=options.minzoom, maxzoom=options.maxzoom,
+                       extent=options.extent, buffer=options.buffer, layer=options.layer,
+                       mode=options.mode, max_tiles=settings.max_tiles)
+    archive = io.BytesIO()
+    try:
+        summary = write_pmtiles(archive, zooms, layer=options.layer)
+    except ValueError as exc:  # no tile holds a feature
+        raise InvalidBodyError(f"{exc}") from None
+    return Outcome(archive.getvalue(), None, "application/vnd.pmtiles",
+                   {"X-Rnsca-Tiles": str(summary.tiles),
+                    "X-Rnsca-Features": str(table.count)})

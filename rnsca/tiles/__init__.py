@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 
 from rnsca.arrays import Ragged
-from rnsca.errors import InvalidOptionError
+from rnsca.errors import InvalidOptionError, LimitExceededError
 from rnsca.options import Backend, Mode
 from rnsca.ragged import clip_ragged
 from rnsca.tiles.archive import (
@@ -123,7 +123,8 @@ def tile_table(table: FeatureTable, *, minzoom: int = 0, maxzoom: int = 14,
                mode: Mode | str = Mode.EXACT,
                validate: Validation | str = Validation.AT_RISK,
                backend: Backend | str = Backend.NUMBA,
-               framing: Framing | str = Framing.DIRECT) -> Iterator[ZoomTiles]:
+               framing: Framing | str = Framing.DIRECT,
+               max_tiles: int | None = None) -> Iterator[ZoomTiles]:
     """Yield the MVT tiles of a `FeatureTable`, one `ZoomTiles` per zoom, in order.
 
     Parameters
@@ -152,11 +153,16 @@ def tile_table(table: FeatureTable, *, minzoom: int = 0, maxzoom: int = 14,
     framing : {"direct", "protobuf"}
         Who puts each tile's message together (`rnsca.tiles.encode.Framing`; the same
         bytes).
+    max_tiles : int, optional
+        Refuse a zoom that cuts more tiles than this (a service's limit: output grows
+        with the zoom, not the input).
 
     Raises
     ------
     InvalidOptionError
         For zooms, extent or buffer out of range, or approx mode without a buffer.
+    LimitExceededError
+        When a zoom's tiles (of any kind of geometry) are more than `max_tiles`.
     """
     mode = Mode(mode)
     framing = Framing(framing)
@@ -168,6 +174,11 @@ def tile_table(table: FeatureTable, *, minzoom: int = 0, maxzoom: int = 14,
     for zoom in range(maxzoom + 1):
         if zoom > 0:
             levels = [cascade(level, pad_units, mode, extent, backend) for level in levels]
+            tiles = sum(level.tile_x.shape[0] for level in levels)
+            if max_tiles is not None and tiles > max_tiles:
+                raise LimitExceededError(
+                    f"zoom {zoom} cuts {tiles} tiles or more, more than the limit of "
+                    f"{max_tiles}: ask for fewer zooms")
         if zoom >= minzoom:
             yield encode_zoom(levels, table, extent=extent, layer=layer, validate=validate,
                               framing=framing)

@@ -10,6 +10,8 @@ RUN apt-get update \
     && apt-get install -y --no-install-recommends libgomp1 \
     && rm -rf /var/lib/apt/lists/*
 ENV NUMBA_CACHE_DIR=/var/cache/numba
+# The extras installed (docker/install.sh): service,dask for the Dask profile of compose.yml.
+ARG RNSCA_EXTRAS=service
 WORKDIR /src
 COPY pyproject.toml README.md ./
 COPY docker/install.sh docker/install.sh

@@ -31,7 +31,7 @@ from rnsca.kernels.validate import (
 )
 
 __all__ = ["GeometryKind", "Ragged", "PathArrays", "OUTPUT_KIND", "exclusive_sum",
-           "geometry_error", "group_offsets"]
+           "geometry_error", "group_offsets", "to_shapely"]
 
 
 class GeometryKind(str, Enum):
@@ -365,7 +365,7 @@ class Ragged:
         (GEOS would carry the NaN into its results).
         """
         coords = np.ascontiguousarray(self.coords[:, :2]) if self.partial_z else self.coords
-        return shapely.from_ragged_array(self.kind.shapely_type, coords, self.offsets)
+        return to_shapely(self.kind, coords, self.offsets)
 
     def geometry_of_coordinate(self, index: int) -> int:
         """Return the index of the geometry that holds coordinate row `index`."""
@@ -425,6 +425,89 @@ class Ragged:
         for level in self.offsets[depth + 1:]:
             g = int(np.searchsorted(level, g, side="right")) - 1
         return g
+
+
+def to_shapely(geometry_type: GeometryKind | shapely.GeometryType | int, coords: np.ndarray,
+               offsets: Sequence[np.ndarray]) -> np.ndarray:
+    """Return the geometries of a ragged array as a Shapely array, empty parts dropped.
+
+    ``shapely.from_ragged_array``, made safe for every layout `Ragged` accepts. Shapely
+    2.2 (GEOS 3.14) mishandles three of them, all valid GeoArrow:
+
+    - a polygon of no rings inside a multipolygon: the process dies (a segfault in GEOS);
+    - a polygon whose exterior ring has no positions but which has holes: the same;
+    - no coordinates at all, in lines or multipoints: an ``IndexError``.
+
+    A polygon with an empty exterior is empty (its holes bound nothing), so its rings are
+    dropped, and a multipolygon's empty polygons with them: the point set is the same.
+    Arrays without such polygons go to Shapely as they are.
+
+    Parameters
+    ----------
+    geometry_type : GeometryKind, shapely.GeometryType or int
+    coords : ndarray of float64, shape (n, 2) or (n, 3)
+    offsets : sequence of ndarray of int
+        Innermost level first, nested as `Ragged` checks them; rings and lines as
+        Shapely takes them (`Ragged` refuses the others: one-position lines, short rings).
+
+    Returns
+    -------
+    ndarray of object
+        One geometry per geometry of the array.
+
+    Examples
+    --------
+    A multipolygon whose first polygon has no rings (offsets innermost first):
+
+    >>> square = np.array([[0, 0], [1, 0], [1, 1], [0, 1], [0, 0]], dtype=float)
+    >>> to_shapely(GeometryKind.MULTIPOLYGON, square,
+    ...            (np.array([0, 5]), np.array([0, 0, 1]), np.array([0, 2])))[0].wkt
+    'MULTIPOLYGON (((0 0, 1 0, 1 1, 0 1, 0 0)))'
+    """
+    kind = GeometryKind.of(shapely.GeometryType(geometry_type)
+                           if isinstance(geometry_type, int) else geometry_type)
+    if kind.dimension == 2:
+        coords, offsets = _without_empty_polygons(kind, coords, tuple(offsets))
+    if coords.shape[0] == 0:
+        count = offsets[-1].shape[0] - 1 if kind.depth else 0
+        return np.full(count, shapely.from_wkt(f"{kind.name} EMPTY"), dtype=object)
+    return shapely.from_ragged_array(kind.shapely_type, coords, tuple(offsets) or None)
+
+
+def _without_empty_polygons(kind: GeometryKind, coords: np.ndarray,
+                            offsets: tuple) -> tuple[np.ndarray, tuple]:
+    """Return polygon arrays without the empty polygons Shapely cannot read (`to_shapely`).
+
+    A polygon whose exterior ring is empty loses its rings (holes included, with their
+    positions); in a MULTIPOLYGON it is then dropped, as is any polygon of no rings. A
+    POLYGON keeps its place as a polygon of no rings (POLYGON EMPTY, which Shapely
+    reads). Empty holes of a non-empty polygon are kept: Shapely reads them.
+    """
+    rings, polygons = offsets[0], offsets[1]
+    ring_sizes = np.diff(rings)
+    ring_counts = np.diff(polygons)
+    has_rings = ring_counts > 0
+    # The exterior is each polygon's first ring: empty when it has no positions.
+    hollow = np.zeros(ring_counts.shape[0], dtype=bool)
+    hollow[has_rings] = ring_sizes[polygons[:-1][has_rings]] == 0
+    if kind is GeometryKind.MULTIPOLYGON:
+        dropped = hollow | ~has_rings
+    else:
+        dropped = hollow & (ring_counts > 1)
+    if not dropped.any():
+        return coords, offsets
+    emptied = dropped & has_rings  # polygons whose rings go
+    keep_ring = ~np.repeat(emptied, ring_counts)
+    coords = np.ascontiguousarray(coords[np.repeat(keep_ring, ring_sizes)])
+    new_rings = exclusive_sum(ring_sizes[keep_ring])
+    new_polygons = exclusive_sum(keep_ring)[polygons]  # an emptied polygon: no rings
+    if kind is GeometryKind.POLYGON:
+        return coords, (new_rings, new_polygons)
+    # Dropping polygon j drops offset j + 1: it has no rings, so its end is its start.
+    kept = ~dropped
+    new_polygons = np.concatenate([new_polygons[:1], new_polygons[1:][kept]])
+    new_geometries = exclusive_sum(kept)[offsets[2]]
+    return coords, (new_rings, new_polygons, new_geometries)
 
 
 def exclusive_sum(counts: npt.ArrayLike) -> np.ndarray:

@@ -1,10 +1,11 @@
 """The ``rnsca`` command line.
 
-Commands: ``clip`` (GeoJSON or SVG documents, GeoJSON text sequences), ``glyphs`` (text
-from a font file, as SVG; needs the ``fonts`` extra), ``segments`` (.npy arrays of
-segments), ``tiles`` (a vector tile pyramid as PMTiles or z/x/y.mvt; needs the ``tiles``
-extra), ``backends``, ``warm-up`` and ``serve`` (the HTTP service; needs the ``service``
-extra).
+Commands: ``clip`` (GeoJSON or SVG documents, GeoJSON text sequences), ``batch``
+(datasets of GeoParquet, FlatGeobuf or text sequences, on Dask; needs the ``dask``
+extra), ``glyphs`` (text from a font file, as SVG; needs the ``fonts`` extra),
+``segments`` (.npy arrays of segments), ``tiles`` (a vector tile pyramid as PMTiles or
+z/x/y.mvt; needs the ``tiles`` extra), ``backends``, ``warm-up`` and ``serve`` (the HTTP
+service; needs the ``service`` extra).
 Errors print one line, ``error: <what and where>``, on stderr and exit with 2 for a wrong
 command line (options, window, the kind of input) or 1 for input that cannot be clipped
 (not JSON, invalid GeoJSON or SVG, unreadable files).
@@ -12,6 +13,7 @@ command line (options, window, the kind of input) or 1 for input that cannot be 
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 import json
 import re
@@ -325,6 +327,120 @@ def clip(
               f"(allowed {verification.allowed_deviation!r}), false_positives="
               f"{verification.false_positives}, valid={verification.valid}", EXIT_DATA)
 
+
+
+@app.command()
+def batch(
+    source: Annotated[str, typer.Argument(
+        metavar="INPUT", show_default=False,
+        help="GeoParquet file (.parquet), FlatGeobuf (.fgb), GeoJSON text sequence "
+             "(.geojsons, .geojsonl, .ndjson), a folder of them, or a glob (quoted)")],
+    output: Annotated[str, typer.Argument(
+        metavar="OUTPUT", show_default=False,
+        help="folder of the partitioned GeoParquet output (made if missing; a second "
+             "run of the same job into it writes only what is missing)")],
+    # Required: Typer reads the Ellipsis so (a default must follow `output`'s).
+    window: Annotated[str, typer.Option(
+        "--window", "-w", show_default=False,
+        help="xmin,ymin,xmax,ymax, e.g. 0,0,10,10")] = ...,  # type: ignore[assignment]
+    scheduler: Annotated[str | None, typer.Option(
+        show_default=False, help="address of a running Dask scheduler, e.g. "
+        "tcp://host:8786 [default: a local cluster of worker processes]")] = None,
+    workers: Annotated[int | None, typer.Option(
+        show_default=False, help="worker processes of the local cluster [default: one "
+        "per core]")] = None,
+    encoding: Annotated[str, typer.Option(
+        help="geometry encoding: wkb (any mix of types) or geoarrow (one type per "
+             "column; lines and polygons written as multi kinds)")] = "wkb",
+    rows_per_partition: Annotated[int, typer.Option(
+        help="rows per partition: Parquet row groups are joined up to this many, "
+             "FlatGeobuf features cut into ranges of it")] = 500_000,
+    bytes_per_partition: Annotated[int, typer.Option(
+        help="bytes per partition of a GeoJSON text sequence")] = 128 * 2**20,
+    keep_empty: Annotated[bool, typer.Option(
+        help="keep rows clipped to nothing (with an empty geometry) instead of dropping "
+             "them")] = False,
+    method: Annotated[str, typer.Option(help="rnsca, cohen_sutherland, liang_barsky, "
+                                             "nicholl_lee_nicholl or midpoint")] = "rnsca",
+    n: Annotated[str, typer.Option(help="pieces (runs) per split, 2..64 or auto")] = "auto",
+    max_depth: Annotated[int | None, typer.Option(help="0..32")] = None,
+    tolerance: Annotated[float | None, typer.Option(help="leaf length")] = None,
+    resolution: Annotated[str | None, typer.Option(help=_RESOLUTION_HELP)] = None,
+    mode: Annotated[str, typer.Option(help="exact or approx (lines and points only)")] = "exact",
+    backend: Annotated[str, typer.Option(help="numba or opencl")] = "numba",
+    boundary: Annotated[str, typer.Option(
+        help="closed keeps parts on the window's edge (as shapely.intersection); interior "
+             "drops them (as shapely.clip_by_rect)")] = "closed",
+    progress: Annotated[bool | None, typer.Option(
+        "--progress/--no-progress", show_default=False,
+        help="show a progress bar on stderr [default: when stderr is a terminal]")] = None,
+    stats: Annotated[Path | None, typer.Option(
+        "--stats", show_default=False,
+        help="write the report JSON to this file instead of stderr")] = None,
+) -> None:
+    """Clip a dataset to a window on Dask, into partitioned GeoParquet.
+
+    Each partition of the input (Parquet row groups, FlatGeobuf feature ranges, byte
+    ranges of a text sequence) is read, clipped and written by one task, as one
+    GeoParquet 1.1 file of OUTPUT (with a bbox covering column), named after the
+    partition so the files sort in input order. Rows keep their columns; rows clipped to
+    nothing are dropped (unless --keep-empty). Each file is written under a temporary
+    name, then renamed: a run stopped half-way leaves complete files only, and the same
+    command run again writes only the partitions missing.
+
+    Runs on a local cluster of worker processes (one per core) or, with --scheduler, on
+    a running Dask cluster whose workers see INPUT and OUTPUT at the same paths. Prints
+    the dashboard's address and a progress bar on stderr, then the report (JSON). A
+    partition that cannot be read or clipped is reported by file (and row) after the
+    others are written; the exit status is then 1.
+    """
+    bounds = _window_bounds(window)
+    options: dict[str, Any] = dict(
+        boundary=boundary, method=method, n=int(n) if n.isdigit() else n, max_depth=max_depth,
+        tolerance=tolerance, mode=mode, backend=backend)
+    try:
+        from rnsca import batch as jobs
+    except ImportError as exc:
+        _fail(f"rnsca batch needs the dask extra: pip install 'rnsca[dask]' ({exc})",
+              EXIT_USAGE)
+    with _reporting(EXIT_USAGE):
+        if resolution is not None:
+            options["resolution"] = _resolution(resolution)
+        _check_options(bounds, options)
+        options = {k: v for k, v in options.items() if v is not None}
+        job = jobs.Job(output=str(Path(output).absolute()), window=bounds, options=options,
+                       keep_empty=keep_empty, encoding=jobs.Encoding(encoding.lower()))
+        partitions = jobs.plan(jobs.find_inputs(source), rows_per_partition=rows_per_partition,
+                               bytes_per_partition=bytes_per_partition)
+        # Refuses another job's output, and finds what is left, before a cluster starts.
+        todo = jobs.pending(job, partitions)
+    if not todo:
+        _write_report(jobs.BatchReport(len(partitions), skipped=len(partitions)).to_dict(),
+                      stats)
+        return
+    from distributed import Client
+
+    with _reporting(EXIT_DATA):
+        cluster = None if scheduler else jobs.local_cluster(workers)
+        client = Client(scheduler) if scheduler else Client(cluster)
+    if cluster is not None:
+        job = dataclasses.replace(job, threads=jobs.threads_per_task(len(cluster.workers)))
+    typer.echo(f"dashboard: {client.dashboard_link}", err=True)
+    bar = _PartitionBar(progress, len(todo))
+    try:
+        with _reporting(EXIT_DATA):
+            report = jobs.run(job, partitions, client, on_done=bar.done)
+    finally:
+        bar.close()
+        if cluster is not None:  # first: its workers stop before the client's link goes
+            cluster.close()
+        client.close()
+    with _reporting(EXIT_DATA):
+        _write_report(report.to_dict(), stats)
+    for _, message in report.failed:
+        typer.echo(f"error: {' '.join(message.split())}", err=True)
+    if report.failed:
+        raise typer.Exit(EXIT_DATA)
 
 @app.command()
 def glyphs(
@@ -790,6 +906,49 @@ class _ProgressBar:
         description, total = self._phase
         self._task = self._progress.add_task(description, total=total)
 
+
+
+class _PartitionBar:
+    """A progress bar of a batch job's partitions on stderr (rich), transient.
+
+    `enabled` None shows it when stderr is a terminal.
+    """
+
+    def __init__(self, enabled: bool | None, total: int) -> None:
+        self._progress: Progress | None = None
+        if enabled is False or (enabled is None and not sys.stderr.isatty()):
+            return
+        from rich.console import Console
+        from rich.progress import (
+            BarColumn,
+            MofNCompleteColumn,
+            Progress,
+            TextColumn,
+            TimeElapsedColumn,
+            TimeRemainingColumn,
+        )
+
+        self._progress = Progress(
+            TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
+            TextColumn("partitions, {task.fields[rows]:,} rows"), TimeElapsedColumn(),
+            TimeRemainingColumn(), console=Console(stderr=True), transient=True)
+        self._progress.start()
+        self._task = self._progress.add_task("clipping", total=total, rows=0)
+        self._rows = 0
+
+    def done(self, partition: Any, report: Any, error: str | None) -> None:
+        """Count one partition finished (its report, or its error)."""
+        if self._progress is None:
+            return
+        if report is not None:
+            self._rows += report.rows_in
+        self._progress.update(self._task, advance=1, rows=self._rows)
+
+    def close(self) -> None:
+        """Remove the bar."""
+        if self._progress is not None:
+            self._progress.stop()
+            self._progress = None
 
 if __name__ == "__main__":  # pragma: no cover
     app()

@@ -17,6 +17,7 @@ from rnsca.errors import (
     InvalidWindowError,
     UnsupportedGeometryError,
 )
+from rnsca.kernels.validate import all_finite
 from rnsca.many_windows import as_windows
 from rnsca.options import Backend, Method, Mode, SegmentOptions
 from rnsca.ragged import clip_ragged, resolve_geometry_options
@@ -187,6 +188,7 @@ def clip_segments(segments: npt.ArrayLike, window: Window | Iterable[float] | No
         table = as_windows(windows)
         smallest = int(np.argmin((table[:, 2] - table[:, 0]) * (table[:, 3] - table[:, 1])))
         window = Window(*table[smallest].tolist())
+    assert window is not None
     window = Window.of(window)
     options = SegmentOptions.resolve(window, method=method, n=n, max_depth=max_depth,
                                      tolerance=tolerance, mode=mode, resolution=resolution)
@@ -200,7 +202,7 @@ def clip_segments(segments: npt.ArrayLike, window: Window | Iterable[float] | No
             raise InvalidGeometryError(
                 "segments in a pyopencl array are on an OpenCL device: clip them with "
                 "backend='opencl', or bring them to the host (.get())")
-        array = segments
+        array: Any = segments
     else:
         array = as_segments(segments, check_values=False)
     if table is not None:
@@ -217,6 +219,27 @@ def clip_segments(segments: npt.ArrayLike, window: Window | Iterable[float] | No
     return SegmentClipResult(out.pieces, out.source, out.t, out.stats, options.method,
                              options.mode, engine.kind, options, out.window,
                              out.window_offsets)
+
+
+def _check_decided_finite(geometries: np.ndarray, rows: np.ndarray, include_z: bool) -> None:
+    """Raise `InvalidGeometryError` for a geometry decided by its box that is not finite.
+
+    GEOS leaves NaN coordinates out of a geometry's bounds, so a line with a NaN vertex
+    can have finite bounds inside (or beyond) the window and never reach the ragged
+    arrays' check: its coordinates are checked here.
+    """
+    import shapely
+
+    if rows.shape[0] == 0:
+        return
+    decided = geometries[rows]
+    coords = shapely.get_coordinates(decided, include_z=include_z)
+    if all_finite(np.ascontiguousarray(coords)):
+        return
+    bad = int(np.argmax(~np.isfinite(coords).all(axis=1)))
+    ends = np.cumsum(shapely.get_num_coordinates(decided))
+    row = int(rows[int(np.searchsorted(ends, bad, side="right"))])
+    raise geometry_error(row, f" has a non-finite coordinate ({coords[bad].tolist()})")
 
 
 def _rows(segments: Any) -> int:
@@ -450,6 +473,7 @@ def _clip_geometries(geometries: np.ndarray,
                             | (box[:, 3] < win[:, 1]) | (box[:, 1] > win[:, 3]))
         inside = finite & ((box[:, 0] > win[:, 0]) & (box[:, 2] < win[:, 2])
                            & (box[:, 1] > win[:, 1]) & (box[:, 3] < win[:, 3]))
+        _check_decided_finite(geometries, rows[outside | inside], include_z)
         out[rows[outside]] = empty_geometry
         kept = geometries[rows[inside]]
         if "POLYGON" in input_name:

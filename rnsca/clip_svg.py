@@ -13,8 +13,8 @@ from dataclasses import dataclass
 from typing import Any, SupportsIndex
 
 from rnsca.arrays import PathArrays
+from rnsca.backends.auto import backend_for
 from rnsca.backends.base import Operation, Polylines
-from rnsca.backends.registry import get_backend
 from rnsca.errors import InvalidOptionError
 from rnsca.io.svgpath import parse_paths, write_paths
 from rnsca.options import (
@@ -120,7 +120,7 @@ def clip_paths(paths: PathArrays, window: Window | Iterable[float], *,
     options = PathOptions.resolve(window, curves=curves, fill=fill, tolerance=tolerance,
                                   method=method, n=n, max_depth=max_depth, mode=mode,
                                   resolution=resolution)
-    engine = get_backend(backend)
+    engine = backend_for(backend, "paths", paths.degree.shape[0])
     engine.capabilities.require(Operation.PATHS, options.mode)
     out = engine.clip_paths(paths, window, options)
     m = out.paths.degree.shape[0]
@@ -197,7 +197,9 @@ def flatten_paths(paths: PathArrays, tolerance: float, *, close: bool = False,
     close : bool
         Close every subpath (fill): the polyline returns to the subpath's start;
         otherwise only subpaths marked closed do.
-    backend : {"numba", "opencl"}
+    backend : {"numba", "opencl", "auto"}
+        ``"auto"`` is Numba for curves (the device does a small share of their work;
+        `rnsca.backends.auto`).
         Where the segments' points are computed; "opencl" gives the same points: the
         same counts, the coordinates to rounding (a float32 device: exactly, the host
         computes them in float64).
@@ -219,6 +221,6 @@ def flatten_paths(paths: PathArrays, tolerance: float, *, close: bool = False,
     if not (tolerance > 0 and math.isfinite(tolerance)):
         raise InvalidOptionError(f"tolerance must be a positive finite number, got "
                                  f"{tolerance!r}")
-    engine = get_backend(backend)
+    engine = backend_for(backend, "flatten", paths.degree.shape[0])
     engine.capabilities.require(Operation.FLATTEN)
     return engine.flatten_paths(paths, float(tolerance), bool(close))

@@ -16,8 +16,8 @@ from typing import Any
 import numpy as np
 
 from rnsca.arrays import PathArrays
+from rnsca.backends.auto import backend_for
 from rnsca.backends.base import Operation
-from rnsca.backends.registry import get_backend
 from rnsca.clip_svg import clip_paths
 from rnsca.errors import InvalidOptionError
 from rnsca.io.svgdoc import (
@@ -188,7 +188,7 @@ def clip_svg_document(document: str | bytes, window: Window | Iterable[float], *
     backend = curve_options.pop("backend")
     checked = PathOptions.resolve(window, curves=curves, fill=None, tolerance=tolerance,
                                   **curve_options)
-    get_backend(backend).capabilities.require(Operation.PATHS, checked.mode)
+    backend_for(backend, "paths", 0).capabilities.require(Operation.PATHS, checked.mode)
     curve_options["backend"] = backend
     write_paths(PathArrays.empty(), precision=precision)  # checks `precision`
     doc = read_document(document)

@@ -17,7 +17,7 @@ import numpy as np
 import numpy.typing as npt
 import shapely
 
-from rnsca.arrays import GeometryKind, Ragged, exclusive_sum
+from rnsca.arrays import GeometryKind, Ragged, exclusive_sum, to_shapely
 from rnsca.backends.auto import backend_for
 from rnsca.backends.base import ClipBackend, GeometryPieces, Operation
 from rnsca.errors import InvalidOptionError, InvalidWindowError
@@ -27,7 +27,7 @@ from rnsca.options import Backend, Boundary, Method, Mode, SegmentOptions
 from rnsca.stats import ClipStats, DeviceStats
 from rnsca.window import Window, WindowTable
 
-__all__ = ["RaggedClipResult", "clip_ragged", "resolve_geometry_options", "to_shapely"]
+__all__ = ["RaggedClipResult", "clip_ragged", "resolve_geometry_options"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -73,19 +73,6 @@ class RaggedClipResult:
     def to_shapely(self) -> np.ndarray:
         """Return the output geometries as a Shapely array."""
         return to_shapely(self.geometry_type, self.coords, self.offsets)
-
-
-def to_shapely(geometry_type: shapely.GeometryType | int, coords: np.ndarray,
-               offsets: Sequence[np.ndarray]) -> np.ndarray:
-    """Return ``shapely.from_ragged_array(...)``, also when there are no coordinates.
-
-    (Shapely 2.2 fails on line arrays whose geometries are all empty.)
-    """
-    if coords.shape[0] == 0:
-        count = offsets[-1].shape[0] - 1 if offsets else 0
-        empty = shapely.from_wkt(f"{shapely.GeometryType(geometry_type).name} EMPTY")
-        return np.full(count, empty, dtype=object)
-    return shapely.from_ragged_array(geometry_type, coords, offsets)
 
 
 def _with_z(xy: np.ndarray, z: np.ndarray, has_z: bool) -> np.ndarray:

@@ -97,7 +97,8 @@ class Settings(BaseSettings):
     cors_origins: Annotated[list[str], NoDecode] = []
     """Origins allowed by CORS, comma-separated (``*`` for any); empty: no CORS headers."""
     gzip_min_bytes: PositiveInt = 1024
-    """Responses at least this large are gzip-compressed when the client accepts it."""
+    """Responses at least this large are gzip-compressed when the client accepts it, except
+    binary ones (Arrow IPC streams, binary segments: `service.main.UNCOMPRESSED_MEDIA_TYPES`)."""
     log_level: LogLevel = "info"
     """Level of the JSON log lines (one per request at ``info``)."""
     warm_up: bool = True

@@ -90,6 +90,8 @@ def backend_report() -> list[dict]:
     present = {kind.value for kind in available_backends()}
     report = []
     for name in BackendName:
+        if name is BackendName.AUTO:  # a choice between the others, not a backend
+            continue
         entry = {"name": name.value, "available": name.value in present}
         if name.value in present:
             # What it runs: the same capability query the library checks each call with.

@@ -14,13 +14,14 @@ from fastapi import FastAPI
 from fastapi.openapi.utils import get_openapi
 from starlette.middleware import Middleware
 from starlette.middleware.cors import CORSMiddleware
-from starlette.middleware.gzip import GZipMiddleware
+from starlette.middleware.gzip import DEFAULT_EXCLUDED_CONTENT_TYPES, GZipMiddleware
 
 import rnsca
 from rnsca.backends.registry import configure_opencl
 from rnsca.runtime import configure_process
 from service.admission import AdmissionMiddleware, MemoryBudget
 from service.config import Settings
+from service.convert import ARROW_STREAM
 from service.errors import install_handlers
 from service.logs import configure_logging
 from service.metrics import Metrics
@@ -30,7 +31,14 @@ from service.runner import ClipRunner
 from service.schemas import REQUEST_MODELS
 from service.warmup import ENDPOINT_STEPS, steps_for
 
-__all__ = ["create_app"]
+__all__ = ["create_app", "UNCOMPRESSED_MEDIA_TYPES"]
+
+#: Answers sent as they are even to a client that accepts gzip: Starlette's defaults
+#: (images, archives, event streams) and the binary answers, Arrow IPC streams and
+#: binary segments. Their float64 coordinates barely compress: gzip saved ~12% of the
+#: bytes of 200k binary segments and took 1.7 s against 24 ms unencoded.
+UNCOMPRESSED_MEDIA_TYPES = (*DEFAULT_EXCLUDED_CONTENT_TYPES, ARROW_STREAM,
+                            "application/octet-stream")
 
 _DESCRIPTION = """\
 Clip geometry against an axis-aligned window with the Recursive N-Subdivision Clipping
@@ -80,7 +88,8 @@ def create_app(settings: Settings | None = None) -> FastAPI:
             await asyncio.get_running_loop().run_in_executor(None, runner.shutdown)
 
     middleware = [Middleware(AccessMiddleware, metrics=metrics),
-                  Middleware(GZipMiddleware, minimum_size=settings.gzip_min_bytes)]
+                  Middleware(GZipMiddleware, minimum_size=settings.gzip_min_bytes,
+                             exclude_content_types=UNCOMPRESSED_MEDIA_TYPES)]
     if settings.cors_origins:
         middleware.append(Middleware(
             CORSMiddleware, allow_origins=settings.cors_origins,

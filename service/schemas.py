@@ -48,10 +48,16 @@ WindowBounds = Annotated[
 
 
 class BackendName(str, Enum):
-    """Backends the API names (DESIGN.md); `/v1/capabilities` lists those present here."""
+    """Backends the API names (DESIGN.md); `/v1/capabilities` lists those present here.
+
+    ``auto`` is not a backend but the measured choice between them (the library's
+    ``backend="auto"``): OpenCL for a call at or above its crossover size on this
+    machine, else Numba.
+    """
 
     NUMBA = "numba"
     OPENCL = "opencl"
+    AUTO = "auto"
 
 
 class ClipOptions(BaseModel):
@@ -79,7 +85,9 @@ class ClipOptions(BaseModel):
                                                "`approx`: dropped (no intersections).")
     backend: BackendName | None = Field(
         None, description="Where it runs (default: the server's `default_backend`); one "
-                          "not present here gives 422 with the reason.")
+                          "not present here gives 422 with the reason. `auto`: OpenCL "
+                          "where it measured faster here for this operation and size, "
+                          "else Numba.")
 
 
 class GeometryOptions(ClipOptions):

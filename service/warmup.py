@@ -158,6 +158,10 @@ def _tiles() -> None:
 
 def _opencl() -> None:
     get_backend(Backend.OPENCL).warm_up()
+    # backend="auto": the calibration here, not in the first request that asks for it.
+    from rnsca.backends.auto import calibration
+
+    calibration()
 
 
 #: Every step, in the order they are done: segments first (the cheapest, so the first

@@ -138,3 +138,24 @@ def _polygon(rings) -> shapely.Polygon:
         return shapely.Polygon()
     shell, *holes = ([_xyz(p) for p in ring] for ring in rings)
     return shapely.Polygon(shell, holes)
+
+
+def raw_native(kind: str, coords, *offsets) -> bytes:
+    """Return a stream of an ``id`` column and an interleaved native column of `kind`.
+
+    Built from raw offsets, outermost first, so that it may hold what Shapely cannot
+    write (`encode` goes through Shapely): polygons of no rings, empty exteriors.
+    """
+    names = LEVELS[kind]
+    xy = pa.list_(pa.field("xy", pa.float64(), nullable=False), 2)
+    storage = pa.FixedSizeListArray.from_arrays(
+        pa.array(np.asarray(coords, dtype=float).reshape(-1)), type=xy)
+    for name, level in zip(reversed(names), reversed(offsets), strict=True):
+        storage = pa.ListArray.from_arrays(
+            pa.array(level, pa.int32()), storage,
+            type=pa.list_(pa.field(name, storage.type, nullable=False)))
+    field = pa.field("geometry", storage.type,
+                     metadata={"ARROW:extension:name": f"geoarrow.{kind}"})
+    rows = len(offsets[0]) - 1
+    return to_stream(pa.Table.from_arrays([pa.array(range(rows)), storage], schema=pa.schema(
+        [pa.field("id", pa.int64()), field])))

@@ -174,16 +174,16 @@ def calibrate(operations: dict[str, tuple[int, ...]] | None = None) -> dict:
     crossover: dict[str, int | None] = {}
     seconds: dict[str, list] = {}
     for operation, sizes in (operations or CALIBRATED).items():
-        rows = []
+        rows: list[list[float]] = []
         for size in sizes:
             numba_s = _best(_calls(operation, size, Backend.NUMBA))
             opencl_s = _best(_calls(operation, size, Backend.OPENCL))
             rows.append([size, numba_s, opencl_s])
         seconds[operation] = rows
-        wins = None
-        for size, numba_s, opencl_s in reversed(rows):
+        wins: int | None = None
+        for measured, numba_s, opencl_s in reversed(rows):
             if opencl_s >= numba_s:
                 break
-            wins = size
+            wins = int(measured)
         crossover[operation] = wins
     return {"crossover": crossover, "seconds": seconds}

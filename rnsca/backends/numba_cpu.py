@@ -187,12 +187,16 @@ class NumbaBackend:
             if start != m:
                 K.move_rows(out, start, m, count)
             m += count
-        rows = out.source[:m]
+        rows = out.source[:m]  # each piece's pair
         window = (np.searchsorted(pairs.window_offsets, rows, side="right") - 1).astype(np.int32)
         window_offsets = np.zeros(windows.shape[0] + 1, dtype=np.int64)
         np.cumsum(np.bincount(window, minlength=windows.shape[0]), out=window_offsets[1:])
-        return SegmentPieces(out.pieces[:m].copy(), pairs.segment[rows] if source else None,
-                             out.t[:m].copy() if t else None,
+        sources = pairs.segment[rows] if source else None
+        pieces, ts = out.pieces, out.t
+        if m < p:  # new arrays no one else holds: realloc shrinks them where they are
+            pieces.resize((m, 4), refcheck=False)
+            ts.resize((m, 2), refcheck=False)
+        return SegmentPieces(pieces, sources, ts if t else None,
                              ClipStats.from_counters(out.counters, p, m), window,
                              window_offsets)
 
@@ -360,12 +364,21 @@ class NumbaBackend:
 
 
 def warm_up_segments(backend: ClipBackend) -> None:
-    """Clip segments on `backend` with every method, through both drivers of the Numba one."""
+    """Clip segments on `backend` with every method, through both drivers of the Numba one.
+
+    Then against many windows: a grid (found by arithmetic) and a set of two (a sweep).
+    """
     window = Window(0.0, 0.0, 1.0, 1.0)
     for n in (1, BLOCK_SIZE * (SERIAL_BLOCKS + 1)):  # the serial and the parallel driver
         segments = np.tile([[-1.0, 0.5, 2.0, 0.5]], (n, 1))
         for method in Method:
             backend.clip_segments(segments, window, SegmentOptions.resolve(window, method=method))
+    segments = np.array([[-1.0, 0.5, 2.0, 0.5], [0.2, 0.2, 0.8, 0.3]])
+    grid = np.array([[0.0, 0.0, 0.5, 1.0], [0.5, 0.0, 1.0, 1.0]])
+    for windows in (grid, grid[[0, 0]] + [[0.0, 0.0, 0.0, 0.5], [0.1, 0.0, 0.0, 0.0]]):
+        for method in (Method.RNSCA, Method.LIANG_BARSKY):
+            backend.clip_segment_windows(segments, windows,
+                                         SegmentOptions.resolve(window, method=method))
 
 
 def warm_up_paths(backend: ClipBackend) -> None:

@@ -30,7 +30,7 @@ import numpy as np
 import pyarrow as pa
 import shapely
 
-from rnsca.arrays import GeometryKind
+from rnsca.arrays import GeometryKind, to_shapely
 from rnsca.errors import ParseError, UnsupportedGeometryError
 
 __all__ = ["GeoArrowEncoding", "CoordLayout", "GeoArrowColumn", "WKB_COLUMN_NAME",
@@ -116,6 +116,10 @@ class GeoArrowColumn:
     single : ndarray of bool or None
         WKB and WKT: whether each geometry was a single kind (POINT, LINESTRING,
         POLYGON), so that a clip left in one part is written as that kind again.
+    with_z : ndarray of bool or None
+        WKB and WKT: whether each geometry has Z. WKB and WKT carry the dimension of
+        each value, so each is written back in its own (a 2D one beside 3D ones stays
+        2D); a native column has one dimension for all its rows.
     large_offsets : bool
         Native: the lists are ``large_list`` (int64 offsets), and are written so again.
     """
@@ -131,6 +135,7 @@ class GeoArrowColumn:
     coord_layout: CoordLayout | None = None
     partial_z: bool = False
     single: np.ndarray | None = None
+    with_z: np.ndarray | None = None
     large_offsets: bool = False
 
     @property
@@ -376,8 +381,15 @@ def _read_serialized(column: pa.Array, field: pa.Field,
         row = next(i for i, v in enumerate(values) if not _parses(parse, v))
         raise ParseError(f"column {field.name!r}, row {row}: not valid "
                          f"{encoding.value.upper()}") from None
-    present = ~null & ~shapely.is_empty(geometries)
-    rows = np.flatnonzero(present).astype(np.int64)
+    geometries = _without_empty_points(geometries)
+    empty = shapely.is_empty(geometries)
+    rows = np.flatnonzero(~null & ~empty).astype(np.int64)
+    if rows.shape[0] == 0:
+        # Every row null or empty (or no rows): nothing to clip, whatever the kind.
+        kind = _kind_of_empties(geometries[~null])
+        nothing = tuple(np.zeros(1, dtype=np.int64) for _ in range(kind.depth))
+        return GeoArrowColumn(kind, np.empty((0, 2)), nothing, rows, len(column), null,
+                              field, encoding, single=np.empty(0, dtype=bool))
     geometries = geometries[rows]
     has_z = shapely.has_z(geometries)
     try:
@@ -390,11 +402,55 @@ def _read_serialized(column: pa.Array, field: pa.Field,
             f"column {field.name!r}: the geometries must be of one kind (points, lines or "
             f"polygons, single or multi), found {', '.join(types)} ({exc})") from None
     single = np.isin(shapely.get_type_id(geometries), [0, 1, 3])
-    # Shapely widens a mix of single and multi kinds to multi; an empty column is points.
+    # Shapely widens a mix of single and multi kinds to multi.
     kind = GeometryKind.of(shapely.GeometryType(kind_id))
+    partial_z = bool(has_z.any() and not has_z.all())
     return GeoArrowColumn(kind, coords, tuple(offsets), rows, len(column), null, field,
-                          encoding, partial_z=bool(has_z.any() and not has_z.all()),
-                          single=single)
+                          encoding, partial_z=partial_z, single=single,
+                          with_z=has_z if partial_z else None)
+
+
+#: The kinds of each family, single first, by Shapely type id.
+_FAMILIES = ({0, 4}, {1, 5}, {3, 6})
+
+
+def _kind_of_empties(geometries: np.ndarray) -> GeometryKind:
+    """Return the kind of a column whose values are all empty: points if they are none.
+
+    Empty values of one family are that family's kind (its multi kind beside a multi
+    one, as Shapely widens them); of several families or collections, points: no
+    kind fits them all, and no value has a coordinate to clip.
+    """
+    types = {int(t) for t in np.unique(shapely.get_type_id(geometries))}
+    for family in _FAMILIES:
+        if types and types <= family:
+            return GeometryKind.of(shapely.GeometryType(max(types)))
+    return GeometryKind.POINT
+
+
+def _without_empty_points(geometries: np.ndarray) -> np.ndarray:
+    """Return `geometries` with the empty points of multipoints dropped.
+
+    WKB and WKT allow ``MULTIPOINT (EMPTY, (1 2))``. ``shapely.to_ragged_array`` counts
+    such a point in the offsets but writes no coordinates for it, so the arrays would not
+    agree; an empty point adds nothing to a multipoint, so it goes. (A multipoint's
+    points each have one coordinate unless empty: the counts find them.)
+    """
+    multi = shapely.get_type_id(geometries) == shapely.GeometryType.MULTIPOINT
+    if not multi.any():
+        return geometries
+    holed = multi & (shapely.get_num_coordinates(geometries)
+                     != shapely.get_num_geometries(geometries))
+    if not holed.any():
+        return geometries
+    rows = np.flatnonzero(holed)
+    points, index = shapely.get_parts(geometries[rows], return_index=True)
+    kept = ~shapely.is_empty(points)
+    rebuilt = np.full(rows.shape[0], shapely.from_wkt("MULTIPOINT EMPTY"), dtype=object)
+    shapely.multipoints(points[kept], indices=index[kept], out=rebuilt)
+    geometries = geometries.copy()
+    geometries[rows] = rebuilt
+    return geometries
 
 
 def _parses(parse: Callable[[Any], Any], value: Any) -> bool:
@@ -495,16 +551,18 @@ def _list_array(offsets: np.ndarray, values: pa.Array, child: str, mask: pa.Arra
 def _write_serialized(read: GeoArrowColumn, kind: GeometryKind, coords: np.ndarray,
                       offsets: tuple, source: np.ndarray,
                       rows: np.ndarray) -> tuple[pa.Array, pa.Field]:
-    if coords.shape[0]:
-        geometries = shapely.from_ragged_array(kind.shapely_type, coords, offsets)
-    else:
-        geometries = np.full(len(rows), shapely.from_wkt(f"{kind.name} EMPTY"))
+    geometries = to_shapely(kind, coords, offsets)
     if kind is GeometryKind.POINT:
         geometries[np.isnan(coords[:, :2]).any(axis=1)] = shapely.from_wkt("POINT EMPTY")
     # A single geometry left in one part is written as its own kind again.
     assert read.single is not None  # read from WKB or WKT
     single = read.single[source] & (shapely.get_num_geometries(geometries) == 1)
     geometries[single] = shapely.get_geometry(geometries[single], 0)
+    if read.with_z is not None:
+        # 2D values beside 3D ones: their NaN Z goes (`to_wkb` and `to_wkt` then write
+        # each value in its own dimension, at most `dimension`).
+        flat = ~read.with_z[source]
+        geometries[flat] = shapely.force_2d(geometries[flat])
     values = np.full(read.row_count, None, dtype=object)
     values[~read.null] = shapely.from_wkt(f"{kind.name} EMPTY")  # rows left without one
     values[rows] = geometries

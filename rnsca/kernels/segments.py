@@ -446,9 +446,18 @@ def _clip_block(blk, segments, window, options, block_size, out):
     Its count is `INVALID_BLOCK` if a segment of it is not finite: the check of the
     input, fused into the clip (the classic methods stop at that segment).
     """
-    st = out.counters[blk]
     first = blk * block_size
-    last = min(first + block_size, segments.shape[0])
+    clip_block_rows(blk, segments, first, min(first + block_size, segments.shape[0]),
+                    window, options, out)
+
+
+@scalar
+def clip_block_rows(blk, segments, first, last, window, options, out):
+    """Clip rows ``first:last`` to `window` as block `blk` (its counters, start, count).
+
+    Shared by the one-window driver and the many-window one (`windows.clip_pairs`).
+    """
+    st = out.counters[blk]
     k = out.block_start[blk]
     if options.method == RNSCA:
         k = _rnsca_block(segments, first, last, window, options, st, k, out)

@@ -21,7 +21,7 @@ import numpy.typing as npt
 import shapely
 from shapely.geometry import shape
 
-from rnsca.arrays import PathArrays, Ragged
+from rnsca.arrays import PathArrays, Ragged, to_shapely
 from rnsca.clip import SegmentClipResult, as_segments
 from rnsca.clip_geojson import GeoJSONClipResult
 from rnsca.clip_svg import CURVE_RELATIVE_TOLERANCE, Fill, PathClipResult
@@ -33,7 +33,7 @@ from rnsca.errors import (
 )
 from rnsca.io.svgpath import parse_paths
 from rnsca.options import Boundary, Method, Mode
-from rnsca.ragged import RaggedClipResult, to_shapely
+from rnsca.ragged import RaggedClipResult
 from rnsca.verify.cost import estimated_crossings
 from rnsca.verify.hausdorff import hausdorff
 from rnsca.verify.paths import paths_to_shapely, select_paths

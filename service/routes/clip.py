@@ -256,9 +256,11 @@ async def clip_geoarrow(request: Request, query: Annotated[GeoArrowQuery, Query(
 
     The answer is an Arrow IPC stream of the same columns and encoding: lines and
     polygons come back as multilinestrings and multipolygons (a cut may leave several
-    parts), WKB and WKT values keep a single kind left in one part. Other columns are
-    passed through; rows whose geometry is clipped away (or empty, or null) are dropped
-    unless `keep_empty`. Headers: `X-Rnsca-Rows` (rows out), `X-Rnsca-Stats` and
+    parts), WKB and WKT values keep a single kind left in one part and their own
+    dimension (2D values beside 3D ones stay 2D). Other columns are passed through; rows
+    whose geometry is clipped away (or empty, or null) are dropped unless `keep_empty`,
+    also when every row is null. Empty parts (a polygon of no rings, or whose exterior is
+    empty) are dropped. Headers: `X-Rnsca-Rows` (rows out), `X-Rnsca-Stats` and
     `X-Rnsca-Verification` (JSON; verification by default up to the server's
     `verify_max_vertices`, never in approx mode).
     """

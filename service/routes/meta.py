@@ -27,9 +27,10 @@ async def capabilities(settings: SettingsDep, runner: RunnerDep) -> Response:
         "version": rnsca.__version__,
         "methods": [m.value for m in Method],
         "modes": [m.value for m in Mode],
+        # Per kind of input (many windows is a way to clip one, not a kind of its own).
         "operations": {op.value: {"methods": [m.value for m in op.methods],
                                   "modes": [m.value for m in op.modes]}
-                       for op in Operation if op.methods},
+                       for op in Operation if op.methods and op is not Operation.WINDOWS},
         "backends": convert.backend_report(),
         "threading_layer": runner.threading_layer,
         "serialized": runner.serialized,

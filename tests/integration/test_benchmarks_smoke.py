@@ -5,6 +5,7 @@ every suite (segments, geometry, svg) keeps the structure benchmarks/README.md d
 """
 
 import json
+import os
 import shutil
 import subprocess
 import sys
@@ -359,3 +360,24 @@ def test_soak_verdict_fails_on_steady_memory_growth_and_passes_on_noise():
     verdict = evaluate_soak(noisy, warm_in=5)
     met = {c["key"]: c["met"] for c in verdict["criteria"]}
     assert verdict["passed"] and not met["p99_max_growth"]
+
+
+@pytest.mark.opencl
+def test_the_gpu_benchmark_runs_and_checks_every_result(opencl, tmp_path):
+    """`python -m benchmarks.gpu --small`: every workload on both backends, equal."""
+    run = subprocess.run(
+        [sys.executable, "-m", "benchmarks.gpu", "--small", "--skip-cold-start",
+         "--repeats", "1", "--out", str(tmp_path)], cwd=ROOT, capture_output=True,
+        text=True, timeout=900, env={**os.environ, "OUT": str(tmp_path),
+             "RNSCA_CACHE_DIR": str(tmp_path / "cache")})
+    assert run.returncode == 0, run.stderr[-3000:]
+    report = json.loads((tmp_path / "gpu.json").read_text())
+    rows = {row["workload"]: row for row in report["rows"]}
+    compared = [row for row in rows.values() if row["equal"] is not None]
+    assert len(compared) >= 9 and all(row["equal"] for row in compared)
+    assert any(name.startswith("1024 windows") for name in rows)
+    assert any("device-resident" in name for name in rows)
+    assert set(report["auto_calibration"]["crossover"]) == {"segments", "windows", "lines",
+                                                            "polygons"}
+    for row in compared:
+        assert row["kernel_s"] >= 0 and row["bytes_to_device"] > 0

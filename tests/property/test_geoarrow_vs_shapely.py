@@ -8,7 +8,8 @@ an id and a name column, sent as an Arrow IPC stream to `service.convert.clip_ge
 the answer's schema is the request's (native lines and polygons as their multi kinds),
 the other columns stay with their rows, a null row stays null (``keep_empty``) or is
 dropped, and each geometry matches Shapely's intersection
-(`tests.geometry_checks.assert_matches_shapely`; a dropped row: Shapely's is empty too).
+(`tests.geometry_checks.assert_matches_shapely`; a dropped row: Shapely's is empty too)
+in its dimension: the column's, or for WKB each value's own (2D and 3D values mixed).
 """
 
 from __future__ import annotations
@@ -33,7 +34,7 @@ MULTI = {"linestring": "multilinestring", "polygon": "multipolygon"}
 def _check(case, kind: str, encoding: str, keep_empty: bool) -> None:
     geometries, window = case
     assume(shapely_can_judge(geometries, window, "closed"))
-    z = bool(shapely.has_z(geometries[0]))
+    z = any(bool(shapely.has_z(g)) for g in geometries)  # WKB may mix 2D and 3D
     rows = [*geometries[:1], None, *geometries[1:]]  # a null row among them
     sent = table(rows, kind, encoding, z)
     outcome = clip_geoarrow(to_stream(sent), Window.of(window),
@@ -61,8 +62,10 @@ def _check(case, kind: str, encoding: str, keep_empty: bool) -> None:
             f"row {row}: {ours}")
         if ours is None:
             ours = shapely.GeometryCollection()  # dropped: nothing left of it
-        elif not ours.is_empty and encoding != "wkb":
-            assert shapely.has_z(ours) == z, ours.wkt
+        elif not ours.is_empty:
+            # Native: the column's dimension; WKB: each value's own (2D beside 3D stays 2D).
+            has_z = z if encoding != "wkb" else bool(shapely.has_z(geometry))
+            assert shapely.has_z(ours) == has_z, ours.wkt
         assert_matches_shapely(ours, geometry, window, "closed", where=f"row {row}")
 
 
@@ -74,3 +77,14 @@ def _check(case, kind: str, encoding: str, keep_empty: bool) -> None:
 @given(data=st.data())
 def test_each_kind_and_encoding_equals_shapely(kind, encoding, keep_empty, z, data):
     _check(data.draw(cases(kind, z=z), label="case"), kind, encoding, keep_empty)
+
+
+@pytest.mark.parametrize("kind", ["point", "multipoint", "linestring", "multilinestring",
+                                  "polygon", "multipolygon"])
+@given(data=st.data())
+def test_wkb_mixing_2d_and_3d_keeps_each_values_dimension(kind, data):
+    geometries, window = data.draw(cases(kind, z=True), label="case")
+    flat = data.draw(st.lists(st.booleans(), min_size=len(geometries),
+                              max_size=len(geometries)), label="2d")
+    mixed = [shapely.force_2d(g) if f else g for g, f in zip(geometries, flat, strict=True)]
+    _check((mixed, window), kind, "wkb", keep_empty=True)

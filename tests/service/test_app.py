@@ -277,6 +277,37 @@ def test_a_gzip_bomb_is_413_after_inflating_no_more_than_the_limit():
         assert time.perf_counter() - started < 10  # inflating 2 GiB would take far longer
 
 
+def test_binary_answers_are_not_compressed_and_json_ones_are():
+    """Arrow streams and binary segments go as they are: gzip saved ~12% at ~10x the time."""
+    import pyarrow as pa
+    import shapely
+
+    from tests.geoarrow_tables import ARROW_STREAM, table, to_stream
+
+    gzip_ok = {"Accept-Encoding": "gzip"}
+    segments = np.column_stack([np.full(500, -5.0), np.arange(500.0) % 10,
+                                np.full(500, 15.0), np.arange(500.0) % 10])
+    lines = shapely.linestrings(segments.reshape(-1, 2, 2))
+    window = dict(zip(("xmin", "ymin", "xmax", "ymax"), WINDOW, strict=True))
+    with make_client(warm_up=False, gzip_min_bytes=1024) as client:
+        binary = client.post("/v1/clip/segments", content=segments.astype("<f8").tobytes(),
+                             params={**window, "verify": "false"},
+                             headers={**gzip_ok, "Content-Type": "application/octet-stream"})
+        arrow = client.post("/v1/clip/geoarrow",
+                            content=to_stream(table(list(lines), "linestring", "wkb", False)),
+                            params={**window, "verify": "false"},
+                            headers={**gzip_ok, "Content-Type": ARROW_STREAM})
+        json = client.post("/v1/clip/segments", headers=gzip_ok, json={
+            "window": WINDOW, "segments": segments.tolist(), "verify": False})
+    for r, media in ((binary, "application/octet-stream"), (arrow, ARROW_STREAM)):
+        assert r.status_code == 200, r.text
+        assert r.headers["content-type"] == media and "content-encoding" not in r.headers
+        assert int(r.headers["content-length"]) == len(r.content) > 1024
+    assert pa.ipc.open_stream(arrow.content).read_all().num_rows == 500
+    assert json.status_code == 200 and json.headers["content-encoding"] == "gzip"
+    assert len(json.json()["segments"]) == 500  # httpx inflates it
+
+
 @pytest.mark.parametrize(("body", "encoding", "status"), [
     (b"not gzip at all", "gzip", 422),
     (b"\x1f\x8b\x08\x00\x00\x00\x00\x00\x00\x03", "gzip", 422),  # a header, then nothing

@@ -9,7 +9,15 @@ import pytest
 import shapely
 
 from service.admission import PEAK_BYTES_PER_BODY_BYTE
-from tests.geoarrow_tables import ARROW_STREAM, decode, encode, from_stream, table, to_stream
+from tests.geoarrow_tables import (
+    ARROW_STREAM,
+    decode,
+    encode,
+    from_stream,
+    raw_native,
+    table,
+    to_stream,
+)
 
 WINDOW = {"xmin": 0, "ymin": 0, "xmax": 10, "ymax": 10}
 ZIGZAG = shapely.from_wkt("LINESTRING (-5 1, 5 1, 5 20, 8 20, 8 5, 15 5)")
@@ -231,3 +239,106 @@ def test_mutated_streams_never_fail_as_anything_but_a_problem():
                           GeometryOptions(keep_empty=bool(i % 2)), None, None, settings)
         except (RnscaError, ServiceError):
             pass
+
+
+# --- degenerate parts: valid GeoArrow that Shapely 2.2 crashes on (verification on) ------
+
+SQUARE_XY = [[-5, -5], [5, -5], [5, 5], [-5, 5], [-5, -5]]
+HOLE_XY = [[1, 1], [1, 2], [2, 2], [2, 1], [1, 1]]
+CLIPPED_SQUARE = shapely.box(0, 0, 5, 5)
+
+
+@pytest.mark.parametrize("verify", ["true", "all", "false"])
+def test_a_polygon_of_no_rings_in_a_multipolygon_is_an_empty_part(client, verify):
+    # Row 0: [no rings, the square]; row 1: [no rings] only.
+    body = raw_native("multipolygon", SQUARE_XY, [0, 2, 3], [0, 0, 1, 1], [0, 5])
+    r = post(client, body, verify=verify, keep_empty="true")
+    assert r.status_code == 200, r.text
+    got = from_stream(r.content)
+    first, second = decode(got.column("geometry"), got.schema.field("geometry"))
+    assert shapely.equals(first, CLIPPED_SQUARE) and second.is_empty
+    if verify != "false":
+        assert orjson.loads(r.headers["X-Rnsca-Verification"])["passed"] is True
+
+
+@pytest.mark.parametrize("kind", ["polygon", "multipolygon"])
+def test_a_polygon_whose_exterior_is_empty_clips_to_nothing(client, kind):
+    # Rings: an empty exterior and a hole; then the square (a second row).
+    levels = ([0, 1, 2], [0, 2, 3]) if kind == "multipolygon" else ([0, 2, 3],)
+    body = raw_native(kind, HOLE_XY + SQUARE_XY, *levels, [0, 0, 5, 10])
+    r = post(client, body, check_validity="true")
+    assert r.status_code == 200, r.text
+    got = from_stream(r.content)
+    assert got.column("id").to_pylist() == [1]
+    assert orjson.loads(r.headers["X-Rnsca-Verification"])["passed"] is True
+
+
+def test_lines_of_no_positions_and_multipoints_of_no_points_are_empty(client):
+    line = [[-5, 1], [15, 1]]
+    for kind, levels in (("linestring", ([0, 0, 2],)),
+                         ("multilinestring", ([0, 1, 2], [0, 0, 2])),
+                         ("multipoint", ([0, 0, 2],))):
+        r = post(client, raw_native(kind, line, *levels))
+        assert r.status_code == 200, (kind, r.text)
+        assert from_stream(r.content).column("id").to_pylist() == (
+            [1] if kind != "multipoint" else [])  # the points lie outside the window
+
+
+def test_a_line_of_one_position_is_422_naming_the_row(client):
+    body = raw_native("linestring", [[-5, 1], [15, 1], [3, 3]], [0, 2, 3])
+    problem = assert_problem(post(client, body), 422, "invalid-geometry", "row 1",
+                             "one position")
+    assert problem["path"] == "geometry[1]"
+
+
+def test_wkb_with_empty_parts_is_clipped_without_them(client):
+    wkts = ["MULTIPOLYGON (EMPTY, ((-5 -5, 5 -5, 5 5, -5 5, -5 -5)))",
+            "MULTIPOINT (EMPTY, (1 1), EMPTY)", "MULTIPOINT (EMPTY)"]
+    for wkt, expected in zip(wkts, [CLIPPED_SQUARE, shapely.Point(1, 1), None], strict=True):
+        body = to_stream(table([shapely.from_wkt(wkt)], "wkb", "wkb", False))
+        r = post(client, body, keep_empty="true")
+        assert r.status_code == 200, (wkt, r.text)
+        got = from_stream(r.content)
+        [clipped] = decode(got.column("geometry"), got.schema.field("geometry"))
+        assert clipped.is_empty if expected is None else shapely.equals(clipped, expected)
+
+
+# --- columns without a geometry, and WKB that mixes 2D and 3D ---------------------------
+
+@pytest.mark.parametrize("encoding", ["separated", "interleaved", "wkb"])
+@pytest.mark.parametrize("keep_empty", ["false", "true"])
+def test_an_all_null_column_is_answered_as_nulls_are_in_any_column(client, encoding,
+                                                                   keep_empty):
+    body = to_stream(table([None, None, None], "polygon", encoding, False))
+    r = post(client, body, keep_empty=keep_empty)
+    assert r.status_code == 200, r.text
+    got = from_stream(r.content)
+    # Null rows are dropped, or kept as nulls with keep_empty, as beside present rows.
+    expected = [0, 1, 2] if keep_empty == "true" else []
+    assert got.column("id").to_pylist() == expected and r.headers["X-Rnsca-Rows"] == str(
+        len(expected))
+    assert got.column("geometry").null_count == len(expected)
+
+
+def test_a_wkb_column_of_empty_values_is_answered_with_empties(client):
+    body = to_stream(table([shapely.Polygon(), None], "polygon", "wkb", False))
+    r = post(client, body, keep_empty="true")
+    assert r.status_code == 200, r.text
+    got = from_stream(r.content)
+    empty, null = decode(got.column("geometry"), got.schema.field("geometry"))
+    assert empty.is_empty and null is None
+
+
+def test_wkb_values_keep_their_own_dimension_when_2d_and_3d_are_mixed(client):
+    lines = shapely.from_wkt(["LINESTRING (-5 1, 15 1)", "LINESTRING Z (-5 2 7, 15 2 9)"])
+    body = to_stream(table(list(lines), "linestring", "wkb", True))  # written with Z...
+    t = from_stream(body)
+    wkb = pa.array(list(shapely.to_wkb(lines, output_dimension=3)), pa.binary())  # ...or not
+    body = to_stream(t.set_column(2, t.schema.field("geometry"), wkb))
+    r = post(client, body)
+    assert r.status_code == 200, r.text
+    got = from_stream(r.content)
+    flat, with_z = decode(got.column("geometry"), got.schema.field("geometry"))
+    assert shapely.to_wkt(flat) == "LINESTRING (0 1, 10 1)"
+    assert shapely.to_wkt(with_z) == "LINESTRING Z (0 2 7.5, 10 2 8.5)"
+    assert orjson.loads(r.headers["X-Rnsca-Verification"])["passed"] is True

@@ -102,3 +102,26 @@ def test_svg_paths_run_on_opencl(opencl, default_configuration):
     assert answers["opencl"].status_code == 200, answers["opencl"].text
     assert answers["opencl"].json()["paths"] == answers["numba"].json()["paths"]
     assert answers["opencl"].json()["stats"]["device"]["device"] == opencl.name
+
+
+def test_backend_auto_runs_where_the_calibration_says(opencl, rng, monkeypatch,
+                                                      default_configuration):
+    from rnsca.backends import auto
+
+    with make_client(warm_up=False) as client:
+        name = registry.get_backend("opencl").name
+        monkeypatch.setattr(auto, "_CACHE", {name: {"crossover": {
+            "segments": 100, "windows": None, "lines": None, "polygons": None}}})
+        small = client.post("/v1/clip/segments", json={
+            "window": WINDOW, "segments": [[-5, 5, 15, 5]], "options": {"backend": "auto"}})
+        large = client.post("/v1/clip/segments", json={
+            "window": WINDOW, "segments": rng.uniform(-5, 15, (200, 4)).tolist(),
+            "options": {"backend": "auto"}})
+        geojson = client.post("/v1/clip/geojson", json={
+            "window": WINDOW, "options": {"backend": "auto"},
+            "geojson": {"type": "LineString", "coordinates": [[-5, 5], [15, 5]]}})
+        backends = [b["name"] for b in client.get("/v1/capabilities").json()["backends"]]
+    assert small.status_code == large.status_code == geojson.status_code == 200, small.text
+    assert small.json()["backend"] == "numba" and large.json()["backend"] == "opencl"
+    assert geojson.headers.get("X-Rnsca-Backend", "numba") == "numba"
+    assert "auto" not in backends  # a choice between the backends, not one of them

@@ -532,3 +532,15 @@ def test_clip_takes_a_window_object_and_an_array_of_windows():
 def test_clip_error_message_names_what_is_wrong():
     with pytest.raises(InvalidWindowError, match=re.escape("xmin < xmax")):
         rnsca.clip(shapely.from_wkt("LINESTRING (1 1, 2 2)"), (5, 0, 5, 1))
+
+
+@pytest.mark.parametrize("where", ["inside", "outside"])
+def test_a_nan_vertex_is_an_error_even_where_the_box_decides(where):
+    """GEOS leaves NaN out of bounds: a box inside (or beyond) the window is no excuse."""
+    import shapely
+
+    offset = 0.0 if where == "inside" else 100.0
+    bad = shapely.LineString([(1 + offset, 1), (np.nan, 2), (3 + offset, 3)])
+    good = shapely.LineString([(1, 1), (2, 2)])
+    with pytest.raises(InvalidGeometryError, match=r"geometry 1 has a non-finite coordinate"):
+        rnsca.clip(np.array([good, bad]), (0, 0, 10, 10))

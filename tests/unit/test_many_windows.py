@@ -42,23 +42,23 @@ def _check(result, expected, windows):
                                      np.random.default_rng(1).permutation(_grid(4))],
                          ids=["one", "grid", "uneven grid", "shuffled grid"])
 def test_a_grid_equals_one_call_per_window(backend, method, rng, windows):
-    segs = rng.uniform(-100.0, 1100.0, size=(3000, 4))
+    segs = rng.uniform(-100.0, 1100.0, size=(800, 4))
     got = clip_segments(segs, windows=windows, method=method, backend=backend)
     _check(got, _per_window(segs, windows, method=method), windows)
 
 
 def test_any_windows_equal_one_call_per_window(backend, rng):
-    lo = rng.uniform(0.0, 900.0, size=(40, 2))
-    windows = np.c_[lo, lo + rng.uniform(0.5, 300.0, size=(40, 2))]
+    lo = rng.uniform(0.0, 900.0, size=(25, 2))
+    windows = np.c_[lo, lo + rng.uniform(0.5, 300.0, size=(25, 2))]
     windows[5] = windows[6]  # the same window twice
-    segs = rng.uniform(-100.0, 1100.0, size=(3000, 4))
+    segs = rng.uniform(-100.0, 1100.0, size=(800, 4))
     assert grid_of(windows) is None
     got = clip_segments(segs, windows=windows, backend=backend)
     _check(got, _per_window(segs, windows), windows)
 
 
 def test_approx_mode_and_the_counters(backend, rng):
-    segs = rng.uniform(0.0, 1000.0, size=(2000, 4))
+    segs = rng.uniform(0.0, 1000.0, size=(800, 4))
     windows = _grid(3)
     got = clip_segments(segs, windows=windows, mode="approx", resolution=0.5, backend=backend)
     expected = _per_window(segs, windows, mode="approx", resolution=0.5)

@@ -225,7 +225,8 @@ class _CollectionClip:
         given = self.collection.geometries[rows]
         geometries = single_again(geometries, is_single(given))
         geometries[shapely.is_missing(given)] = None   # sent as empties, kept (keep_empty)
-        # 2D beside 3D goes as WKB, which the server writes all 3D (Z NaN where none was).
+        # 2D beside 3D goes as WKB; servers before 0.1 wrote it all 3D (Z NaN where none
+        # was): each geometry is given back in its own dimension whichever answers.
         flat = shapely.has_z(geometries) & ~shapely.has_z(given)
         if flat.any():
             geometries[flat] = shapely.force_2d(geometries[flat])

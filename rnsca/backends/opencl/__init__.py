@@ -83,6 +83,7 @@ from rnsca.backends.numba_cpu import (
     polyline_layout,
     warm_up_geometry,
     warm_up_paths,
+    warm_up_segments,
 )
 from rnsca.backends.opencl import segments as _segments
 from rnsca.errors import BackendUnavailableError, InvalidGeometryError, InvalidWindowError
@@ -91,6 +92,7 @@ from rnsca.kernels import counters as C
 from rnsca.kernels import polygons as PG
 from rnsca.kernels import polylines as PL
 from rnsca.kernels import records as R
+from rnsca.kernels import windows as WK
 from rnsca.kernels.outcode import BOTTOM, LEFT, RIGHT, TOP
 from rnsca.many_windows import assign
 from rnsca.options import Backend, Curves, Method, Mode, PathOptions, Precision, SegmentOptions
@@ -243,6 +245,8 @@ class _Device:
     # allocation per call.
     allocator: cl.tools.MemoryPool | None = None
     scans: dict = field(default_factory=dict)
+    # An 8-byte buffer for the kernels' unused buffer arguments.
+    nowhere: cl.Buffer | None = None
     lock: threading.Lock = field(default_factory=threading.Lock)
     # Kernel objects hold their arguments and are shared by every backend on this
     # device: one call at a time sets and enqueues them.
@@ -325,7 +329,8 @@ def _device(entry: dict) -> _Device:
             _DEVICES[entry["id"]] = _Device(
                 f"{entry['platform']} / {entry['device']}", context, queues[0],
                 second_queue=queues[1], staging=_segments.Staging(context, queues),
-                allocator=cl.tools.MemoryPool(cl.tools.ImmediateAllocator(queues[0])))
+                allocator=cl.tools.MemoryPool(cl.tools.ImmediateAllocator(queues[0])),
+                nowhere=cl.Buffer(context, cl.mem_flags.READ_WRITE, 8))
         return _DEVICES[entry["id"]]
 
 
@@ -333,17 +338,35 @@ class _Ledger:
     """Transfers and kernel runs of one call, timed by OpenCL event profiling."""
 
     def __init__(self) -> None:
-        self.transfers = 0
         self.bytes_to_device = 0
         self.bytes_from_device = 0
         self.copy_events: list[cl.Event] = []
         self.kernel_events: list[cl.Event] = []
+        # Uploads on the other queue (`staged`), which the first kernels wait for.
+        self.ready: list[cl.Event] = []
+
+    @property
+    def transfers(self) -> int:
+        """Return the number of host-device copies so far."""
+        return len(self.copy_events)
+
+    def staged(self, device: _Device, array: np.ndarray, chunk: int) -> cl_array.Array:
+        """Copy a large `array` to the device through the pinned staging buffers.
+
+        On every core into page-locked memory, then at full bus speed, in pieces that
+        alternate between the device's two queues (`segments.upload_whole`); a small
+        one directly. The kernels that read it wait for ``ready``.
+        """
+        queue = device.queue
+        if array.nbytes < (1 << 20) or device.staging is None:
+            return self.to_device(queue, array)
+        buffer = _segments.upload_whole(self, device.staging, array, chunk, np.float64)
+        return cl_array.Array(queue, array.shape, array.dtype, data=buffer)
 
     def to_device(self, queue: cl.CommandQueue, array: np.ndarray) -> cl_array.Array:
         buffer = cl_array.empty(queue, array.shape, array.dtype)
         if array.nbytes:
             self.copy_events.append(cl.enqueue_copy(queue, _data(buffer), array))
-            self.transfers += 1
             self.bytes_to_device += array.nbytes
         return buffer
 
@@ -352,7 +375,6 @@ class _Ledger:
         if out.nbytes:
             self.copy_events.append(cl.enqueue_copy(queue, out, cast(cl.Buffer, buffer.base_data),
                                                     src_offset=buffer.offset))
-            self.transfers += 1
             self.bytes_from_device += out.nbytes
         return out
 
@@ -443,25 +465,26 @@ class OpenCLBackend:
         """
         real = self.real
         on_device = isinstance(segments, cl_array.Array)
-        if on_device:
+        host_data: np.ndarray | None = None
+        if isinstance(segments, cl_array.Array):
             self._check_device_segments(segments)
-            data = segments
+            n = int(segments.shape[0])
         else:
             with np.errstate(over="ignore"):  # float32: checked below, with the row named
-                data = np.ascontiguousarray(segments, dtype=real)
-        n = int(data.shape[0])
+                host_data = np.ascontiguousarray(segments, dtype=real)
+            n = int(host_data.shape[0])
         bounds: np.ndarray = np.array(window.bounds, dtype=real)
-        if real is np.float32 and not on_device:
-            _check_float32(data, bounds)
+        if real is np.float32 and host_data is not None:
+            _check_float32(host_data, bounds)
         device = self._device
         with device.call_lock:
             run = self._segment_run(bounds if n else None, options, source, t)
-            if on_device:
-                outputs, totals, m = _segments.clip_device(run, device.queue, data, n,
+            if isinstance(segments, cl_array.Array):
+                outputs, totals, m = _segments.clip_device(run, device.queue, segments, n,
                                                            device.allocator)
             else:
                 assert device.staging is not None
-                host, totals, m = _segments.clip_host(run, device.staging, data,
+                host, totals, m = _segments.clip_host(run, device.staging, host_data,
                                                       _segments.CHUNK_SEGMENTS)
             device_stats = self._run_stats(run)
         bad = totals[:, -1].min() if totals.shape[0] else n
@@ -498,8 +521,8 @@ class OpenCLBackend:
         check_segment_values(segments)  # the assignment reads the boxes
         real = self.real
         with np.errstate(over="ignore"):
-            data = np.ascontiguousarray(segments, dtype=real)
-            bounds = np.ascontiguousarray(windows, dtype=real)
+            data: np.ndarray = np.ascontiguousarray(segments, dtype=real)
+            bounds: np.ndarray = np.ascontiguousarray(windows, dtype=real)
         if real is np.float32:
             _check_float32(data, bounds[0])
             _check_float32_lines(data.reshape(-1, 2), bounds)
@@ -545,14 +568,15 @@ class OpenCLBackend:
         device = self._device
         real = self.real
         kernels = device.program(real is np.float64)
-        windows = np.ascontiguousarray(bounds if bounds is not None else [], dtype=real
-                                       ).reshape(-1)
+        windows: np.ndarray = np.ascontiguousarray(
+            bounds if bounds is not None else [], dtype=real).reshape(-1)
+        assert device.allocator is not None
         run = _segments.SegmentRun(
             kernels, device.scan(), real, LOCAL_SIZE,
-            cl.Buffer(device.context, cl.mem_flags.READ_ONLY, max(8, windows.nbytes)),
+            cast(cl.Buffer, device.allocator(max(8, windows.nbytes))),
             METHOD_ID[options.method], options.n, options.max_depth, options.tolerance,
-            int(options.mode is Mode.EXACT), source, t,
-            nowhere=cl.Buffer(device.context, cl.mem_flags.READ_WRITE, 8))
+            int(options.mode is Mode.EXACT), source, t, nowhere=device.nowhere,
+            allocator=device.allocator)
         if windows.size:
             run.ready.append(run.upload(device.queue, run.windows, windows))
         return run
@@ -636,11 +660,54 @@ class OpenCLBackend:
         ring_polygon = np.repeat(np.arange(n_polygons, dtype=np.int64),
                                  np.diff(polygon_offsets))
         ring_window = np.ascontiguousarray(polygon_window[ring_polygon])
-        active = (polygon_class[ring_polygon] == PG.AMBIGUOUS).astype(np.uint8)
-        tables, device_counters, device_stats = self._prune(
-            xy, ring_offsets, ring_window, windows.bounds, options, True, active)
+        active = polygon_class[ring_polygon] == PG.AMBIGUOUS
+        tables, device_counters, device_stats = self._prune_rings(
+            xy, ring_offsets, ring_window, windows.bounds, options, active)
         return _HOST.clip_polygons(polygons, windows, options, device=DevicePolygons(
             polygon_class, PL.Decisions(True, *tables), device_counters, device_stats))
+
+    def _prune_rings(self, xy: np.ndarray, ring_offsets: np.ndarray, ring_window: np.ndarray,
+                     windows: np.ndarray, options: SegmentOptions, active: np.ndarray,
+                     ) -> tuple[tuple[np.ndarray, ...], np.ndarray, DeviceStats]:
+        """Prune the `active` rings on the device: `_prune` of those rings only.
+
+        Only the rings of ambiguous polygons go to the device (their vertices gathered
+        on the host); the tables come back laid out for every ring, the others' chunks
+        rejected, as `_prune` with an `active` mask gives them. The polygons wholly
+        inside or outside the window are most of a large input (1M scattered stars: 84%),
+        and their vertices were most of the call's transfers.
+        """
+        rings = np.flatnonzero(active)
+        sizes = np.diff(ring_offsets)[rings]
+        sub_offsets = np.zeros(rings.shape[0] + 1, dtype=np.int64)
+        np.cumsum(sizes, out=sub_offsets[1:])
+        rows = np.repeat(ring_offsets[rings] - sub_offsets[:-1], sizes) + np.arange(
+            sub_offsets[-1], dtype=np.int64)
+        sub_xy = np.empty((rows.shape[0], 2))
+        WK.gather_rows(np.ascontiguousarray(xy, dtype=np.float64), rows, sub_xy)
+        sub_tables, counters, device_stats = self._prune(
+            sub_xy, sub_offsets, ring_window[rings], windows, options, True, None)
+        _, sub_decision, _, kept, pieces = sub_tables
+        segments = np.maximum(np.diff(ring_offsets), 1) - 1
+        chunks_per_ring = -(-segments // PL.RUN_LEAF_SEGMENTS)
+        chunk_start = exclusive_sum(chunks_per_ring)
+        decision = np.full(int(chunk_start[-1]), PL.CHUNK_REJECTED, dtype=np.uint8)
+        active_chunks = chunks_per_ring[rings]
+        decision[np.repeat(chunk_start[rings] - exclusive_sum(active_chunks)[:-1],
+                           active_chunks) + np.arange(int(active_chunks.sum()))] = sub_decision
+        # Each chunk's first row among the pieces: the segmented chunks' lengths, in order.
+        chunk_ring = np.repeat(np.arange(ring_offsets.shape[0] - 1, dtype=np.int64),
+                               chunks_per_ring)
+        chunk_first = (ring_offsets[chunk_ring]
+                       + (np.arange(decision.shape[0]) - chunk_start[chunk_ring])
+                       * PL.RUN_LEAF_SEGMENTS)
+        chunk_length = np.minimum(chunk_first + PL.RUN_LEAF_SEGMENTS,
+                                  ring_offsets[chunk_ring + 1] - 1) - chunk_first
+        segmented_rows = np.where(decision == PL.CHUNK_SEGMENTED, chunk_length, 0)
+        piece_start = np.zeros(decision.shape[0], dtype=np.int64)
+        np.cumsum(segmented_rows[:-1], out=piece_start[1:])
+        return ((chunk_start[:-1].copy(), decision, piece_start, kept, pieces), counters,
+                device_stats)
 
     def _prune(self, xy: np.ndarray, part_offsets: np.ndarray, part_window: np.ndarray,
                windows: np.ndarray, options: SegmentOptions, drop_edge_runs: bool,
@@ -677,7 +744,7 @@ class OpenCLBackend:
         n_runs = options.n if options.n > 0 else PL.RUN_N_AUTO
         with self._device.call_lock:
             kernels = self._device.program(real is np.float64)
-            d_xy = ledger.to_device(queue, data.reshape(-1))
+            d_xy = ledger.staged(self._device, data.reshape(-1), _segments.CHUNK_SEGMENTS)
             d_offsets = ledger.to_device(queue, np.ascontiguousarray(part_offsets, np.int64))
             d_chunk_start = ledger.to_device(queue, chunk_start)
             d_chunk_part = ledger.to_device(queue, chunk_part)
@@ -693,13 +760,15 @@ class OpenCLBackend:
             if n_chunks:
                 ledger.kernel_events.append(kernels.chunk_boxes(
                     queue, (n_chunks,), None, _data(d_xy), _data(d_offsets),
-                    _data(d_chunk_start), _data(d_chunk_part), np.int64(n_chunks), _data(boxes)))
+                    _data(d_chunk_start), _data(d_chunk_part), np.int64(n_chunks), _data(boxes),
+                    wait_for=ledger.ready))
             ledger.kernel_events.append(kernels.classify_runs(
                 queue, (part_groups * LOCAL_SIZE,), (LOCAL_SIZE,), _data(boxes), _data(d_offsets),
                 _data(d_chunk_start), _data(d_part_window), _data(d_windows),
                 np.int64(n_parts), np.int32(n_runs), np.int32(drop_edge_runs),
                 np.int32(options.method is Method.RNSCA), _data(d_active),
-                np.int32(active is None), _data(decision), _data(segmented), _data(run_counters)))
+                np.int32(active is None), _data(decision), _data(segmented), _data(run_counters),
+                wait_for=ledger.ready))
             total = 0
             position = segmented
             if n_chunks:
@@ -907,10 +976,7 @@ class OpenCLBackend:
         Also compiles (or loads from Numba's cache) the host kernels that assemble lines
         and polygons, and those that clip and flatten curves from the device's decisions.
         """
-        window = Window(0.0, 0.0, 1.0, 1.0)
-        segments = np.array([[-1.0, 0.5, 2.0, 0.5], [0.2, 0.2, 0.8, 0.8]])
-        for method in Method:
-            self.clip_segments(segments, window, SegmentOptions.resolve(window, method=method))
+        warm_up_segments(self)
         warm_up_geometry(self)
         # Curves: every flatten choice of the device, and the host kernel that reads
         # the device's decisions (compiled or loaded here).

@@ -9,15 +9,17 @@ and the host's copies overlap. Per chunk, on the device:
 1. ``clip_segments``: each item's result and a 0/1 keep count, the counters summed per
    work-group (few groups: a grid-stride loop), the first non-finite segment;
 2. an inclusive scan of the counts (the slots of the kept pieces);
-3. ``reduce_counters``: the groups' counter rows to one row;
+3. ``reduce_counters``: the groups' counter rows to one row, with the first non-finite
+   item and the count of kept items;
 4. ``write_pieces``: the kept results to their slots, in the output's dtype and layout
    (``source`` and ``t`` only where asked for).
 
-Only the count and one counter row come back before the pieces. The host copies between
-the caller's arrays and the staging buffers on every core (`rnsca.kernels.copies`).
+Only that row comes back before the pieces (`clip_host` says in which order the chunks'
+steps interleave). The host copies between the caller's arrays and the staging buffers
+on every core (`rnsca.kernels.copies`).
 
 A call on a `pyopencl.array.Array` of segments runs the same kernels in one pass and
-returns device arrays: nothing crosses the bus but the count and the counters.
+returns device arrays: nothing crosses the bus but the window and the row.
 
 An item is a segment and the window, or a (segment, window) pair of a many-window call
 (``pairs``): the kernels read the window of each pair from a table on the device.
@@ -26,7 +28,7 @@ An item is a segment and the window, or a (segment, window) pair of a many-windo
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 import pyopencl as cl
@@ -66,9 +68,10 @@ class _Pinned:
                                 self.nbytes)
         # Kept mapped: its host pointer is the source and target of the transfers
         # (the pattern NVIDIA's OpenCL guide gives for pinned staging).
-        self.view, _ = cl.enqueue_map_buffer(
-            queue, self.buffer, cl.map_flags.READ | cl.map_flags.WRITE, 0, (self.nbytes,),
-            np.uint8, is_blocking=True)
+        mapped = cl.enqueue_map_buffer(
+            queue, self.buffer, cast(cl.map_flags, cl.map_flags.READ | cl.map_flags.WRITE), 0,
+            (self.nbytes,), np.dtype(np.uint8), is_blocking=True)
+        self.view: np.ndarray = mapped[0]
 
     def array(self, offset: int, dtype: Any, count: int) -> np.ndarray:
         """Return `count` items of `dtype` from byte `offset` on, a view."""
@@ -144,6 +147,21 @@ class Staging:
 
 
 @dataclass
+class _Raw:
+    """A buffer as pyopencl's scan takes an array argument, without an `Array` object.
+
+    (An `Array` checks its shape with NumPy on creation: about 40 us each, eight per call,
+    most of a small device-resident call's host time.)
+    """
+
+    base_data: cl.Buffer
+    queue: cl.CommandQueue
+    allocator: Any
+    offset: int = 0
+    events: tuple = ()
+
+
+@dataclass
 class SegmentRun:
     """One clip call's kernels and settings: everything but the data."""
 
@@ -162,6 +180,8 @@ class SegmentRun:
     pair_segment: cl.Buffer | None = None
     pair_window: cl.Buffer | None = None
     nowhere: cl.Buffer | None = None
+    # Where the scan's scratch and the device outputs come from (the device's pool).
+    allocator: Any = None
     # The uploads every clip waits for (the window table), whichever queue it runs on.
     ready: list = field(default_factory=list)
     kernel_events: list = field(default_factory=list)
@@ -189,9 +209,10 @@ class SegmentRun:
             np.int32(self.method), np.int32(self.n_fixed), np.int32(self.max_depth),
             real(self.tolerance), np.int32(self.exact), buffers["result"], buffers["keep"],
             buffers["counters"], buffers["first_bad"], wait_for=wait_for + self.ready)
-        keep = cl_array.Array(queue, n, np.int64, data=buffers["keep"])
-        position = cl_array.Array(queue, n, np.int64, data=buffers["position"])
-        scan = self.scan(keep, position, queue=queue, size=n, wait_for=[clip])
+        keep = _Raw(buffers["keep"], queue, self.allocator)
+        position = _Raw(buffers["position"], queue, self.allocator)
+        scan = self.scan(keep, position, queue=queue, size=n, allocator=self.allocator,
+                         wait_for=[clip])
         reduce = self.kernels.reduce_counters(
             queue, ((_WIDTH + 1) * self.local_size,), (self.local_size,), buffers["counters"],
             buffers["first_bad"], np.int64(groups), buffers["position"], np.int64(n),
@@ -270,14 +291,17 @@ def _out_views(slot: _Slot, m: int) -> dict[str, np.ndarray]:
             "window": slot.pinned_out.array((6 * item + 8) * c, np.int32, m)}
 
 
-def upload_whole(run: SegmentRun, staging: Staging, array: np.ndarray,
-                 chunk: int) -> cl.Buffer:
+def upload_whole(run: Any, staging: Staging, array: np.ndarray, chunk: int,
+                 real: Any = None) -> cl.Buffer:
     """Return a device copy of `array`, streamed through the slots' staging buffers.
+
+    `run` records the copies (``copy_events``, ``bytes_to_device``, ``ready``): a
+    `SegmentRun`, or another call's ledger, which then names the slots' `real`.
 
     The copies of successive pieces alternate between the slots' queues (one piece's
     host copy overlaps the other's transfer); the clips wait for them (``run.ready``).
     """
-    slots = staging.slots_for(run.real, chunk)
+    slots = staging.slots_for(real or run.real, chunk)
     raw = np.ascontiguousarray(array).reshape(-1).view(np.uint8)
     buffer = cl.Buffer(staging.context, cl.mem_flags.READ_ONLY, max(8, raw.nbytes))
     step = slots[0].pinned_in.nbytes
@@ -420,7 +444,7 @@ def clip_device(run: SegmentRun, queue: cl.CommandQueue, segments: cl_array.Arra
     size = max(1, n)
 
     def scratch(nbytes: int) -> cl.Buffer:
-        return cl_array.empty(queue, max(8, nbytes), np.uint8, allocator=allocator).data
+        return allocator(max(8, nbytes))
 
     buffers = {"result": scratch(6 * item * size), "keep": scratch(8 * size),
                "position": scratch(8 * size), "counters": scratch(8 * _WIDTH * MAX_GROUPS),
@@ -429,7 +453,7 @@ def clip_device(run: SegmentRun, queue: cl.CommandQueue, segments: cl_array.Arra
     row[_WIDTH] = n
     m = 0
     if n:
-        reduced = run.clip(queue, segments.data, n, 0, buffers, [])
+        reduced = run.clip(queue, cast(cl.Buffer, segments.data), n, 0, buffers, [])
         run.download(queue, row, buffers["total"], wait_for=[reduced]).wait()
         m = int(row[_WIDTH + 1])
     out_arrays = {

@@ -91,3 +91,9 @@ def test_opencl_by_name_is_never_replaced(monkeypatch):
     monkeypatch.setattr(registry, "_BUILT", {})
     with pytest.raises(BackendUnavailableError, match="no OpenCL here"):
         rnsca.clip_segments([[0.0, 0.0, 1.0, 1.0]], (0, 0, 1, 1), backend="opencl")
+
+
+def test_auto_runs_curves_on_numba(opencl):
+    path = ["M -5 5 C 0 15 10 -5 15 5"]
+    assert rnsca.clip_svg(path, (0, 0, 10, 10), backend="auto")[1].device is None
+    assert rnsca.clip_svg(path, (0, 0, 10, 10), backend="opencl")[1].device is not None

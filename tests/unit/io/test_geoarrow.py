@@ -219,3 +219,68 @@ def test_interleaved_values_must_match_their_dimension_names():
     with pytest.raises(ParseError, match="3 values per vertex named 'xy'"):
         read_geoarrow(pa.array([[1.0, 2.0, 3.0]], storage),
                       _field("g", storage, "geoarrow.point"))
+
+
+def _serialized(values, encoding: str) -> tuple[pa.Array, pa.Field]:
+    """Return a WKB or WKT column of these WKT texts (None: a null row)."""
+    geometries = [None if v is None else shapely.from_wkt(v) for v in values]
+    if encoding == "wkb":
+        data = [None if g is None else shapely.to_wkb(g, output_dimension=3)
+                for g in geometries]
+        return pa.array(data, pa.binary()), _field("g", pa.binary(), "geoarrow.wkb")
+    return pa.array(values, pa.string()), _field("g", pa.string(), "geoarrow.wkt")
+
+
+def _clip_and_write(read, keep_empty: bool = True) -> list:
+    result = clip_ragged(read.kind, read.coords, read.offsets, (0, 0, 10, 10),
+                         keep_empty=keep_empty, partial_z=read.partial_z)
+    array, _ = write_geoarrow(read, result.geometry_type, result.coords, result.offsets,
+                              result.source)
+    parse = shapely.from_wkb if pa.types.is_binary(array.type) else shapely.from_wkt
+    return list(parse(array.to_numpy(zero_copy_only=False)))
+
+
+@pytest.mark.parametrize("encoding", ["wkb", "wkt"])
+@pytest.mark.parametrize("values", [[None, None], [], ["POLYGON EMPTY", None],
+                                    ["POINT EMPTY", "LINESTRING EMPTY"]],
+                         ids=["all null", "no rows", "null and empty", "empties of two kinds"])
+def test_a_column_without_a_present_geometry_reads_as_no_geometries(encoding, values):
+    read = read_geoarrow(*_serialized(values, encoding))
+    assert read.coords.shape == (0, 2) and read.rows.shape == (0,)
+    assert all(level.tolist() == [0] for level in read.offsets)
+    got = _clip_and_write(read)
+    assert [g is None for g in got] == [v is None for v in values]
+    assert all(g is None or g.is_empty for g in got)
+
+
+def test_empty_values_of_one_family_give_the_column_its_kind():
+    read = read_geoarrow(*_serialized(["POLYGON EMPTY", "MULTIPOLYGON EMPTY", None], "wkb"))
+    assert read.kind is GeometryKind.MULTIPOLYGON
+    read = read_geoarrow(*_serialized(["LINESTRING EMPTY"], "wkt"))
+    assert read.kind is GeometryKind.LINESTRING
+
+
+@pytest.mark.parametrize("encoding", ["wkb", "wkt"])
+def test_2d_and_3d_values_are_written_back_each_in_its_own_dimension(encoding):
+    read = read_geoarrow(*_serialized(
+        ["LINESTRING (-5 1, 15 1)", "LINESTRING Z (-5 2 7, 15 2 9)", None,
+         "LINESTRING (-5 3, 5 3, 5 20, 8 20, 8 5, 15 5)"], encoding))
+    assert read.partial_z and read.with_z.tolist() == [False, True, False]
+    got = _clip_and_write(read)
+    assert [None if g is None else shapely.to_wkt(g) for g in got] == [
+        "LINESTRING (0 1, 10 1)", "LINESTRING Z (0 2 7.5, 10 2 8.5)", None,
+        "MULTILINESTRING ((0 3, 5 3, 5 10), (8 10, 8 5, 10 5))"]
+
+
+def test_a_column_of_one_dimension_has_no_per_value_dimensions():
+    read = read_geoarrow(*_serialized(["LINESTRING Z (-5 2 7, 15 2 9)"], "wkb"))
+    assert not read.partial_z and read.with_z is None
+    assert shapely.has_z(_clip_and_write(read)[0])
+
+
+def test_empty_points_of_a_multipoint_are_dropped():
+    read = read_geoarrow(*_serialized(["MULTIPOINT (EMPTY, (1 1), EMPTY, (2 2))",
+                                       "MULTIPOINT (EMPTY)", "MULTIPOINT ((3 3))"], "wkb"))
+    assert read.rows.tolist() == [0, 2]
+    assert read.coords.tolist() == [[1, 1], [2, 2], [3, 3]]
+    assert read.offsets[0].tolist() == [0, 2, 3]

@@ -47,3 +47,14 @@ def test_first_invalid_segment_across_parallel_blocks():
     segments[BLOCK_SIZE + 3, 2] = -np.inf
     segments[-1, 1] = np.nan
     assert first_invalid_segment(segments) == BLOCK_SIZE + 3
+
+
+@pytest.mark.parametrize("where, value", [(0, np.nan), ((1 << 20) - 1, np.inf),
+                                          (3 * (1 << 20) + 7, -np.inf), (-1, np.nan)])
+def test_all_finite_in_parallel_blocks_finds_any_value(where, value):
+    from rnsca.kernels.validate import FINITE_BLOCK, all_finite
+
+    values = np.ones(4 * FINITE_BLOCK + 123)  # past the one-thread size: blocks
+    assert all_finite(values)
+    values[where] = value
+    assert not all_finite(values)

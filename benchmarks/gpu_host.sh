@@ -1,0 +1,21 @@
+#!/usr/bin/env bash
+# The GPU measurements on a lent GPU machine (README, "Development"), from the project
+# root: install the wheels carried in .whl/ (that machine reaches no package index),
+# register NVIDIA's OpenCL driver, run benchmarks/gpu.py (cold start, every workload on
+# Numba and OpenCL, the calibration, profiles), then the OpenCL tests on the GPU.
+# Results: $OUT/bench.log, $OUT/gpu-*.json, $OUT/tests.log.
+set -u
+export PYTHONUNBUFFERED=1
+OUT=${OUT:-/tmp/out}; mkdir -p "$OUT"
+python3 -m pip install -q --no-index --no-deps --no-compile --no-cache-dir --upgrade --target /tmp/site .whl/*.whl || exit 1
+export PYTHONPATH=/tmp/site:$PWD
+mkdir -p /tmp/vendors
+lib=$(ls /usr/local/nvidia/lib64/libnvidia-opencl.so* /usr/lib/x86_64-linux-gnu/libnvidia-opencl.so* 2>/dev/null | head -1)
+[[ -n $lib ]] && echo "$lib" > /tmp/vendors/nvidia.icd
+export OCL_ICD_VENDORS=/tmp/vendors RNSCA_CACHE_DIR=/tmp/rnsca-cache
+nvidia-smi --query-gpu=name,driver_version,memory.total --format=csv,noheader
+echo "cores $(nproc)"
+timeout ${BENCH_TIMEOUT:-380} python3 -m benchmarks.gpu --profile ${BENCH_ARGS:-} 2>&1 | grep -v -i "warn\|_create_built\|prg.build" | tee "$OUT/bench.log"
+cp benchmarks/results/gpu-*.json "$OUT/" 2>/dev/null
+timeout ${TEST_TIMEOUT:-140} python3 -m pytest -q -p no:cacheprovider -o addopts="-ra" \
+  tests/unit/backends tests/unit/test_many_windows.py tests/property/test_geometry_backends_agree.py 2>&1 | tail -12 | tee "$OUT/tests.log"

@@ -7,7 +7,7 @@ SERVE_STAMP := $(VENV)/.installed-service
 HOST ?= 127.0.0.1
 PORT ?= 8000
 
-.PHONY: serve test check bench paper compare soak lint fuzz clean
+.PHONY: serve test check bench paper compare soak lint fuzz clean proto
 
 # The client SDK (clients/python, package rnsca-client) is installed beside rnsca so that
 # `make test` tests it against live servers.
@@ -33,6 +33,12 @@ $(SERVE_STAMP): pyproject.toml clients/python/pyproject.toml
 # The HTTP service on http://$(HOST):$(PORT) (docs at /docs); Ctrl-C stops it gracefully.
 serve: $(SERVE_STAMP)
 	$(VENV)/bin/rnsca serve --host $(HOST) --port $(PORT)
+
+# The MVT message's descriptor set (rnsca/tiles/vector_tile.desc) from its .proto, by
+# protoc (grpcio-tools, the dev extra); rnsca.tiles.vector_tile loads it.
+proto: $(STAMP)
+	$(PY) -m grpc_tools.protoc -I rnsca/tiles --descriptor_set_out=rnsca/tiles/vector_tile.desc \
+	  rnsca/tiles/vector_tile.proto
 
 # Ruff (style, NumPy docstrings, return types of public functions), the layer rules
 # (import-linter: [tool.importlinter] in pyproject.toml) and the type checker (mypy:

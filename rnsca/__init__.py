@@ -4,8 +4,13 @@ The public API lives here; see README.md for a tour.
 """
 
 from rnsca.arrays import GeometryKind, PathArrays, Ragged
-from rnsca.clip import SegmentClipResult, clip, clip_segments
-from rnsca.clip_geojson import GeoJSONClipResult, clip_geojson
+from rnsca.clip import SegmentClipResult, WindowsClipResult, clip, clip_segments
+from rnsca.clip_geojson import (
+    GeoJSONClipResult,
+    GeoJSONWindowsResult,
+    clip_geojson,
+    clip_geojson_windows,
+)
 from rnsca.clip_geojson_seq import RecordsClipResult, SequenceClip, clip_geojson_seq, clip_records
 from rnsca.clip_svg import (
     Curves,
@@ -48,6 +53,7 @@ __all__ = [
     "FillMode",
     "FontError",
     "GeoJSONClipResult",
+    "GeoJSONWindowsResult",
     "GeometryKind",
     "InvalidGeometryError",
     "InvalidOptionError",
@@ -67,8 +73,10 @@ __all__ = [
     "UnsupportedGeometryError",
     "Verification",
     "Window",
+    "WindowsClipResult",
     "clip",
     "clip_geojson",
+    "clip_geojson_windows",
     "clip_geojson_seq",
     "clip_paths",
     "clip_ragged",

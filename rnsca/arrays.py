@@ -21,6 +21,7 @@ import numpy.typing as npt
 import shapely
 
 from rnsca.errors import InvalidGeometryError, UnsupportedGeometryError
+from rnsca.kernels.copies import copy_ranges
 from rnsca.kernels.validate import (
     LAYOUT_MESSAGES,
     all_finite,
@@ -284,6 +285,78 @@ class Ragged:
         if self.kind is GeometryKind.MULTIPOLYGON:
             return self.offsets[1], self.offsets[2]
         raise UnsupportedGeometryError(f"{self.kind.value} has no parts or polygons")
+
+    def vertex_offsets(self) -> np.ndarray:
+        """Return the int64 vertex offsets of the geometries.
+
+        Geometry ``g`` is coordinate rows ``[g]:[g + 1]`` (points: one row each).
+
+        Examples
+        --------
+        >>> import shapely
+        >>> polygons = shapely.box([0, 5], [0, 5], [1, 6], [1, 6])
+        >>> Ragged.from_shapely(polygons).vertex_offsets().tolist()
+        [0, 5, 10]
+        """
+        if self.kind.depth == 0:
+            return np.arange(self.coords.shape[0] + 1, dtype=np.int64)
+        offsets = self.offsets[-1]
+        for level in reversed(self.offsets[:-1]):
+            offsets = level[offsets]
+        return np.ascontiguousarray(offsets, dtype=np.int64)
+
+    def take(self, index: npt.ArrayLike) -> Ragged:
+        """Return the geometries at `index` (int, any order, repeats allowed), as a Ragged.
+
+        Vectorised level by level, outermost first: each level's items of the geometries
+        taken are whole ranges of the level below, gathered without a loop per geometry.
+
+        Examples
+        --------
+        >>> import shapely
+        >>> lines = Ragged.from_shapely([shapely.LineString([(0, 0), (1, 1)]),
+        ...                              shapely.LineString([(5, 5), (6, 6), (7, 5)])])
+        >>> taken = lines.take([1, 1, 0])
+        >>> taken.offsets[0].tolist(), taken.coords[:, 0].tolist()
+        ([0, 3, 6, 8], [5.0, 6.0, 7.0, 5.0, 6.0, 7.0, 0.0, 1.0])
+        """
+        items = np.ascontiguousarray(index, dtype=np.int64)
+        if self.kind.depth == 0:
+            return Ragged(self.kind, np.ascontiguousarray(self.coords[items]), (),
+                          self.partial_z)
+        levels = []
+        for depth, level in enumerate(reversed(self.offsets)):  # outermost first
+            starts = level[items]
+            counts = level[items + 1] - starts
+            taken = exclusive_sum(counts)
+            levels.append(taken)
+            if depth == len(self.offsets) - 1:
+                # The coordinates: whole ranges copied on every core, no index array.
+                coords = np.empty((int(taken[-1]), self.coords.shape[1]))
+                copy_ranges(self.coords, starts, counts, taken, coords)
+                return Ragged(self.kind, coords, tuple(reversed(levels)), self.partial_z)
+            # The items below: ranges starts[j]..starts[j] + counts[j], back to back.
+            items = (np.arange(int(taken[-1]), dtype=np.int64)
+                     + np.repeat(starts - taken[:-1], counts))
+        raise AssertionError("unreachable: a kind with offsets has a coordinate level")
+
+    def concat(self, other: Ragged) -> Ragged:
+        """Return the geometries of `self` then those of `other` (of the same kind).
+
+        Examples
+        --------
+        >>> import shapely
+        >>> a = Ragged.from_shapely([shapely.LineString([(0, 0), (1, 1)])])
+        >>> a.concat(a).offsets[0].tolist()
+        [0, 2, 4]
+        """
+        levels = []
+        shift = self.coords.shape[0]
+        for mine, theirs in zip(self.offsets, other.offsets, strict=True):
+            levels.append(np.concatenate([mine, theirs[1:] + shift]))
+            shift = mine.shape[0] - 1
+        return Ragged(self.kind, np.concatenate([self.coords, other.coords]), tuple(levels),
+                      self.partial_z or other.partial_z)
 
     def to_shapely(self) -> np.ndarray:
         """Return the geometries as a Shapely array.

@@ -3,7 +3,8 @@
 Commands: ``clip`` (GeoJSON or SVG documents, GeoJSON text sequences), ``batch``
 (datasets of GeoParquet, FlatGeobuf or text sequences, on Dask; needs the ``dask``
 extra), ``glyphs`` (text from a font file, as SVG; needs the ``fonts`` extra),
-``segments`` (.npy arrays of segments), ``backends``, ``warm-up`` and ``serve`` (the HTTP
+``segments`` (.npy arrays of segments), ``tiles`` (a vector tile pyramid as PMTiles or
+z/x/y.mvt; needs the ``tiles`` extra), ``backends``, ``warm-up`` and ``serve`` (the HTTP
 service; needs the ``service`` extra).
 Errors print one line, ``error: <what and where>``, on stderr and exit with 2 for a wrong
 command line (options, window, the kind of input) or 1 for input that cannot be clipped
@@ -521,6 +522,95 @@ def _point(text: str, option: str) -> tuple[float, float]:
         raise InvalidOptionError(f"{option} needs two comma-separated numbers x,y, got "
                                  f"{text!r}") from None
     return x, y
+
+
+@app.command()
+def tiles(
+    source: Annotated[Path, typer.Argument(
+        help="GeoJSON, GeoJSON text sequence (.geojsons/.ndjson: a feature per line), "
+             "GeoParquet (.parquet) or FlatGeobuf (.fgb)")],
+    output: Annotated[Path, typer.Option(
+        "--output", "-o", help="a .pmtiles archive, or a directory for z/x/y.mvt")],
+    minzoom: Annotated[int, typer.Option(help="first zoom")] = 0,
+    maxzoom: Annotated[int, typer.Option(help="last zoom (at most 24)")] = 14,
+    layer: Annotated[str | None, typer.Option(
+        help="layer name [default: the input's file name]")] = None,
+    buffer: Annotated[int, typer.Option(help="tile units around each tile")] = 64,
+    extent: Annotated[int, typer.Option(help="tile units per tile side")] = 4096,
+    mode: Annotated[str, typer.Option(help="exact or approx (lines cut within one unit "
+                                           "inside the buffer)")] = "exact",
+    crs: Annotated[str | None, typer.Option(
+        help="EPSG:4326 or EPSG:3857 [default: the input's; GeoJSON is EPSG:4326]")] = None,
+    compression: Annotated[str | None, typer.Option(
+        help="gzip or none [default: gzip for PMTiles, none for a directory]")] = None,
+    validate: Annotated[str, typer.Option(
+        help="polygons checked once rounded, invalid ones snapped: at-risk (those not "
+             "proved valid), all, or none")] = "at-risk",
+    progress: Annotated[bool, typer.Option(help="a progress bar per zoom")] = True,
+    summary_json: Annotated[Path | None, typer.Option(
+        "--summary-json", help="also write the summary as JSON here")] = None,
+) -> None:
+    """Cut features into a vector tile pyramid (MVT 2.1), one clipping pass per zoom.
+
+    Prints a summary: tiles, features, bytes and seconds per zoom.
+    """
+    import time
+
+    try:
+        from rich.console import Console
+        from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+        from rich.table import Table
+
+        from rnsca import tiles as T
+        from rnsca.tiles.sources import read_features
+    except ImportError as exc:
+        _fail(f"rnsca tiles needs the tiles extra: pip install 'rnsca[tiles]' ({exc})",
+              EXIT_USAGE)
+    console = Console(stderr=True)
+    started = time.perf_counter()
+    with _reporting(EXIT_DATA):
+        features = read_features(source)
+        read_seconds = time.perf_counter() - started
+        table = features.table(T.Crs(crs) if crs else None)
+        name = layer or source.stem
+        zooms = T.tile_table(table, minzoom=minzoom, maxzoom=maxzoom, extent=extent,
+                             buffer=buffer, layer=name, mode=mode, validate=validate)
+        pmtiles = output.suffix.lower() == ".pmtiles"
+        with Progress(TextColumn("zoom {task.fields[zoom]:>2}"), BarColumn(),
+                      TextColumn("{task.completed}/{task.total} zooms, {task.fields[tiles]} "
+                                 "tiles"), TimeElapsedColumn(), console=console,
+                      disable=not progress) as bar:
+            task = bar.add_task("tiles", total=maxzoom - minzoom + 1, zoom=minzoom, tiles=0)
+            done = [0]
+
+            def on_zoom(zoom: Any, stored: int) -> None:
+                done[0] += len(zoom)
+                bar.update(task, advance=1, zoom=min(zoom.zoom + 1, maxzoom), tiles=done[0])
+
+            if pmtiles:
+                summary = T.write_pmtiles(output, zooms, layer=name,
+                                          compression=compression or "gzip", on_zoom=on_zoom)
+            else:
+                summary = T.write_directory(output, zooms, compression=compression or "none",
+                                            on_zoom=on_zoom)
+    total = time.perf_counter() - started
+    report = Table(title=f"{source.name} -> {output}")
+    for column in ("zoom", "tiles", "features", "bytes", "seconds"):
+        report.add_column(column, justify="right")
+    for z in summary.zooms:
+        report.add_row(str(z["zoom"]), f"{z['tiles']:,}", f"{z['features']:,}",
+                       f"{z['bytes']:,}", f"{z['seconds']:.3f}")
+    report.add_row("all", f"{summary.tiles:,}",
+                   f"{sum(z['features'] for z in summary.zooms):,}", f"{summary.bytes:,}",
+                   f"{total:.3f}")
+    console.print(report)
+    console.print(f"{table.count:,} features read in {read_seconds:.3f} s")
+    if summary_json is not None:
+        summary_json.write_text(json.dumps({"input": str(source), "output": str(output),
+                                            "features_in": table.count,
+                                            "read_seconds": read_seconds,
+                                            "seconds": total, "zooms": summary.zooms},
+                                           indent=2))
 
 
 def _fail(message: object, code: int) -> NoReturn:

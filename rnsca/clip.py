@@ -24,7 +24,8 @@ from rnsca.ragged import clip_ragged, resolve_geometry_options
 from rnsca.stats import ClipStats
 from rnsca.window import Window, WindowTable
 
-__all__ = ["SegmentClipResult", "clip_segments", "as_segments", "clip", "SEGMENT_OUTPUTS"]
+__all__ = ["SegmentClipResult", "WindowsClipResult", "clip_segments", "as_segments", "clip",
+           "SEGMENT_OUTPUTS"]
 
 #: What `clip_segments` can return (``outputs``).
 SEGMENT_OUTPUTS = ("segments", "source", "t")
@@ -264,8 +265,37 @@ def is_device_array(obj: Any) -> bool:
     return type(obj).__module__.startswith("pyopencl") and hasattr(obj, "queue")
 
 
-def clip(obj: Any, window: Window | Iterable[float] | Iterable[Iterable[float]],
-         **options: Any) -> Any:
+@dataclass(frozen=True, slots=True)
+class WindowsClipResult:
+    """Shapely geometries clipped to many windows (`clip` with ``windows=``).
+
+    Attributes
+    ----------
+    geometries : ndarray of object
+        The non-empty clipped geometries, sorted by window, then source.
+    source : ndarray of int64
+        The input geometry of each.
+    window : ndarray of int64
+        The window of each (its row in ``windows``).
+    window_offsets : ndarray of int64, shape (k + 1,)
+        Window ``w``'s geometries are ``window_offsets[w]:window_offsets[w + 1]``.
+    """
+
+    geometries: np.ndarray
+    source: np.ndarray
+    window: np.ndarray
+    window_offsets: np.ndarray
+
+    def __len__(self) -> int:
+        return self.geometries.shape[0]
+
+    def of_window(self, w: int) -> np.ndarray:
+        """Return window `w`'s geometries."""
+        return self.geometries[self.window_offsets[w]:self.window_offsets[w + 1]]
+
+
+def clip(obj: Any, window: Window | Iterable[float] | Iterable[Iterable[float]] | None = None,
+         *, windows: npt.ArrayLike | None = None, **options: Any) -> Any:
     """Return `obj` clipped to the window, in the form it came in.
 
     Parameters
@@ -280,6 +310,12 @@ def clip(obj: Any, window: Window | Iterable[float] | Iterable[Iterable[float]],
         offsets)`` triple gives a `RaggedClipResult` (see `clip_ragged`).
     window : Window, sequence of 4 floats, or array_like of shape (n, 4)
         One window, or one per geometry of an array or triple.
+    windows : array_like, shape (k, 4), optional
+        Many windows instead of `window`: every geometry against every window its box
+        touches, in one call (see `clip_ragged`). A GeoJSON dict then gives a list of k
+        documents, one per window; a triple a `RaggedClipResult` with ``window`` and
+        ``window_offsets``; Shapely geometries a `WindowsClipResult` (the non-empty
+        clips, sorted by window then source).
     **options
         ``boundary``, ``method``, ``n``, ``max_depth``, ``tolerance``, ``resolution``, ``mode``,
         ``backend`` (see `clip_ragged`); ``keep_empty`` for GeoJSON and triples.
@@ -301,6 +337,11 @@ def clip(obj: Any, window: Window | Iterable[float] | Iterable[Iterable[float]],
     """
     import shapely
 
+    if (window is None) == (windows is None):
+        raise InvalidWindowError("give one of window= and windows=")
+    if windows is not None:
+        return _clip_windows(obj, as_windows(windows), options)
+    assert window is not None
     if isinstance(obj, dict):
         from rnsca.clip_geojson import clip_geojson
 
@@ -321,6 +362,64 @@ def clip(obj: Any, window: Window | Iterable[float] | Iterable[Iterable[float]],
             "clip takes a Shapely geometry, a 1-d array of them, a GeoJSON dict or a "
             f"(geometry_type, coords, offsets) triple, got {type(obj).__name__}")
     return _clip_geometries(array, window, options)
+
+
+def _clip_windows(obj: Any, table: np.ndarray, options: dict[str, Any]) -> Any:
+    """`clip` with many windows: documents per window, a ragged result, or geometries."""
+    import shapely
+
+    if isinstance(obj, dict):
+        from rnsca.clip_geojson import clip_geojson_windows
+
+        return clip_geojson_windows(obj, table, **options).documents
+    if isinstance(obj, tuple) and len(obj) == 3:
+        geometry_type, coords, offsets = obj
+        return clip_ragged(geometry_type, coords, offsets, windows=table, **options)
+    array = np.asarray([obj] if isinstance(obj, shapely.Geometry) else obj, dtype=object)
+    if array.ndim != 1 or not all(g is None or isinstance(g, shapely.Geometry) for g in array):
+        raise UnsupportedGeometryError(
+            "clip takes a Shapely geometry, a 1-d array of them, a GeoJSON dict or a "
+            f"(geometry_type, coords, offsets) triple, got {type(obj).__name__}")
+    # Collections member by member: their members stand for them (source = collection).
+    parts, part_source = shapely.get_parts(array, return_index=True)
+    rings = shapely.get_type_id(parts) == shapely.GeometryType.LINEARRING
+    if rings.any():  # a ring clipped is a line (GEOS gives line strings too)
+        parts[rings] = [shapely.LineString(g.coords) for g in parts[rings]]
+    type_ids, has_z = shapely.get_type_id(parts), shapely.has_z(parts)
+    pieces: list[np.ndarray] = []
+    sources: list[np.ndarray] = []
+    windows_of: list[np.ndarray] = []
+    for type_id, include_z in sorted({(int(t), bool(z)) for t, z in zip(type_ids, has_z,
+                                                                           strict=True)}):
+        rows = np.flatnonzero((type_ids == type_id) & (has_z == include_z)
+                              & ~shapely.is_empty(parts))
+        if rows.shape[0] == 0:
+            continue
+        geometry_type, coords, offsets = shapely.to_ragged_array(parts[rows],
+                                                                 include_z=include_z)
+        result = clip_ragged(geometry_type, coords, offsets, windows=table,
+                             **{k: v for k, v in options.items() if k != "keep_empty"})
+        clipped = result.to_shapely()
+        if _SINGLE_OF_MULTI.get(result.geometry_type.name) == shapely.GeometryType(
+                type_id).name:  # a single-part input cut into one part stays single
+            one = shapely.get_num_geometries(clipped) == 1
+            clipped[one] = shapely.get_geometry(clipped[one], 0)
+        pieces.append(clipped)
+        sources.append(part_source[rows[result.source]])
+        assert result.window is not None
+        windows_of.append(result.window)
+    if not pieces:
+        return WindowsClipResult(np.empty(0, dtype=object), np.empty(0, dtype=np.int64),
+                                 np.empty(0, dtype=np.int64),
+                                 np.zeros(table.shape[0] + 1, dtype=np.int64))
+    geometries = np.concatenate(pieces)
+    source, window = np.concatenate(sources), np.concatenate(windows_of)
+    order = np.lexsort((source, window))
+    counts = np.bincount(window, minlength=table.shape[0])
+    offsets_out = np.zeros(table.shape[0] + 1, dtype=np.int64)
+    np.cumsum(counts, out=offsets_out[1:])
+    return WindowsClipResult(geometries[order], source[order].astype(np.int64),
+                             window[order].astype(np.int64), offsets_out)
 
 
 _SINGLE_OF_MULTI = {"MULTIPOINT": "POINT", "MULTILINESTRING": "LINESTRING",

@@ -9,12 +9,15 @@ from typing import Any
 
 import numpy as np
 
+from rnsca.arrays import exclusive_sum
 from rnsca.io.geojson import from_geojson, write_geojson
+from rnsca.many_windows import as_windows
 from rnsca.ragged import RaggedClipResult, clip_ragged
 from rnsca.stats import ClipStats, DeviceStats
 from rnsca.window import Window
 
-__all__ = ["GeoJSONClipResult", "clip_geojson", "combine_stats"]
+__all__ = ["GeoJSONClipResult", "GeoJSONWindowsResult", "clip_geojson",
+           "clip_geojson_windows", "combine_stats"]
 
 _KINDS = ("points", "lines", "polygons")
 
@@ -159,6 +162,116 @@ def clip_geojson(obj: dict | str | bytes | bytearray | memoryview,
     document, feature_source = write_geojson(layout, **clipped, keep_empty=keep_empty,
                                              arrays=arrays)
     return GeoJSONClipResult(document, combine_stats(stats), feature_source, inputs, outputs)
+
+
+@dataclass(frozen=True, slots=True)
+class GeoJSONWindowsResult:
+    """A GeoJSON document clipped to many windows: one document per window, and the stats.
+
+    Unpacks as ``(documents, stats)``.
+
+    Attributes
+    ----------
+    documents : list of dict
+        Document ``w`` is the input clipped to window ``w``, as `clip_geojson` writes it
+        (a FeatureCollection keeps the features that have something in the window).
+    stats : ClipStats
+        Of the clips of every (geometry, window) pair, added up.
+    feature_source : list of ndarray of int64
+        For each window, the input feature of each output feature (see
+        `GeoJSONClipResult.feature_source`).
+    """
+
+    documents: list
+    stats: ClipStats
+    feature_source: list
+
+    def __iter__(self) -> Iterator[Any]:
+        """Unpack as ``documents, stats``."""
+        return iter((self.documents, self.stats))
+
+
+def clip_geojson_windows(obj: dict | str | bytes | bytearray | memoryview,
+                         windows: Any, *, keep_empty: bool = False,
+                         max_vertices: int | None = None, arrays: bool = False,
+                         **options: Any) -> GeoJSONWindowsResult:
+    """Return a GeoJSON object clipped to each of many windows, and the stats.
+
+    Each kind of geometry the document holds (points, lines, polygons) is clipped once
+    against all the windows (`rnsca.clip_ragged` with ``windows=``); then one document
+    is written per window, as `clip_geojson` writes one.
+
+    Parameters
+    ----------
+    obj : dict or str or bytes
+        A GeoJSON Geometry, Feature or FeatureCollection, or JSON text holding one.
+    windows : array_like, shape (k, 4)
+        ``[xmin, ymin, xmax, ymax]`` rows.
+    keep_empty, max_vertices, arrays, **options
+        As for `clip_geojson`.
+
+    Returns
+    -------
+    GeoJSONWindowsResult
+
+    Raises
+    ------
+    As `clip_geojson`; `InvalidWindowError` for a bad row of `windows`.
+
+    Examples
+    --------
+    >>> line = {"type": "LineString", "coordinates": [[-5, 1], [15, 1]]}
+    >>> docs, stats = clip_geojson_windows(line, [[0, 0, 5, 5], [5, 0, 10, 5], [0, 5, 5, 9]])
+    >>> [d["coordinates"] for d in docs]
+    [[[0.0, 1.0], [5.0, 1.0]], [[5.0, 1.0], [10.0, 1.0]], []]
+    """
+    table = as_windows(windows)
+    k = table.shape[0]
+    layout = from_geojson(obj, max_vertices=max_vertices)
+    outputs: dict[str, RaggedClipResult] = {}
+    for kind in _KINDS:
+        if layout.geometry_count(kind) == 0:
+            continue
+        geometry_type, coords, offsets = getattr(layout, kind)
+        outputs[kind] = clip_ragged(geometry_type, coords, offsets, windows=table,
+                                    partial_z=layout.partial_z, **options)
+    stats = [result.stats for result in outputs.values()]
+    if not stats:
+        geometry_type, coords, offsets = layout.points
+        stats.append(clip_ragged(geometry_type, coords, offsets, windows=table,
+                                 **options).stats)
+    documents, sources = [], []
+    for w in range(k):
+        clipped = {kind: _window_part(result, w, layout.geometry_count(kind))
+                   for kind, result in outputs.items()}
+        document, feature_source = write_geojson(layout, **clipped, keep_empty=keep_empty,
+                                                 arrays=arrays)
+        documents.append(document)
+        sources.append(feature_source)
+    return GeoJSONWindowsResult(documents, combine_stats(stats), sources)
+
+
+def _window_part(result: RaggedClipResult, w: int, count: int) -> tuple:
+    """Return window `w`'s outputs as a triple aligned with the `count` inputs.
+
+    The inputs with no output in the window get an empty geometry: only the outermost
+    offsets change (`result` is of a MULTI kind, as a layout's arrays are).
+    """
+    assert result.window_offsets is not None
+    first, last = int(result.window_offsets[w]), int(result.window_offsets[w + 1])
+    outer = result.offsets[-1]
+    inner_first, inner_last = int(outer[first]), int(outer[last])
+    per_input = np.zeros(count, dtype=np.int64)
+    per_input[result.source[first:last]] = np.diff(outer[first:last + 1])
+    levels = list(result.offsets[:-1])
+    # The inner levels of the window's outputs, from the start of its first one.
+    item_first, item_last = inner_first, inner_last
+    cut = []
+    for level in reversed(levels):
+        cut.append(level[item_first:item_last + 1] - level[item_first])
+        item_first, item_last = int(level[item_first]), int(level[item_last])
+    offsets = (*reversed(cut), exclusive_sum(per_input))
+    return (result.geometry_type, result.coords[item_first:item_last], offsets)
 
 
 def combine_stats(stats: Iterable[ClipStats]) -> ClipStats:

@@ -1,10 +1,13 @@
-"""Many windows at once: the windows' table, and which segments each window gets.
+"""Many windows at once: the windows' table, and which segments or boxes each window gets.
 
 `assign` pairs every segment with every window its bounding box touches, sorted by
 window then segment, without a windows-by-segments loop (`rnsca.kernels.windows`): a
 regular grid of windows is recognised (`grid_of`) and found by arithmetic on the edges;
 any other set by a sweep over the windows sorted by ``xmin``. The backends clip the
-pairs (`ClipBackend.clip_segment_windows`); both use this one assignment.
+pairs (`ClipBackend.clip_segment_windows`); both use this one assignment. Lines and
+polygons are assigned by the bounding boxes of their geometries (`vertex_boxes`,
+`assign_boxes`, the same kernels: a box is its own bounding box) and clipped with one
+window per pair (`rnsca.clip_ragged(..., windows=)`).
 """
 
 from __future__ import annotations
@@ -18,7 +21,7 @@ import numpy.typing as npt
 from rnsca.errors import InvalidWindowError
 from rnsca.kernels import windows as K
 
-__all__ = ["WindowPairs", "as_windows", "assign", "grid_of"]
+__all__ = ["WindowPairs", "as_windows", "assign", "assign_boxes", "grid_of", "vertex_boxes"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -28,7 +31,7 @@ class WindowPairs:
     Attributes
     ----------
     segment : ndarray of int64, shape (p,)
-        The segment of each pair.
+        The segment (or, from `assign_boxes`, the box) of each pair.
     window_offsets : ndarray of int64, shape (k + 1,)
         Window ``w``'s pairs are ``window_offsets[w]:window_offsets[w + 1]``.
     """
@@ -144,3 +147,40 @@ def assign(segments: np.ndarray, windows: np.ndarray) -> WindowPairs:
     pairs = np.empty(int(offsets[-1]), dtype=np.int64)
     K.assign_write(segments, finder, threads, cursor, pairs)
     return WindowPairs(pairs, offsets)
+
+
+def vertex_boxes(xy: np.ndarray, vertex_offsets: np.ndarray) -> np.ndarray:
+    """Return the bounding box of each run of vertices, float64 (n, 4).
+
+    `xy` is float64 (v, 2), finite; run ``g`` is ``xy[vertex_offsets[g]:vertex_offsets[g
+    + 1]]`` (int64 offsets). An empty run's box is NaN: `assign_boxes` pairs it with no
+    window.
+
+    Examples
+    --------
+    >>> xy = np.array([[0.0, 1.0], [4.0, -1.0], [2.0, 2.0]])
+    >>> vertex_boxes(xy, np.array([0, 3, 3])).tolist()
+    [[0.0, -1.0, 4.0, 2.0], [nan, nan, nan, nan]]
+    """
+    boxes = np.empty((vertex_offsets.shape[0] - 1, 4))
+    K.vertex_boxes(np.ascontiguousarray(xy[:, :2]), np.ascontiguousarray(vertex_offsets,
+                                                                         dtype=np.int64), boxes)
+    return boxes
+
+
+def assign_boxes(boxes: np.ndarray, windows: np.ndarray) -> WindowPairs:
+    """Return the pairs of every box with every window it touches (closed), by window.
+
+    `boxes` is float64 (n, 4) ``[xmin, ymin, xmax, ymax]`` rows (NaN rows, empty
+    geometries, touch nothing); `windows` a table from `as_windows`. The same assignment
+    as `assign` (a box is its own bounding box): a grid by arithmetic on its edges, any
+    other set by the sweep. Pairs are sorted by window, then box.
+
+    Examples
+    --------
+    >>> windows = np.array([[0.0, 0.0, 1.0, 1.0], [1.0, 0.0, 2.0, 1.0]])
+    >>> pairs = assign_boxes(np.array([[0.5, 0.2, 1.5, 0.4], [1.2, 0.1, 1.3, 0.2]]), windows)
+    >>> pairs.segment.tolist(), pairs.window_offsets.tolist()
+    ([0, 0, 1], [0, 1, 3])
+    """
+    return assign(np.ascontiguousarray(boxes, dtype=np.float64), windows)

@@ -17,11 +17,12 @@ import numpy as np
 import numpy.typing as npt
 import shapely
 
-from rnsca.arrays import GeometryKind, Ragged, to_shapely
+from rnsca.arrays import GeometryKind, Ragged, exclusive_sum, to_shapely
 from rnsca.backends.auto import backend_for
 from rnsca.backends.base import ClipBackend, GeometryPieces, Operation
-from rnsca.errors import InvalidOptionError
+from rnsca.errors import InvalidOptionError, InvalidWindowError
 from rnsca.kernels import counters as C
+from rnsca.many_windows import as_windows, assign_boxes, vertex_boxes
 from rnsca.options import Backend, Boundary, Method, Mode, SegmentOptions
 from rnsca.stats import ClipStats, DeviceStats
 from rnsca.window import Window, WindowTable
@@ -42,8 +43,16 @@ class RaggedClipResult:
     offsets : tuple of ndarray of int64
         Innermost level first, as ``shapely.from_ragged_array`` takes them.
     source : ndarray of int64
-        Index of the input geometry of each output geometry (increasing).
+        Index of the input geometry of each output geometry (increasing; with
+        ``windows=``, increasing within each window).
     stats : ClipStats
+    window : ndarray of int64, or None
+        With ``windows=``: the window of each output geometry (its row in `windows`); the
+        outputs are sorted by window, then source. None for one window (or one per
+        geometry).
+    window_offsets : ndarray of int64, shape (k + 1,), or None
+        With ``windows=``: window ``w``'s outputs are ``window_offsets[w]:window_offsets[w
+        + 1]``.
     """
 
     geometry_type: shapely.GeometryType
@@ -51,6 +60,8 @@ class RaggedClipResult:
     offsets: tuple
     source: np.ndarray
     stats: ClipStats
+    window: np.ndarray | None = None
+    window_offsets: np.ndarray | None = None
 
     def __len__(self) -> int:
         return self.source.shape[0]
@@ -105,7 +116,8 @@ def resolve_geometry_options(
 
 def clip_ragged(geometry_type: shapely.GeometryType | GeometryKind | str, coords: npt.ArrayLike,
                 offsets: Sequence[npt.ArrayLike],
-                window: Window | Iterable[float] | Iterable[Iterable[float]], *,
+                window: Window | Iterable[float] | Iterable[Iterable[float]] | None = None,
+                *, windows: npt.ArrayLike | None = None,
                 boundary: Boundary | str = "closed", keep_empty: bool = False,
                 check_validity: bool = False, method: Method | str = "rnsca",
                 n: SupportsIndex | str = "auto", max_depth: SupportsIndex | None = None,
@@ -129,6 +141,14 @@ def clip_ragged(geometry_type: shapely.GeometryType | GeometryKind | str, coords
         Innermost level first; polygon rings closed, with at least four positions.
     window : Window, sequence of 4 floats, or array_like of shape (G, 4)
         One window for all, or one per input geometry.
+    windows : array_like, shape (k, 4), optional
+        Many windows instead of `window`: every geometry is clipped against every window
+        its bounding box touches, in one call, and the result says the window of each
+        output (``window``, ``window_offsets``; sorted by window, then source). The
+        (geometry, window) pairs come from `rnsca.many_windows.assign_boxes` (a regular
+        grid of windows by arithmetic, other sets by a sweep); the pairs' geometries are
+        gathered into one ragged array and clipped with one window each. Default
+        tolerances follow the smallest window; the stats count pairs as inputs.
     boundary : {"closed", "interior"}
         "closed" keeps parts lying on the window's edge (``shapely.intersection``);
         "interior" drops points on the edge and line parts that only run along it
@@ -137,7 +157,8 @@ def clip_ragged(geometry_type: shapely.GeometryType | GeometryKind | str, coords
         sharing only an edge with it, gives nothing.
     keep_empty : bool
         Keep one output geometry per input (empty where nothing is left) instead of
-        dropping the empty ones.
+        dropping the empty ones; with ``windows=``, one per (geometry, window) pair whose
+        boxes touch.
     check_validity : bool
         Polygons: count invalid inputs in ``stats.invalid_polygons`` with GEOS
         (``shapely.is_valid``, a full check that costs more than the clip). Without it,
@@ -182,10 +203,41 @@ def clip_ragged(geometry_type: shapely.GeometryType | GeometryKind | str, coords
     'MULTILINESTRING ((0 1, 5 1, 5 10), (8 10, 8 5, 10 5))'
     """
     kind = GeometryKind.of(geometry_type)
-    # Lines are checked for non-finite coordinates by the clip's first pass over them.
-    ragged = Ragged.of(kind, coords, offsets, check_finite=kind.dimension != 1,
+    if (window is None) == (windows is None):
+        raise InvalidWindowError("give one of window= and windows=")
+    # Lines are checked for non-finite coordinates by the clip's first pass over them
+    # (with many windows, here: the pairs are found from the boxes).
+    ragged = Ragged.of(kind, coords, offsets,
+                       check_finite=kind.dimension != 1 or windows is not None,
                        partial_z=partial_z)
-    windows = WindowTable.of(window, ragged.count)
+    options: dict[str, Any] = dict(
+        boundary=boundary, keep_empty=keep_empty, check_validity=check_validity,
+        method=method, n=n, max_depth=max_depth, tolerance=tolerance, mode=mode,
+        backend=backend, resolution=resolution)
+    if windows is not None:
+        return _clip_windows(ragged, as_windows(windows), **options)
+    assert window is not None
+    return _clip_table(ragged, WindowTable.of(window, ragged.count), **options)
+
+
+def _clip_windows(ragged: Ragged, table: np.ndarray, **options: Any) -> RaggedClipResult:
+    """Clip `ragged` against every window of `table` its geometries' boxes touch."""
+    pairs = assign_boxes(vertex_boxes(ragged.coords, ragged.vertex_offsets()), table)
+    pair_window = np.repeat(np.arange(table.shape[0], dtype=np.int64),
+                            np.diff(pairs.window_offsets))
+    result = _clip_table(ragged.take(pairs.segment), WindowTable(table, pair_window),
+                         **options)
+    window = pair_window[result.source]
+    return replace(result, source=pairs.segment[result.source], window=window,
+                   window_offsets=exclusive_sum(np.bincount(window, minlength=table.shape[0])))
+
+
+def _clip_table(ragged: Ragged, windows: WindowTable, *, boundary: Boundary | str,
+                keep_empty: bool, check_validity: bool, method: Method | str,
+                n: SupportsIndex | str, max_depth: SupportsIndex | None,
+                tolerance: float | None, mode: Mode | str, backend: Backend | str,
+                resolution: float | str | None) -> RaggedClipResult:
+    """Clip `ragged`, each geometry against its window in `windows`."""
     options, side, engine = resolve_geometry_options(
         windows, ragged.kind.dimension, boundary=boundary, method=method, n=n,
         max_depth=max_depth, tolerance=tolerance, mode=mode, backend=backend,

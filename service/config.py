@@ -51,6 +51,9 @@ class Settings(BaseSettings):
     work_budget: PositiveInt = 500_000_000
     """Largest estimated work of one request, in fragments evaluated (about 20 ns each on
     one core, see `service.budget`); more gives 422 before any clipping."""
+    max_tiles: PositiveInt = 100_000
+    """Most tiles ``POST /v1/tiles`` cuts in one zoom (a short line across the world makes
+    millions at zoom 20); more gives 413, checked after each zoom's cut."""
     memory_budget_bytes: PositiveInt = 2 * 2**30
     """Memory the clip requests in flight may use, all workers together (each worker
     takes its share); a request's need is estimated from its body (`service.admission`).

@@ -13,6 +13,7 @@ import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 import orjson
@@ -21,13 +22,16 @@ import pyarrow as pa
 import rnsca
 from rnsca.backends.registry import available_backends, get_backend, opencl_report
 from rnsca.clip import SegmentClipResult, as_segments
+from rnsca.clip_geojson import combine_stats
 from rnsca.errors import (
     InvalidGeometryError,
+    InvalidOptionError,
     LimitExceededError,
     RnscaError,
 )
 from rnsca.io.geoarrow import find_geometry_column, read_geoarrow, write_geoarrow
 from rnsca.io.geojson_seq import Framing, record_bytes
+from rnsca.many_windows import as_windows
 from rnsca.options import Mode
 from rnsca.stats import ClipStats
 from rnsca.verify import Verification
@@ -48,6 +52,7 @@ from service.errors import (
 )
 from service.schemas import (
     BackendName,
+    ClipGeoJSONRequest,
     ClipOptions,
     ClipSegmentsRequest,
     ClipSVGRequest,
@@ -198,6 +203,9 @@ def clip_geojson(body: bytes, settings: Settings, deadline: float | None = None)
     """Answer ``POST /v1/clip/geojson`` by `deadline` (`time.monotonic`; see `clip_svg`)."""
     deadline = _due(deadline, settings)
     request = parse_geojson_request(body)  # a large body a slice of features at a time
+    if request.windows is not None:
+        return _clip_geojson_windows(request, settings)
+    assert request.window is not None
     window = Window(*request.window)
     options = request.options
     arguments = _library_options(options, settings)
@@ -235,6 +243,45 @@ def clip_geojson(body: bytes, settings: Settings, deadline: float | None = None)
                                           boundary=options.boundary, **limits))
     payload = {"geojson": clipped, "stats": stats.to_dict(),
                "verification": _dict_or_none(verification)}
+    return Outcome(orjson.dumps(payload, option=_JSON), stats)
+
+
+def _windows_vertex_cap(options: ClipOptions, windows: list, settings: Settings,
+                        ) -> tuple[Window, int, bool]:
+    """Return the smallest window, the vertex cap and whether the budget set it.
+
+    Every vertex is charged once per window (`geometry_vertex_cap` of the budget shared
+    out among the windows); invalid windows are refused (`InvalidWindowError`, naming
+    the row).
+    """
+    table = as_windows(windows)
+    area = (table[:, 2] - table[:, 0]) * (table[:, 3] - table[:, 1])
+    smallest = Window(*table[int(np.argmin(area))].tolist())
+    cap, by_budget = geometry_vertex_cap(options, smallest, settings.max_vertices,
+                                         settings.work_budget // table.shape[0])
+    return smallest, cap, by_budget
+
+
+def _clip_geojson_windows(request: ClipGeoJSONRequest, settings: Settings) -> Outcome:
+    """Answer ``POST /v1/clip/geojson`` with `windows`: one document per window."""
+    options = request.options
+    assert request.windows is not None
+    smallest, cap, by_budget = _windows_vertex_cap(options, request.windows, settings)
+    try:
+        documents, stats = rnsca.clip_geojson_windows(
+            request.geojson, request.windows, keep_empty=options.keep_empty,
+            max_vertices=cap, arrays=True, boundary=options.boundary,
+            check_validity=options.check_validity, **_library_options(options, settings))
+    except LimitExceededError as exc:
+        raise _over_vertex_cap(f"{exc} ({len(request.windows)} windows: each vertex counts "
+                               "once per window)", options, smallest, cap, by_budget,
+                               settings) from None
+    except InvalidGeometryError as exc:
+        path = getattr(exc, "path", None)
+        if path is not None:
+            exc.path = "geojson" + (path if not path or path.startswith("[") else "." + path)
+        raise
+    payload = {"geojson": documents, "stats": stats.to_dict(), "verification": None}
     return Outcome(orjson.dumps(payload, option=_JSON), stats)
 
 
@@ -498,6 +545,9 @@ def clip_svg(body: bytes, settings: Settings, deadline: float | None = None) -> 
     """
     deadline = _due(deadline, settings)
     request = ClipSVGRequest.model_validate_json(body)
+    if request.windows is not None:
+        return _clip_svg_windows(request, settings)
+    assert request.window is not None
     window = Window(*request.window)
     arguments = _library_options(request.options, settings)
     options = request.options
@@ -531,3 +581,87 @@ def clip_svg(body: bytes, settings: Settings, deadline: float | None = None) -> 
     payload = {"paths": written, "stats": result.stats.to_dict(),
                "verification": _dict_or_none(verification)}
     return Outcome(orjson.dumps(payload, option=_JSON), result.stats)
+
+
+def _clip_svg_windows(request: ClipSVGRequest, settings: Settings) -> Outcome:
+    """Answer ``POST /v1/clip/svg`` with `windows`: the paths clipped to each window.
+
+    The path text is read once; the work budget charges every control point once per
+    window.
+    """
+    assert request.windows is not None
+    options = request.options
+    arguments = _library_options(options, settings)
+    table = as_windows(request.windows)
+    windows = [Window(*row) for row in table.tolist()]
+    try:
+        paths = rnsca.parse_paths(request.paths, tolerance=arguments["tolerance"])
+        vertices = int(paths.degree.sum()) + paths.closed.shape[0]
+        check_vertices(vertices, settings.max_vertices)
+        check_work(vertices * sum(1 + subdivision_cost(options, w, None) for w in windows),
+                   settings.work_budget)
+        results = [rnsca.clip_paths(paths, w, curves=options.curves, fill=options.fill,
+                                    **arguments) for w in windows]
+    except RnscaError as exc:
+        if getattr(exc, "path_index", None) is not None:
+            exc.path = f"paths[{exc.path_index}]"
+        raise
+    stats = combine_stats(r.stats for r in results)
+    payload = {"paths": [rnsca.write_paths(r.paths, precision=None) for r in results],
+               "stats": stats.to_dict(), "verification": None}
+    return Outcome(orjson.dumps(payload, option=_JSON), stats)
+
+
+# --- Vector tiles ---------------------------------------------------------------------
+
+
+def _tile_features(body: bytes, options: Any, zooms: int, settings: Settings) -> Any:
+    """Return the `FeatureTable` of a GeoJSON body, within the vertex limit and budget.
+
+    The work budget counts every vertex once per zoom cut.
+    """
+    from rnsca.io.geojson import loads
+    from rnsca.tiles import Crs
+    from rnsca.tiles.sources import features_of_geojson
+
+    features = features_of_geojson(loads(body))
+    table = features.table(Crs(options.crs))
+    vertices = sum(r.coords.shape[0] for r in (table.points, table.lines, table.polygons))
+    check_vertices(vertices, settings.max_vertices)
+    check_work(vertices * zooms, settings.work_budget)
+    return table
+
+
+def tile_one(body: bytes, z: int, x: int, y: int, options: Any,
+             settings: Settings) -> Outcome:
+    """Answer ``POST /v1/tiles/{z}/{x}/{y}``: the tile's bytes (empty: no feature)."""
+    from rnsca.tiles import tile_one as one
+
+    table = _tile_features(body, options, 1, settings)
+    data = one(table, z, x, y, extent=options.extent, buffer=options.buffer,
+               layer=options.layer, mode=options.mode)
+    return Outcome(data or b"", None, "application/vnd.mapbox-vector-tile",
+                   {"X-Rnsca-Features": str(table.count)})
+
+
+def tile_pyramid(body: bytes, options: Any, settings: Settings) -> Outcome:
+    """Answer ``POST /v1/tiles``: a PMTiles archive of zooms minzoom..maxzoom."""
+    import io
+
+    from rnsca.tiles import tile_table, write_pmtiles
+
+    if options.minzoom > options.maxzoom:
+        raise InvalidOptionError(f"minzoom {options.minzoom} is above maxzoom "
+                                 f"{options.maxzoom}")
+    table = _tile_features(body, options, options.maxzoom + 1, settings)
+    zooms = tile_table(table, minzoom=options.minzoom, maxzoom=options.maxzoom,
+                       extent=options.extent, buffer=options.buffer, layer=options.layer,
+                       mode=options.mode, max_tiles=settings.max_tiles)
+    archive = io.BytesIO()
+    try:
+        summary = write_pmtiles(archive, zooms, layer=options.layer)
+    except ValueError as exc:  # no tile holds a feature
+        raise InvalidBodyError(f"{exc}") from None
+    return Outcome(archive.getvalue(), None, "application/vnd.pmtiles",
+                   {"X-Rnsca-Tiles": str(summary.tiles),
+                    "X-Rnsca-Features": str(table.count)})

@@ -13,7 +13,7 @@ import typing
 from enum import Enum
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, FiniteFloat, create_model
+from pydantic import BaseModel, ConfigDict, Field, FiniteFloat, create_model, model_validator
 
 from rnsca.options import MAX_DEPTH_LIMIT, N_MAX, N_MIN, Boundary, Method, Mode
 from rnsca.stats import ClipStats
@@ -155,18 +155,47 @@ VerificationModel = create_model(
     "Verification", __doc__="The comparison with Shapely's intersection (`rnsca.verify`).",
     **_VERIFICATION_FIELDS)
 
+WindowList = Annotated[
+    list[WindowBounds],
+    Field(min_length=1, description="Many windows instead of `window`: the input is clipped "
+                                    "to each (in one library call), and the answer holds one "
+                                    "result per window, in this order. The work budget "
+                                    "counts every vertex once per window.",
+          examples=[[[0, 0, 5, 5], [5, 0, 10, 5]]])]
+
+
+class _OneOrManyWindows(BaseModel):
+    """A request with `window` or `windows`, exactly one of them."""
+
+    window: WindowBounds | None = None
+    windows: WindowList | None = None
+
+    @model_validator(mode="after")
+    def _one_of(self) -> _OneOrManyWindows:
+        if (self.window is None) == (self.windows is None):
+            raise ValueError("give one of window and windows")
+        return self
+
+    def window_table(self) -> list[tuple[float, float, float, float]]:
+        """Return the windows asked for: `windows`, or `window` alone."""
+        if self.windows is not None:
+            return list(self.windows)
+        assert self.window is not None
+        return [self.window]
+
+
 _LINE: dict[str, Any] = {"type": "Feature", "id": 1, "properties": {"name": "road"},
          "geometry": {"type": "LineString",
                       "coordinates": [[-5, 1], [5, 1], [5, 20], [8, 20], [8, 5], [15, 5]]}}
 
 
-class ClipGeoJSONRequest(BaseModel):
-    """A GeoJSON Geometry, Feature or FeatureCollection and the window to clip it to."""
+class ClipGeoJSONRequest(_OneOrManyWindows):
+    """A GeoJSON Geometry, Feature or FeatureCollection and the window(s) to clip it to."""
 
     model_config = ConfigDict(**_STRICT, json_schema_extra={"examples": [
-        {"window": [0, 0, 10, 10], "geojson": _LINE}]})
+        {"window": [0, 0, 10, 10], "geojson": _LINE},
+        {"windows": [[0, 0, 5, 5], [5, 0, 10, 5]], "geojson": _LINE}]})
 
-    window: WindowBounds
     geojson: dict[str, Any] = Field(
         description="GeoJSON (RFC 7946) Geometry, Feature or FeatureCollection. Positions "
                     "have 2 or 3 numbers (more are checked, then dropped), and one document "
@@ -181,35 +210,42 @@ class ClipGeoJSONRequest(BaseModel):
 
 
 class ClipGeoJSONResponse(BaseModel):
-    """The clipped document (properties, ids and foreign members kept)."""
+    """The clipped document (properties, ids and foreign members kept).
+
+    With `windows`: `geojson` is a list, the document clipped to each window in order,
+    and `verification` is null (verify with one window per request).
+    """
 
     model_config = ConfigDict(json_schema_extra={"examples": [{
         "geojson": {**_LINE, "geometry": {"type": "MultiLineString", "coordinates": [
             [[0.0, 1.0], [5.0, 1.0], [5.0, 10.0]], [[8.0, 10.0], [8.0, 5.0], [10.0, 5.0]]]}},
         "stats": {"segments_in": 5, "pieces_out": 4}, "verification": None}]})
 
-    geojson: dict[str, Any]
+    geojson: dict[str, Any] | list[dict[str, Any]]
     stats: StatsModel
     verification: VerificationModel | None
 
 
-class ClipSVGRequest(BaseModel):
-    """SVG path data (the ``d`` attribute) and the window to clip it to."""
+class ClipSVGRequest(_OneOrManyWindows):
+    """SVG path data (the ``d`` attribute) and the window(s) to clip it to."""
 
     model_config = ConfigDict(**_STRICT, json_schema_extra={"examples": [
         {"window": [0, 0, 10, 10], "paths": ["M -5 5 C 0 15 10 -5 15 5"],
          "options": {"curves": "preserve"}}]})
 
-    window: WindowBounds
     paths: list[str] = Field(description="Path data strings, e.g. `M 0 0 L 10 10`.")
     options: SVGOptions = Field(default_factory=SVGOptions)
     verify: bool | Literal["all"] | None = _VERIFY
 
 
 class ClipSVGResponse(BaseModel):
-    """The clipped path data, one string per input path."""
+    """The clipped path data, one string per input path.
 
-    paths: list[str]
+    With `windows`: `paths` is a list per window (in order) of one string per input
+    path, and `verification` is null.
+    """
+
+    paths: list[str] | list[list[str]]
     stats: StatsModel
     verification: VerificationModel | None
 

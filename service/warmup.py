@@ -31,6 +31,7 @@ from pathlib import Path
 
 import numpy as np
 import orjson
+import shapely
 
 import rnsca
 from rnsca.backends.numba_cpu import (
@@ -143,6 +144,18 @@ def _svg() -> None:
     _requests("svg")
 
 
+def _tiles() -> None:
+    """Cut a small document into tiles as the tile endpoints do (their kernels)."""
+    from rnsca.tiles import FeatureTable, tile_one, tile_table
+
+    table = FeatureTable.of([shapely.LineString([(-10, -10), (10, 10)]),
+                             shapely.Point(1, 1), shapely.box(-5, -5, 5, 5)],
+                            [{"a": 1}] * 3, [1, 2, 3])
+    for _ in tile_table(table, maxzoom=2):
+        pass
+    tile_one(table, 1, 0, 0)
+
+
 def _opencl() -> None:
     get_backend(Backend.OPENCL).warm_up()
     # backend="auto": the calibration here, not in the first request that asks for it.
@@ -157,11 +170,12 @@ def _opencl() -> None:
 #: `needs` are compiled (`ClipRunner.warm_up`).
 STEPS = (Step("segments", _segments), Step("lines", _lines), Step("polygons", _polygons),
          Step("geojson", _geojson, ("lines", "polygons")), Step("svg", _svg),
-         Step("opencl", _opencl))
+         Step("tiles", _tiles, ("lines", "polygons")), Step("opencl", _opencl))
 
 #: The steps each clipping endpoint waits for (by the name `ClipRunner.run` is given).
 ENDPOINT_STEPS = {"segments": ("segments",), "geoarrow": ("lines", "polygons"),
-                  "geojson": ("lines", "polygons", "geojson"), "svg": ("svg",)}
+                  "geojson": ("lines", "polygons", "geojson"), "svg": ("svg",),
+                  "tiles": ("lines", "polygons", "tiles")}
 
 
 def steps_for(backends: list[Backend] | None = None) -> tuple[Step, ...]:

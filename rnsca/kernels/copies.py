@@ -15,7 +15,7 @@ import numpy as np
 
 from rnsca.kernels.jit import parallel
 
-__all__ = ["copy_into", "COPY_BLOCK"]
+__all__ = ["copy_into", "copy_ranges", "COPY_BLOCK"]
 
 #: Elements per block of a parallel copy (a few hundred KB: large enough that a
 #: block's overhead vanishes, small enough that every thread gets several).
@@ -44,3 +44,18 @@ def copy_into(target: np.ndarray, source: np.ndarray) -> None:
         target.reshape(-1)[...] = source.reshape(-1)
         return
     _copy_blocks(source.reshape(-1), target.reshape(-1))
+
+
+@parallel
+def copy_ranges(source, starts, counts, out_starts, target):
+    """Copy rows ``source[starts[j]:starts[j] + counts[j]]`` to ``target[out_starts[j]:]``.
+
+    `source` and `target` are 2-D with the same columns; ranges may repeat or overlap
+    in `source` (a gather of whole geometries, `rnsca.arrays.Ragged.take`).
+    """
+    for j in numba.prange(starts.shape[0]):
+        first = starts[j]
+        out = out_starts[j]
+        for k in range(counts[j]):
+            for c in range(source.shape[1]):
+                target[out + k, c] = source[first + k, c]

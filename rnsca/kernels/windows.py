@@ -35,7 +35,8 @@ from rnsca.kernels.jit import borrowing, inlined, parallel, scalar
 from rnsca.kernels.records import Window
 from rnsca.kernels.segments import clip_block_rows
 
-__all__ = ["WindowFinder", "assign_counts", "assign_write", "clip_pairs", "gather_rows"]
+__all__ = ["WindowFinder", "assign_counts", "assign_write", "clip_pairs", "gather_rows",
+           "vertex_boxes"]
 
 
 @inlined
@@ -279,3 +280,38 @@ def clip_pairs(segments, windows, block_window, block_first, block_end, options,
     for chunk in prange(n_chunks):
         _clip_pair_chunk(np.int64(chunk), n_chunks, segments, windows, block_window,
                          block_first, block_end, options, out)
+
+
+@parallel
+def vertex_boxes(xy, vertex_offsets, boxes):
+    """Write the bounding box of each run of vertices into ``boxes[g]``.
+
+    Run ``g`` is ``xy[vertex_offsets[g]:vertex_offsets[g + 1]]``; an empty run's box is
+    NaN (no window's box test passes with it). ``boxes`` is float64 (n, 4), rows
+    ``[xmin, ymin, xmax, ymax]``: a box is its own bounding box, so the assignment
+    (`assign_counts`, `assign_write`) takes it as it takes a segment.
+    """
+    for g in prange(vertex_offsets.shape[0] - 1):
+        first = vertex_offsets[g]
+        last = vertex_offsets[g + 1]
+        if first == last:
+            for c in range(4):
+                boxes[g, c] = np.nan
+            continue
+        x0 = x1 = xy[first, 0]
+        y0 = y1 = xy[first, 1]
+        for v in range(first + 1, last):
+            x = xy[v, 0]
+            y = xy[v, 1]
+            if x < x0:
+                x0 = x
+            elif x > x1:
+                x1 = x
+            if y < y0:
+                y0 = y
+            elif y > y1:
+                y1 = y
+        boxes[g, 0] = x0
+        boxes[g, 1] = y0
+        boxes[g, 2] = x1
+        boxes[g, 3] = y1

@@ -2,7 +2,7 @@
 
 from fastapi import APIRouter
 
-from service.routes import clip, docs, health, meta, playground
+from service.routes import clip, docs, health, meta, playground, tiles
 
 __all__ = ["api_router"]
 
@@ -10,6 +10,7 @@ __all__ = ["api_router"]
 # template, which the access log and the metrics use as the route label.
 api_router = APIRouter()
 api_router.include_router(clip.router)
+api_router.include_router(tiles.router)
 api_router.include_router(meta.v1_router)
 api_router.include_router(health.router)
 api_router.include_router(meta.router)

@@ -368,8 +368,10 @@ def test_during_warm_up_each_endpoint_is_served_once_its_kernels_are(monkeypatch
     def slow_svg():  # stands in for a cold compile of the SVG kernels
         release.wait(20)
 
+    # The tiles step left out: when it finishes (before or after the blocked SVG step)
+    # depends on whether warm-up runs in child processes; this test is about SVG.
     steps = tuple(dataclasses.replace(s, run=slow_svg) if s.name == "svg" else s
-                  for s in warmup.steps_for())
+                  for s in warmup.steps_for() if s.name != "tiles")
     monkeypatch.setattr(main, "steps_for", lambda: steps)
     segments = {"window": WINDOW, "segments": [[-5, 5, 15, 5]]}
     svg = {"window": WINDOW, "paths": ["M -5 5 L 15 5"]}

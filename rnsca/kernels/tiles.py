@@ -1,0 +1,313 @@
+"""Tile pyramids: which child tiles each clipped geometry goes to, and longitudes unwrapped.
+
+World coordinates: Web Mercator scaled to the unit square, ``X`` east from the
+antimeridian, ``Y`` south from the top (85.0511 N), as XYZ tiles count them. Tile
+``(x, y)`` of zoom ``z`` covers ``[x, x + 1] * cell`` by ``[y, y + 1] * cell`` with
+``cell = 2**-z``, and is clipped with ``pad = buffer / extent * cell`` around it.
+
+The cascade (`cascade_counts` then `cascade_write`): the geometries of zoom ``z`` come
+grouped by their tile, groups in quadkey order (children of one parent in the order
+top-left, top-right, bottom-left, bottom-right), geometries in source order within a
+group. Each geometry goes to those of its tile's four children whose padded box its
+bounding box touches (closed: touching counts; the clip decides). Every child's
+padded box lies inside its parent's (half the pad, in world units), so a child needs
+nothing its parent did not keep. Counting per (group, quadrant), then writing at each
+(group, quadrant)'s cursor, puts the pairs in quadkey order of the children and in
+source order within each: sorted by window then source with no sort call.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import prange
+
+from rnsca.kernels.jit import borrowing, parallel
+
+__all__ = ["MAX_EDGES", "cascade_counts", "cascade_write", "polygons_at_risk", "quantise",
+           "unwrap_rings", "unwrap_runs"]
+
+
+@borrowing
+def _touches(boxes, i, cx, cy, cell, pad):
+    """Return whether box ``i`` touches child tile ``(cx, cy)`` padded by `pad` (closed).
+
+    A NaN box (an empty geometry) touches nothing: every comparison with NaN is False.
+    """
+    return (boxes[i, 0] <= (cx + 1) * cell + pad and boxes[i, 2] >= cx * cell - pad
+            and boxes[i, 1] <= (cy + 1) * cell + pad and boxes[i, 3] >= cy * cell - pad)
+
+
+@parallel
+def cascade_counts(boxes, group_offsets, group_x, group_y, cell, pad, counts):
+    """Count the geometries of each group that go to each of its four children.
+
+    `boxes` float64 (n, 4) ``[xmin, ymin, xmax, ymax]`` in world units; group ``g`` is
+    geometries ``group_offsets[g]:group_offsets[g + 1]`` of parent tile ``(group_x[g],
+    group_y[g])``; `cell` and `pad` are those of the children's zoom. ``counts[g, q]``
+    (zeroed by the caller) gets the count of quadrant ``q = 2 * dy + dx``.
+    """
+    for g in prange(group_offsets.shape[0] - 1):
+        for i in range(group_offsets[g], group_offsets[g + 1]):
+            for q in range(4):
+                if _touches(boxes, i, 2 * group_x[g] + (q & 1), 2 * group_y[g] + (q >> 1),
+                            cell, pad):
+                    counts[g, q] += 1
+
+
+@parallel
+def cascade_write(boxes, group_offsets, group_x, group_y, cell, pad, cursor, pairs):
+    """Write each (geometry, child) pair's geometry at its child's cursor.
+
+    ``cursor[g, q]`` is the first slot of child ``q`` of group ``g`` (an exclusive prefix
+    sum of `cascade_counts`, groups then quadrants) and is advanced.
+    """
+    for g in prange(group_offsets.shape[0] - 1):
+        for i in range(group_offsets[g], group_offsets[g + 1]):
+            for q in range(4):
+                if _touches(boxes, i, 2 * group_x[g] + (q & 1), 2 * group_y[g] + (q >> 1),
+                            cell, pad):
+                    pairs[cursor[g, q]] = i
+                    cursor[g, q] += 1
+
+
+@borrowing
+def _unwrap_run(lon, first, last):
+    """Shift longitudes of one run by multiples of 360 so no step is longer than 180.
+
+    A step from 179 to -179 is taken to cross the antimeridian (2 degrees east), not the
+    whole map (358 west): RFC 7946 asks for such geometries to be cut, and uncut ones
+    mean the short way. A step between two positions on the antimeridian (both at
+    +-180: the edge of a map drawn flat, such as a world box) is left as it is.
+    """
+    prev_raw = lon[first]
+    for v in range(first + 1, last):
+        raw = lon[v]
+        step = lon[v] - lon[v - 1]
+        if abs(raw) == 180.0 and abs(prev_raw) == 180.0:
+            step = 0.0
+            lon[v] = lon[v - 1] + (raw - prev_raw)
+        if step > 180.0:
+            lon[v] -= 360.0 * np.ceil((step - 180.0) / 360.0)
+        elif step < -180.0:
+            lon[v] += 360.0 * np.ceil((-step - 180.0) / 360.0)
+        prev_raw = raw
+
+
+@parallel
+def unwrap_runs(lon, run_offsets):
+    """Unwrap the longitudes of each line part in place (`_unwrap_run`)."""
+    for r in prange(run_offsets.shape[0] - 1):
+        _unwrap_run(lon, run_offsets[r], run_offsets[r + 1])
+
+
+@parallel
+def unwrap_rings(lon, original, ring_offsets, polygon_rings):
+    """Unwrap the rings of each polygon in place, its holes beside its shell.
+
+    `original` is a copy of `lon` before. A ring that does not close once unwrapped goes
+    round a pole: it is put back as it was (its crossing is the map's edge, not a step).
+    Each hole is shifted by whole turns so its first vertex lies within 180 of the
+    shell's.
+    """
+    for p in prange(polygon_rings.shape[0] - 1):
+        first_ring = polygon_rings[p]
+        reference = 0.0
+        for r in range(first_ring, polygon_rings[p + 1]):
+            first = ring_offsets[r]
+            last = ring_offsets[r + 1]
+            if last - first < 2:
+                continue
+            _unwrap_run(lon, first, last)
+            if lon[last - 1] != lon[first]:  # round a pole: put back
+                for v in range(first, last):
+                    lon[v] = original[v]
+            if r == first_ring:
+                reference = lon[first]
+            else:
+                shift = 360.0 * np.round((reference - lon[first]) / 360.0)
+                if shift != 0.0:
+                    for v in range(first, last):
+                        lon[v] += shift
+
+
+@parallel
+def quantise(coords, vertex_offsets, tile_offsets, tile_x, tile_y, scale, extent, q):
+    """Write each vertex in integer units of its tile: ``q`` int64 (v, 2).
+
+    ``round((X * scale - x) * extent)`` (half up, as ``floor(u + 1/2)``) with the tile
+    ``(x, y)`` of the vertex's geometry: tile ``t``'s geometries are
+    ``tile_offsets[t]:tile_offsets[t + 1]``, geometry ``g``'s vertices
+    ``vertex_offsets[g]:vertex_offsets[g + 1]``; `scale` is ``2**zoom``.
+    """
+    for t in prange(tile_x.shape[0]):
+        ox = np.float64(tile_x[t])
+        oy = np.float64(tile_y[t])
+        for v in range(vertex_offsets[tile_offsets[t]], vertex_offsets[tile_offsets[t + 1]]):
+            q[v, 0] = np.int64(np.floor((coords[v, 0] * scale - ox) * extent + 0.5))
+            q[v, 1] = np.int64(np.floor((coords[v, 1] * scale - oy) * extent + 0.5))
+
+
+@borrowing
+def _orient(q, a, b, c):
+    """Return the sign of the turn a -> b -> c (exact: int64 tile units, |q| < 2**30)."""
+    d = (q[b, 0] - q[a, 0]) * (q[c, 1] - q[a, 1]) - (q[b, 1] - q[a, 1]) * (q[c, 0] - q[a, 0])
+    return 1 if d > 0 else (-1 if d < 0 else 0)
+
+
+@borrowing
+def _within(q, a, b, c):
+    """Whether c, collinear with a and b, lies in their bounding box (on the segment)."""
+    return (min(q[a, 0], q[b, 0]) <= q[c, 0] <= max(q[a, 0], q[b, 0])
+            and min(q[a, 1], q[b, 1]) <= q[c, 1] <= max(q[a, 1], q[b, 1]))
+
+
+@borrowing
+def _touch(q, a, b, c, d):
+    """Whether segments ab and cd share a point (crossing, touching or overlapping)."""
+    o1 = _orient(q, a, b, c)
+    o2 = _orient(q, a, b, d)
+    o3 = _orient(q, c, d, a)
+    o4 = _orient(q, c, d, b)
+    if o1 * o2 < 0 and o3 * o4 < 0:
+        return True
+    return ((o1 == 0 and _within(q, a, b, c)) or (o2 == 0 and _within(q, a, b, d))
+            or (o3 == 0 and _within(q, c, d, a)) or (o4 == 0 and _within(q, c, d, b)))
+
+
+@borrowing
+def _next_edge(q, first, last, i):
+    """Return the next edge of positive length after edge i of the ring, cyclically."""
+    n = last - 1  # edges first..last-2: (v, v + 1); the ring is closed
+    j = i
+    for _ in range(n - first):
+        j = j + 1 if j + 1 < n else first
+        if q[j, 0] != q[j + 1, 0] or q[j, 1] != q[j + 1, 1]:
+            return j
+    return i
+
+
+@borrowing
+def _inside(q, first, last, p):
+    """Return 1 if position p is strictly inside the ring, 0 outside, -1 on it."""
+    inside = False
+    for v in range(first, last - 1):
+        w = v + 1
+        if _orient(q, v, w, p) == 0 and _within(q, v, w, p):
+            return -1
+        if (q[v, 1] > q[p, 1]) != (q[w, 1] > q[p, 1]):
+            # The edge crosses the horizontal line through p: left or right of p?
+            side = _orient(q, v, w, p) if q[w, 1] > q[v, 1] else -_orient(q, v, w, p)
+            if side > 0:
+                inside = not inside
+    return 1 if inside else 0
+
+
+#: Most edges `polygons_at_risk` compares pairwise in one geometry; past it the
+#: geometry is marked (GEOS checks it).
+MAX_EDGES = 512
+
+
+@borrowing
+def _area2(q, first, last):
+    area = 0
+    for v in range(first, last - 1):
+        area += q[v, 0] * q[v + 1, 1] - q[v + 1, 0] * q[v, 1]
+    return area
+
+
+@borrowing
+def _boxes_meet(q, a, b, c, d):
+    return (max(q[a, 0], q[b, 0]) >= min(q[c, 0], q[d, 0])
+            and max(q[c, 0], q[d, 0]) >= min(q[a, 0], q[b, 0])
+            and max(q[a, 1], q[b, 1]) >= min(q[c, 1], q[d, 1])
+            and max(q[c, 1], q[d, 1]) >= min(q[a, 1], q[b, 1]))
+
+
+@borrowing
+def _suspect(q, ring_offsets, polygon_rings, first_polygon, last_polygon, kept):
+    """Whether one geometry's rounded polygons may be invalid (see `polygons_at_risk`).
+
+    `kept` is scratch, one flag per ring of the whole array.
+    """
+    first_ring = polygon_rings[first_polygon]
+    last_ring = polygon_rings[last_polygon]
+    if ring_offsets[last_ring] - ring_offsets[first_ring] > MAX_EDGES:
+        return True
+    # The rings the encoder writes: non-zero area, and a shell written (the others are
+    # dropped whole, so they cannot make the output invalid).
+    for p in range(first_polygon, last_polygon):
+        shell_kept = False
+        for r in range(polygon_rings[p], polygon_rings[p + 1]):
+            kept[r] = (_area2(q, ring_offsets[r], ring_offsets[r + 1]) != 0
+                       and (r == polygon_rings[p] or shell_kept))
+            if r == polygon_rings[p]:
+                shell_kept = kept[r]
+    # Every pair of edges of positive length: adjacent ones may not fold back onto each
+    # other, others may not meet at all.
+    for r in range(first_ring, last_ring):
+        if not kept[r]:
+            continue
+        first = ring_offsets[r]
+        last = ring_offsets[r + 1]
+        for i in range(first, last - 1):
+            if q[i, 0] == q[i + 1, 0] and q[i, 1] == q[i + 1, 1]:
+                continue
+            nxt = _next_edge(q, first, last, i)
+            # The shared position is i + 1 = nxt: a spike if the two edges go back along
+            # one line.
+            if _orient(q, i, i + 1, nxt + 1) == 0 and (
+                    (q[i, 0] - q[i + 1, 0]) * (q[nxt + 1, 0] - q[nxt, 0])
+                    + (q[i, 1] - q[i + 1, 1]) * (q[nxt + 1, 1] - q[nxt, 1])) > 0:
+                return True
+            for s in range(r, last_ring):
+                if not kept[s]:
+                    continue
+                s_first = ring_offsets[s]
+                s_last = ring_offsets[s + 1]
+                for j in range(i + 1 if s == r else s_first, s_last - 1):
+                    if not _boxes_meet(q, i, i + 1, j, j + 1):
+                        continue
+                    if q[j, 0] == q[j + 1, 0] and q[j, 1] == q[j + 1, 1]:
+                        continue
+                    if s == r and (j == nxt or i == _next_edge(q, first, last, j)):
+                        continue
+                    if _touch(q, i, i + 1, j, j + 1):
+                        return True
+    # No edges meet: each hole is wholly inside its shell or wholly outside, and each
+    # polygon wholly inside another's shell or wholly outside it.
+    for p in range(first_polygon, last_polygon):
+        shell = polygon_rings[p]
+        if not kept[shell]:
+            continue
+        for h in range(shell + 1, polygon_rings[p + 1]):
+            if kept[h] and _inside(q, ring_offsets[shell], ring_offsets[shell + 1],
+                                   ring_offsets[h]) != 1:
+                return True
+        for o in range(first_polygon, last_polygon):
+            other = polygon_rings[o]
+            if o != p and kept[other] and _inside(
+                    q, ring_offsets[other], ring_offsets[other + 1],
+                    ring_offsets[shell]) != 0:
+                return True
+    return False
+
+
+@parallel
+def polygons_at_risk(q, ring_offsets, polygon_rings, geometry_polygons, at_risk):
+    """Mark the geometries whose rounded polygons may be invalid (``at_risk[g]``).
+
+    Only the rings the encoder writes count (`rnsca.kernels.mvt`: a ring of zero area
+    is dropped, a shell with its holes): rounding collapses most small polygons of low
+    zooms, which then need no check. A geometry is not marked only when those rings are
+    proved fine here, exactly in integer arithmetic: no two
+    edges of positive length meet (crossing, touching or overlapping) except adjacent
+    ones at their shared position, and no two adjacent ones fold back along one line;
+    every hole lies inside its shell and no polygon's shell inside another's. Then the
+    rings are simple and properly nested: the polygons are valid. Anything else (or more
+    than `MAX_EDGES` edges, where the O(E^2) test would cost more than GEOS) is marked,
+    and the caller checks it with GEOS. Repeated positions are allowed, as in GEOS.
+    """
+    kept = np.empty(ring_offsets.shape[0] - 1, dtype=np.bool_)
+    for g in prange(geometry_polygons.shape[0] - 1):
+        at_risk[g] = _suspect(q, ring_offsets, polygon_rings, geometry_polygons[g],
+                              geometry_polygons[g + 1], kept)

@@ -14,6 +14,7 @@ from typer.testing import CliRunner
 
 from rnsca.cli import app
 from rnsca.tiles import tile_features
+from tests.missing import missing
 
 runner = CliRunner()
 
@@ -29,6 +30,16 @@ def features():
             for i, g in enumerate(lines + polygons)]
 
 
+def _needed(name):
+    """Return module `name`: skipped here without it, a failure under CI=true."""
+    import importlib
+
+    try:
+        return importlib.import_module(name)
+    except ImportError as exc:
+        missing(f"{name} is not installed ({exc}); pip install -e '.[dev]'")
+
+
 def _write(path, features):
     suffix = path.suffix
     if suffix == ".geojson":
@@ -36,13 +47,13 @@ def _write(path, features):
     elif suffix == ".ndjson":
         path.write_bytes(b"\n".join(b"\x1e" + orjson.dumps(f) for f in features))
     else:
-        geopandas = pytest.importorskip("geopandas")
+        geopandas = _needed("geopandas")
         frame = geopandas.GeoDataFrame.from_features(features, crs="EPSG:4326")
         frame["id"] = [f["id"] for f in features]
         if suffix == ".parquet":
             frame.to_parquet(path)
         else:
-            pytest.importorskip("pyogrio")
+            _needed("pyogrio")
             frame.to_file(path, driver="FlatGeobuf")
 
 

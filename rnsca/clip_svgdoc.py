@@ -174,7 +174,7 @@ def clip_svg_document(document: str | bytes, window: Window | Iterable[float], *
     >>> out, stats = clip_svg_document(text, (0, 0, 10, 10))
     >>> print(out)
     <svg xmlns="http://www.w3.org/2000/svg">
-      <path id="r" d="M0 2H5V6H0V2Z" />
+      <path id="r" d="M0 2H5V6H0Z" />
       <text x="1" y="1">kept</text>
     </svg>
     <BLANKLINE>

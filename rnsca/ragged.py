@@ -22,7 +22,7 @@ from rnsca.backends.auto import backend_for
 from rnsca.backends.base import ClipBackend, GeometryPieces, Operation
 from rnsca.errors import InvalidOptionError, InvalidWindowError
 from rnsca.kernels import counters as C
-from rnsca.many_windows import as_windows, assign_boxes, vertex_boxes
+from rnsca.many_windows import WindowPairs, as_windows, assign_boxes, vertex_boxes
 from rnsca.options import Backend, Boundary, Method, Mode, SegmentOptions
 from rnsca.stats import ClipStats, DeviceStats
 from rnsca.window import Window, WindowTable
@@ -210,49 +210,48 @@ def clip_ragged(geometry_type: shapely.GeometryType | GeometryKind | str, coords
     ragged = Ragged.of(kind, coords, offsets,
                        check_finite=kind.dimension != 1 or windows is not None,
                        partial_z=partial_z)
-    options: dict[str, Any] = dict(
-        boundary=boundary, keep_empty=keep_empty, check_validity=check_validity,
-        method=method, n=n, max_depth=max_depth, tolerance=tolerance, mode=mode,
-        backend=backend, resolution=resolution)
+    # One body for one window and many (the pairs' geometries, one window each): the
+    # service's path to the kernel stays short (tests/service/test_hops.py).
+    pairs = None
     if windows is not None:
-        return _clip_windows(ragged, as_windows(windows), **options)
-    assert window is not None
-    return _clip_table(ragged, WindowTable.of(window, ragged.count), **options)
-
-
-def _clip_windows(ragged: Ragged, table: np.ndarray, **options: Any) -> RaggedClipResult:
-    """Clip `ragged` against every window of `table` its geometries' boxes touch."""
-    pairs = assign_boxes(vertex_boxes(ragged.coords, ragged.vertex_offsets()), table)
-    pair_window = np.repeat(np.arange(table.shape[0], dtype=np.int64),
-                            np.diff(pairs.window_offsets))
-    result = _clip_table(ragged.take(pairs.segment), WindowTable(table, pair_window),
-                         **options)
-    window = pair_window[result.source]
-    return replace(result, source=pairs.segment[result.source], window=window,
-                   window_offsets=exclusive_sum(np.bincount(window, minlength=table.shape[0])))
-
-
-def _clip_table(ragged: Ragged, windows: WindowTable, *, boundary: Boundary | str,
-                keep_empty: bool, check_validity: bool, method: Method | str,
-                n: SupportsIndex | str, max_depth: SupportsIndex | None,
-                tolerance: float | None, mode: Mode | str, backend: Backend | str,
-                resolution: float | str | None) -> RaggedClipResult:
-    """Clip `ragged`, each geometry against its window in `windows`."""
+        ragged, table, pairs = _pair_windows(ragged, as_windows(windows))
+    else:
+        assert window is not None
+        table = WindowTable.of(window, ragged.count)
     options, side, engine = resolve_geometry_options(
-        windows, ragged.kind.dimension, boundary=boundary, method=method, n=n,
+        table, ragged.kind.dimension, boundary=boundary, method=method, n=n,
         max_depth=max_depth, tolerance=tolerance, mode=mode, backend=backend,
         resolution=resolution, size=ragged.coords.shape[0])
     if ragged.kind.dimension == 0:
-        return _clip_points(ragged, windows, side, keep_empty)
-    if ragged.kind.dimension == 1:
-        return _line_result(ragged, engine.clip_lines(ragged, windows, options,
-                                                      side is Boundary.INTERIOR), keep_empty)
-    result = _polygon_result(ragged, engine.clip_polygons(ragged, windows, options),
-                             keep_empty)
-    if check_validity:
-        invalid = int((~shapely.is_valid(ragged.to_shapely())).sum())
-        result = replace(result, stats=replace(result.stats, invalid_polygons=invalid))
-    return result
+        result = _clip_points(ragged, table, side, keep_empty)
+    elif ragged.kind.dimension == 1:
+        result = _line_result(ragged, engine.clip_lines(ragged, table, options,
+                                                        side is Boundary.INTERIOR), keep_empty)
+    else:
+        result = _polygon_result(ragged, engine.clip_polygons(ragged, table, options),
+                                 keep_empty)
+        if check_validity:
+            invalid = int((~shapely.is_valid(ragged.to_shapely())).sum())
+            result = replace(result, stats=replace(result.stats, invalid_polygons=invalid))
+    return result if pairs is None else _window_result(result, pairs, table)
+
+
+def _pair_windows(ragged: Ragged, bounds: np.ndarray
+                  ) -> tuple[Ragged, WindowTable, WindowPairs]:
+    """Return the (geometry, window) pairs' geometries, their windows and the pairs."""
+    pairs = assign_boxes(vertex_boxes(ragged.coords, ragged.vertex_offsets()), bounds)
+    pair_window = np.repeat(np.arange(bounds.shape[0], dtype=np.int64),
+                            np.diff(pairs.window_offsets))
+    return ragged.take(pairs.segment), WindowTable(bounds, pair_window), pairs
+
+
+def _window_result(result: RaggedClipResult, pairs: WindowPairs,
+                   table: WindowTable) -> RaggedClipResult:
+    """Name each output of the pairs' clip by its source geometry and its window."""
+    window = table.index[result.source]
+    return replace(result, source=pairs.segment[result.source], window=window,
+                   window_offsets=exclusive_sum(np.bincount(
+                       window, minlength=table.bounds.shape[0])))
 
 
 def _stats(counters: np.ndarray, segments_in: int, pieces_out: int, ragged: Ragged,

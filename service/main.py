@@ -59,7 +59,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     >>> sorted(p for p in app.openapi()["paths"] if p.startswith("/v1"))
     ... # doctest: +NORMALIZE_WHITESPACE
     ['/v1/capabilities', '/v1/clip/geoarrow', '/v1/clip/geojson', '/v1/clip/geojson-seq',
-     '/v1/clip/segments', '/v1/clip/svg']
+     '/v1/clip/segments', '/v1/clip/svg', '/v1/tiles', '/v1/tiles/{z}/{x}/{y}']
     """
     settings = settings or Settings()
     configure_logging(settings.log_level)

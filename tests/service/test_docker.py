@@ -71,8 +71,9 @@ def test_image_install_and_start_steps_in_a_fresh_environment(tmp_path):
         if keyword == "COPY":
             *sources, target = arguments.split()
             for name in sources:
-                destination = source / (name if target.endswith("/") and target == "./"
-                                        else target)
+                # Into a folder (a target ending in "/") under the source's own name.
+                destination = (source / target / Path(name).name if target.endswith("/")
+                               else source / target)
                 if (ROOT / name).is_dir():
                     shutil.copytree(ROOT / name, destination,
                                     ignore=shutil.ignore_patterns("__pycache__", "*.nb[ic]"))

@@ -19,10 +19,10 @@
 - copies of one shared object under its version names (``libx.so``, ``libx.so.26``,
   ``libx.so.26.1``: pip writes links as files), made links again.
 
-``bytecode`` starts the service as the image does (``python -m service``) with
-``-X importtime``, asks each endpoint once, stops it, and deletes the ``.pyc`` of every
-module it did not import: those would be compiled in memory if ever imported (the root
-may be read-only), and most never are (numba's CUDA target, pydantic's v1 layer, ...).
+``bytecode`` starts the service as the image does (``python -m service``, with ``-v``),
+asks each endpoint once, stops it, and deletes every ``.pyc`` it did not read: a module
+without one is compiled in memory if it is ever imported (the root may be read-only),
+and most never are (numba's CUDA target, pydantic's v1 layer, pygments, ...).
 
 Both end by checking that what the service imports still imports.
 """
@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import hashlib
 import os
+import re
 import shutil
 import signal
 import socket
@@ -83,9 +84,10 @@ def _remove(path: Path) -> int:
 
 def remove_installers(venv: Path) -> None:
     """Uninstall pip, setuptools and wheel (the last uninstalls itself)."""
-    subprocess.run([str(venv / "bin/python"), "-m", "pip", "uninstall", "--yes", "--quiet",
-                    *INSTALLERS], check=True)
     site = site_packages(venv)
+    installed = [name for name in INSTALLERS if any(site.glob(f"{name}-*.dist-info"))]
+    subprocess.run([str(venv / "bin/python"), "-m", "pip", "uninstall", "--yes", "--quiet",
+                    *installed], check=True)
     for leftover in ("_distutils_hack", "distutils-precedence.pth"):
         if (site / leftover).exists():
             _remove(site / leftover)
@@ -252,17 +254,21 @@ def _ask_each_endpoint(url: str, venv: Path) -> None:
             raise RuntimeError(f"{path}: {status}, expected {expected}: {answer[:500]!r}")
 
 
-def imported_modules(venv: Path) -> set[str]:
-    """Return the modules ``python -m service`` imports while it answers each endpoint."""
+def loaded_bytecode(venv: Path) -> set[Path]:
+    """Return the ``.pyc`` files ``python -m service`` reads while it answers each endpoint.
+
+    ``python -v`` names each one it reads ("# code object from '...'"), modules imported
+    through importlib included (``-X importtime`` leaves those out).
+    """
     port = _free_port()
     environment = {**os.environ, "RNSCA_HOST": "127.0.0.1", "RNSCA_PORT": str(port),
                    "RNSCA_WORKERS": "1"}
     url = f"http://127.0.0.1:{port}"
-    # The import lines go to a file: hundreds of kilobytes, more than a pipe holds.
+    # To a file: megabytes, more than a pipe holds.
     with tempfile.TemporaryFile("w+") as log:
-        process = subprocess.Popen(
-            [str(venv / "bin/python"), "-X", "importtime", "-m", "service"],
-            env=environment, stdout=log, stderr=subprocess.STDOUT, text=True)
+        process = subprocess.Popen([str(venv / "bin/python"), "-v", "-m", "service"],
+                                   env=environment, stdout=log, stderr=subprocess.STDOUT,
+                                   text=True)
         try:
             deadline = time.monotonic() + 1800  # a cold cache compiles for minutes
             while not _ready(url):
@@ -272,20 +278,22 @@ def imported_modules(venv: Path) -> set[str]:
             _ask_each_endpoint(url, venv)
         except Exception:
             log.seek(0)
-            lines = [line for line in log if not line.startswith("import time:")]
-            print("".join(lines)[-5000:], file=sys.stderr)
+            print("".join(line for line in log if not line.startswith("#"))[-5000:],
+                  file=sys.stderr)
             raise
         finally:
             process.send_signal(signal.SIGTERM)
             process.wait(timeout=120)
             log.seek(0)
             output = log.read()
-    modules = {line.split("|")[-1].strip() for line in output.splitlines()
-               if line.startswith("import time:") and "|" in line}
-    modules.discard("package")  # the header line's last column
-    if process.returncode != 0 or "service.main" not in modules:
-        raise RuntimeError("the service failed:\n" + output[-3000:])
-    return modules
+    loaded = {Path(match) for match in re.findall(r"^# code object from '(.+\.pyc)'$",
+                                                  output, re.MULTILINE)}
+    # uvicorn raises SIGTERM again once it has shut down (the status says so).
+    if process.returncode not in (0, -signal.SIGTERM) or not any(
+            path.match("service/__pycache__/main.*.pyc") for path in loaded):
+        raise RuntimeError(f"the service failed (status {process.returncode}):\n"
+                           + output[-3000:])
+    return loaded
 
 
 def _ready(url: str) -> bool:
@@ -299,20 +307,13 @@ def _ready(url: str) -> bool:
     return status == 200
 
 
-def module_of(pyc: Path, site: Path) -> str:
-    """Return the module name of bytecode file `pyc` (in a ``__pycache__`` of `site`)."""
-    package = pyc.parent.parent.relative_to(site).parts
-    stem = pyc.name.split(".")[0]
-    return ".".join(package if stem == "__init__" else (*package, stem))
-
-
 def remove_unused_bytecode(venv: Path) -> int:
-    """Delete the bytecode of modules the running service never imported; return bytes."""
+    """Delete the bytecode the running service never read; return the bytes freed."""
     site = site_packages(venv)
-    used = imported_modules(venv)
+    loaded = loaded_bytecode(venv)
     freed = 0
     for pyc in list(site.rglob("__pycache__/*.pyc")):
-        if module_of(pyc, site) not in used:
+        if pyc not in loaded:
             freed += _remove(pyc)
     for folder in list(site.rglob("__pycache__")):
         if folder.is_dir() and not any(folder.iterdir()):

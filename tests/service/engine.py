@@ -12,7 +12,6 @@ from __future__ import annotations
 import fcntl
 import json
 import os
-import re
 import shutil
 import subprocess
 import tempfile
@@ -27,7 +26,8 @@ import httpx
 from tests.e2e.server import ROOT
 from tests.missing import missing
 
-__all__ = ["IMAGE", "Container", "build_image", "docker", "inspect", "require_engine"]
+__all__ = ["IMAGE", "Container", "build_image", "build_lock", "docker", "inspect",
+           "require_engine"]
 
 #: The tag the tests build the Dockerfile under.
 IMAGE = "rnsca:test"
@@ -61,8 +61,9 @@ def inspect(name: str, template: str) -> str:
 
 
 @contextmanager
-def _build_lock() -> Iterator[None]:
-    # The two xdist workers build one after the other: the second finds every layer cached.
+def build_lock() -> Iterator[None]:
+    """Hold the lock of image builds: the xdist workers build one after the other (the
+    second finds every layer cached)."""
     with open(Path(tempfile.gettempdir()) / "rnsca-docker-build.lock", "a") as handle:
         fcntl.flock(handle, fcntl.LOCK_EX)
         try:
@@ -81,8 +82,10 @@ def _build_args() -> list[str]:
 def build_image(tag: str = IMAGE) -> str:
     """Build the Dockerfile as `tag` (base images stood in if need be); return `tag`."""
     require_engine()
-    with _build_lock():
-        if docker("image", "inspect", "python:3.11-slim", check=False).returncode != 0:
+    with build_lock():
+        # The Dockerfile's base, and the proxy's of docker/compose.yml.
+        bases = ("python:3.11-slim", "debian:bookworm-slim")
+        if docker("image", "inspect", *bases, check=False).returncode != 0:
             result = subprocess.run([str(BASE_IMAGES)], capture_output=True, text=True,
                                     timeout=1800)
             assert result.returncode == 0, (
@@ -145,11 +148,3 @@ class Container:
 
     def __exit__(self, *exc) -> None:
         docker("rm", "--force", "--volumes", self.name, check=False)
-
-
-def megabytes(size: str | int) -> float:
-    """Return `size` (bytes, or Docker's "565MB"-style text) in megabytes (10**6)."""
-    if isinstance(size, int) or size.isdigit():
-        return int(size) / 1e6
-    number, unit = re.fullmatch(r"([\d.]+)\s*([kMG]?B)", size).groups()
-    return float(number) * {"B": 1e-6, "kB": 1e-3, "MB": 1, "GB": 1e3}[unit]

@@ -22,7 +22,7 @@ import pytest
 
 from tests.e2e.server import ROOT
 from tests.missing import missing
-from tests.service.engine import build_image, docker
+from tests.service.engine import build_image, build_lock, docker
 
 pytestmark = pytest.mark.slow
 
@@ -62,7 +62,9 @@ class Stack:
 
     def __enter__(self) -> Stack:
         # The replicas' image is the one the other tests built (every layer cached).
-        self.compose("up", "--detach", "--build")
+        with build_lock():
+            self.compose("build")
+        self.compose("up", "--detach")
         port = self.compose("port", "proxy", "8080").stdout.strip().rsplit(":", 1)[1]
         self.url = f"http://127.0.0.1:{port}"
         return self
@@ -83,7 +85,7 @@ def test_two_replicas_share_requests_and_a_killed_one_loses_none():
     if shutil.which("docker-compose") is None:
         missing("docker-compose is not installed (apt-get install docker-compose; "
                 ".ci/run installs it)")
-    build_image("rnsca:latest")
+    build_image()  # and the base images, stood in if need be
     with Stack() as stack:
         replicas = {stack.address("rnsca-1"): "rnsca-1", stack.address("rnsca-2"): "rnsca-2"}
         with httpx.Client(base_url=stack.url, timeout=60) as client:

@@ -264,11 +264,14 @@ def loaded_bytecode(venv: Path) -> set[Path]:
     environment = {**os.environ, "RNSCA_HOST": "127.0.0.1", "RNSCA_PORT": str(port),
                    "RNSCA_WORKERS": "1"}
     url = f"http://127.0.0.1:{port}"
-    # To a file: megabytes, more than a pipe holds.
-    with tempfile.TemporaryFile("w+") as log:
+    # From an empty folder, as the image's WORKDIR: ``-m`` puts the working directory
+    # first on sys.path, and a source tree there (docker/install.sh runs in one) would be
+    # imported instead of the environment's copy. The log goes to a file: megabytes, more
+    # than a pipe holds.
+    with tempfile.TemporaryFile("w+") as log, tempfile.TemporaryDirectory() as empty:
         process = subprocess.Popen([str(venv / "bin/python"), "-v", "-m", "service"],
-                                   env=environment, stdout=log, stderr=subprocess.STDOUT,
-                                   text=True)
+                                   cwd=empty, env=environment, stdout=log,
+                                   stderr=subprocess.STDOUT, text=True)
         try:
             deadline = time.monotonic() + 1800  # a cold cache compiles for minutes
             while not _ready(url):
@@ -289,8 +292,9 @@ def loaded_bytecode(venv: Path) -> set[Path]:
     loaded = {Path(match) for match in re.findall(r"^# code object from '(.+\.pyc)'$",
                                                   output, re.MULTILINE)}
     # uvicorn raises SIGTERM again once it has shut down (the status says so).
+    main = site_packages(venv) / "service/__pycache__"
     if process.returncode not in (0, -signal.SIGTERM) or not any(
-            path.match("service/__pycache__/main.*.pyc") for path in loaded):
+            path.parent == main and path.name.startswith("main.") for path in loaded):
         raise RuntimeError(f"the service failed (status {process.returncode}):\n"
                            + output[-3000:])
     return loaded

@@ -80,8 +80,13 @@ def _build_args() -> list[str]:
 
 
 def build_image(tag: str = IMAGE) -> str:
-    """Build the Dockerfile as `tag` (base images stood in if need be); return `tag`."""
+    """Build the Dockerfile as `tag` (base images stood in if need be); return `tag`.
+
+    ``RNSCA_TEST_IMAGE=name`` tests that image as it is instead (nothing is built).
+    """
     require_engine()
+    if os.environ.get("RNSCA_TEST_IMAGE"):
+        return os.environ["RNSCA_TEST_IMAGE"]
     with build_lock():
         # The Dockerfile's base, and the proxy's of docker/compose.yml.
         bases = ("python:3.11-slim", "debian:bookworm-slim")

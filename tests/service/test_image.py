@@ -69,7 +69,7 @@ def test_image_serves_health_readiness_and_a_clip_of_each_endpoint(served):
 
     r = httpx.post(url + "/v1/clip/svg",
                    json={"window": [0, 0, 10, 10], "paths": ["M -5 5 L 15 5"]})
-    assert r.status_code == 200 and r.json()["paths"] == ["M0,5L10,5"]
+    assert r.status_code == 200 and r.json()["paths"] == ["M0 5H10"]
 
     line = shapely.from_geojson(orjson.dumps(LINE))
     r = httpx.post(url + "/v1/clip/geoarrow", params=window,

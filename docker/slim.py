@@ -70,6 +70,17 @@ def site_packages(venv: Path) -> Path:
     return found
 
 
+def _python(venv: Path, *args: str, **options) -> subprocess.CompletedProcess:
+    """Return the finished run of the environment's python with `args`, in an empty folder.
+
+    As the image runs it: ``-c`` and ``-m`` put the working directory first on sys.path,
+    and a source tree there (docker/install.sh runs in one) would be imported instead of
+    the installed copy.
+    """
+    with tempfile.TemporaryDirectory() as empty:
+        return subprocess.run([str(venv / "bin/python"), *args], cwd=empty, **options)
+
+
 def _remove(path: Path) -> int:
     """Remove file or folder `path`; return the bytes freed."""
     if path.is_symlink() or path.is_file():
@@ -86,8 +97,7 @@ def remove_installers(venv: Path) -> None:
     """Uninstall pip, setuptools and wheel (the last uninstalls itself)."""
     site = site_packages(venv)
     installed = [name for name in INSTALLERS if any(site.glob(f"{name}-*.dist-info"))]
-    subprocess.run([str(venv / "bin/python"), "-m", "pip", "uninstall", "--yes", "--quiet",
-                    *installed], check=True)
+    _python(venv, "-m", "pip", "uninstall", "--yes", "--quiet", *installed, check=True)
     for leftover in ("_distutils_hack", "distutils-precedence.pth"):
         if (site / leftover).exists():
             _remove(site / leftover)
@@ -125,14 +135,14 @@ def _shared_objects(site: Path) -> list[Path]:
                   and (p.suffix == ".so" or ".so." in p.name))
 
 
-def _loads(path: Path, python: Path) -> bool:
+def _loads(path: Path, venv: Path) -> bool:
     """Return whether the dynamic loader accepts shared object `path` (in a new process).
 
     Libraries that patchelf has edited (auditwheel's, some wheels' own) can come out of
     strip broken ("ELF load command address/offset not page-aligned") without a warning.
     """
     check = f"import ctypes; ctypes.CDLL({str(path)!r}, mode=ctypes.RTLD_GLOBAL)"
-    return subprocess.run([str(python), "-c", check], capture_output=True).returncode == 0
+    return _python(venv, "-c", check, capture_output=True).returncode == 0
 
 
 def strip_debug_symbols(venv: Path) -> int:
@@ -142,7 +152,6 @@ def strip_debug_symbols(venv: Path) -> int:
         print("slim: strip not found (binutils): shared objects keep their symbols",
               file=sys.stderr)
         return 0
-    python = venv / "bin/python"
     freed = 0
     for path in _shared_objects(site_packages(venv)):
         # In the same folder, so that $ORIGIN finds the libraries it needs.
@@ -151,7 +160,7 @@ def strip_debug_symbols(venv: Path) -> int:
                                 capture_output=True, text=True)
         if (result.returncode != 0 or result.stderr.strip()
                 or stripped.stat().st_size >= path.stat().st_size
-                or not _loads(stripped, python)):
+                or not _loads(stripped, venv)):
             stripped.unlink(missing_ok=True)
             continue
         shutil.copymode(path, stripped)
@@ -186,7 +195,7 @@ def link_copies(site: Path) -> int:
 
 def check_imports(venv: Path) -> None:
     """Fail unless what the service imports still imports."""
-    subprocess.run([str(venv / "bin/python"), "-c", CHECK], check=True)
+    _python(venv, "-c", CHECK, check=True)
 
 
 # --- bytecode -------------------------------------------------------------------------
@@ -221,8 +230,7 @@ def _arrow_body(venv: Path) -> bytes:
         "with pa.ipc.new_stream(sink, table.schema) as writer:\n"
         "    writer.write_table(table)\n"
         "sys.stdout.buffer.write(sink.getvalue().to_pybytes())\n")
-    return subprocess.run([str(venv / "bin/python"), "-c", script], check=True,
-                          capture_output=True).stdout
+    return _python(venv, "-c", script, check=True, capture_output=True).stdout
 
 
 def _ask_each_endpoint(url: str, venv: Path) -> None:
@@ -264,10 +272,8 @@ def loaded_bytecode(venv: Path) -> set[Path]:
     environment = {**os.environ, "RNSCA_HOST": "127.0.0.1", "RNSCA_PORT": str(port),
                    "RNSCA_WORKERS": "1"}
     url = f"http://127.0.0.1:{port}"
-    # From an empty folder, as the image's WORKDIR: ``-m`` puts the working directory
-    # first on sys.path, and a source tree there (docker/install.sh runs in one) would be
-    # imported instead of the environment's copy. The log goes to a file: megabytes, more
-    # than a pipe holds.
+    # From an empty folder (see `_python`). The log goes to a file: megabytes, more than a
+    # pipe holds.
     with tempfile.TemporaryFile("w+") as log, tempfile.TemporaryDirectory() as empty:
         process = subprocess.Popen([str(venv / "bin/python"), "-v", "-m", "service"],
                                    cwd=empty, env=environment, stdout=log,

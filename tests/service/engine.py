@@ -62,8 +62,10 @@ def inspect(name: str, template: str) -> str:
 
 @contextmanager
 def build_lock() -> Iterator[None]:
-    """Hold the lock of image builds: the xdist workers build one after the other (the
-    second finds every layer cached)."""
+    """Hold the lock of image builds inside the block.
+
+    The xdist workers build one after the other: the second finds every layer cached.
+    """
     with open(Path(tempfile.gettempdir()) / "rnsca-docker-build.lock", "a") as handle:
         fcntl.flock(handle, fcntl.LOCK_EX)
         try:
@@ -73,8 +75,10 @@ def build_lock() -> Iterator[None]:
 
 
 def _build_args() -> list[str]:
-    """Return ``--build-arg`` for the proxy variables set here (Docker keeps them out of
-    the image's history; pip inside the build uses them)."""
+    """Return ``--build-arg`` options for the proxy variables set here.
+
+    pip inside the build uses them; Docker keeps these out of the image's history.
+    """
     names = ("HTTP_PROXY", "HTTPS_PROXY", "NO_PROXY", "http_proxy", "https_proxy", "no_proxy")
     return [f"--build-arg={name}" for name in names if os.environ.get(name)]
 

@@ -119,7 +119,8 @@ def test_two_replicas_share_requests_and_a_killed_one_loses_none():
         log = stack.access_log()
         retried = [entry for entry in log if "," in entry["upstreams"]]
         print(f"compose: {len(statuses)} requests under load, rnsca-2 killed after "
-              f"{killed_at}; {len(retried)} retried by the proxy, none lost")
+              f"{killed_at}; {len(retried)} retried by the proxy, none lost: "
+              + "; ".join(f"{e['upstreams']} {e['statuses']}" for e in retried))
         assert retried, "no request reached the killed replica"
         for entry in retried:
             first, second = (u.strip() for u in entry["upstreams"].split(","))

@@ -27,6 +27,8 @@ from tests.service.engine import build_image, build_lock, docker
 pytestmark = pytest.mark.slow
 
 COMPOSE_FILE = ROOT / "docker/compose.yml"
+#: The stack's services (not those of the profile dask).
+SERVICES = ("rnsca-1", "rnsca-2", "proxy")
 BODY = {"window": [0, 0, 10, 10], "segments": [[-5, 5, 15, 5]] * 2000}
 #: One access-log line of the proxy (docker/proxy/nginx.conf, log_format upstreams).
 ACCESS = re.compile(r'"POST (?P<path>\S+) [^"]*" (?P<status>\d+) \S+ '
@@ -61,10 +63,11 @@ class Stack:
         return [m.groupdict() for m in ACCESS.finditer(logs)]
 
     def __enter__(self) -> Stack:
-        # The replicas' image is the one the other tests built (every layer cached).
+        # The replicas' image is the one the other tests built (every layer cached); the
+        # profile dask's services are left out.
         with build_lock():
-            self.compose("build")
-        self.compose("up", "--detach")
+            self.compose("build", *SERVICES)
+        self.compose("up", "--detach", *SERVICES)
         port = self.compose("port", "proxy", "8080").stdout.strip().rsplit(":", 1)[1]
         self.url = f"http://127.0.0.1:{port}"
         return self

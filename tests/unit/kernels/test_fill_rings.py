@@ -158,6 +158,15 @@ def test_a_counter_touching_an_edge_at_one_point_inside_a_shape_around_the_windo
     assert_clean_and_same_region(d, "nonzero")
 
 
+def test_a_sliver_an_ulp_below_an_edge_paints_nothing():
+    # The line from (0, -5e-324) up to (1, 2) crosses y = 0 at t ~ 2.5e-324 (0 in
+    # floats). The root finder once lost the sign of its bracket there (the Illinois
+    # halving of g(0) = -5e-324 underflows to -0.0) and cut the line at t = 0.25, a
+    # point (0.25, 0.5) moved onto the edge: a triangle of area 0.25 out of nothing.
+    assert clean("M0 0 L0 -5e-324 L1 2 Z", "nonzero") == ""
+    assert clean("M0 0 L0 -5e-324 L1 2 Z", "evenodd") == ""
+
+
 @pytest.mark.parametrize("rule", RULES)
 def test_outlines_crossing_inside_the_window_stay_separate_rings(rule):
     # The second square turns the other way and sticks out of the first at x = 5..6:

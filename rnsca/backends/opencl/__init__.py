@@ -92,7 +92,7 @@ from rnsca.kernels import counters as C
 from rnsca.kernels import polygons as PG
 from rnsca.kernels import polylines as PL
 from rnsca.kernels import records as R
-from rnsca.kernels import windows as WK
+from rnsca.kernels.copies import copy_ranges
 from rnsca.kernels.outcode import BOTTOM, LEFT, RIGHT, TOP
 from rnsca.many_windows import assign
 from rnsca.options import Backend, Curves, Method, Mode, PathOptions, Precision, SegmentOptions
@@ -672,42 +672,24 @@ class OpenCLBackend:
         """Prune the `active` rings on the device: `_prune` of those rings only.
 
         Only the rings of ambiguous polygons go to the device (their vertices gathered
-        on the host); the tables come back laid out for every ring, the others' chunks
-        rejected, as `_prune` with an `active` mask gives them. The polygons wholly
-        inside or outside the window are most of a large input (1M scattered stars: 84%),
-        and their vertices were most of the call's transfers.
+        on every core); the polygons wholly inside or outside the window are most of a
+        large input (1M scattered stars: 84%), and their vertices were most of the
+        call's transfers. The tables stay in the active rings' layout: the assembly
+        reads a ring's chunks only for ambiguous polygons, through ``chunk_start[ring]``,
+        so only the active rings' entries are set (the others' are never read).
         """
         rings = np.flatnonzero(active)
-        sizes = np.diff(ring_offsets)[rings]
-        sub_offsets = np.zeros(rings.shape[0] + 1, dtype=np.int64)
-        np.cumsum(sizes, out=sub_offsets[1:])
-        rows = np.repeat(ring_offsets[rings] - sub_offsets[:-1], sizes) + np.arange(
-            sub_offsets[-1], dtype=np.int64)
-        sub_xy = np.empty((rows.shape[0], 2))
-        WK.gather_rows(np.ascontiguousarray(xy, dtype=np.float64), rows, sub_xy)
-        sub_tables, counters, device_stats = self._prune(
+        starts = ring_offsets[rings]
+        sizes = ring_offsets[rings + 1] - starts
+        sub_offsets = exclusive_sum(sizes)
+        sub_xy = np.empty((int(sub_offsets[-1]), 2))
+        copy_ranges(np.ascontiguousarray(xy, dtype=np.float64), starts, sizes,
+                    sub_offsets[:-1], sub_xy)
+        (sub_chunk_start, *sub_tables), counters, device_stats = self._prune(
             sub_xy, sub_offsets, ring_window[rings], windows, options, True, None)
-        _, sub_decision, _, kept, pieces = sub_tables
-        segments = np.maximum(np.diff(ring_offsets), 1) - 1
-        chunks_per_ring = -(-segments // PL.RUN_LEAF_SEGMENTS)
-        chunk_start = exclusive_sum(chunks_per_ring)
-        decision = np.full(int(chunk_start[-1]), PL.CHUNK_REJECTED, dtype=np.uint8)
-        active_chunks = chunks_per_ring[rings]
-        decision[np.repeat(chunk_start[rings] - exclusive_sum(active_chunks)[:-1],
-                           active_chunks) + np.arange(int(active_chunks.sum()))] = sub_decision
-        # Each chunk's first row among the pieces: the segmented chunks' lengths, in order.
-        chunk_ring = np.repeat(np.arange(ring_offsets.shape[0] - 1, dtype=np.int64),
-                               chunks_per_ring)
-        chunk_first = (ring_offsets[chunk_ring]
-                       + (np.arange(decision.shape[0]) - chunk_start[chunk_ring])
-                       * PL.RUN_LEAF_SEGMENTS)
-        chunk_length = np.minimum(chunk_first + PL.RUN_LEAF_SEGMENTS,
-                                  ring_offsets[chunk_ring + 1] - 1) - chunk_first
-        segmented_rows = np.where(decision == PL.CHUNK_SEGMENTED, chunk_length, 0)
-        piece_start = np.zeros(decision.shape[0], dtype=np.int64)
-        np.cumsum(segmented_rows[:-1], out=piece_start[1:])
-        return ((chunk_start[:-1].copy(), decision, piece_start, kept, pieces), counters,
-                device_stats)
+        chunk_start = np.zeros(ring_offsets.shape[0] - 1, dtype=np.int64)
+        chunk_start[rings] = sub_chunk_start
+        return (chunk_start, *sub_tables), counters, device_stats
 
     def _prune(self, xy: np.ndarray, part_offsets: np.ndarray, part_window: np.ndarray,
                windows: np.ndarray, options: SegmentOptions, drop_edge_runs: bool,
@@ -796,7 +778,7 @@ class OpenCLBackend:
         segmented_rows = np.where(chunk_decision == PL.CHUNK_SEGMENTED, chunk_length, 0)
         piece_start = np.zeros(n_chunks, dtype=np.int64)
         np.cumsum(segmented_rows[:-1], out=piece_start[1:])
-        pieces = pieces.astype(np.float64)
+        pieces = pieces.astype(np.float64, copy=False)  # a fresh array from the device
         if real is np.float32:
             _exact_float32_ends(pieces, xy, windows, part_window, chunk_part, chunk_first,
                                 segmented_rows)

@@ -714,11 +714,6 @@ class OpenCLBackend:
         chunk_start = exclusive_sum(chunks_per_part)
         n_chunks = int(chunk_start[-1])
         chunk_part = np.repeat(np.arange(n_parts, dtype=np.int64), chunks_per_part)
-        # Each chunk's first vertex and segment count (the host needs them to assemble).
-        chunk_first = (part_offsets[chunk_part]
-                       + (np.arange(n_chunks) - chunk_start[chunk_part]) * PL.RUN_LEAF_SEGMENTS)
-        chunk_length = np.minimum(chunk_first + PL.RUN_LEAF_SEGMENTS,
-                                  part_offsets[chunk_part + 1] - 1) - chunk_first
         queue = self._device.queue
         ledger = _Ledger()
         part_groups = max(1, -(-n_parts // LOCAL_SIZE))
@@ -757,7 +752,9 @@ class OpenCLBackend:
                 event, position = cl_array.cumsum(segmented[:n_chunks], queue=queue,
                                                   return_event=True)
                 ledger.kernel_events.append(event)
-                total = int(ledger.from_device(queue, position[n_chunks - 1:n_chunks])[0])
+                # The chunks' piece rows, inclusive: the assembly's piece_start, shifted.
+                piece_end = ledger.from_device(queue, position[:n_chunks])
+                total = int(piece_end[-1])
             keep = cl_array.empty(queue, max(1, total), np.uint8)
             result = cl_array.empty(queue, max(1, 6 * total), real)
             ledger.kernel_events.append(kernels.clip_chunk_segments(
@@ -775,13 +772,16 @@ class OpenCLBackend:
                 ledger.from_device(queue, run_counters).reshape(-1, C.WIDTH),
                 ledger.from_device(queue, chunk_counters).reshape(-1, C.WIDTH)])
             device_stats = ledger.stats(self.name, self.precision)
-        segmented_rows = np.where(chunk_decision == PL.CHUNK_SEGMENTED, chunk_length, 0)
         piece_start = np.zeros(n_chunks, dtype=np.int64)
-        np.cumsum(segmented_rows[:-1], out=piece_start[1:])
+        if n_chunks:
+            piece_start[1:] = piece_end[:-1]
         pieces = pieces.astype(np.float64, copy=False)  # a fresh array from the device
         if real is np.float32:
+            # Each chunk's first vertex, and its rows among the pieces.
+            chunk_first = (part_offsets[chunk_part] + (np.arange(n_chunks)
+                           - chunk_start[chunk_part]) * PL.RUN_LEAF_SEGMENTS)
             _exact_float32_ends(pieces, xy, windows, part_window, chunk_part, chunk_first,
-                                segmented_rows)
+                                np.diff(piece_start, append=total))
         tables = (chunk_start[:-1].copy(), chunk_decision, piece_start, kept, pieces)
         return tables, counters, device_stats
 

@@ -117,9 +117,11 @@ def _library_options(options: ClipOptions, settings: Settings) -> dict:
                 resolution=options.resolution)
 
 
-#: Share of the request's time limit kept, after verification, for writing the answer.
-#: orjson writes the answer to a 21 MB GeoJSON body in 0.2 s (measured): a tenth of the
-#: default 30 s leaves room on a busy machine.
+#: Share of the request's time limit kept, after verification, for writing the answer, at
+#: least: orjson writes the answer to a 21 MB GeoJSON body in 0.2 s (measured), and a
+#: tenth of the default 30 s leaves room on a busy machine. Verification also leaves as
+#: much time as reading and clipping took (`_verify_within_budget`): writing the answer
+#: is of their order, and on a loaded machine slower by the same factor.
 _ANSWER_SHARE = 0.1
 
 
@@ -178,7 +180,9 @@ def _verify_within_budget(kind: str, asked: bool | str | None, clip_seconds: flo
     """
     sample = _COST.sample(kind, asked, clip_seconds, inputs, vertices,
                           settings.verify_cost_ratio)
-    time_limit = deadline - time.monotonic() - _ANSWER_SHARE * settings.request_time_limit
+    left = deadline - time.monotonic()
+    spent = settings.request_time_limit - left  # reading and clipping, so far
+    time_limit = left - max(_ANSWER_SHARE * settings.request_time_limit, spent)
     started = time.perf_counter()
     verification = call(sample=sample, time_limit=max(time_limit, 0.0),
                         max_crossings=settings.verify_max_crossings)

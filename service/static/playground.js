@@ -41,6 +41,7 @@ const world = $("world");
 const state = {
   format: null,          // "geojson" or "svg" once an input is loaded
   geojson: null,         // the parsed GeoJSON document
+  geojsonText: null,     // and its text (sent as is: JSON.parse rounds integers past 2**53)
   paths: null,           // the SVG path data strings
   inputError: false,     // the text could not be read (the error is shown)
   // What the numeric inputs hold (maybe invalid: the server says); none before an input.
@@ -74,7 +75,7 @@ function parseInput(text) {
       throw new InputError('GeoJSON must be an object with a "type" (a Geometry, Feature ' +
                            "or FeatureCollection).");
     }
-    return { format: "geojson", geojson: doc };
+    return { format: "geojson", geojson: doc, text: trimmed };
   }
   if (trimmed[0] === "<") {
     const doc = new DOMParser().parseFromString(trimmed, "image/svg+xml");
@@ -160,14 +161,15 @@ function loadInput({ keepWindow }) {
   try {
     parsed = parseInput($("input-text").value);
     Object.assign(state, { format: parsed.format, geojson: parsed.geojson || null,
-                           paths: parsed.paths || null });
+                           geojsonText: parsed.text || null, paths: parsed.paths || null });
     document.body.classList.toggle("format-geojson", state.format === "geojson");
     document.body.classList.toggle("format-svg", state.format === "svg");
     world.setAttribute("transform", state.format === "geojson" ? "scale(1 -1)" : "");
     drawInput();
   } catch (e) {
     if (!(e instanceof InputError)) throw e;
-    Object.assign(state, { format: null, geojson: null, paths: null, inputError: true });
+    Object.assign(state, { format: null, geojson: null, geojsonText: null, paths: null,
+                           inputError: true });
     $("input-layer").replaceChildren();
     clearResult();
     if (state.view === "tiles") tiles.showInput();
@@ -479,7 +481,7 @@ async function sendClip() {
   } finally {
     state.inFlight = false;
     if (state.pending && state.format) sendClip();
-    else setState(ok ? "idle" : "error");
+    else if (state.view === "clip") setState(ok ? "idle" : "error");  // (else tiles.js says)
   }
 }
 
@@ -812,6 +814,7 @@ function onOptionChange() {
 function showView(name) {
   // Switch between the clip view and the tile view; the input is drawn again for it.
   state.view = name;
+  if (name !== "tiles") tiles.hide();
   document.body.classList.toggle("view-tiles", name === "tiles");
   $("status").textContent = "";
   $("request").textContent = "";

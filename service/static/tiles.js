@@ -27,7 +27,8 @@ export function lonLatToWorld([lon, lat]) {
   // World coordinates of WebMercatorQuad on the unit square: x east from the
   // antimeridian, y south from the top edge; latitudes clamped to the square.
   const phi = (Math.max(-MAX_LATITUDE, Math.min(MAX_LATITUDE, lat)) * Math.PI) / 180;
-  return [(lon + 180) / 360, 0.5 - Math.asinh(Math.tan(phi)) / (2 * Math.PI)];
+  const y = 0.5 - Math.asinh(Math.tan(phi)) / (2 * Math.PI);
+  return [(lon + 180) / 360, Math.max(0, Math.min(1, y))];  // (tan rounds at the edge)
 }
 
 export function tileRange(box, z) {
@@ -96,7 +97,7 @@ export function createTileView(ui) {
       $("grid-tiles").replaceChildren();
       note.textContent = state.format === "svg"
         ? "The tile view takes GeoJSON in lon/lat (EPSG:4326); this input is SVG path data." : "";
-      clearTile();
+      dropTile();
       ui.setState(state.inputError ? "error" : "idle");
       return;
     }
@@ -109,7 +110,7 @@ export function createTileView(ui) {
     drawGrid();
     if (view.selected && inRange(view.selected)) requestTile(view.selected);
     else {
-      clearTile();
+      dropTile();
       ui.setState("idle");
     }
   }
@@ -200,7 +201,7 @@ export function createTileView(ui) {
     let ok = false;
     try {
       const response = await fetch(url, {
-        method: "POST", body: JSON.stringify(state.geojson),
+        method: "POST", body: state.geojsonText,
         headers: { "Content-Type": "application/geo+json",
                    Accept: "application/vnd.mapbox-vector-tile, application/problem+json" },
       });
@@ -236,8 +237,18 @@ export function createTileView(ui) {
       clearTile();
       ui.showError({ title: "Could not reach the server", detail: String(e) });
     } finally {
-      if (mine === view.latest) ui.setState(ok ? "idle" : "error");
+      // Unless a later change (typing: "loading") already says the page is not done.
+      if (mine === view.latest && document.body.dataset.state === "busy") {
+        ui.setState(ok ? "idle" : "error");
+      }
     }
+  }
+
+  function dropTile() {
+    // Clear the tile shown, and forget any answer still on its way.
+    view.latest += 1;
+    view.selected = null;
+    clearTile();
   }
 
   function clearTile() {
@@ -357,9 +368,9 @@ export function createTileView(ui) {
   $("zoom").value = "0";
   $("zoom").addEventListener("change", () => {
     view.zoomChosen = true;
-    view.selected = null;
+    dropTile();
     if (view.box) drawGrid();
-    clearTile();
+    if (document.body.dataset.state === "busy") ui.setState("idle");
   });
   for (const id of ["tile-extent", "tile-buffer"]) {
     $(id).addEventListener("change", () => {
@@ -382,5 +393,6 @@ export function createTileView(ui) {
   return {
     showInput,
     newInput() { view.zoomChosen = false; view.selected = null; },
+    hide() { view.latest += 1; },    // an answer still on its way is not shown
   };
 }

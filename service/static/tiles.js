@@ -257,8 +257,12 @@ export function createTileView(ui) {
     delete box.dataset.bytes;
     $("tile-features").replaceChildren();
     $("tile-summary").replaceChildren();
-    $("tile-layers").replaceChildren();
+    const hint = document.createElement("p");
+    hint.className = "note";
+    hint.textContent = ui.state.format === "geojson" ? "Click a tile of the grid to see what it holds." : "";
+    $("tile-layers").replaceChildren(hint);
     $("tile-json").textContent = "";
+    $("tile-json-details").hidden = true;
     $("tile-title").textContent = "Tile";
     $("tile-canvas").style.display = "none";
   }
@@ -299,6 +303,7 @@ export function createTileView(ui) {
     }));
     $("tile-layers").replaceChildren(...(layers.length ? layers.map(layerTable) : [emptyNote()]));
     $("tile-json").textContent = tileJson({ tile: id, bytes, layers });
+    $("tile-json-details").hidden = false;
   }
 
   function emptyNote() {

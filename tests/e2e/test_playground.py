@@ -447,6 +447,73 @@ def comparable(layer: dict) -> dict:
                          for f in layer["features"]]}
 
 
+def zigzag_commands(parts: list[tuple[str, list[tuple[int, int]]]]) -> list[int]:
+    """MVT geometry commands for parts [(kind, points)]: kind "line" (MoveTo, LineTo),
+    "ring" (the same, then ClosePath) or "points" (one MoveTo of them all)."""
+    out, x, y = [], 0, 0
+
+    def deltas(points):
+        nonlocal x, y
+        for px, py in points:
+            out.extend([((px - x) << 1) ^ ((px - x) >> 31), ((py - y) << 1) ^ ((py - y) >> 31)])
+            x, y = px, py
+
+    for kind, points in parts:
+        first = points if kind == "points" else points[:1]
+        out.append((len(first) << 3) | 1)
+        deltas(first)
+        if kind != "points":
+            out.append(((len(points) - 1) << 3) | 2)
+            deltas(points[1:])
+        if kind == "ring":
+            out.append((1 << 3) | 7)
+    return out
+
+
+def test_the_page_decoder_reads_what_mapbox_vector_tile_reads(page):
+    """Every kind of value (float32 and 64-bit integers among them), ids past 2**53 and
+    none, multi-part geometry, holes and a zero-area ring, in a tile written by protobuf."""
+    from mapbox_vector_tile.Mapbox import vector_tile_pb2
+
+    tile = vector_tile_pb2.tile()
+    layer = tile.layers.add(name="kinds", version=2, extent=256)
+    values = [("string_value", "é ünïcode"), ("float_value", 0.1),
+              ("double_value", -2.5e300), ("int_value", -(2**63)),
+              ("uint_value", 2**64 - 1), ("sint_value", -(2**62) - 1),
+              ("bool_value", False), ("int_value", 7)]
+    for i, (kind, value) in enumerate(values):
+        layer.keys.append(f"k{i}")
+        layer.values.add(**{kind: value})
+    polygon = layer.features.add(id=2**64 - 1, type=3, tags=[0, 0, 1, 1, 2, 2, 3, 3])
+    polygon.geometry.extend(zigzag_commands([
+        ("ring", [(0, 0), (10, 0), (10, 10), (0, 10)]),
+        ("ring", [(2, 2), (2, 8), (8, 8), (8, 2)]),              # a hole
+        ("ring", [(40, 40), (50, 40), (60, 40)]),                # zero area: dropped
+        ("ring", [(-20, 20), (-10, 20), (-10, 30), (-20, 30)])]))
+    lines = layer.features.add(id=5, type=2, tags=[4, 4, 5, 5, 6, 6])
+    lines.geometry.extend(zigzag_commands([("line", [(-64, 3), (300, 4), (7, 250)]),
+                                           ("line", [(1, 1), (2, 2)])]))
+    points = layer.features.add(type=1, tags=[7, 7])
+    points.geometry.extend(zigzag_commands([("points", [(5, 5), (-3, 9), (256, 256)])]))
+    single = layer.features.add(type=1)
+    single.geometry.extend(zigzag_commands([("points", [(1, 2)])]))
+    data = tile.SerializeToString()
+
+    decoded = json.loads(page.evaluate("""async (bytes) => {
+        const mvt = await import("./playground/mvt.js");
+        return mvt.tileJson(mvt.decodeTile(new Uint8Array(bytes)));
+    }""", list(data)))
+    assert [comparable(layer) for layer in decoded] == decoded_by_mapbox_vector_tile(data)
+    features = decoded[0]["features"]
+    assert features[0]["id"] == 2**64 - 1 and features[0]["properties"]["k3"] == -(2**63)
+    assert features[1]["properties"] == {"k4": 2**64 - 1, "k5": -(2**62) - 1, "k6": False}
+    assert features[0]["properties"]["k1"] == 0.10000000149011612     # float32 0.1
+    assert [f["geometry"]["type"] for f in features] == [
+        "MultiPolygon", "MultiLineString", "MultiPoint", "Point"]
+    assert [len(p) for p in features[0]["geometry"]["coordinates"]] == [2, 1]
+    assert features[2]["id"] is None
+
+
 def test_the_tile_grid_covers_the_input_bounds(page):
     open_tile_view(page, TILE_INPUT)
     assert page.is_hidden("#canvas") and page.is_visible("#grid-canvas")

@@ -48,7 +48,11 @@ export function createTileView(ui) {
   // geometryShapes, drawShapes, count).
   const { $ } = ui;
   const SVG_NS = "http://www.w3.org/2000/svg";
-  const view = { box: null, range: null, selected: null, latest: 0, zoomChosen: false };
+  // box: the input's world bounds; projected: its geometries in world coordinates;
+  // range: the tiles drawn; selected: the tile shown; latest: the number of the last
+  // tile request (older answers are dropped).
+  const view = { box: null, projected: [], range: null, selected: null, latest: 0,
+                 zoomChosen: false };
 
   function project(geom) {
     // A copy of a GeoJSON geometry in world coordinates.

@@ -1,6 +1,8 @@
 """The playground in a real headless Chromium (Debian's ``chromium``, driven by Playwright)
 against a live server: load an example, drag and resize the window with the mouse, and
-check that what is drawn and the numbers shown are the API's answer for that window.
+check that what is drawn and the numbers shown are the API's answer for that window; in
+the tile view, check the grid and that a clicked tile's decoded content is what
+`mapbox-vector-tile` reads from the same tile.
 
 Screenshots go to ``test-artifacts/`` at the repository's root (ignored by git).
 """

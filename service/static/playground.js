@@ -1,6 +1,7 @@
 // The rnsca playground: load GeoJSON or SVG path data, drag a clip window over it, and
-// draw what POST /v1/clip/geojson or /v1/clip/svg answers. Plain JavaScript, no build
-// step and nothing fetched from outside the service.
+// draw what POST /v1/clip/geojson or /v1/clip/svg answers; or, in the tile view
+// (tiles.js), see the vector tile grid over GeoJSON and what a tile holds. Plain
+// JavaScript modules, no build step and nothing fetched from outside the service.
 //
 // Coordinates: the drawing lives in <g id="world">, in the input's own units. GeoJSON
 // has y pointing up, so that group flips y for it; SVG path data has y pointing down
@@ -10,7 +11,10 @@
 // Test hooks: <body data-state> is "loading", "busy", "idle" or "error";
 // #results[data-window] is the window (JSON) of the result or error shown; summary
 // values and statistics carry their full-precision number in data-value; #copy-status
-// has data-copied="true" once the result is on the clipboard.
+// has data-copied="true" once the result is on the clipboard; <body> has the class
+// view-tiles while the tile view is shown (tiles.js lists its own hooks).
+
+import { createTileView } from "./tiles.js";
 
 const API = { geojson: "v1/clip/geojson", svg: "v1/clip/svg", capabilities: "v1/capabilities" };
 const EXAMPLES = "playground/examples/";
@@ -37,6 +41,7 @@ const world = $("world");
 const state = {
   format: null,          // "geojson" or "svg" once an input is loaded
   geojson: null,         // the parsed GeoJSON document
+  geojsonText: null,     // and its text (sent as is: JSON.parse rounds integers past 2**53)
   paths: null,           // the SVG path data strings
   inputError: false,     // the text could not be read (the error is shown)
   // What the numeric inputs hold (maybe invalid: the server says); none before an input.
@@ -48,7 +53,9 @@ const state = {
   pending: false,
   drag: null,
   inputTimer: 0,
+  view: "clip",          // "clip" or "tiles": which view is shown
 };
+let tiles = null;        // the tile view (tiles.js), once the page is set up
 
 class InputError extends Error {}
 
@@ -68,7 +75,7 @@ function parseInput(text) {
       throw new InputError('GeoJSON must be an object with a "type" (a Geometry, Feature ' +
                            "or FeatureCollection).");
     }
-    return { format: "geojson", geojson: doc };
+    return { format: "geojson", geojson: doc, text: trimmed };
   }
   if (trimmed[0] === "<") {
     const doc = new DOMParser().parseFromString(trimmed, "image/svg+xml");
@@ -154,16 +161,18 @@ function loadInput({ keepWindow }) {
   try {
     parsed = parseInput($("input-text").value);
     Object.assign(state, { format: parsed.format, geojson: parsed.geojson || null,
-                           paths: parsed.paths || null });
+                           geojsonText: parsed.text || null, paths: parsed.paths || null });
     document.body.classList.toggle("format-geojson", state.format === "geojson");
     document.body.classList.toggle("format-svg", state.format === "svg");
     world.setAttribute("transform", state.format === "geojson" ? "scale(1 -1)" : "");
     drawInput();
   } catch (e) {
     if (!(e instanceof InputError)) throw e;
-    Object.assign(state, { format: null, geojson: null, paths: null, inputError: true });
+    Object.assign(state, { format: null, geojson: null, geojsonText: null, paths: null,
+                           inputError: true });
     $("input-layer").replaceChildren();
     clearResult();
+    if (state.view === "tiles") tiles.showInput();
     showError({ title: "Input not readable", detail: e.message });
     setState("error");
     return;
@@ -173,10 +182,10 @@ function loadInput({ keepWindow }) {
     info.textContent = "";
     clearResult();
     offerOptions();
+    if (state.view === "tiles") tiles.showInput();
     setState("idle");
     return;
   }
-  const box = $("input-layer").getBBox();
   if (state.format === "geojson") {
     const m = measure(state.geojson);
     info.textContent = `GeoJSON: ${count(m.geometries)} geometries, ${count(m.vertices)} vertices`;
@@ -185,6 +194,12 @@ function loadInput({ keepWindow }) {
       (state.capabilities && !state.capabilities.svg ? " (this server has no SVG clipping)" : "");
   }
   if (parsed.warning) info.innerHTML += ` <span class="warning">${escapeHtml(parsed.warning)}</span>`;
+  offerOptions();
+  if (state.view === "tiles") {  // the clip view is hidden: its window waits until shown
+    tiles.showInput();
+    return;
+  }
+  const box = $("input-layer").getBBox();
   if (!keepWindow || !overlaps(state.window, box)) {
     // The middle half of the input; a flat input (a horizontal line) still gets a window.
     const size = Math.max(box.width, box.height) || 1;
@@ -192,7 +207,6 @@ function loadInput({ keepWindow }) {
     const cx = box.x + box.width / 2, cy = box.y + box.height / 2;
     setWindow(roundWindow([cx - w, cy - h, cx + w, cy + h], { width: size, height: size }));
   }
-  offerOptions();
   fitView();
   requestClip();
 }
@@ -467,7 +481,7 @@ async function sendClip() {
   } finally {
     state.inFlight = false;
     if (state.pending && state.format) sendClip();
-    else setState(ok ? "idle" : "error");
+    else if (state.view === "clip") setState(ok ? "idle" : "error");  // (else tiles.js says)
   }
 }
 
@@ -782,6 +796,7 @@ async function chooseExample(id) {
     return;
   }
   $("input-text").value = text;
+  tiles.newInput();
   $("fill").value = ex.options.fill || "";
   $("curves").value = ex.options.curves || "preserve";
   $("example-about").textContent = ex.about;
@@ -796,7 +811,22 @@ function onOptionChange() {
   else if (!state.inFlight) setState("idle");
 }
 
+function showView(name) {
+  // Switch between the clip view and the tile view; the input is drawn again for it.
+  state.view = name;
+  if (name !== "tiles") tiles.hide();
+  document.body.classList.toggle("view-tiles", name === "tiles");
+  $("status").textContent = "";
+  $("request").textContent = "";
+  loadInput({ keepWindow: true });
+}
+
 async function main() {
+  tiles = createTileView({ $, state, setState, showError, geometries, geometryShapes,
+                           drawShapes, count });
+  for (const radio of document.querySelectorAll('input[name="view"]')) {
+    radio.addEventListener("change", (e) => { if (e.target.checked) showView(e.target.value); });
+  }
   canvas.addEventListener("pointerdown", startDrag);
   canvas.addEventListener("pointermove", moveDrag);
   canvas.addEventListener("pointerup", endDrag);
@@ -808,6 +838,7 @@ async function main() {
     if (!file) return;
     setState("loading");
     $("input-text").value = await file.text();
+    tiles.newInput();
     $("example").value = "";
     $("example-about").textContent = `from ${file.name}`;
     loadInput({ keepWindow: true });

@@ -43,7 +43,7 @@ from typing import Any
 import numpy as np
 import shapely
 
-from rnsca.dask import clip_frame
+from rnsca.dask import clip_frame, use_threads
 from rnsca.errors import InvalidGeometryError, InvalidOptionError, RnscaError
 from rnsca.io.geojson_seq import Framing, framing_of_path, parse_record, split_records
 
@@ -461,7 +461,7 @@ def run_partition(partition: Partition, job: Job) -> PartitionReport:
     """
     started = time.perf_counter()
     if job.threads is not None:
-        _use_threads(job.threads)
+        use_threads(job.threads)
     try:
         frame, keep_index = _read(partition)
     except PartitionError:
@@ -493,15 +493,6 @@ def run_partition(partition: Partition, job: Job) -> PartitionReport:
     done = time.perf_counter()
     return PartitionReport(partition.name, len(frame), len(clipped), done - started,
                            read - started, clipped_at - read, done - clipped_at)
-
-
-def _use_threads(threads: int) -> None:
-    """Run this thread's parallel kernels on `threads` threads, and pyarrow's pool too."""
-    import numba
-    import pyarrow
-
-    numba.set_num_threads(max(1, min(threads, numba.config.NUMBA_NUM_THREADS)))
-    pyarrow.set_cpu_count(max(1, threads))
 
 
 def _read(partition: Partition) -> tuple[Any, bool]:

@@ -36,6 +36,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
+
 import numpy as np
 
 from rnsca.arrays import Ragged, exclusive_sum

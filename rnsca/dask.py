@@ -508,15 +508,16 @@ def tiles(table: FeatureTable, output: str | Path, *, client: Any = None,
     """Build the tile pyramid of `table` on a Dask cluster; write one archive at `output`.
 
     The tiles equal `rnsca.tiles.tile_table`'s (the same bytes). The work is split by
-    tile (`rnsca.tiles.split`): each task builds the subtrees below some tiles of the
-    split zoom, one more the zooms above it, and no two write the same tile. Tasks
+    tile (`rnsca.tiles.split`): the zooms down to the split zoom are cascaded here, once;
+    each task builds the subtrees below a run of that zoom's tiles (sent to it with
+    their geometry), one more the zooms above it, and no two build the same tile. Tasks
     compress their tiles; this process merges them and writes the archive once all are
     built (it holds the stored tiles meanwhile: about the archive's size in memory).
 
     Parameters
     ----------
     table : rnsca.tiles.FeatureTable
-        Sent once to each worker.
+        Sent once to each worker (the tasks encode its ids and properties).
     output : str or Path
         A ``.pmtiles`` archive, or a directory (``z/x/y.mvt``), as ``rnsca tiles``.
     client : distributed.Client, optional
@@ -526,10 +527,9 @@ def tiles(table: FeatureTable, output: str | Path, *, client: Any = None,
     compression : {"gzip", "none"}, optional
         Default: gzip for PMTiles, none for a directory.
     split_zoom : int, optional
-        Where the pyramid is cut (``0..rnsca.tiles.split.MAX_SPLIT_ZOOM``, at most
-        `maxzoom`). Default: the lowest zoom with `parts` tiles touched by the input
-        (`rnsca.tiles.split.choose_split_zoom`): the zooms above it are one task, and
-        each part repeats their cascade for its own geometries.
+        Where the pyramid is cut (``0..min(maxzoom, rnsca.tiles.split.MAX_SPLIT_ZOOM)``).
+        Default: the first zoom with `parts` tiles holding something; the zooms above it
+        are cascaded here, and built by one task.
     parts : int, optional
         Tasks below the split zoom (default: four per worker, for balance).
     threads : int, optional
@@ -555,7 +555,7 @@ def tiles(table: FeatureTable, output: str | Path, *, client: Any = None,
 
     from rnsca import tiles as T
     from rnsca.options import Mode
-    from rnsca.tiles.split import MAX_SPLIT_ZOOM, choose_split_zoom, merge, plan_parts
+    from rnsca.tiles.split import merge, split
 
     T.check_options(minzoom, maxzoom, extent, buffer, Mode(options.get("mode", Mode.EXACT)))
     if client is None:
@@ -565,26 +565,24 @@ def tiles(table: FeatureTable, output: str | Path, *, client: Any = None,
             raise InvalidOptionError("rnsca.dask.tiles needs a dask.distributed Client: "
                                      "give client=, or start one first") from None
     workers = max(1, len(client.scheduler_info().get("workers", {})))
-    parts = 4 * workers if parts is None else parts
-    if split_zoom is None:
-        split_zoom = choose_split_zoom(table, parts, maxzoom, extent=extent, buffer=buffer)
-    elif not (isinstance(split_zoom, int) and 0 <= split_zoom <= min(maxzoom, MAX_SPLIT_ZOOM)):
-        raise InvalidOptionError(f"split_zoom must be an int in 0..{min(maxzoom, MAX_SPLIT_ZOOM)}"
-                                 f" (and at most maxzoom), got {split_zoom!r}")
     pmtiles = Path(output).suffix.lower() == ".pmtiles"
     stored = T.Compression(compression or ("gzip" if pmtiles else "none"))
+    zoom, pieces = split(table, parts=4 * workers if parts is None else parts,
+                         split_zoom=split_zoom, maxzoom=maxzoom, extent=extent,
+                         buffer=buffer, mode=options.get("mode", Mode.EXACT),
+                         backend=options.get("backend", "numba"))
     build = dict(options, minzoom=minzoom, maxzoom=maxzoom, extent=extent, buffer=buffer,
                  layer=layer, compression=stored)
-    pieces: list[Part | None] = list(plan_parts(table, split_zoom=split_zoom, parts=parts,
-                                                extent=extent, buffer=buffer))
-    if split_zoom > minzoom:
-        pieces.insert(0, None)  # the zooms above the split: first, the longest task
     [shared] = client.scatter([table], broadcast=True, hash=False)
+    sent = client.scatter(pieces, hash=False)
     token = uuid.uuid4().hex[:12]
-    futures = [client.submit(_build_tiles, shared, piece, split_zoom, threads, build,
-                             key=f"rnsca-tiles-{k}-{token}", pure=False,
-                             priority=1 if piece is None else 0)
-               for k, piece in enumerate(pieces)]
+    futures = [client.submit(_build_tiles, shared, piece, zoom, threads, build,
+                             key=f"rnsca-tiles-{k}-{token}", pure=False)
+               for k, piece in enumerate(sent)]
+    if zoom > minzoom:  # the zooms above the split
+        futures.append(client.submit(_build_tiles, shared, None, zoom, threads, build,
+                                     key=f"rnsca-tiles-top-{token}", pure=False))
+    del pieces
     built: list[list[ZoomTiles]] = []
     try:
         for done, future in enumerate(as_completed(futures), start=1):
@@ -594,11 +592,9 @@ def tiles(table: FeatureTable, output: str | Path, *, client: Any = None,
                 on_part(done, len(futures))
     finally:
         client.cancel([f for f in futures if not f.done()])
-        client.cancel([shared])
+        client.cancel([shared, *sent])
     zooms = merge(built)
     if pmtiles:
-        summary = T.write_pmtiles(output, zooms, layer=layer, compression=stored,
-                                  compressed=True)
-    else:
-        summary = T.write_directory(output, zooms, compression=stored, compressed=True)
-    return summary
+        return T.write_pmtiles(output, zooms, layer=layer, compression=stored,
+                               compressed=True)
+    return T.write_directory(output, zooms, compression=stored, compressed=True)

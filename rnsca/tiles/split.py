@@ -1,30 +1,27 @@
 """A tile pyramid built in parts that share no tile: what `rnsca.dask.tiles` runs.
 
-The pyramid is cut at a *split zoom* s. Each `Part` owns some tiles of zoom s (a run of
-them along the Hilbert curve) and builds their subtrees: zooms s..maxzoom below its
-tiles (`build_part`). The zooms above s are built once, whole (`build_top`): a tile of
-zoom z < s covers the tiles of several parts, so no part builds it. No two builds write
-the same tile, and `merge` joins their zooms into the zooms `rnsca.tiles.tile_table`
-yields.
+The pyramid is cut at a *split zoom* s. `split` cascades the input from zoom 0 to s once
+(as `rnsca.tiles.tile_table` does) and cuts zoom s's tiles into `Part` s: runs of them
+along the Hilbert curve, of about equal weight (vertices), each with its tiles'
+clipped geometry. Each part then builds its tiles' subtrees, zooms s..maxzoom
+(`build_part`); the zooms above s are built once, whole (`build_top`), since a tile of
+zoom z < s covers the tiles of several parts. No two builds make the same tile, and
+`merge` joins their zooms into the zooms `tile_table` yields.
 
-A part's tiles equal the single-process pyramid's, byte for byte: the part takes the
-geometries whose box touches one of its padded tiles at zoom s (any other has nothing in
-them), cascades them from zoom 0 as `tile_table` does, keeping at each zoom z <= s only
-the ancestors of its tiles (`_within`), then cascades its subtrees to maxzoom. A
-cascade clips each geometry against each child's padded box on its own, and encodes
-each tile from its own geometries, so leaving geometries and tiles out changes no tile
-kept. Each part repeats the cascade of zooms 1..s for its geometries: choose s as low
-as gives enough parts (`choose_split_zoom`).
+A part's tiles equal the single-process pyramid's, byte for byte: its zoom s is that
+pyramid's zoom s, restricted to its tiles, and a cascade clips each geometry against each
+child's padded box on its own, and encodes each tile from its own geometries, so leaving
+other tiles out changes no tile kept.
 
 Examples
 --------
 >>> import shapely
 >>> from rnsca.tiles import FeatureTable, tile_table
 >>> table = FeatureTable.of([shapely.LineString([(-10, -10), (10, 10)])], [{"n": 1}])
->>> parts = plan_parts(table, split_zoom=1, parts=4)
->>> [(p.x.tolist(), p.y.tolist()) for p in parts]
-[([0], [0]), ([0], [1]), ([1], [1]), ([1], [0])]
->>> built = [build_top(table, split_zoom=1, maxzoom=2)]
+>>> zoom, parts = split(table, parts=4, maxzoom=2)
+>>> zoom, [(p.x.tolist(), p.y.tolist()) for p in parts]
+(1, [([0], [0]), ([0], [1]), ([1], [1]), ([1], [0])])
+>>> built = [build_top(table, split_zoom=zoom, maxzoom=2)]
 >>> built += [build_part(table, p, maxzoom=2) for p in parts]
 >>> merged = list(merge(built))
 >>> whole = list(tile_table(table, maxzoom=2))
@@ -39,25 +36,23 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rnsca.arrays import Ragged, exclusive_sum
+from rnsca.arrays import exclusive_sum
 from rnsca.errors import InvalidOptionError
-from rnsca.many_windows import vertex_boxes
 from rnsca.options import Backend, Mode
 from rnsca.tiles.archive import Compression, compress_tiles, tile_ids
 from rnsca.tiles.encode import Framing, Validation, ZoomTiles, encode_zoom
 from rnsca.tiles.features import FeatureTable
 from rnsca.tiles.pyramid import Level, cascade, root
 
-__all__ = ["Part", "MAX_SPLIT_ZOOM", "choose_split_zoom", "plan_parts", "build_top",
-           "build_part", "merge"]
+__all__ = ["Part", "MAX_SPLIT_ZOOM", "split", "build_top", "build_part", "merge"]
 
-#: The deepest split zoom: parts find their geometries on a 2**s by 2**s grid.
-MAX_SPLIT_ZOOM = 10
+#: The deepest split zoom (the zooms above it are cascaded once, in one process).
+MAX_SPLIT_ZOOM = 12
 
 
 @dataclass(frozen=True, slots=True, eq=False)
 class Part:
-    """Tiles of the split zoom whose subtrees one task builds.
+    """Tiles of the split zoom whose subtrees one task builds, with their geometry.
 
     Attributes
     ----------
@@ -66,104 +61,16 @@ class Part:
     x, y : ndarray of int64
         Its tiles, in Hilbert (PMTiles tile id) order.
     weight : int
-        Vertices of the geometries touching its tiles (a geometry counted in each).
+        Vertices of its tiles' clipped geometry.
+    levels : tuple of Level
+        Points, lines and polygons of its tiles at the split zoom (`rnsca.tiles.pyramid`).
     """
 
     zoom: int
     x: np.ndarray
     y: np.ndarray
     weight: int
-
-
-def _boxes(table: FeatureTable) -> tuple[list[np.ndarray], list[np.ndarray]]:
-    """Return each kind's geometry boxes (world coordinates) and vertex counts."""
-    boxes, sizes = [], []
-    for ragged in (table.points, table.lines, table.polygons):
-        offsets = ragged.vertex_offsets()
-        boxes.append(vertex_boxes(ragged.coords, offsets))
-        sizes.append(np.diff(offsets))
-    return boxes, sizes
-
-
-def _tile_ranges(boxes: np.ndarray, zoom: int, pad_units: float) -> np.ndarray:
-    """Return the tiles of `zoom` each box may touch, padded: int64 (n, 4) [x0, y0, x1, y1].
-
-    A superset, by one tile each way: it only selects what the cascade then decides.
-    """
-    side = 2**zoom
-    scaled = boxes * side
-    ranges = np.empty(boxes.shape, dtype=np.int64)
-    ranges[:, :2] = np.floor(scaled[:, :2] - pad_units) - 1
-    ranges[:, 2:] = np.floor(scaled[:, 2:] + pad_units) + 1
-    return np.clip(ranges, 0, side - 1)
-
-
-def _painted(ranges: np.ndarray, weights: np.ndarray, side: int) -> np.ndarray:
-    """Return the (side, side) grid [y, x] of the weights summed over each tile range."""
-    grid = np.zeros((side + 1, side + 1), dtype=np.int64)
-    x0, y0, x1, y1 = ranges.T
-    np.add.at(grid, (y0, x0), weights)
-    np.add.at(grid, (y0, x1 + 1), -weights)
-    np.add.at(grid, (y1 + 1, x0), -weights)
-    np.add.at(grid, (y1 + 1, x1 + 1), weights)
-    return grid.cumsum(axis=0).cumsum(axis=1)[:side, :side]
-
-
-def _weights(table: FeatureTable, zoom: int, pad_units: float) -> np.ndarray:
-    """Return the vertices touching each tile of `zoom` (grid [y, x]), roughly."""
-    side = 2**zoom
-    grid = np.zeros((side, side), dtype=np.int64)
-    for boxes, sizes in zip(*_boxes(table), strict=True):
-        real = ~np.isnan(boxes[:, 0])
-        if real.any():
-            grid += _painted(_tile_ranges(boxes[real], zoom, pad_units), sizes[real] + 1,
-                             side)
-    return grid
-
-
-def choose_split_zoom(table: FeatureTable, parts: int, maxzoom: int, *, extent: int = 4096,
-                      buffer: int = 64) -> int:
-    """Return the lowest zoom (at most `maxzoom` and `MAX_SPLIT_ZOOM`) with `parts` tiles.
-
-    Tiles touched by a geometry's box are counted; a zoom with fewer (a small area) is
-    passed over for the next, up to the limits.
-    """
-    for zoom in range(min(maxzoom, MAX_SPLIT_ZOOM) + 1):
-        if np.count_nonzero(_weights(table, zoom, buffer / extent)) >= parts:
-            return zoom
-    return min(maxzoom, MAX_SPLIT_ZOOM)
-
-
-def plan_parts(table: FeatureTable, *, split_zoom: int, parts: int, extent: int = 4096,
-               buffer: int = 64) -> list[Part]:
-    """Return up to `parts` parts owning the tiles of `split_zoom` that geometries touch.
-
-    The tiles are taken along the Hilbert curve and cut into runs of about equal weight
-    (vertices touching them), so that a part's tiles lie together.
-
-    Raises
-    ------
-    InvalidOptionError
-        For a split zoom outside ``0..MAX_SPLIT_ZOOM`` or fewer than one part.
-    """
-    if not (isinstance(split_zoom, int) and 0 <= split_zoom <= MAX_SPLIT_ZOOM):
-        raise InvalidOptionError(f"split_zoom must be an int in 0..{MAX_SPLIT_ZOOM}, got "
-                                 f"{split_zoom!r}")
-    if not (isinstance(parts, int) and parts >= 1):
-        raise InvalidOptionError(f"parts must be an int >= 1, got {parts!r}")
-    grid = _weights(table, split_zoom, buffer / extent)
-    y, x = np.nonzero(grid)
-    order = np.argsort(tile_ids(split_zoom, x, y), kind="stable")
-    x, y = x[order].astype(np.int64), y[order].astype(np.int64)
-    weight = grid[y, x]
-    total = int(weight.sum())
-    # Cut where the running weight passes each k / parts of the total.
-    ends = np.cumsum(weight)
-    cuts = np.searchsorted(ends, np.arange(1, parts) * total / parts, side="left") + 1
-    bounds = np.unique(np.concatenate([[0], np.minimum(cuts, x.shape[0]), [x.shape[0]]]))
-    return [Part(split_zoom, x[a:b], y[a:b], int(weight[a:b].sum()))
-            for a, b in zip(bounds[:-1].tolist(), bounds[1:].tolist(), strict=True)
-            if b > a]
+    levels: tuple
 
 
 def _within(level: Level, x: np.ndarray, y: np.ndarray) -> Level:
@@ -178,22 +85,76 @@ def _within(level: Level, x: np.ndarray, y: np.ndarray) -> Level:
                  exclusive_sum(counts[keep]), level.tile_x[keep], level.tile_y[keep])
 
 
-def _touching(ragged: Ragged, source: np.ndarray, part: Part, pad_units: float,
-              ) -> tuple[Ragged, np.ndarray]:
-    """Return the geometries whose box may touch one of the part's padded tiles."""
-    side = 2**part.zoom
-    boxes = vertex_boxes(ragged.coords, ragged.vertex_offsets())
-    real = np.flatnonzero(~np.isnan(boxes[:, 0]))
-    owned = np.zeros((side + 1, side + 1), dtype=np.int64)
-    owned[part.y + 1, part.x + 1] = 1
-    owned = owned.cumsum(axis=0).cumsum(axis=1)  # owned tiles in [0, y) x [0, x)
-    x0, y0, x1, y1 = _tile_ranges(boxes[real], part.zoom, pad_units).T
-    inside = (owned[y1 + 1, x1 + 1] - owned[y0, x1 + 1] - owned[y1 + 1, x0]
-              + owned[y0, x0])
-    rows = real[inside > 0]
-    if rows.shape[0] == ragged.count:
-        return ragged, source
-    return ragged.take(rows), source[rows]
+def _tile_weights(levels: list[Level]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Return the tiles holding something (x, y) and their vertices, all kinds together."""
+    side = np.int64(2**levels[0].zoom)
+    keys, weights = [], []
+    for level in levels:
+        if level.ragged.count == 0:  # (zoom 0 has its one tile, even empty)
+            continue
+        vertices = np.diff(level.ragged.vertex_offsets())
+        keys.append(level.tile_x * side + level.tile_y)
+        weights.append(np.add.reduceat(vertices, level.tile_offsets[:-1]) + np.diff(
+            level.tile_offsets))
+    if not keys:
+        empty = np.zeros(0, dtype=np.int64)
+        return empty, empty, empty
+    key, inverse = np.unique(np.concatenate(keys), return_inverse=True)
+    weight = np.bincount(inverse, weights=np.concatenate(weights)).astype(np.int64)
+    return key // side, key % side, weight
+
+
+def split(table: FeatureTable, *, parts: int, split_zoom: int | None = None,
+          maxzoom: int = 14, extent: int = 4096, buffer: int = 64,
+          mode: Mode | str = Mode.EXACT, backend: Backend | str = Backend.NUMBA,
+          ) -> tuple[int, list[Part]]:
+    """Return the split zoom and up to `parts` parts of its tiles, with their geometry.
+
+    The input is cascaded from zoom 0 (`rnsca.tiles.pyramid.cascade`, as
+    `rnsca.tiles.tile_table` does) down to `split_zoom`, or by default to the first zoom
+    with at least `parts` tiles holding something (at most `maxzoom` and
+    `MAX_SPLIT_ZOOM`). Its tiles are taken along the Hilbert curve and cut into runs of
+    about equal weight (vertices), so that a part's tiles lie together.
+
+    Raises
+    ------
+    InvalidOptionError
+        For a split zoom outside ``0..min(maxzoom, MAX_SPLIT_ZOOM)``, or fewer than one
+        part.
+    """
+    deepest = min(maxzoom, MAX_SPLIT_ZOOM)
+    if split_zoom is not None and not (isinstance(split_zoom, int)
+                                       and 0 <= split_zoom <= deepest):
+        raise InvalidOptionError(f"split_zoom must be an int in 0..{deepest} (at most "
+                                 f"maxzoom and {MAX_SPLIT_ZOOM}), got {split_zoom!r}")
+    if not (isinstance(parts, int) and parts >= 1):
+        raise InvalidOptionError(f"parts must be an int >= 1, got {parts!r}")
+    mode = Mode(mode)
+    pad_units = buffer / extent
+    levels = [root(table.points, table.points_source), root(table.lines, table.lines_source),
+              root(table.polygons, table.polygons_source)]
+    zoom = 0
+    while True:
+        x, y, weight = _tile_weights(levels)
+        if zoom == split_zoom or (split_zoom is None and (x.shape[0] >= parts
+                                                          or zoom == deepest)):
+            break
+        levels = [cascade(level, pad_units, mode, extent, backend) for level in levels]
+        zoom += 1
+    order = np.argsort(tile_ids(zoom, x, y), kind="stable")
+    x, y, weight = x[order], y[order], weight[order]
+    total = int(weight.sum())
+    parts = min(parts, max(1, x.shape[0]))
+    # Cut where the running weight passes each k / parts of the total.
+    ends = np.cumsum(weight)
+    cuts = np.searchsorted(ends, np.arange(1, parts) * total / parts, side="left") + 1
+    bounds = np.unique(np.concatenate([[0], np.minimum(cuts, x.shape[0]), [x.shape[0]]]))
+    out = []
+    for a, b in zip(bounds[:-1].tolist(), bounds[1:].tolist(), strict=True):
+        if b > a:
+            out.append(Part(zoom, x[a:b], y[a:b], int(weight[a:b].sum()),
+                            tuple(_within(level, x[a:b], y[a:b]) for level in levels)))
+    return zoom, out
 
 
 def _options(mode: Mode | str, validate: Validation | str, framing: Framing | str,
@@ -238,23 +199,16 @@ def build_part(table: FeatureTable, part: Part, *, minzoom: int = 0, maxzoom: in
 
     Each zoom holds the tiles below the part's tiles of the split zoom, as
     `rnsca.tiles.tile_table` makes them; each tile's data stored with `compression`.
+    `table` gives the features' ids and properties.
     """
     mode, validation, framing = _options(mode, validate, framing)
     pad_units = buffer / extent
-    levels = [root(*_touching(ragged, source, part, pad_units))
-              for ragged, source in ((table.points, table.points_source),
-                                     (table.lines, table.lines_source),
-                                     (table.polygons, table.polygons_source))]
+    levels = list(part.levels)
     out = []
-    for zoom in range(maxzoom + 1):
-        if zoom > 0:
+    for zoom in range(part.zoom, maxzoom + 1):
+        if zoom > part.zoom:
             levels = [cascade(level, pad_units, mode, extent, backend) for level in levels]
-        if zoom <= part.zoom:
-            shift = part.zoom - zoom
-            x, y = np.unique(np.column_stack([part.x >> shift, part.y >> shift]),
-                             axis=0).T
-            levels = [_within(level, x, y) for level in levels]
-        if zoom >= max(minzoom, part.zoom):
+        if zoom >= minzoom:
             out.append(compress_tiles(encode_zoom(levels, table, extent=extent, layer=layer,
                                                   validate=validation, framing=framing),
                                       compression))

@@ -11,14 +11,7 @@ import shapely
 
 from rnsca.errors import InvalidOptionError
 from rnsca.tiles import FeatureTable, tile_table
-from rnsca.tiles.split import (
-    MAX_SPLIT_ZOOM,
-    build_part,
-    build_top,
-    choose_split_zoom,
-    merge,
-    plan_parts,
-)
+from rnsca.tiles.split import MAX_SPLIT_ZOOM, build_part, build_top, merge, split
 
 
 @pytest.fixture(scope="module")
@@ -37,7 +30,10 @@ def table():
 
 
 def _built(table, split_zoom, parts, **options):
-    pieces = plan_parts(table, split_zoom=split_zoom, parts=parts)
+    mode = options.get("mode", "exact")
+    zoom, pieces = split(table, parts=parts, split_zoom=split_zoom, mode=mode,
+                         maxzoom=options["maxzoom"])
+    assert zoom == split_zoom
     return [build_top(table, split_zoom=split_zoom, **options)] + [
         build_part(table, part, **options) for part in pieces]
 
@@ -69,25 +65,32 @@ def test_a_split_below_minzoom_builds_no_top_and_tiles_are_compressed(table):
 
 
 def test_parts_own_disjoint_runs_of_the_split_zoom_s_tiles(table):
-    parts = plan_parts(table, split_zoom=3, parts=6)
-    assert 1 < len(parts) <= 6
+    zoom, parts = split(table, parts=6, split_zoom=3)
+    assert zoom == 3 and 1 < len(parts) <= 6
     owned = [(x, y) for p in parts for x, y in zip(p.x.tolist(), p.y.tolist(), strict=True)]
     assert len(owned) == len(set(owned))
     assert all(p.weight > 0 for p in parts)
+    for part in parts:  # each part holds its tiles' geometry, and no other tile's
+        held = {(x, y) for level in part.levels
+                for x, y in zip(level.tile_x.tolist(), level.tile_y.tolist(), strict=True)}
+        assert held == set(zip(part.x.tolist(), part.y.tolist(), strict=True))
 
 
 def test_merge_refuses_a_tile_built_twice(table):
-    part = plan_parts(table, split_zoom=1, parts=1)[0]
+    _, (part,) = split(table, parts=1, split_zoom=1)
     built = build_part(table, part, maxzoom=2)
     with pytest.raises(ValueError, match="same tile"):
         list(merge([built, built]))
 
 
-def test_the_split_zoom_is_the_lowest_with_enough_tiles(table):
-    assert choose_split_zoom(table, 1, 8) == 0
-    assert choose_split_zoom(table, 8, 8) == 2
-    assert choose_split_zoom(table, 10**9, 3) == 3
+def test_the_split_zoom_is_the_first_with_enough_tiles(table):
+    assert split(table, parts=1, maxzoom=8)[0] == 0
+    zoom, parts = split(table, parts=8, maxzoom=8)
+    assert zoom == 2 and 1 < len(parts) <= 8  # heavy tiles make fewer parts
+    assert split(table, parts=10**9, maxzoom=3)[0] == 3
     with pytest.raises(InvalidOptionError, match="split_zoom"):
-        plan_parts(table, split_zoom=MAX_SPLIT_ZOOM + 1, parts=2)
+        split(table, parts=2, split_zoom=MAX_SPLIT_ZOOM + 1, maxzoom=24)
+    with pytest.raises(InvalidOptionError, match="split_zoom"):
+        split(table, parts=2, split_zoom=4, maxzoom=3)
     with pytest.raises(InvalidOptionError, match="parts"):
-        plan_parts(table, split_zoom=1, parts=0)
+        split(table, parts=0)

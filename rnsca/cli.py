@@ -572,10 +572,11 @@ def tiles(
 
     Prints a summary: tiles, features, bytes and seconds per zoom.
 
-    With --scheduler or --workers the pyramid is built on Dask (the dask extra): one
-    task per subtree below a tile of the split zoom, one for the zooms above it (no two
-    tasks build the same tile), merged here into one archive, equal to the one built in
-    this process. Prints the dashboard's address and a progress bar of the tasks.
+    With --scheduler or --workers the pyramid is built on Dask (the dask extra): the
+    zooms down to a split zoom are cascaded here, then one task builds the subtrees
+    below each run of that zoom's tiles, one more the zooms above it (no two tasks build
+    the same tile), merged here into one archive, equal to the one built in this
+    process. Prints the dashboard's address and a progress bar of the tasks.
     """
     import time
 

@@ -13,11 +13,15 @@ there and readable is not clipped again (`pending`), and a worker that dies mid-
 leaves at most a temporary file, removed at the next start, while its task runs again
 elsewhere (Dask reschedules it).
 
-The output folder records the job (`MANIFEST`: window, options, encoding, partitioning and
-input files); a second run into it must be the same job, so that no stale partition of
-another one is left beside new ones. The input and output paths must be the same on the
-client and on the workers (a shared file system, or the same volume mounted in every
-container).
+With many windows (`Job.windows`, read from a file by `read_windows`), each row is
+clipped to every window its geometry touches and gives a row per window, in input
+order, then window order, with the window's index (its row in the file) in a column.
+
+The output folder records the job (`MANIFEST`: window(s), options, encoding,
+partitioning and input files); a second run into it must be the same job, so that no
+stale partition of another one is left beside new ones. The input and output paths
+must be the same on the client and on the workers (a shared file system, or the same
+volume mounted in every container).
 
 A partition that cannot be read or clipped fails alone, with a `PartitionError` naming
 the file and, where known, the row (or the record of a text sequence); the others are
@@ -28,7 +32,9 @@ Needs the ``dask`` extra (dask.distributed, geopandas, pyarrow, pyogrio).
 
 from __future__ import annotations
 
+import csv
 import glob
+import hashlib
 import json
 import os
 import re
@@ -43,13 +49,18 @@ from typing import Any
 import numpy as np
 import shapely
 
-from rnsca.dask import clip_frame
-from rnsca.errors import InvalidGeometryError, InvalidOptionError, RnscaError
+from rnsca.dask import clip_frame, use_threads
+from rnsca.errors import (
+    InvalidGeometryError,
+    InvalidOptionError,
+    InvalidWindowError,
+    RnscaError,
+)
 from rnsca.io.geojson_seq import Framing, framing_of_path, parse_record, split_records
 
 __all__ = ["Encoding", "InputFormat", "Partition", "Job", "PartitionReport", "BatchReport",
            "PartitionError", "MANIFEST", "find_inputs", "plan", "pending", "run_partition",
-           "run", "local_cluster", "threads_per_task"]
+           "run", "local_cluster", "threads_per_task", "read_windows"]
 
 #: The job's record in the output folder (dataset readers skip names starting with ``_``).
 MANIFEST = "_rnsca_batch.json"
@@ -160,7 +171,13 @@ class Job:
     ----------
     output : str
         The output folder.
-    window : tuple of 4 float
+    window : tuple of 4 float, or None
+        The window; None with `windows`.
+    windows : tuple of tuples of 4 float, or None
+        Many windows instead of `window` (`read_windows`): each row gives a row per
+        window its geometry meets, the window's index in `window_column`.
+    window_column : str
+        With `windows`: the output column of the window index (int64).
     options : dict
         `rnsca.clip`'s options (``method``, ``n``, ``mode``, ``boundary``, ...).
     keep_empty : bool
@@ -175,11 +192,21 @@ class Job:
     """
 
     output: str
-    window: tuple[float, float, float, float]
+    window: tuple[float, float, float, float] | None
     options: dict[str, Any] = field(default_factory=dict)
     keep_empty: bool = False
     encoding: Encoding = Encoding.WKB
     threads: int | None = None
+    windows: tuple[tuple[float, float, float, float], ...] | None = None
+    window_column: str = "window"
+
+    def __post_init__(self) -> None:
+        if (self.window is None) == (self.windows is None):
+            raise InvalidWindowError("a job has one of window and windows")
+        if self.windows is not None and self.keep_empty:
+            raise InvalidOptionError(
+                "keep_empty applies to one window: with many windows a row gives a row "
+                "per window its geometry meets, and none for the others")
 
     def target(self, partition: Partition) -> str:
         """Return the path of `partition`'s output file."""
@@ -370,6 +397,83 @@ def _plan_sequence(path: str, number: int, size: int) -> list[Partition]:
             for k, (a, b) in enumerate(zip(cuts[:-1], cuts[1:], strict=True))]
 
 
+def read_windows(path: str | Path) -> tuple[tuple[float, float, float, float], ...]:
+    r"""Return the windows of a file, one ``(xmin, ymin, xmax, ymax)`` per row.
+
+    Two formats, by the name's ending:
+
+    - ``.json``: a JSON array of ``[xmin, ymin, xmax, ymax]`` arrays of numbers;
+    - anything else (``.csv``, ``.txt``): CSV text, a window per line as four numbers
+      ``xmin,ymin,xmax,ymax``; blank lines and lines starting with ``#`` are skipped, and
+      a first line ``xmin,ymin,xmax,ymax`` is a header.
+
+    A window's index (the output's window column) is its row among the windows, from 0
+    (header, comments and blank lines not counted).
+
+    Raises
+    ------
+    InvalidWindowError
+        Naming the file and the line (CSV) or the element (JSON, from 0) at fault: not
+        four numbers, not finite, ``min >= max``, or no window at all.
+    InvalidOptionError
+        The file cannot be read.
+
+    Examples
+    --------
+    >>> import tempfile, os
+    >>> with tempfile.NamedTemporaryFile("w", suffix=".csv", delete=False) as f:
+    ...     _ = f.write("xmin,ymin,xmax,ymax\n0,0,10,10\n# a comment\n5,5,20,20\n")
+    >>> read_windows(f.name)
+    ((0.0, 0.0, 10.0, 10.0), (5.0, 5.0, 20.0, 20.0))
+    >>> os.remove(f.name)
+    """
+    name = str(path)
+    try:
+        with open(path, encoding="utf-8") as stream:
+            text = stream.read()
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InvalidOptionError(f"{name}: cannot read the windows file: {exc}") from None
+    rows: list[tuple[str, Any]] = []   # (where, values)
+    if name.lower().endswith(".json"):
+        try:
+            document = json.loads(text)
+        except ValueError as exc:
+            raise InvalidWindowError(f"{name}: not JSON: {exc}") from None
+        if not isinstance(document, list):
+            raise InvalidWindowError(f"{name}: expected a JSON array of [xmin, ymin, xmax, "
+                                     f"ymax] arrays, got a {type(document).__name__}")
+        rows = [(f"element {k}", item) for k, item in enumerate(document)]
+    else:
+        for number, fields in enumerate(csv.reader(text.splitlines()), start=1):
+            if not fields or not "".join(fields).strip() or fields[0].lstrip().startswith("#"):
+                continue
+            if not rows and [f.strip().lower() for f in fields] == ["xmin", "ymin", "xmax",
+                                                                     "ymax"]:
+                continue
+            rows.append((f"line {number}", fields))
+    windows: list[tuple[float, float, float, float]] = []
+    for where, values in rows:
+        try:
+            if isinstance(values, (str, bytes, dict)) or len(values) != 4 or any(
+                    isinstance(v, bool) for v in values):
+                raise ValueError
+            xmin, ymin, xmax, ymax = (float(v) for v in values)
+        except (TypeError, ValueError):
+            raise InvalidWindowError(
+                f"{name}: {where}: expected four numbers xmin, ymin, xmax, ymax, got "
+                f"{values!r:.80}") from None
+        window = (xmin, ymin, xmax, ymax)
+        if not (np.isfinite(window).all() and xmin < xmax and ymin < ymax):
+            raise InvalidWindowError(
+                f"{name}: {where}: window {list(window)} must be finite with xmin < xmax "
+                "and ymin < ymax")
+        windows.append(window)
+    if not windows:
+        raise InvalidWindowError(f"{name}: no window in the file (a window per line: "
+                                 "xmin,ymin,xmax,ymax)")
+    return tuple(windows)
+
+
 def is_complete(path: str) -> bool:
     """Return whether `path` is a readable GeoParquet file (a partition written whole)."""
     import pyarrow.parquet as pq
@@ -426,7 +530,12 @@ def _remove_temporary_files(folder: str) -> None:
 
 def _manifest(job: Job, partitions: Sequence[Partition]) -> dict[str, Any]:
     files = sorted({(p.file_number, p.path) for p in partitions})
-    return {"window": list(job.window),
+    windows = None
+    if job.windows is not None:
+        table = np.asarray(job.windows, dtype=np.float64)
+        windows = {"count": table.shape[0], "column": job.window_column,
+                   "sha256": hashlib.sha256(table.tobytes()).hexdigest()}
+    return {"window": None if job.window is None else list(job.window), "windows": windows,
             "options": {k: (v.value if isinstance(v, Enum) else v)
                         for k, v in sorted(job.options.items())},
             "keep_empty": job.keep_empty, "encoding": job.encoding.value,
@@ -461,7 +570,7 @@ def run_partition(partition: Partition, job: Job) -> PartitionReport:
     """
     started = time.perf_counter()
     if job.threads is not None:
-        _use_threads(job.threads)
+        use_threads(job.threads)
     try:
         frame, keep_index = _read(partition)
     except PartitionError:
@@ -473,7 +582,12 @@ def run_partition(partition: Partition, job: Job) -> PartitionReport:
                              f"{type(exc).__name__}: {exc}", partition.path) from None
     read = time.perf_counter()
     try:
-        clipped = clip_frame(frame, job.window, keep_empty=job.keep_empty, **job.options)
+        if job.windows is not None:
+            clipped = clip_frame(frame, windows=np.asarray(job.windows, dtype=np.float64),
+                                 window_column=job.window_column, **job.options)
+        else:
+            clipped = clip_frame(frame, job.window, keep_empty=job.keep_empty,
+                                 **job.options)
     except InvalidGeometryError as exc:
         position = exc.geometry
         row = None if position is None or partition.format is InputFormat.GEOJSON_SEQ \
@@ -493,15 +607,6 @@ def run_partition(partition: Partition, job: Job) -> PartitionReport:
     done = time.perf_counter()
     return PartitionReport(partition.name, len(frame), len(clipped), done - started,
                            read - started, clipped_at - read, done - clipped_at)
-
-
-def _use_threads(threads: int) -> None:
-    """Run this thread's parallel kernels on `threads` threads, and pyarrow's pool too."""
-    import numba
-    import pyarrow
-
-    numba.set_num_threads(max(1, min(threads, numba.config.NUMBA_NUM_THREADS)))
-    pyarrow.set_cpu_count(max(1, threads))
 
 
 def _read(partition: Partition) -> tuple[Any, bool]:

@@ -344,13 +344,19 @@ def batch(
         metavar="OUTPUT", show_default=False,
         help="folder of the partitioned GeoParquet output (made if missing; a second "
              "run of the same job into it writes only what is missing)")],
-    # Required: Typer reads the Ellipsis so (a default must follow `output`'s).
-    window: Annotated[str, typer.Option(
+    window: Annotated[str | None, typer.Option(
         "--window", "-w", show_default=False,
-        help="xmin,ymin,xmax,ymax, e.g. 0,0,10,10")] = ...,  # type: ignore[assignment]
+        help="xmin,ymin,xmax,ymax, e.g. 0,0,10,10 (this or --windows)")] = None,
+    windows: Annotated[Path | None, typer.Option(
+        "--windows", show_default=False,
+        help="a file of many windows: CSV, a line xmin,ymin,xmax,ymax per window (an "
+             "optional header line of those names; # comments), or .json, an array of "
+             "[xmin, ymin, xmax, ymax]; each row is clipped to every window it touches, "
+             "a row out per window, the window's index (from 0) in --window-column")] = None,
+    window_column: Annotated[str, typer.Option(
+        help="with --windows: the output column of the window index")] = "window",
     scheduler: Annotated[str | None, typer.Option(
-        show_default=False, help="address of a running Dask scheduler, e.g. "
-        "tcp://host:8786 [default: a local cluster of worker processes]")] = None,
+        show_default=False, help=_SCHEDULER_HELP)] = None,
     workers: Annotated[int | None, typer.Option(
         show_default=False, help="worker processes of the local cluster [default: one "
         "per core]")] = None,
@@ -383,13 +389,15 @@ def batch(
         "--stats", show_default=False,
         help="write the report JSON to this file instead of stderr")] = None,
 ) -> None:
-    """Clip a dataset to a window on Dask, into partitioned GeoParquet.
+    """Clip a dataset to a window (or many) on Dask, into partitioned GeoParquet.
 
     Each partition of the input (Parquet row groups, FlatGeobuf feature ranges, byte
     ranges of a text sequence) is read, clipped and written by one task, as one
     GeoParquet 1.1 file of OUTPUT (with a bbox covering column), named after the
     partition so the files sort in input order. Rows keep their columns; rows clipped to
-    nothing are dropped (unless --keep-empty). Each file is written under a temporary
+    nothing are dropped (unless --keep-empty). With --windows FILE, each row gives one
+    row per window its geometry meets (in input order, then window order), with the
+    window's index in the file in a column. Each file is written under a temporary
     name, then renamed: a run stopped half-way leaves complete files only, and the same
     command run again writes only the partitions missing.
 
@@ -399,7 +407,9 @@ def batch(
     partition that cannot be read or clipped is reported by file (and row) after the
     others are written; the exit status is then 1.
     """
-    bounds = _window_bounds(window)
+    if (window is None) == (windows is None):
+        _fail("give one of --window xmin,ymin,xmax,ymax and --windows FILE", EXIT_USAGE)
+    bounds = _window_bounds(window) if window is not None else None
     options: dict[str, Any] = dict(
         boundary=boundary, method=method, n=int(n) if n.isdigit() else n, max_depth=max_depth,
         tolerance=tolerance, mode=mode, backend=backend)
@@ -411,9 +421,11 @@ def batch(
     with _reporting(EXIT_USAGE):
         if resolution is not None:
             options["resolution"] = _resolution(resolution)
-        _check_options(bounds, options)
+        table = jobs.read_windows(windows) if windows is not None else None
+        _check_options(bounds if bounds is not None else table[0], options)  # type: ignore[index]
         options = {k: v for k, v in options.items() if v is not None}
-        job = jobs.Job(output=str(Path(output).absolute()), window=bounds, options=options,
+        job = jobs.Job(output=str(Path(output).absolute()), window=bounds, windows=table,
+                       window_column=window_column, options=options,
                        keep_empty=keep_empty, encoding=jobs.Encoding(encoding.lower()))
         partitions = jobs.plan(jobs.find_inputs(source), rows_per_partition=rows_per_partition,
                                bytes_per_partition=bytes_per_partition)
@@ -423,23 +435,14 @@ def batch(
         _write_report(jobs.BatchReport(len(partitions), skipped=len(partitions)).to_dict(),
                       stats)
         return
-    from distributed import Client
-
-    with _reporting(EXIT_DATA):
-        cluster = None if scheduler else jobs.local_cluster(workers)
-        client = Client(scheduler) if scheduler else Client(cluster)
-    if cluster is not None:
-        job = dataclasses.replace(job, threads=jobs.threads_per_task(len(cluster.workers)))
-    typer.echo(f"dashboard: {client.dashboard_link}", err=True)
-    bar = _PartitionBar(progress, len(todo))
-    try:
-        with _reporting(EXIT_DATA):
-            report = jobs.run(job, partitions, client, on_done=bar.done)
-    finally:
-        bar.close()
-        if cluster is not None:  # first: its workers stop before the client's link goes
-            cluster.close()
-        client.close()
+    with _dask_client(scheduler, workers) as (client, threads):
+        job = dataclasses.replace(job, threads=threads)
+        bar = _PartitionBar(progress, len(todo))
+        try:
+            with _reporting(EXIT_DATA):
+                report = jobs.run(job, partitions, client, on_done=bar.done)
+        finally:
+            bar.close()
     with _reporting(EXIT_DATA):
         _write_report(report.to_dict(), stats)
     for _, message in report.failed:
@@ -549,22 +552,46 @@ def tiles(
     progress: Annotated[bool, typer.Option(help="a progress bar per zoom")] = True,
     summary_json: Annotated[Path | None, typer.Option(
         "--summary-json", help="also write the summary as JSON here")] = None,
+    scheduler: Annotated[str | None, typer.Option(
+        show_default=False,
+        help="build on a running Dask scheduler, e.g. tcp://host:8786 (the dask extra; "
+             "OUTPUT is written here, by this process)")] = None,
+    workers: Annotated[int | None, typer.Option(
+        show_default=False,
+        help="build on a local Dask cluster of this many worker processes, as rnsca "
+             "batch's [default: in this process, unless --scheduler]")] = None,
+    split_zoom: Annotated[int | None, typer.Option(
+        show_default=False,
+        help="on Dask: the zoom whose tiles' subtrees are the tasks [default: the lowest "
+             "with --parts tiles holding features]")] = None,
+    parts: Annotated[int | None, typer.Option(
+        show_default=False,
+        help="on Dask: tasks below the split zoom [default: four per worker]")] = None,
 ) -> None:
     """Cut features into a vector tile pyramid (MVT 2.1), one clipping pass per zoom.
 
     Prints a summary: tiles, features, bytes and seconds per zoom.
+
+    With --scheduler or --workers the pyramid is built on Dask (the dask extra): the
+    zooms down to a split zoom are cascaded here, then one task builds the subtrees
+    below each run of that zoom's tiles, one more the zooms above it (no two tasks build
+    the same tile), merged here into one archive, equal to the one built in this
+    process. Prints the dashboard's address and a progress bar of the tasks.
     """
     import time
 
     try:
         from rich.console import Console
         from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
-        from rich.table import Table
 
         from rnsca import tiles as T
         from rnsca.tiles.sources import read_features
     except ImportError as exc:
         _fail(f"rnsca tiles needs the tiles extra: pip install 'rnsca[tiles]' ({exc})",
+              EXIT_USAGE)
+    on_dask = scheduler is not None or workers is not None
+    if not on_dask and (split_zoom is not None or parts is not None):
+        _fail("--split-zoom and --parts apply on Dask: give --scheduler or --workers",
               EXIT_USAGE)
     console = Console(stderr=True)
     started = time.perf_counter()
@@ -573,6 +600,18 @@ def tiles(
         read_seconds = time.perf_counter() - started
         table = features.table(T.Crs(crs) if crs else None)
         name = layer or source.stem
+    if on_dask:
+        with _reporting(EXIT_USAGE):
+            T.check_options(minzoom, maxzoom, extent, buffer, rnsca.Mode(mode))
+        summary = _tiles_on_dask(table, output, scheduler, workers, progress,
+                                 minzoom=minzoom, maxzoom=maxzoom, extent=extent,
+                                 buffer=buffer, layer=name, mode=mode, validate=validate,
+                                 compression=compression, split_zoom=split_zoom,
+                                 parts=parts)
+        _print_tiles_summary(console, source, output, summary, table.count, read_seconds,
+                             time.perf_counter() - started, summary_json)
+        return
+    with _reporting(EXIT_DATA):
         zooms = T.tile_table(table, minzoom=minzoom, maxzoom=maxzoom, extent=extent,
                              buffer=buffer, layer=name, mode=mode, validate=validate)
         pmtiles = output.suffix.lower() == ".pmtiles"
@@ -593,7 +632,48 @@ def tiles(
             else:
                 summary = T.write_directory(output, zooms, compression=compression or "none",
                                             on_zoom=on_zoom)
-    total = time.perf_counter() - started
+    _print_tiles_summary(console, source, output, summary, table.count, read_seconds,
+                         time.perf_counter() - started, summary_json)
+
+
+def _tiles_on_dask(table: Any, output: Path, scheduler: str | None, workers: int | None,
+                   progress: bool, **options: Any) -> Any:
+    """Build the pyramid with `rnsca.dask.tiles`, a bar of its tasks on stderr."""
+    from rich.console import Console
+    from rich.progress import (
+        BarColumn,
+        MofNCompleteColumn,
+        Progress,
+        TextColumn,
+        TimeElapsedColumn,
+    )
+
+    try:
+        import rnsca.dask
+    except ImportError as exc:
+        _fail(f"rnsca tiles on Dask needs the dask extra: pip install 'rnsca[dask]' ({exc})",
+              EXIT_USAGE)
+    with _dask_client(scheduler, workers) as (client, threads), \
+            Progress(TextColumn("building tiles"), BarColumn(), MofNCompleteColumn(),
+                     TextColumn("tasks"), TimeElapsedColumn(),
+                     console=Console(stderr=True), transient=True,
+                     disable=not progress) as bar:
+        task = bar.add_task("tiles", total=None)
+
+        def on_part(done: int, total: int) -> None:
+            bar.update(task, completed=done, total=total)
+
+        with _reporting(EXIT_DATA):
+            return rnsca.dask.tiles(table, output, client=client, threads=threads,
+                                    on_part=on_part, **options)
+
+
+def _print_tiles_summary(console: Any, source: Path, output: Path, summary: Any,
+                         features_in: int, read_seconds: float, total: float,
+                         summary_json: Path | None) -> None:
+    """Print the table of tiles, features, bytes and seconds per zoom; write the JSON."""
+    from rich.table import Table
+
     report = Table(title=f"{source.name} -> {output}")
     for column in ("zoom", "tiles", "features", "bytes", "seconds"):
         report.add_column(column, justify="right")
@@ -604,10 +684,10 @@ def tiles(
                    f"{sum(z['features'] for z in summary.zooms):,}", f"{summary.bytes:,}",
                    f"{total:.3f}")
     console.print(report)
-    console.print(f"{table.count:,} features read in {read_seconds:.3f} s")
+    console.print(f"{features_in:,} features read in {read_seconds:.3f} s")
     if summary_json is not None:
         summary_json.write_text(json.dumps({"input": str(source), "output": str(output),
-                                            "features_in": table.count,
+                                            "features_in": features_in,
                                             "read_seconds": read_seconds,
                                             "seconds": total, "zooms": summary.zooms},
                                            indent=2))
@@ -636,6 +716,39 @@ def _reporting(code: int) -> Iterator[None]:
     except OSError as error:
         _fail(f"{error.strerror}: {error.filename}" if error.filename and error.strerror
               else error, code)
+
+
+_SCHEDULER_HELP = ("address of a running Dask scheduler, e.g. tcp://host:8786, whose "
+                   "workers see INPUT and OUTPUT at the same paths [default: a local "
+                   "cluster of worker processes]")
+
+
+@contextmanager
+def _dask_client(scheduler: str | None, workers: int | None,
+                 ) -> Iterator[tuple[Any, int | None]]:
+    """Yield a Dask client and each task's threads; print the dashboard's address.
+
+    With `scheduler`, a client of that cluster (threads None: the workers' own);
+    otherwise `rnsca.batch.local_cluster` of `workers` processes (one per core by
+    default), each task given its share of the cores. Closed on the way out.
+    """
+    from distributed import Client
+
+    from rnsca import batch as jobs
+
+    if workers is not None and workers < 1:
+        _fail(f"--workers must be at least 1, got {workers}", EXIT_USAGE)
+    with _reporting(EXIT_DATA):
+        cluster = None if scheduler else jobs.local_cluster(workers)
+        client = Client(scheduler) if scheduler else Client(cluster)
+    threads = None if cluster is None else jobs.threads_per_task(len(cluster.workers))
+    typer.echo(f"dashboard: {client.dashboard_link}", err=True)
+    try:
+        yield client, threads
+    finally:
+        if cluster is not None:  # first: its workers stop before the client's link goes
+            cluster.close()
+        client.close()
 
 
 def _window_bounds(text: str) -> tuple[float, float, float, float]:

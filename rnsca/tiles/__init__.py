@@ -41,7 +41,7 @@ from rnsca.tiles.pyramid import Level, cascade, root, tile_windows
 
 __all__ = ["ArchiveSummary", "Compression", "Crs", "FeatureTable", "Framing", "Validation",
            "ZoomTiles",
-           "MAX_ZOOM", "tile_features", "tile_one", "tile_table", "tile_ids",
+           "MAX_ZOOM", "check_options", "tile_features", "tile_one", "tile_table", "tile_ids",
            "write_directory", "write_pmtiles"]
 
 #: The deepest zoom: world coordinates in float64 keep 2**-52 of the world, so tile
@@ -67,7 +67,8 @@ def tile_features(geometries: Any, properties: Sequence[Mapping[str, Any] | None
     yield from tile_table(FeatureTable.of(geometries, properties, ids, crs=crs), **options)
 
 
-def _check_options(minzoom: int, maxzoom: int, extent: int, buffer: int, mode: Mode) -> None:
+def check_options(minzoom: int, maxzoom: int, extent: int, buffer: int, mode: Mode) -> None:
+    """Raise `InvalidOptionError` for zooms, extent or buffer out of range (`tile_table`)."""
     if not (isinstance(minzoom, int) and isinstance(maxzoom, int)
             and 0 <= minzoom <= maxzoom <= MAX_ZOOM):
         raise InvalidOptionError(
@@ -96,7 +97,7 @@ def tile_one(table: FeatureTable, zoom: int, x: int, y: int, *, extent: int = 40
         For a tile outside the zoom's grid, or options out of range.
     """
     mode = Mode(mode)
-    _check_options(zoom, zoom, extent, buffer, mode)
+    check_options(zoom, zoom, extent, buffer, mode)
     if not (isinstance(x, int) and isinstance(y, int) and 0 <= x < 2**zoom
             and 0 <= y < 2**zoom):
         raise InvalidOptionError(f"tile {zoom}/{x}/{y} is outside zoom {zoom}'s grid "
@@ -167,7 +168,7 @@ def tile_table(table: FeatureTable, *, minzoom: int = 0, maxzoom: int = 14,
     mode = Mode(mode)
     framing = Framing(framing)
     validate = Validation(validate)
-    _check_options(minzoom, maxzoom, extent, buffer, mode)
+    check_options(minzoom, maxzoom, extent, buffer, mode)
     pad_units = buffer / extent
     levels = [root(table.points, table.points_source), root(table.lines, table.lines_source),
               root(table.polygons, table.polygons_source)]

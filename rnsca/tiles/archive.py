@@ -24,7 +24,8 @@ import numpy as np
 from rnsca.options import _ChoiceEnum
 from rnsca.tiles.encode import ZoomTiles
 
-__all__ = ["Compression", "ArchiveSummary", "tile_ids", "write_pmtiles", "write_directory"]
+__all__ = ["Compression", "ArchiveSummary", "tile_ids", "compress_tiles", "write_pmtiles",
+           "write_directory"]
 
 
 class Compression(_ChoiceEnum):
@@ -92,6 +93,19 @@ def _compressor(compression: Compression) -> Callable[[bytes], bytes] | None:
     return None
 
 
+def compress_tiles(zoom: ZoomTiles, compression: Compression | str) -> ZoomTiles:
+    """Return the zoom with each tile's data stored with `compression` (in this thread).
+
+    What the writers do, done beforehand (on the worker that made the tiles): give them
+    ``compressed=True``.
+    """
+    compress = _compressor(Compression(compression))
+    if compress is None:
+        return zoom
+    return ZoomTiles(zoom.zoom, zoom.x, zoom.y, [compress(d) for d in zoom.data],
+                     zoom.features)
+
+
 def _stored(zoom: ZoomTiles, compress: Callable[[bytes], bytes] | None,
             pool: ThreadPoolExecutor) -> list[bytes]:
     """Return the tiles' stored bytes, compressed in chunks of tiles across the pool.
@@ -114,10 +128,12 @@ def _stored(zoom: ZoomTiles, compress: Callable[[bytes], bytes] | None,
 def write_pmtiles(path: str | Path | BinaryIO, zooms: Iterable[ZoomTiles], *, layer: str,
                   compression: Compression | str = Compression.GZIP,
                   metadata: dict[str, Any] | None = None,
-                  on_zoom: Callable[[ZoomTiles, int], None] | None = None) -> ArchiveSummary:
+                  on_zoom: Callable[[ZoomTiles, int], None] | None = None,
+                  compressed: bool = False) -> ArchiveSummary:
     """Write the zooms' tiles as a PMTiles v3 archive at `path`; return the summary.
 
-    `path` may be a binary file open for writing (it is not closed).
+    `path` may be a binary file open for writing (it is not closed). With `compressed`,
+    the tiles' data are already stored with `compression` (`compress_tiles`).
 
     `on_zoom(zoom_tiles, stored_bytes)` is called after each zoom is written (progress).
     The metadata has ``vector_layers`` (the one layer, its zooms), and any `metadata`.
@@ -127,7 +143,7 @@ def write_pmtiles(path: str | Path | BinaryIO, zooms: Iterable[ZoomTiles], *, la
     from pmtiles.writer import Writer
 
     compression = Compression(compression)
-    compress = _compressor(compression)
+    compress = None if compressed else _compressor(compression)
     summary = ArchiveSummary()
     bounds = [math.inf, math.inf, -math.inf, -math.inf]
     zoom_range: list[int] = []
@@ -210,9 +226,12 @@ def _timed(zooms: Iterable[ZoomTiles], summary: ArchiveSummary) -> Iterator[Zoom
 def write_directory(path: str | Path, zooms: Iterable[ZoomTiles], *,
                     compression: Compression | str = Compression.NONE,
                     on_zoom: Callable[[ZoomTiles, int], None] | None = None,
-                    ) -> ArchiveSummary:
-    """Write each tile as ``path/z/x/y.mvt`` (uncompressed by default); return the summary."""
-    compress = _compressor(Compression(compression))
+                    compressed: bool = False) -> ArchiveSummary:
+    """Write each tile as ``path/z/x/y.mvt`` (uncompressed by default); return the summary.
+
+    With `compressed`, the tiles' data are already stored with `compression`.
+    """
+    compress = None if compressed else _compressor(Compression(compression))
     root = Path(path)
     summary = ArchiveSummary()
     with ThreadPoolExecutor() as pool:

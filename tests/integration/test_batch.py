@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 import shapely
 
+import rnsca
 from tests.dask_data import (
     WINDOW,
     assert_same_frames,
@@ -334,3 +335,78 @@ def test_cli_refuses_a_bad_window_and_an_unknown_input_kind(tmp_path):
         result = subprocess.run([sys.executable, "-m", "rnsca.cli", "batch", *arguments],
                                 capture_output=True, text=True, timeout=120)
         assert result.returncode == 2 and expected in result.stderr, result.stderr
+
+
+WINDOWS = [(0.0, 0.0, 50.0, 50.0), (40.0, 40.0, 100.0, 100.0), (-20.0, 60.0, 10.0, 130.0),
+           (500.0, 500.0, 501.0, 501.0)]
+
+
+def _expected_windows(whole, windows=WINDOWS):
+    """The single-process library call with windows=, its rows by source then window."""
+    import geopandas
+
+    result = rnsca.clip(np.asarray(whole.geometry.array, dtype=object), windows=windows)
+    order = np.lexsort((result.window, result.source))
+    out = whole.iloc[result.source[order]].copy()
+    out["geometry"] = geopandas.GeoSeries(result.geometries[order], index=out.index,
+                                          crs=whole.crs)
+    out["window"] = result.window[order].astype(np.int64)
+    return out.reset_index(drop=True)
+
+
+def test_many_windows_equal_the_single_process_library_call(client, inputs, tmp_path):
+    import rnsca.batch
+
+    folder, whole = inputs
+    partitions = _plan(folder)
+    job = rnsca.batch.Job(output=str(tmp_path / "out"), window=None, windows=tuple(WINDOWS))
+    report = rnsca.batch.run(job, partitions, client)
+    assert not report.failed and len(report.written) == len(partitions)
+    got = _read_output(tmp_path / "out")
+    expected = _expected_windows(whole)
+    assert_same_frames(got, expected)
+    # Rows in several windows come out once per window; the empty window holds nothing.
+    assert len(got) > whole.geometry.notna().sum() * 0.3
+    assert got.duplicated("id").any() and set(got["window"]) == {0, 1, 2}
+
+
+def test_cli_windows_file_on_a_scheduler(client, inputs, tmp_path):
+    folder, whole = inputs
+    windows = tmp_path / "windows.csv"
+    windows.write_text("xmin,ymin,xmax,ymax\n" + "\n".join(
+        ",".join(map(str, w)) for w in WINDOWS) + "\n")
+    out = tmp_path / "out"
+    result = subprocess.run(
+        [sys.executable, "-m", "rnsca.cli", "batch", str(folder), str(out), "--windows",
+         str(windows), "--window-column", "tile", "--scheduler", client.scheduler.address,
+         "--rows-per-partition", str(2 * ROW_GROUP), "--no-progress"],
+        capture_output=True, text=True, timeout=300)
+    assert result.returncode == 0, result.stderr
+    expected = _expected_windows(whole).rename(columns={"window": "tile"})
+    assert_same_frames(_read_output(out), expected)
+
+
+def test_cli_names_the_file_and_line_of_a_bad_window(inputs, tmp_path):
+    folder, _ = inputs
+    for name, text, expected in (
+            ("w.csv", "0,0,10,10\n# note\n5,5,1,20\n", "w.csv: line 3: window [5.0, 5.0, 1.0, "
+             "20.0] must be finite with xmin < xmax"),
+            ("w.csv", "xmin,ymin,xmax,ymax\n0,0,10\n", "w.csv: line 2: expected four numbers"),
+            ("w.txt", "0,0,10,ten\n", "w.txt: line 1: expected four numbers"),
+            ("w.json", "[[0, 0, 10, 10], [0, 0, 1]]", "w.json: element 1: expected four"),
+            ("w.json", '{"a": 1}', "w.json: expected a JSON array"),
+            ("w.csv", "# nothing\n", "w.csv: no window in the file")):
+        path = tmp_path / name
+        path.write_text(text)
+        result = subprocess.run(
+            [sys.executable, "-m", "rnsca.cli", "batch", str(folder), str(tmp_path / "o"),
+             "--windows", str(path), "--workers", "1"],
+            capture_output=True, text=True, timeout=120)
+        assert result.returncode == 2, result.stderr
+        assert expected in result.stderr and "Traceback" not in result.stderr, result.stderr
+    assert not (tmp_path / "o").exists()
+    result = subprocess.run(
+        [sys.executable, "-m", "rnsca.cli", "batch", str(folder), str(tmp_path / "o"),
+         "--windows", str(path), "--window", "0,0,1,1"],
+        capture_output=True, text=True, timeout=120)
+    assert result.returncode == 2 and "one of --window" in result.stderr

@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 import shapely
 
+import rnsca
 from rnsca.errors import (
     InvalidGeometryError,
     InvalidOptionError,
@@ -121,10 +122,55 @@ def test_options_and_window_are_checked_before_anything_runs(data):
         rnsca.dask.clip(lazy, WINDOW, method="nope")
     with pytest.raises(InvalidWindowError):
         rnsca.dask.clip(lazy, (10, 0, 0, 10))
-    with pytest.raises(InvalidOptionError, match="windows= clips segments only"):
-        rnsca.dask.clip(lazy, windows=[WINDOW, WINDOW])
+    with pytest.raises(InvalidWindowError, match="one of window= and windows="):
+        rnsca.dask.clip(lazy, WINDOW, windows=[WINDOW, WINDOW])
+    with pytest.raises(InvalidWindowError, match="window 1"):
+        rnsca.dask.clip(lazy, windows=[WINDOW, (10, 0, 0, 10)])
+    with pytest.raises(InvalidOptionError, match="keep_empty applies to one window"):
+        rnsca.dask.clip(lazy, windows=[WINDOW], keep_empty=True)
+    with pytest.raises(InvalidOptionError, match="has a column 'name'"):
+        rnsca.dask.clip(lazy, windows=[WINDOW], window_column="name")
     with pytest.raises(UnsupportedGeometryError, match="dask_geopandas or geopandas"):
         rnsca.dask.clip([shapely.Point(1, 1)], WINDOW)
+
+
+FRAME_WINDOWS = [(0.0, 0.0, 50.0, 50.0), (40.0, 40.0, 100.0, 100.0),
+                 (-20.0, 60.0, 10.0, 130.0)]
+
+
+def _windows_reference(data, windows=FRAME_WINDOWS):
+    """The library call with windows=, rows by source then window, the window column."""
+    import geopandas
+
+    result = rnsca.clip(np.asarray(data.geometry.array, dtype=object), windows=windows)
+    order = np.lexsort((result.window, result.source))
+    out = data.iloc[result.source[order]].copy()
+    out["geometry"] = geopandas.GeoSeries(result.geometries[order], index=out.index,
+                                          crs=data.crs)
+    out["window"] = result.window[order].astype(np.int64)
+    return out
+
+
+def test_dask_frame_with_many_windows_equals_the_library_call(client, data):
+    import dask_geopandas
+
+    import rnsca.dask
+
+    lazy = dask_geopandas.from_geopandas(data, npartitions=4)
+    clipped = rnsca.dask.clip(lazy, windows=FRAME_WINDOWS)
+    assert clipped.divisions == lazy.divisions
+    assert list(clipped._meta.columns) == [*data.columns, "window"]
+    got = clipped.compute()
+    assert got.dtypes.equals(clipped._meta.dtypes)
+    expected = _windows_reference(lazy.compute())
+    assert_same_frames(got, expected)
+    assert got.index.duplicated().any() and set(got["window"]) == {0, 1, 2}
+    # In process, a plain frame and a series (a frame of its geometry and the window).
+    assert_same_frames(rnsca.dask.clip(data, windows=FRAME_WINDOWS),
+                       _windows_reference(data))
+    series = rnsca.dask.clip(data.geometry, windows=FRAME_WINDOWS, window_column="w")
+    assert list(series.columns) == ["geometry", "w"]
+    assert series["w"].tolist() == _windows_reference(data)["window"].tolist()
 
 
 def test_a_bad_geometry_is_named_by_its_index_label(client, data):

@@ -168,3 +168,33 @@ def test_encoding_names_its_choices(batch):
     with pytest.raises(InvalidOptionError, match="wkb, geoarrow"):
         batch.Encoding("parquet")
     assert batch.Encoding("geoarrow") is batch.Encoding.GEOARROW
+
+
+def test_windows_files_in_csv_and_json_give_the_same_windows(batch, tmp_path):
+    (tmp_path / "w.csv").write_text("xmin, ymin, xmax, ymax\n\n0,0,10,10\n# skip\n-5,2.5,1e3,7\n")
+    (tmp_path / "w.json").write_text("[[0, 0, 10, 10], [-5, 2.5, 1000, 7]]")
+    expected = ((0.0, 0.0, 10.0, 10.0), (-5.0, 2.5, 1000.0, 7.0))
+    assert batch.read_windows(tmp_path / "w.csv") == expected
+    assert batch.read_windows(tmp_path / "w.json") == expected
+
+
+def test_a_windows_file_is_refused_naming_the_file_and_row(batch, tmp_path):
+    from rnsca.errors import InvalidOptionError, InvalidWindowError
+
+    (tmp_path / "w.json").write_text("[[0, 0, 10, 10], [0, true, 1, 1]]")
+    with pytest.raises(InvalidWindowError, match=r"w\.json: element 1: expected four"):
+        batch.read_windows(tmp_path / "w.json")
+    (tmp_path / "w.csv").write_text("0,0,10,10\n0,0,inf,1\n")
+    with pytest.raises(InvalidWindowError, match=r"w\.csv: line 2: window .* finite"):
+        batch.read_windows(tmp_path / "w.csv")
+    with pytest.raises(InvalidOptionError, match=r"none\.csv: cannot read"):
+        batch.read_windows(tmp_path / "none.csv")
+
+
+def test_a_job_has_one_window_or_many_and_keeps_no_empty_rows_with_many(batch, tmp_path):
+    from rnsca.errors import InvalidOptionError, InvalidWindowError
+
+    with pytest.raises(InvalidWindowError, match="one of window and windows"):
+        batch.Job(output=str(tmp_path), window=WINDOW, windows=(WINDOW,))
+    with pytest.raises(InvalidOptionError, match="keep_empty"):
+        batch.Job(output=str(tmp_path), window=None, windows=(WINDOW,), keep_empty=True)

@@ -23,8 +23,8 @@ from numba import prange
 
 from rnsca.kernels.jit import borrowing, parallel
 
-__all__ = ["MAX_EDGES", "cascade_counts", "cascade_write", "polygons_at_risk", "quantise",
-           "unwrap_rings", "unwrap_runs"]
+__all__ = ["MAX_EDGES", "cascade_counts", "cascade_write", "clean_rings", "polygons_at_risk",
+           "quantise", "unwrap_rings", "unwrap_runs", "write_clean_rings"]
 
 
 @borrowing
@@ -311,3 +311,101 @@ def polygons_at_risk(q, ring_offsets, polygon_rings, geometry_polygons, at_risk)
     for g in prange(geometry_polygons.shape[0] - 1):
         at_risk[g] = _suspect(q, ring_offsets, polygon_rings, geometry_polygons[g],
                               geometry_polygons[g + 1], kept)
+
+
+# --- Rounded rings cleaned before any validity check ---------------------------------
+
+
+@borrowing
+def _turn(w, a, b, c):
+    """Return the sign of the turn a -> b -> c of rows of `w` (exact, as `_orient`)."""
+    d = (w[b, 0] - w[a, 0]) * (w[c, 1] - w[a, 1]) - (w[b, 1] - w[a, 1]) * (w[c, 0] - w[a, 0])
+    return 1 if d > 0 else (-1 if d < 0 else 0)
+
+
+@borrowing
+def _clean_ring(q, first, last, w):
+    """Clean one closed ring ``q[first:last]`` into ``w[first:]``; return ``(begin, end)``.
+
+    The ring's positions (the closing one left out) are pushed on a stack held in
+    ``w[first:]``: a position equal to the top is not pushed, and while the top two
+    and the new position lie on one line (integer orientation zero: exact for tile
+    units below 2**30) the top is popped: a collinear vertex (the same point set) or
+    the tip of a spike (an edge that goes back along itself, of no area: GEOS's
+    ``make_valid`` drops it too). Then the same across the ring's ends, from either
+    side, until no three cyclically consecutive positions are collinear or repeated.
+    The kept positions are ``w[begin:end]`` (not closed); fewer than three: nothing
+    is left (a ring of no area, dropped as the specification asks).
+    """
+    top = first  # next free row of the stack
+    for v in range(first, last - 1):
+        if top > first and q[v, 0] == w[top - 1, 0] and q[v, 1] == w[top - 1, 1]:
+            continue
+        w[top, 0] = q[v, 0]
+        w[top, 1] = q[v, 1]
+        while top - first >= 2 and _turn(w, top - 2, top - 1, top) == 0:
+            # Pop the middle one (the new position moves down one row).
+            w[top - 1, 0] = w[top, 0]
+            w[top - 1, 1] = w[top, 1]
+            top -= 1
+        if top - first >= 1 and w[top, 0] == w[top - 1, 0] and w[top, 1] == w[top - 1, 1]:
+            continue  # a spike back onto the position below: already there
+        top += 1
+    begin = first
+    end = top
+    while end - begin >= 3:
+        if w[end - 1, 0] == w[begin, 0] and w[end - 1, 1] == w[begin, 1]:
+            end -= 1
+        elif _turn(w, end - 2, end - 1, begin) == 0:
+            end -= 1
+        elif _turn(w, end - 1, begin, begin + 1) == 0:
+            begin += 1
+        else:
+            break
+    if end - begin < 3:
+        return begin, begin
+    return begin, end
+
+
+@parallel
+def clean_rings(q, ring_offsets, polygon_rings, geometry_polygons, w, ring_begin, ring_end):
+    """Clean every rounded ring (`_clean_ring`); drop degenerate rings and their holes.
+
+    `q` int64 (v, 2) rounded positions, rings closed; `w` int64 like `q` gets each
+    ring's kept positions at ``w[ring_begin[r]:ring_end[r]]`` (within the ring's own
+    rows, not closed); a ring left with fewer than three positions, and every ring of a
+    polygon whose shell is such, gets ``ring_begin[r] == ring_end[r]``. The geometry
+    each ring belongs to is unchanged (`write_clean_rings` compacts).
+    """
+    for g in prange(geometry_polygons.shape[0] - 1):
+        for p in range(geometry_polygons[g], geometry_polygons[g + 1]):
+            shell = polygon_rings[p]
+            for r in range(shell, polygon_rings[p + 1]):
+                first = ring_offsets[r]
+                last = ring_offsets[r + 1]
+                if last - first < 4 or (r > shell and ring_begin[shell] == ring_end[shell]):
+                    ring_begin[r] = first
+                    ring_end[r] = first
+                    continue
+                begin, end = _clean_ring(q, first, last, w)
+                ring_begin[r] = begin
+                ring_end[r] = end
+
+
+@parallel
+def write_clean_rings(w, ring_begin, ring_end, out_start, out):
+    """Write each kept ring ``w[ring_begin[r]:ring_end[r]]``, closed, at ``out[out_start[r]:]``.
+
+    `out_start` holds each ring's first row in `out` (rings of no positions write
+    nothing).
+    """
+    for r in prange(ring_begin.shape[0]):
+        n = ring_end[r] - ring_begin[r]
+        if n == 0:
+            continue
+        o = out_start[r]
+        for k in range(n):
+            out[o + k, 0] = w[ring_begin[r] + k, 0]
+            out[o + k, 1] = w[ring_begin[r] + k, 1]
+        out[o + n, 0] = w[ring_begin[r], 0]
+        out[o + n, 1] = w[ring_begin[r], 1]

@@ -324,25 +324,34 @@ def _turn(w, a, b, c):
 
 
 @borrowing
-def _clean_ring(q, first, last, w):
-    """Clean one closed ring ``q[first:last]`` into ``w[first:]``; return ``(begin, end)``.
+def _unit(value, origin, scale, extent):
+    """Return a world coordinate in integer tile units, as `quantise` rounds it."""
+    return np.int64(np.floor((value * scale - origin) * extent + 0.5))
 
-    The ring's positions (the closing one left out) are pushed on a stack held in
-    ``w[first:]``: a position equal to the top is not pushed, and while the top two
-    and the new position lie on one line (integer orientation zero: exact for tile
-    units below 2**30) the top is popped: a collinear vertex (the same point set) or
-    the tip of a spike (an edge that goes back along itself, of no area: GEOS's
-    ``make_valid`` drops it too). Then the same across the ring's ends, from either
-    side, until no three cyclically consecutive positions are collinear or repeated.
-    The kept positions are ``w[begin:end]`` (not closed); fewer than three: nothing
-    is left (a ring of no area, dropped as the specification asks).
+
+@borrowing
+def _clean_ring(coords, first, last, ox, oy, scale, extent, w):
+    """Round one closed ring ``coords[first:last]`` and clean it into ``w[first:]``.
+
+    Return ``(begin, end)``: the kept positions are ``w[begin:end]`` (not closed).
+    Each position is rounded to tile units (tile origin ``(ox, oy)``, as `quantise`)
+    and pushed on a stack held in ``w[first:]``: a position equal to the top is not
+    pushed, and while the top two and the new position lie on one line (integer
+    orientation zero: exact for tile units below 2**30) the top is popped: a collinear
+    vertex (the same point set) or the tip of a spike (an edge that goes back along
+    itself, of no area: GEOS's ``make_valid`` drops it too). Then the same across the
+    ring's ends, from either side, until no three cyclically consecutive positions are
+    collinear or repeated. Fewer than three left: nothing is kept (a ring of no area,
+    dropped as the specification asks).
     """
     top = first  # next free row of the stack
     for v in range(first, last - 1):
-        if top > first and q[v, 0] == w[top - 1, 0] and q[v, 1] == w[top - 1, 1]:
+        x = _unit(coords[v, 0], ox, scale, extent)
+        y = _unit(coords[v, 1], oy, scale, extent)
+        if top > first and x == w[top - 1, 0] and y == w[top - 1, 1]:
             continue
-        w[top, 0] = q[v, 0]
-        w[top, 1] = q[v, 1]
+        w[top, 0] = x
+        w[top, 1] = y
         while top - first >= 2 and _turn(w, top - 2, top - 1, top) == 0:
             # Pop the middle one (the new position moves down one row).
             w[top - 1, 0] = w[top, 0]
@@ -368,16 +377,21 @@ def _clean_ring(q, first, last, w):
 
 
 @parallel
-def clean_rings(q, ring_offsets, polygon_rings, geometry_polygons, w, ring_begin, ring_end):
-    """Clean every rounded ring (`_clean_ring`); drop degenerate rings and their holes.
+def clean_rings(coords, ring_offsets, polygon_rings, geometry_polygons, origin, scale, extent,
+                w, ring_begin, ring_end):
+    """Round and clean every ring (`_clean_ring`); drop degenerate rings and their holes.
 
-    `q` int64 (v, 2) rounded positions, rings closed; `w` int64 like `q` gets each
-    ring's kept positions at ``w[ring_begin[r]:ring_end[r]]`` (within the ring's own
-    rows, not closed); a ring left with fewer than three positions, and every ring of a
-    polygon whose shell is such, gets ``ring_begin[r] == ring_end[r]``. The geometry
-    each ring belongs to is unchanged (`write_clean_rings` compacts).
+    `coords` float64 (v, 2) world positions, rings closed; geometry ``g``'s tile origin
+    is ``origin[g]`` (tile x, y), `scale` is ``2**zoom`` (with ``scale = extent = 1``
+    and origins 0, integer positions are cleaned as they are). `w` int64 (v, 2) gets
+    each ring's kept positions at ``w[ring_begin[r]:ring_end[r]]`` (within the ring's
+    own rows, not closed); a ring left with fewer than three positions, and every ring
+    of a polygon whose shell is such, gets ``ring_begin[r] == ring_end[r]``. The
+    geometry each ring belongs to is unchanged (`write_clean_rings` compacts).
     """
     for g in prange(geometry_polygons.shape[0] - 1):
+        ox = np.float64(origin[g, 0])
+        oy = np.float64(origin[g, 1])
         for p in range(geometry_polygons[g], geometry_polygons[g + 1]):
             shell = polygon_rings[p]
             for r in range(shell, polygon_rings[p + 1]):
@@ -387,7 +401,7 @@ def clean_rings(q, ring_offsets, polygon_rings, geometry_polygons, w, ring_begin
                     ring_begin[r] = first
                     ring_end[r] = first
                     continue
-                begin, end = _clean_ring(q, first, last, w)
+                begin, end = _clean_ring(coords, first, last, ox, oy, scale, extent, w)
                 ring_begin[r] = begin
                 ring_end[r] = end
 

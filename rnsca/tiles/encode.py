@@ -111,10 +111,13 @@ def _threaded(function: Any, geometries: np.ndarray, **options: Any) -> np.ndarr
                                             chunks)))
 
 
-def clean_polygons(q: np.ndarray, offsets: tuple) -> tuple[np.ndarray, tuple]:
-    """Return rounded polygons cleaned: ``(positions int64 (v, 2), offsets)``.
+def clean_polygons(coords: np.ndarray, offsets: tuple, origin: np.ndarray | None = None,
+                   scale: float = 1.0, extent: float = 1.0) -> tuple[np.ndarray, tuple]:
+    """Return polygons rounded to tile units and cleaned: ``(positions int64 (v, 2), offsets)``.
 
-    Per ring (`rnsca.kernels.tiles.clean_rings`): repeated positions, collinear
+    `coords` float64 (v, 2); geometry ``g``'s position ``X`` becomes ``round((X * scale -
+    origin[g]) * extent)``, as `quantise` rounds it (default: integer positions as they
+    are). Per ring (`rnsca.kernels.tiles.clean_rings`): repeated positions, collinear
     vertices and spikes (edges going back along themselves) removed; a ring left with
     fewer than three positions is dropped, and a shell's holes with it. `offsets` are a
     MULTIPOLYGON's (rings, polygons, geometries, innermost first); the geometries are the
@@ -122,10 +125,14 @@ def clean_polygons(q: np.ndarray, offsets: tuple) -> tuple[np.ndarray, tuple]:
     """
     ring_offsets, polygon_rings, geometry_polygons = offsets
     n_rings = ring_offsets.shape[0] - 1
-    work = np.empty_like(q)
+    if origin is None:
+        origin = np.zeros((geometry_polygons.shape[0] - 1, 2), dtype=np.int64)
+    work = np.empty(coords.shape, dtype=np.int64)
     begin = np.empty(n_rings, dtype=np.int64)
     end = np.empty(n_rings, dtype=np.int64)
-    KT.clean_rings(q, ring_offsets, polygon_rings, geometry_polygons, work, begin, end)
+    KT.clean_rings(np.ascontiguousarray(coords, dtype=np.float64), ring_offsets, polygon_rings,
+                   geometry_polygons, np.ascontiguousarray(origin, dtype=np.int64),
+                   float(scale), float(extent), work, begin, end)
     kept = end > begin
     starts = exclusive_sum(np.where(kept, end - begin + 1, 0))
     out = np.empty((int(starts[-1]), 2), dtype=np.int64)
@@ -154,7 +161,10 @@ def _valid_polygons(level: Level, extent: int, validation: Validation,
     `bad`), written instead of the cleaned ones (`rnsca.kernels.mvt.REPAIRED`).
     """
     ragged = level.ragged
-    q, offsets = clean_polygons(quantise(level, extent), ragged.offsets)
+    tile = level.geometry_tile
+    q, offsets = clean_polygons(ragged.coords, ragged.offsets,
+                                np.column_stack([level.tile_x[tile], level.tile_y[tile]]),
+                                float(2**level.zoom), float(extent))
     shapes = K.Shapes(q, *offsets)
     nothing = np.empty(0, dtype=np.int64)
     if ragged.count == 0 or validation is Validation.NONE:

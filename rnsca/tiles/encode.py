@@ -4,12 +4,14 @@
 each tile's bytes (a ``Tile`` with one layer):
 
 1. Quantise: world coordinates to integer tile units, ``round((X * 2**z - x) * extent)``
-   (y down, as MVT counts), all vertices at once.
+   (y down, as MVT counts), all vertices at once (polygons: with step 2).
 2. Valid polygons (`Validation`): rounding can make a polygon invalid (a spike folded
-   onto itself, rings that touch along an edge); of the polygons a kernel cannot prove
-   valid, those GEOS finds invalid are snapped to the integer grid by
-   ``shapely.set_precision`` (snap-rounding, valid by construction), from their
-   unrounded coordinates.
+   onto itself, rings that touch along an edge). Polygons are rounded and cleaned in one
+   kernel pass first (`clean_polygons`: repeated and collinear positions and spikes
+   removed, rings left with fewer than three positions dropped with a shell's holes),
+   which fixes most small polygons of the low zooms; of the rest, those a kernel cannot
+   prove valid and GEOS finds invalid are repaired by GEOS (``make_valid``, then
+   snap-rounding by ``shapely.set_precision`` where that is not enough).
 3. Features in tile order, then source order (`rnsca.kernels.mvt.Features`); each
    feature's tags are its properties' keys and values, numbered per tile (each key and
    value once per layer, as the spec asks), all tiles at once with one sort.

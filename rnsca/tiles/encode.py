@@ -4,12 +4,14 @@
 each tile's bytes (a ``Tile`` with one layer):
 
 1. Quantise: world coordinates to integer tile units, ``round((X * 2**z - x) * extent)``
-   (y down, as MVT counts), all vertices at once.
+   (y down, as MVT counts), all vertices at once (polygons: with step 2).
 2. Valid polygons (`Validation`): rounding can make a polygon invalid (a spike folded
-   onto itself, rings that touch along an edge); of the polygons a kernel cannot prove
-   valid, those GEOS finds invalid are snapped to the integer grid by
-   ``shapely.set_precision`` (snap-rounding, valid by construction), from their
-   unrounded coordinates.
+   onto itself, rings that touch along an edge). Polygons are rounded and cleaned in one
+   kernel pass first (`clean_polygons`: repeated and collinear positions and spikes
+   removed, rings left with fewer than three positions dropped with a shell's holes),
+   which fixes most small polygons of the low zooms; of the rest, those a kernel cannot
+   prove valid and GEOS finds invalid are repaired by GEOS (``make_valid``, then
+   snap-rounding by ``shapely.set_precision`` where that is not enough).
 3. Features in tile order, then source order (`rnsca.kernels.mvt.Features`); each
    feature's tags are its properties' keys and values, numbered per tile (each key and
    value once per layer, as the spec asks), all tiles at once with one sort.
@@ -39,7 +41,7 @@ from rnsca.tiles.features import FeatureTable
 from rnsca.tiles.pyramid import Level
 from rnsca.tiles.vector_tile import Layer, Tile
 
-__all__ = ["Framing", "Validation", "ZoomTiles", "encode_zoom", "quantise"]
+__all__ = ["Framing", "Validation", "ZoomTiles", "clean_polygons", "encode_zoom", "quantise"]
 
 _KIND_CODE = {GeometryKind.MULTIPOINT: K.POINT, GeometryKind.MULTILINESTRING: K.LINESTRING,
               GeometryKind.MULTIPOLYGON: K.POLYGON}
@@ -111,30 +113,76 @@ def _threaded(function: Any, geometries: np.ndarray, **options: Any) -> np.ndarr
                                             chunks)))
 
 
-def _valid_polygons(level: Level, extent: int, validation: Validation,
-                    ) -> tuple[np.ndarray, np.ndarray, K.Shapes]:
-    """Return the rounded polygons (q), those invalid once rounded, and their repairs.
+def clean_polygons(coords: np.ndarray, offsets: tuple, origin: np.ndarray | None = None,
+                   scale: float = 1.0, extent: float = 1.0) -> tuple[np.ndarray, tuple]:
+    """Return polygons rounded to tile units and cleaned: ``(positions int64 (v, 2), offsets)``.
 
-    The repairs are `Shapes` in tile units, one geometry per invalid polygon (in the
-    order of `bad`), written instead of the rounded ones (`rnsca.kernels.mvt.REPAIRED`).
+    `coords` float64 (v, 2); geometry ``g``'s position ``X`` becomes ``round((X * scale -
+    origin[g]) * extent)``, as `quantise` rounds it (default: integer positions as they
+    are). Per ring (`rnsca.kernels.tiles.clean_rings`): repeated positions, collinear
+    vertices and spikes (edges going back along themselves) removed; a ring left with
+    fewer than three positions is dropped, and a shell's holes with it. `offsets` are a
+    MULTIPOLYGON's (rings, polygons, geometries, innermost first); the geometries are the
+    same (some may be left empty).
     """
-    q = quantise(level, extent)
+    ring_offsets, polygon_rings, geometry_polygons = offsets
+    n_rings = ring_offsets.shape[0] - 1
+    if origin is None:
+        origin = np.zeros((geometry_polygons.shape[0] - 1, 2), dtype=np.int64)
+    work = np.empty(coords.shape, dtype=np.int64)
+    begin = np.empty(n_rings, dtype=np.int64)
+    end = np.empty(n_rings, dtype=np.int64)
+    KT.clean_rings(np.ascontiguousarray(coords, dtype=np.float64), ring_offsets, polygon_rings,
+                   geometry_polygons, np.ascontiguousarray(origin, dtype=np.int64),
+                   float(scale), float(extent), work, begin, end)
+    kept = end > begin
+    starts = exclusive_sum(np.where(kept, end - begin + 1, 0))
+    out = np.empty((int(starts[-1]), 2), dtype=np.int64)
+    KT.write_clean_rings(work, begin, end, starts[:-1], out)
+    n_polygons = polygon_rings.shape[0] - 1
+    ring_polygon = np.repeat(np.arange(n_polygons, dtype=np.int64), np.diff(polygon_rings))
+    rings_per_polygon = np.bincount(ring_polygon[kept], minlength=n_polygons)
+    polygon_kept = rings_per_polygon > 0
+    n_geometries = geometry_polygons.shape[0] - 1
+    polygon_geometry = np.repeat(np.arange(n_geometries, dtype=np.int64),
+                                 np.diff(geometry_polygons))
+    polygons_per_geometry = np.bincount(polygon_geometry[polygon_kept],
+                                        minlength=n_geometries)
+    return out, (np.append(starts[:-1][kept], starts[-1]),
+                 exclusive_sum(rings_per_polygon[polygon_kept]),
+                 exclusive_sum(polygons_per_geometry))
+
+
+def _valid_polygons(level: Level, extent: int, validation: Validation,
+                    ) -> tuple[K.Shapes, np.ndarray, K.Shapes]:
+    """Return the rounded polygons cleaned, those still invalid, and their repairs.
+
+    The rounded rings are cleaned first (`clean_polygons`: most of what rounding breaks
+    in small polygons is a ring collapsed, a spike or a vertex on a line). The repairs
+    are `Shapes` in tile units, one geometry per invalid polygon (in the order of
+    `bad`), written instead of the cleaned ones (`rnsca.kernels.mvt.REPAIRED`).
+    """
     ragged = level.ragged
+    tile = level.geometry_tile
+    q, offsets = clean_polygons(ragged.coords, ragged.offsets,
+                                np.column_stack([level.tile_x[tile], level.tile_y[tile]]),
+                                float(2**level.zoom), float(extent))
+    shapes = K.Shapes(q, *offsets)
     nothing = np.empty(0, dtype=np.int64)
     if ragged.count == 0 or validation is Validation.NONE:
-        return q, nothing, _no_polygons()
-    rounded = Ragged(ragged.kind, q.astype(np.float64), ragged.offsets)
+        return shapes, nothing, _no_polygons()
+    rounded = Ragged(ragged.kind, q.astype(np.float64), offsets)
     if validation is Validation.ALL:
         candidates = np.arange(ragged.count, dtype=np.int64)
     else:
         at_risk = np.empty(ragged.count, dtype=np.bool_)
-        KT.polygons_at_risk(q, *ragged.offsets, at_risk)
+        KT.polygons_at_risk(q, *offsets, at_risk)
         candidates = np.flatnonzero(at_risk)
     if candidates.shape[0] == 0:
-        return q, nothing, _no_polygons()
+        return shapes, nothing, _no_polygons()
     bad = candidates[~_threaded(shapely.is_valid, rounded.take(candidates).to_shapely())]
     if bad.shape[0] == 0:
-        return q, nothing, _no_polygons()
+        return shapes, nothing, _no_polygons()
     # First the cheap repair: GEOS's make_valid (structure) of the rounded polygon, its
     # new vertices (where edges crossed) rounded; what that leaves invalid is snapped
     # from its unrounded coordinates in tile units onto the integer grid by GEOS's
@@ -167,7 +215,7 @@ def _valid_polygons(level: Level, extent: int, validation: Validation,
                             *(np.asarray(o, dtype=np.int64) for o in offsets))
     else:
         repaired = _no_polygons(bad.shape[0])
-    return q, bad, repaired
+    return shapes, bad, repaired
 
 
 def _no_polygons(count: int = 0) -> K.Shapes:
@@ -205,7 +253,7 @@ def encode_zoom(levels: list[Level], table: FeatureTable, *, extent: int, layer:
         count = level.ragged.count
         index = np.arange(count, dtype=np.int64)
         if level.ragged.kind is GeometryKind.MULTIPOLYGON:
-            q, bad, repaired = _valid_polygons(level, extent, validation)
+            polygon_shapes, bad, repaired = _valid_polygons(level, extent, validation)
             if bad.shape[0]:
                 # The repaired polygons are written from their own shapes instead.
                 kinds.append(np.full(bad.shape[0], K.REPAIRED, dtype=np.int8))
@@ -215,9 +263,9 @@ def encode_zoom(levels: list[Level], table: FeatureTable, *, extent: int, layer:
                 good = np.ones(count, dtype=bool)
                 good[bad] = False
                 index = index[good]
+            shapes.append(polygon_shapes)
         else:
-            q = quantise(level, extent)
-        shapes.append(_shapes(level, q))
+            shapes.append(_shapes(level, quantise(level, extent)))
         kinds.append(np.full(index.shape[0], _KIND_CODE[level.ragged.kind], dtype=np.int8))
         indices.append(index)
         sources.append(level.source[index])

@@ -45,6 +45,9 @@ class Level:
     tile_offsets : ndarray of int64, shape (t + 1,)
     tile_x, tile_y : ndarray of int64, shape (t,)
         The tiles that hold something, in quadkey order.
+    boxes : ndarray of float64, shape (n, 4), or None
+        Each geometry's bounding box, if known (the cascade keeps them: a child reads
+        its parent's instead of every vertex again).
     """
 
     zoom: int
@@ -53,6 +56,7 @@ class Level:
     tile_offsets: np.ndarray
     tile_x: np.ndarray
     tile_y: np.ndarray
+    boxes: np.ndarray | None = None
 
     @property
     def geometry_tile(self) -> np.ndarray:
@@ -98,7 +102,8 @@ def cascade(level: Level, pad_units: float, mode: Mode, extent: int,
     cell = 2.0 ** -zoom
     ragged = level.ragged
     n_tiles = level.tile_x.shape[0]
-    boxes = vertex_boxes(ragged.coords, ragged.vertex_offsets())
+    boxes = level.boxes if level.boxes is not None else vertex_boxes(
+        ragged.coords, ragged.vertex_offsets())
     counts = np.zeros((n_tiles, 4), dtype=np.int64)
     K.cascade_counts(boxes, level.tile_offsets, level.tile_x, level.tile_y, cell,
                      pad_units * cell, counts)
@@ -127,14 +132,21 @@ def cascade(level: Level, pad_units: float, mode: Mode, extent: int,
                          tolerance=cell / extent if approx else None)
     clipped = Ragged(ragged.kind, result.coords, result.offsets)
     kept_pairs = crossing[result.source]
+    out_boxes = vertex_boxes(clipped.coords, clipped.vertex_offsets())
     if crossing.shape[0] < pairs.shape[0]:
         whole = np.flatnonzero(inside)
-        # Back in pair order (children in quadkey order, sources in order in each).
-        order = np.argsort(np.concatenate([whole, kept_pairs]), kind="stable")
-        clipped = ragged.take(pairs[whole]).concat(clipped).take(order)
-        kept_pairs = np.concatenate([whole, kept_pairs])[order]
+        # Back in pair order (children in quadkey order, sources in order in each): each
+        # pair's geometry is its own (copied) or its clip's, if anything is left.
+        geometry = np.empty(pairs.shape[0], dtype=np.int64)
+        geometry[whole] = pairs[whole]
+        geometry[kept_pairs] = ragged.count + np.arange(clipped.count, dtype=np.int64)
+        present = inside.copy()
+        present[kept_pairs] = True
+        clipped = ragged.concat_take(clipped, geometry[present])
+        out_boxes = np.concatenate([boxes, out_boxes])[geometry[present]]
+        kept_pairs = np.flatnonzero(present)
     out_child = pair_child[kept_pairs]
     per_tile = np.bincount(out_child, minlength=children.shape[0])
     kept = per_tile > 0
     return Level(zoom, clipped, level.source[pairs[kept_pairs]],
-                 exclusive_sum(per_tile[kept]), child_x[kept], child_y[kept])
+                 exclusive_sum(per_tile[kept]), child_x[kept], child_y[kept], out_boxes)

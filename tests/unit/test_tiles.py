@@ -432,3 +432,19 @@ def test_one_tile_equals_the_pyramid_s(dataset):
     assert tile_one(table, 4, 0, 0) is None  # the far north-west: nothing there
     with pytest.raises(InvalidOptionError, match="outside"):
         tile_one(table, 2, 4, 0)
+
+
+def test_rounded_rings_are_cleaned_before_they_are_checked():
+    """Repeated and collinear positions and spikes go; a collapsed shell takes its holes."""
+    from rnsca.tiles.encode import clean_polygons
+
+    spiky = [(0, 0), (2, 0), (4, 0), (4, 0), (4, 2), (4, 4), (7, 4), (4, 4), (0, 4), (0, 2),
+             (0, 0)]
+    line = [(0, 0), (3, 3), (1, 1), (0, 0)]  # a shell rounded onto a line
+    hole = [(1, 1), (1, 2), (2, 2), (1, 1)]
+    q = np.array(spiky + line + hole, dtype=np.int64)
+    offsets = (np.array([0, 11, 15, 19]), np.array([0, 1, 3]), np.array([0, 1, 2]))
+    out, (rings, polygons, geometries) = clean_polygons(q, offsets)
+    assert out.tolist() == [[0, 0], [4, 0], [4, 4], [0, 4], [0, 0]]
+    assert rings.tolist() == [0, 5] and polygons.tolist() == [0, 1]
+    assert geometries.tolist() == [0, 1, 1]  # the second geometry is left empty

@@ -29,6 +29,7 @@ from rnsca.kernels.validate import (
     first_invalid_segment,
     first_open_ring,
 )
+from rnsca.kernels.windows import vertex_boxes
 
 __all__ = ["GeometryKind", "Ragged", "PathArrays", "OUTPUT_KIND", "exclusive_sum",
            "geometry_error", "group_offsets", "to_shapely"]
@@ -701,6 +702,49 @@ class PathArrays:
 
     __hash__ = None  # type: ignore[assignment]  # unhashable: == compares arrays
 
+    def take(self, index: npt.ArrayLike) -> PathArrays:
+        """Return the paths at `index` (int, any order, repeats allowed), as a `PathArrays`.
+
+        Copied from checked arrays: the layout holds by construction.
+
+        Examples
+        --------
+        >>> from rnsca.io.svgpath import parse_paths, write_paths
+        >>> write_paths(parse_paths(["M0 0L1 1", "M5 5L6 5"]).take([1, 1, 0]))
+        ['M5 5H6', 'M5 5H6', 'M0 0 1 1']
+        """
+        rows = np.ascontiguousarray(index, dtype=np.int64)
+        first, last = self.path_offsets[rows], self.path_offsets[rows + 1]
+        subpaths = _ranges(first, last)
+        segments = _ranges(self.subpath_offsets[subpaths], self.subpath_offsets[subpaths + 1])
+        return PathArrays.from_kernel(
+            controls=self.controls[segments], degree=self.degree[segments],
+            subpath_offsets=exclusive_sum(np.diff(self.subpath_offsets)[subpaths]),
+            closed=self.closed[subpaths], start=self.start[subpaths],
+            path_offsets=exclusive_sum(last - first))
+
+    def boxes(self) -> np.ndarray:
+        """Return each path's bounding box of control and start points, float64 (n, 4).
+
+        Rows ``[xmin, ymin, xmax, ymax]``: the curves lie in the box (convex hull
+        property), and so does a filled subpath's closing line. A path of no subpaths
+        has a NaN row.
+
+        Examples
+        --------
+        >>> from rnsca.io.svgpath import parse_paths
+        >>> parse_paths(["M0 0Q5 4 2 1", "M-1 3"]).boxes().tolist()
+        [[0.0, 0.0, 5.0, 4.0], [-1.0, 3.0, -1.0, 3.0]]
+        """
+        n = len(self)
+        controls = np.empty((n, 4))
+        starts = np.empty((n, 4))
+        vertex_boxes(self.controls.reshape(-1, 2), 4 * self.subpath_offsets[self.path_offsets],
+                     controls)
+        vertex_boxes(self.start, self.path_offsets, starts)
+        return np.column_stack([np.fmin(controls[:, :2], starts[:, :2]),
+                                np.fmax(controls[:, 2:], starts[:, 2:])])
+
     def path(self, index: int) -> PathArrays:
         """Return path `index` (negative counts from the end) as a `PathArrays` of one."""
         n = len(self)
@@ -713,6 +757,14 @@ class PathArrays:
                           subpath_offsets=self.subpath_offsets[s0:s1 + 1] - g0,
                           closed=self.closed[s0:s1], start=self.start[s0:s1],
                           path_offsets=np.array([0, s1 - s0], dtype=np.int64))
+
+
+def _ranges(first: np.ndarray, stop: np.ndarray) -> np.ndarray:
+    """Return ``first[0]..stop[0]-1, first[1]..stop[1]-1, ...`` concatenated (int64)."""
+    sizes = stop - first
+    offset = np.arange(int(sizes.sum()), dtype=np.int64) - np.repeat(np.cumsum(sizes) - sizes,
+                                                                      sizes)
+    return np.repeat(first, sizes).astype(np.int64) + offset
 
 
 def _as_array(value: npt.ArrayLike, dtype: npt.DTypeLike, name: str) -> np.ndarray:

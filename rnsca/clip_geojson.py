@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, fields
 from itertools import zip_longest
@@ -180,11 +181,22 @@ class GeoJSONWindowsResult:
     feature_source : list of ndarray of int64
         For each window, the input feature of each output feature (see
         `GeoJSONClipResult.feature_source`).
+    inputs : dict
+        As `GeoJSONClipResult.inputs`: the arrays read from the document, by kind.
+    outputs : dict
+        For the same kinds, the `RaggedClipResult` of clipping them against every window
+        (``windows=``: each output's ``source`` and ``window``), so `rnsca.verify`
+        compares every (geometry, window) pair without reading a document again.
+    windows : ndarray of float64, shape (k, 4)
+        The windows, as checked.
     """
 
     documents: list
     stats: ClipStats
     feature_source: list
+    inputs: dict = dataclasses.field(default_factory=dict)
+    outputs: dict = dataclasses.field(default_factory=dict)
+    windows: np.ndarray | None = None
 
     def __iter__(self) -> Iterator[Any]:
         """Unpack as ``documents, stats``."""
@@ -228,11 +240,12 @@ def clip_geojson_windows(obj: dict | str | bytes | bytearray | memoryview,
     table = as_windows(windows)
     k = table.shape[0]
     layout = from_geojson(obj, max_vertices=max_vertices)
+    inputs: dict[str, tuple] = {}
     outputs: dict[str, RaggedClipResult] = {}
     for kind in _KINDS:
         if layout.geometry_count(kind) == 0:
             continue
-        geometry_type, coords, offsets = getattr(layout, kind)
+        geometry_type, coords, offsets = inputs[kind] = getattr(layout, kind)
         outputs[kind] = clip_ragged(geometry_type, coords, offsets, windows=table,
                                     partial_z=layout.partial_z, **options)
     stats = [result.stats for result in outputs.values()]
@@ -248,7 +261,8 @@ def clip_geojson_windows(obj: dict | str | bytes | bytearray | memoryview,
                                                  arrays=arrays)
         documents.append(document)
         sources.append(feature_source)
-    return GeoJSONWindowsResult(documents, combine_stats(stats), sources)
+    return GeoJSONWindowsResult(documents, combine_stats(stats), sources, inputs, outputs,
+                                table)
 
 
 def _window_part(result: RaggedClipResult, w: int, count: int) -> tuple:

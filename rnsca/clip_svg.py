@@ -9,14 +9,18 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any, SupportsIndex
 
-from rnsca.arrays import PathArrays
+import numpy as np
+import numpy.typing as npt
+
+from rnsca.arrays import PathArrays, exclusive_sum
 from rnsca.backends.auto import backend_for
 from rnsca.backends.base import Operation, Polylines
-from rnsca.errors import InvalidOptionError
+from rnsca.errors import InvalidOptionError, InvalidWindowError
 from rnsca.io.svgpath import parse_paths, write_paths
+from rnsca.many_windows import as_windows, assign_boxes
 from rnsca.options import (
     CURVE_RELATIVE_TOLERANCE,
     Backend,
@@ -28,7 +32,7 @@ from rnsca.options import (
     PathOptions,
 )
 from rnsca.stats import ClipStats
-from rnsca.window import Window
+from rnsca.window import Window, WindowTable
 
 __all__ = [
     "Curves",
@@ -44,22 +48,37 @@ __all__ = [
 
 @dataclass(frozen=True, slots=True)
 class PathClipResult:
-    """Clipped paths: output path ``i`` is the clip of input path ``i`` (empty if nothing is left).
+    """Clipped paths: output path ``i`` is the clip of input path ``source[i]``.
+
+    With one window, output path ``i`` is the clip of input path ``i`` (empty if nothing
+    is left). With ``windows=``, output ``i`` is the clip of input path ``source[i]``
+    against window ``window[i]``, sorted by window, then source.
 
     Attributes
     ----------
     paths : PathArrays
-        The clipped paths, in input order.
+        The clipped paths: in input order (one window), or by window then source.
     stats : ClipStats
         ``segments_in`` counts input segments (closing edges included);
         ``pieces_out`` output segments; fragments are pieces of segments tested by the
-        outcodes of their control points.
+        outcodes of their control points. With ``windows=``, of every (path, window)
+        pair clipped (``geometries_in`` counts the pairs).
     curves, fill, mode : str or None
         The options the clip ran with (``fill`` None for strokes), for `rnsca.verify`.
     fill_output : str or None
         How the fill was written (``"clean"`` or ``"raw"``); None for strokes.
     tolerance : float
         The clip's tolerance (flattening, approx leaves), user units.
+    source : ndarray of int64, shape (m,), or None
+        With ``windows=``: the input path of each output path. None for one window
+        (output ``i`` is input ``i``).
+    window : ndarray of int64, shape (m,), or None
+        With ``windows=``: the window (its row in ``windows``) of each output path.
+    window_offsets : ndarray of int64, shape (k + 1,), or None
+        With ``windows=``: window ``w``'s outputs are ``window_offsets[w]:window_offsets[w
+        + 1]``.
+    windows : ndarray of float64, shape (k, 4), or None
+        With ``windows=``: the windows, as checked (for `rnsca.verify`).
     """
 
     paths: PathArrays
@@ -69,9 +88,31 @@ class PathClipResult:
     mode: str = "exact"
     tolerance: float = 0.0
     fill_output: str | None = None
+    source: np.ndarray | None = None
+    window: np.ndarray | None = None
+    window_offsets: np.ndarray | None = None
+    windows: np.ndarray | None = None
+
+    def __len__(self) -> int:
+        """Return the number of output paths."""
+        return len(self.paths)
+
+    def window_paths(self, w: int) -> tuple[PathArrays, np.ndarray]:
+        """Return window `w`'s output paths and the input path of each (``windows=``).
+
+        Raises
+        ------
+        ValueError
+            For a result of one window.
+        """
+        if self.window_offsets is None or self.source is None:
+            raise ValueError("window_paths is for a clip with windows=")
+        first, last = int(self.window_offsets[w]), int(self.window_offsets[w + 1])
+        return self.paths.take(np.arange(first, last)), self.source[first:last]
 
 
-def clip_paths(paths: PathArrays, window: Window | Iterable[float], *,
+def clip_paths(paths: PathArrays, window: Window | Iterable[float] | None = None, *,
+               windows: npt.ArrayLike | None = None, keep_empty: bool = False,
                curves: Curves | str = "preserve", fill: Fill | str | None = None,
                tolerance: float | None = None, method: Method | str = "rnsca",
                n: SupportsIndex | str = "auto", max_depth: SupportsIndex | None = None,
@@ -86,6 +127,19 @@ def clip_paths(paths: PathArrays, window: Window | Iterable[float], *,
         Paths of lines, quadratic and cubic Béziers (`rnsca.io.svgpath`).
     window : Window or sequence of 4 floats
         The closed window ``(xmin, ymin, xmax, ymax)``.
+    windows : array_like, shape (k, 4), optional
+        Many windows instead of `window`: every path is clipped against every window
+        its bounding box (of control and start points, `PathArrays.boxes`) touches, in
+        one call, and the result says the source path and the window of each output
+        (``source``, ``window``, ``window_offsets``; sorted by window, then source). The
+        (path, window) pairs come from `rnsca.many_windows.assign_boxes` (a regular grid
+        of windows by arithmetic, other sets by a sweep); the pairs' paths are gathered
+        and clipped in one kernel call, each against its own window. Default tolerances
+        follow the smallest window.
+    keep_empty : bool
+        With ``windows=``: keep the output of every (path, window) pair whose boxes
+        touch, empty where nothing of the path is in the window, instead of dropping
+        the empty ones. With one window every input has its output (empty or not).
     curves : {"preserve", "flatten"}
         "preserve": visible parts as Béziers of the same degree, cut exactly where
         they cross an edge (to about 1e-15 of the parameter, ends snapped onto the
@@ -110,7 +164,8 @@ def clip_paths(paths: PathArrays, window: Window | Iterable[float], *,
         back and forth, and touch itself. Strokes ignore it.
     tolerance : float, optional
         Flattening accuracy and approx mode's smallest piece, in user units; default
-        `CURVE_RELATIVE_TOLERANCE` times the window's longer side.
+        `CURVE_RELATIVE_TOLERANCE` times the window's longer side (the smallest
+        window's, with ``windows=``).
     resolution : float > 0 or str, optional
         Approx mode: sets the tolerance from the output's resolution instead (see
         `rnsca.clip_segments`); not with `tolerance`.
@@ -123,7 +178,8 @@ def clip_paths(paths: PathArrays, window: Window | Iterable[float], *,
         segment by its control points, and flattens the curves accepted whole, on the
         device, and runs of segments by their box; the ambiguous segments and the
         output are done on the host by the Numba kernel, from the device's decisions:
-        the output is the same.
+        the output is the same. With ``windows=`` the device classifies the pairs of
+        one window at a time (one launch per window), the host assembles all at once.
 
     Returns
     -------
@@ -132,26 +188,64 @@ def clip_paths(paths: PathArrays, window: Window | Iterable[float], *,
     Raises
     ------
     InvalidWindowError, InvalidOptionError
-        (ValueError) naming the bad value.
+        (ValueError) naming the bad value: a bad window, a bad row of `windows` (not
+        finite, ``min >= max``, not 4 columns), no windows, or both or neither of
+        `window` and `windows`.
+
+    Examples
+    --------
+    >>> from rnsca.io.svgpath import parse_paths, write_paths
+    >>> paths = parse_paths(["M-1 1H9", "M6 4L8 4"])
+    >>> r = clip_paths(paths, windows=[[0, 0, 5, 5], [5, 0, 10, 5], [0, 5, 5, 9]])
+    >>> write_paths(r.paths), r.source.tolist(), r.window_offsets.tolist()
+    (['M0 1H5', 'M5 1H9', 'M6 4H8'], [0, 0, 1], [0, 1, 3, 3])
     """
-    window = Window.of(window)
-    options = PathOptions.resolve(window, curves=curves, fill=fill, tolerance=tolerance,
-                                  method=method, n=n, max_depth=max_depth, mode=mode,
-                                  resolution=resolution, fill_output=fill_output)
-    engine = backend_for(backend, "paths", paths.degree.shape[0])
+    if (window is None) == (windows is None):
+        raise InvalidWindowError("give one of window= and windows=")
+    bounds = None
+    if windows is not None:
+        # The (path, window) pairs' paths, each with its window: one clip for them all.
+        bounds = as_windows(windows)
+        pairs = assign_boxes(paths.boxes(), bounds)
+        pair_window = np.repeat(np.arange(bounds.shape[0], dtype=np.int64),
+                                np.diff(pairs.window_offsets))
+        table = WindowTable(bounds, pair_window)
+        clipped_in = paths.take(pairs.segment)
+    else:
+        assert window is not None
+        single = Window.of(window)
+        table = WindowTable.of(single, len(paths))
+        clipped_in = paths
+    options = PathOptions.resolve(table.smallest(), curves=curves, fill=fill,
+                                  tolerance=tolerance, method=method, n=n,
+                                  max_depth=max_depth, mode=mode, resolution=resolution,
+                                  fill_output=fill_output)
+    engine = backend_for(backend, "paths", clipped_in.degree.shape[0])
     engine.capabilities.require(Operation.PATHS, options.mode)
-    out = engine.clip_paths(paths, window, options)
+    out = engine.clip_paths(clipped_in, table, options)
     m = out.paths.degree.shape[0]
-    non_empty = int((out.paths.path_offsets[1:] > out.paths.path_offsets[:-1]).sum())
+    non_empty = np.diff(out.paths.path_offsets) > 0
     stats = ClipStats.from_counters(out.counters, out.segments_in, m,
-                                    geometries_in=len(paths), geometries_out=non_empty,
-                                    vertices_in=int(paths.controls.shape[0]),
+                                    geometries_in=len(clipped_in),
+                                    geometries_out=int(non_empty.sum()),
+                                    vertices_in=int(clipped_in.controls.shape[0]),
                                     vertices_out=m, device=out.device)
     fill = options.fill
-    return PathClipResult(out.paths, stats, options.curves.value,
-                          None if fill is None else fill.value,
-                          options.mode.value, options.tolerance,
-                          None if fill is None else options.fill_output.value)
+    result = PathClipResult(out.paths, stats, options.curves.value,
+                            None if fill is None else fill.value,
+                            options.mode.value, options.tolerance,
+                            None if fill is None else options.fill_output.value)
+    if bounds is None:
+        return result
+    source, pair_window = pairs.segment, table.index
+    clipped = out.paths
+    if not keep_empty:
+        kept = np.flatnonzero(non_empty)
+        clipped, source, pair_window = clipped.take(kept), source[kept], pair_window[kept]
+    return replace(result, paths=clipped, source=source, window=pair_window,
+                   window_offsets=exclusive_sum(np.bincount(pair_window,
+                                                            minlength=bounds.shape[0])),
+                   windows=bounds)
 
 
 def clip_svg(d: str | Sequence[str], window: Window | Iterable[float], *,

@@ -22,7 +22,6 @@ import pyarrow as pa
 import rnsca
 from rnsca.backends.registry import available_backends, get_backend, opencl_report
 from rnsca.clip import SegmentClipResult, as_segments
-from rnsca.clip_geojson import combine_stats
 from rnsca.errors import (
     InvalidGeometryError,
     InvalidOptionError,
@@ -208,7 +207,7 @@ def clip_geojson(body: bytes, settings: Settings, deadline: float | None = None)
     deadline = _due(deadline, settings)
     request = parse_geojson_request(body)  # a large body a slice of features at a time
     if request.windows is not None:
-        return _clip_geojson_windows(request, settings)
+        return _clip_geojson_windows(request, settings, deadline)
     assert request.window is not None
     window = Window(*request.window)
     options = request.options
@@ -266,13 +265,19 @@ def _windows_vertex_cap(options: ClipOptions, windows: list, settings: Settings,
     return smallest, cap, by_budget
 
 
-def _clip_geojson_windows(request: ClipGeoJSONRequest, settings: Settings) -> Outcome:
-    """Answer ``POST /v1/clip/geojson`` with `windows`: one document per window."""
+def _clip_geojson_windows(request: ClipGeoJSONRequest, settings: Settings,
+                          deadline: float) -> Outcome:
+    """Answer ``POST /v1/clip/geojson`` with `windows`: one document per window.
+
+    Verified as one window is, every (geometry, window) pair whose boxes touch counted
+    as one input.
+    """
     options = request.options
     assert request.windows is not None
     smallest, cap, by_budget = _windows_vertex_cap(options, request.windows, settings)
+    started = time.perf_counter()
     try:
-        documents, stats = rnsca.clip_geojson_windows(
+        result = rnsca.clip_geojson_windows(
             request.geojson, request.windows, keep_empty=options.keep_empty,
             max_vertices=cap, arrays=True, boundary=options.boundary,
             check_validity=options.check_validity, **_library_options(options, settings))
@@ -285,7 +290,21 @@ def _clip_geojson_windows(request: ClipGeoJSONRequest, settings: Settings) -> Ou
         if path is not None:
             exc.path = "geojson" + (path if not path or path.startswith("[") else "." + path)
         raise
-    payload = {"geojson": documents, "stats": stats.to_dict(), "verification": None}
+    clip_seconds = time.perf_counter() - started
+    stats = result.stats
+    verification = None
+    windows = request.windows
+    approx_unbounded = options.mode is Mode.APPROX and request.approx_bound is None
+    if _verify_wanted(request.verify, stats.vertices_in, settings) and not (
+            request.verify is None and approx_unbounded):
+        verification = _verify_within_budget(
+            "geojson", request.verify, clip_seconds, stats.geometries_in, stats.vertices_in,
+            settings, deadline,
+            lambda **limits: rnsca.verify(None, result, windows, mode=options.mode,
+                                          approx_bound=request.approx_bound,
+                                          boundary=options.boundary, **limits))
+    payload = {"geojson": result.documents, "stats": stats.to_dict(),
+               "verification": _dict_or_none(verification)}
     return Outcome(orjson.dumps(payload, option=_JSON), stats)
 
 
@@ -550,7 +569,7 @@ def clip_svg(body: bytes, settings: Settings, deadline: float | None = None) -> 
     deadline = _due(deadline, settings)
     request = ClipSVGRequest.model_validate_json(body)
     if request.windows is not None:
-        return _clip_svg_windows(request, settings)
+        return _clip_svg_windows(request, settings, deadline)
     assert request.window is not None
     window = Window(*request.window)
     arguments = _library_options(request.options, settings)
@@ -587,32 +606,54 @@ def clip_svg(body: bytes, settings: Settings, deadline: float | None = None) -> 
     return Outcome(orjson.dumps(payload, option=_JSON), result.stats)
 
 
-def _clip_svg_windows(request: ClipSVGRequest, settings: Settings) -> Outcome:
+def _clip_svg_windows(request: ClipSVGRequest, settings: Settings, deadline: float) -> Outcome:
     """Answer ``POST /v1/clip/svg`` with `windows`: the paths clipped to each window.
 
-    The path text is read once; the work budget charges every control point once per
-    window.
+    The path text is read once and clipped against every window in one library call
+    (`rnsca.clip_paths` with ``windows=``); the work budget charges every control point
+    once per window. Verified as one window is, every (path, window) pair whose boxes
+    touch counted as one input.
     """
     assert request.windows is not None
     options = request.options
     arguments = _library_options(options, settings)
     table = as_windows(request.windows)
-    windows = [Window(*row) for row in table.tolist()]
     try:
         paths = rnsca.parse_paths(request.paths, tolerance=arguments["tolerance"])
         vertices = int(paths.degree.sum()) + paths.closed.shape[0]
         check_vertices(vertices, settings.max_vertices)
-        check_work(vertices * sum(1 + subdivision_cost(options, w, None) for w in windows),
-                   settings.work_budget)
-        results = [rnsca.clip_paths(paths, w, curves=options.curves, fill=options.fill,
-                                    **arguments) for w in windows]
+        check_work(vertices * sum(1 + subdivision_cost(options, Window(*row), None)
+                                  for row in table.tolist()), settings.work_budget)
+        started = time.perf_counter()
+        result = rnsca.clip_paths(paths, windows=table, curves=options.curves,
+                                  fill=options.fill, fill_output=options.fill_output,
+                                  **arguments)
+        clip_seconds = time.perf_counter() - started
     except RnscaError as exc:
         if getattr(exc, "path_index", None) is not None:
             exc.path = f"paths[{exc.path_index}]"
         raise
-    stats = combine_stats(r.stats for r in results)
-    payload = {"paths": [rnsca.write_paths(r.paths, precision=None) for r in results],
-               "stats": stats.to_dict(), "verification": None}
+    assert result.window_offsets is not None and result.source is not None
+    written = rnsca.write_paths(result.paths, precision=None)
+    per_window = []
+    for w in range(table.shape[0]):
+        # One string per input path, "" where nothing of it is in the window.
+        strings = [""] * len(paths)
+        for j in range(int(result.window_offsets[w]), int(result.window_offsets[w + 1])):
+            strings[int(result.source[j])] = written[j]
+        per_window.append(strings)
+    verification = None
+    stats = result.stats
+    if (request.paths and Mode(options.mode) is not Mode.APPROX
+            and _verify_wanted(request.verify, stats.vertices_in, settings)):
+        tolerance = arguments.get("tolerance") if options.curves == "flatten" else None
+        verification = _verify_within_budget(
+            "svg", request.verify, clip_seconds, stats.geometries_in, stats.vertices_in,
+            settings, deadline,
+            lambda **limits: rnsca.verify(paths, result, table, tolerance=tolerance,
+                                          **limits))
+    payload = {"paths": per_window, "stats": stats.to_dict(),
+               "verification": _dict_or_none(verification)}
     return Outcome(orjson.dumps(payload, option=_JSON), stats)
 
 

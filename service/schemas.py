@@ -134,7 +134,11 @@ _VERIFY = Field(None, description="Compare with Shapely's exact intersection. tr
                                   "and `passed` is null (no verdict) when some inputs were "
                                   "not compared and none of those compared failed. "
                                   "Default: true for inputs of up to the server's "
-                                  "`verify_max_vertices`.")
+                                  "`verify_max_vertices`. With `windows`, every (input, "
+                                  "window) pair whose bounding boxes touch is one input, "
+                                  "compared in its window, and one `verification` covers "
+                                  "them all (`inputs` counts the pairs; the allowed "
+                                  "deviation is that of the largest window).")
 
 
 def _stats_fields() -> dict[str, Any]:
@@ -213,7 +217,7 @@ class ClipGeoJSONResponse(BaseModel):
     """The clipped document (properties, ids and foreign members kept).
 
     With `windows`: `geojson` is a list, the document clipped to each window in order,
-    and `verification` is null (verify with one window per request).
+    and `verification` covers every (geometry, window) pair (see `verify`).
     """
 
     model_config = ConfigDict(json_schema_extra={"examples": [{
@@ -242,7 +246,8 @@ class ClipSVGResponse(BaseModel):
     """The clipped path data, one string per input path.
 
     With `windows`: `paths` is a list per window (in order) of one string per input
-    path, and `verification` is null.
+    path (`""` where nothing of it is in that window), and `verification` covers every
+    (path, window) pair (see `verify`).
     """
 
     paths: list[str] | list[list[str]]
@@ -296,6 +301,8 @@ class Limits(BaseModel):
                                                 "about this many bytes of records ...")
     stream_chunk_records: int = Field(description="... or this many records.")
     stream_max_record_bytes: int = Field(description="Longest record of streamed GeoJSON.")
+    max_tiles: int = Field(description="Most tiles `POST /v1/tiles` cuts in one zoom; more "
+                                       "gives 413.")
 
 
 class OperationOptions(BaseModel):

@@ -15,7 +15,7 @@ segments     (n, 4) float64 array, `Window`           `SegmentPieces`
 windows      (n, 4) float64 array, (k, 4) windows     `SegmentPieces` (+ window)
 lines        `Ragged` lines, `WindowTable`            `GeometryPieces`
 polygons     `Ragged` polygons, `WindowTable`         `GeometryPieces`
-paths        `PathArrays`, `Window`                   `PathPieces`
+paths        `PathArrays`, `WindowTable`              `PathPieces`
 flatten      `PathArrays`, tolerance                  `Polylines`
 ===========  =======================================  ===========================
 
@@ -220,7 +220,7 @@ class GeometryPieces:
 
 @dataclass(frozen=True, slots=True)
 class PathPieces:
-    """Clipped paths: output path ``i`` is the clip of input path ``i``.
+    """Clipped paths: output path ``i`` is the clip of input path ``i`` in its window.
 
     Attributes
     ----------
@@ -304,8 +304,13 @@ class ClipBackend(Protocol):
         """Return the valid polygons each POLYGON or MULTIPOLYGON gives inside its window."""
         ...
 
-    def clip_paths(self, paths: PathArrays, window: Window, options: PathOptions) -> PathPieces:
-        """Return the paths clipped to the window (curves kept or flattened, strokes or fills)."""
+    def clip_paths(self, paths: PathArrays, windows: WindowTable,
+                   options: PathOptions) -> PathPieces:
+        """Return each path clipped to its window (curves kept or flattened, strokes or fills).
+
+        `windows` gives one window for all paths or one per path (``rnsca.clip_paths(...,
+        windows=)`` passes the (path, window) pairs' paths, sorted by window).
+        """
         ...
 
     def flatten_paths(self, paths: PathArrays, tolerance: float, close: bool) -> Polylines:

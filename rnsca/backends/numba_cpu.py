@@ -290,9 +290,9 @@ class NumbaBackend:
             group_offsets(counts.n_polys, geometry_polygons)),
             np.concatenate([counters, device.counters]), device.stats)
 
-    def clip_paths(self, paths: PathArrays, window: Window, options: PathOptions,
+    def clip_paths(self, paths: PathArrays, windows: WindowTable, options: PathOptions,
                    *, device: DevicePaths | None = None) -> PathPieces:
-        """Return the paths clipped to the window; see `ClipBackend.clip_paths`.
+        """Return each path clipped to its window; see `ClipBackend.clip_paths`.
 
         The path kernel's count pass, prefix sums and write pass. `device` is for the
         OpenCL backend, which assembles here from what its device decided: each segment's
@@ -316,7 +316,7 @@ class NumbaBackend:
         kernel_input = (
             BZ.PathInput(paths.controls, paths.degree, paths.subpath_offsets, paths.closed,
                          paths.start, subpath_source),
-            R.Window(window.xmin, window.ymin, window.xmax, window.ymax),
+            _window_rows(windows),
             BZ.Options(fill=options.fill is not None, flatten=options.curves is Curves.FLATTEN,
                        exact=options.mode is Mode.EXACT, n_split=int(options.n_split),
                        leaf_depth=int(options.leaf_depth), tolerance=float(options.tolerance),
@@ -353,7 +353,7 @@ class NumbaBackend:
                                          subpath_offsets=out_first, closed=out_closed,
                                          start=out_start, path_offsets=path_offsets)
         if clean:
-            clipped = clean_fills(clipped, window, options.fill is Fill.EVENODD)
+            clipped = clean_fills(clipped, windows, options.fill is Fill.EVENODD)
         segments_in = paths.degree.shape[0] + BZ.closing_edges(
             paths.controls, paths.subpath_offsets, paths.closed, paths.start,
             options.fill is not None)
@@ -416,13 +416,24 @@ def warm_up_paths(backend: ClipBackend) -> None:
     window = Window(0.0, 0.0, 1.0, 1.0)
     for curves, fill, mode in (("preserve", None, "exact"), ("preserve", "nonzero", "exact"),
                                ("flatten", None, "exact"), ("preserve", None, "approx")):
-        backend.clip_paths(paths, window, PathOptions.resolve(window, curves=curves,
-                                                              fill=fill, mode=mode))
+        backend.clip_paths(paths, WindowTable.of(window, len(paths)),
+                           PathOptions.resolve(window, curves=curves, fill=fill, mode=mode))
     backend.flatten_paths(paths, 1e-3, True)
 
 
-def clean_fills(clipped: PathArrays, window: Window, evenodd: bool) -> PathArrays:
+def _window_rows(windows: WindowTable) -> R.WindowRows:
+    """Return the kernels' form of `windows` (one row for all: an empty index)."""
+    bounds = np.ascontiguousarray(windows.bounds, dtype=np.float64)
+    if bounds.shape[0] == 1:
+        return R.WindowRows(bounds, np.empty(0, dtype=np.int64))
+    return R.WindowRows(bounds, np.ascontiguousarray(windows.index, dtype=np.int64))
+
+
+def clean_fills(clipped: PathArrays, windows: Window | WindowTable,
+                evenodd: bool) -> PathArrays:
     """Return the fill clip's output rebuilt as simple rings (`kernels.fill_rings`).
+
+    `windows`: the window of every path, or a `WindowTable` of one per path.
 
     The same count, prefix-sum, write passes as the clip, over paths. Host code for both
     backends: the OpenCL backend's paths are assembled by `NumbaBackend.clip_paths` too.
@@ -430,7 +441,8 @@ def clean_fills(clipped: PathArrays, window: Window, evenodd: bool) -> PathArray
     n = len(clipped)
     kernel_input = (FR.FillPaths(clipped.controls, clipped.degree, clipped.subpath_offsets,
                                  clipped.path_offsets),
-                    R.Window(window.xmin, window.ymin, window.xmax, window.ymax))
+                    _window_rows(WindowTable.of(windows, n) if isinstance(windows, Window)
+                                 else windows))
     n_segments = np.zeros(n, dtype=np.int64)
     n_rings = np.zeros(n, dtype=np.int64)
     nothing = np.empty(0, dtype=np.int64)

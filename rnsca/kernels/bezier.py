@@ -55,6 +55,7 @@ from rnsca.constants import (
 from rnsca.kernels import counters as C
 from rnsca.kernels.jit import borrowing, inlined, parallel, scalar
 from rnsca.kernels.outcode import BOTTOM, LEFT, RIGHT, TOP, clamp, outcode
+from rnsca.kernels.records import window_of
 from rnsca.kernels.stacks import interval_at, put_interval
 
 # Helpers that take arrays are `borrowing` (no reference counting of their arrays): a
@@ -1070,8 +1071,11 @@ def _decide_run(paths, window, opts, i, j):
 
 
 @borrowing
-def _clip_subpaths(paths, window, opts, decisions, layout, out, state, work, k0, k1):
+def _clip_subpaths(paths, windows, opts, decisions, layout, out, state, work, k0, k1):
     """Count or write the clipped output of subpaths k0..k1-1 (one block).
+
+    Subpath k is clipped against its path's window (``paths.source[k]``'s row of
+    `windows`, a `records.WindowRows`).
 
     Subpath k, segments ``first..last-1`` starting at (sx, sy), gives as strokes its
     visible parts as open subpaths (the subpath itself, closed, if it is visible whole;
@@ -1098,6 +1102,7 @@ def _clip_subpaths(paths, window, opts, decisions, layout, out, state, work, k0,
             v0 = layout.segment_start[k]
             v_end = v0 + layout.n_segments[k]
             s0 = layout.subpath_start[k]
+        window = window_of(windows.bounds, windows.index, paths.source[k])
         first = paths.subpath_offsets[k]
         last = paths.subpath_offsets[k + 1]
         sx = paths.start[k, 0]
@@ -1211,10 +1216,11 @@ def _clip_subpaths(paths, window, opts, decisions, layout, out, state, work, k0,
 
 
 @parallel
-def clip_path_blocks(paths, window, opts, decisions, layout, out, counters, block_size):
+def clip_path_blocks(paths, windows, opts, decisions, layout, out, counters, block_size):
     """Count (``out.write`` False) or write the clipped subpaths of a path array.
 
-    Subpath k of `paths` (`PathInput`) is cut to `window` as `opts` says, block by block
+    Subpath k of `paths` (`PathInput`) is cut to its path's window (`windows`, a
+    `records.WindowRows`: one window for all, or one per path) as `opts` says, block by block
     (`block_size` subpaths each). The count pass stores each subpath's output size in
     ``layout.n_segments``, ``layout.n_subpaths`` (and the stats, one row of `counters`
     per block) and each run's decision in ``decisions.runs``, unless given; the write
@@ -1233,7 +1239,7 @@ def clip_path_blocks(paths, window, opts, decisions, layout, out, counters, bloc
                     np.empty(BREAK_CAPACITY, dtype=np.float64),
                     np.empty(BREAK_CAPACITY, dtype=np.int64),
                     np.empty((CURVE_STACK_CAPACITY, 3), dtype=np.float64))
-        _clip_subpaths(paths, window, opts, decisions, layout, out, state, work,
+        _clip_subpaths(paths, windows, opts, decisions, layout, out, state, work,
                        blk * block_size, min(n, (blk + 1) * block_size))
 
 

@@ -73,6 +73,7 @@ from numba import prange
 
 from rnsca.kernels.bezier import piece_values
 from rnsca.kernels.jit import allocating, borrowing, parallel, scalar
+from rnsca.kernels.records import window_of
 
 __all__ = ["FillPaths", "RingLayout", "RingOutput", "clean_fill_paths"]
 
@@ -1104,9 +1105,10 @@ def _clean_path(paths, window, out, p, v, r, evenodd):
 
 
 @borrowing
-def _clean_paths(paths, window, layout, out, p0, p1, evenodd):
-    """Count or write the rings of paths p0..p1-1 (one block)."""
+def _clean_paths(paths, windows, layout, out, p0, p1, evenodd):
+    """Count or write the rings of paths p0..p1-1 (one block), each in its window."""
     for p in range(p0, p1):
+        window = window_of(windows.bounds, windows.index, p)
         v = 0
         r = 0
         if out.write:
@@ -1119,11 +1121,12 @@ def _clean_paths(paths, window, layout, out, p0, p1, evenodd):
 
 
 @parallel
-def clean_fill_paths(paths, window, layout, out, block_size, evenodd):
+def clean_fill_paths(paths, windows, layout, out, block_size, evenodd):
     """Count (``out.write`` False) or write the clean rings of each filled path.
 
-    `paths` (`FillPaths`) is the fill clip's output for `window` (`records.Window`):
-    closed subpaths inside the closed window, each segment starting where the one
+    `paths` (`FillPaths`) is the fill clip's output for `windows` (`records.WindowRows`:
+    path p's window is ``window_of(windows.bounds, windows.index, p)``): closed
+    subpaths inside their closed window, each segment starting where the one
     before it ends and the last ending at its subpath's start. The count pass stores
     each path's output size in ``layout.n_segments`` and ``layout.n_rings`` (-1 for a
     path whose edge lines do not add up: a bug upstream); the write pass writes path
@@ -1137,5 +1140,5 @@ def clean_fill_paths(paths, window, layout, out, block_size, evenodd):
     n = paths.path_offsets.shape[0] - 1
     n_blocks = (n + block_size - 1) // block_size
     for blk in prange(n_blocks):
-        _clean_paths(paths, window, layout, out, blk * block_size,
+        _clean_paths(paths, windows, layout, out, blk * block_size,
                      min(n, (blk + 1) * block_size), evenodd)

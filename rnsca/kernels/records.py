@@ -27,7 +27,8 @@ import numpy as np
 
 from rnsca.kernels.jit import inlined
 
-__all__ = ["CoreOptions", "Direction", "Fragment", "Vertices", "Window", "vertices", "window_of"]
+__all__ = ["CoreOptions", "Direction", "Fragment", "Vertices", "Window", "WindowRows", "vertices",
+           "window_of"]
 
 
 class Window(NamedTuple):
@@ -65,6 +66,17 @@ class Vertices(NamedTuple):
 def vertices(xy, z):
     """Return the `Vertices` of `xy` and `z` (host side: kernels get it built)."""
     return Vertices(xy, xy.reshape(-1), z, z.shape[0] > 0)
+
+
+class WindowRows(NamedTuple):
+    """The window of each of many items: a table of windows and the row of each item.
+
+    The kernels' form of `rnsca.window.WindowTable`: item ``g`` (a path, a geometry) is
+    clipped against ``window_of(rows.bounds, rows.index, g)``.
+    """
+
+    bounds: np.ndarray  # float64 (w, 4): [xmin, ymin, xmax, ymax] rows
+    index: np.ndarray   # int64 (n,): the row of each item, or empty: row 0 for all
 
 
 @inlined

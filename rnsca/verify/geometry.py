@@ -23,15 +23,17 @@ from shapely.geometry import shape
 
 from rnsca.arrays import PathArrays, Ragged, to_shapely
 from rnsca.clip import SegmentClipResult, as_segments
-from rnsca.clip_geojson import GeoJSONClipResult
+from rnsca.clip_geojson import GeoJSONClipResult, GeoJSONWindowsResult
 from rnsca.clip_svg import CURVE_RELATIVE_TOLERANCE, Fill, PathClipResult
 from rnsca.errors import (
     InvalidGeometryError,
     InvalidOptionError,
+    InvalidWindowError,
     ParseError,
     UnsupportedGeometryError,
 )
 from rnsca.io.svgpath import parse_paths
+from rnsca.many_windows import as_windows, assign_boxes
 from rnsca.options import Boundary, Method, Mode
 from rnsca.ragged import RaggedClipResult
 from rnsca.verify.cost import estimated_crossings
@@ -293,9 +295,8 @@ def verify(original: Any, clipped: Any, window: _Windows, *, mode: Mode | str | 
     if isinstance(clipped, PathClipResult) or (_is_path_data(clipped)
                                                 and _is_path_data(original)):
         # Paths and segments are clipped to one window (`Window.of` refuses a table).
-        return chooser.report(_verify_paths(
-            original, clipped, cast("Window | Iterable[float]", window), mode, approx_bound,
-            fill, tolerance, chooser))
+        return chooser.report(_verify_paths(original, clipped, window, mode, approx_bound,
+                                            fill, tolerance, chooser))
     if isinstance(clipped, SegmentClipResult):
         if boundary is not Boundary.CLOSED:
             raise InvalidOptionError("segments are always clipped with boundary='closed'")
@@ -307,7 +308,12 @@ def verify(original: Any, clipped: Any, window: _Windows, *, mode: Mode | str | 
         raise InvalidOptionError(
             "verify in approx mode needs approx_bound (the largest deviation to accept) "
             "for geometries")
-    if isinstance(clipped, GeoJSONClipResult):
+    if isinstance(clipped, GeoJSONWindowsResult):
+        originals, delivered, source, window = _geojson_windows_pairs(clipped, window)
+    elif isinstance(clipped, RaggedClipResult) and clipped.window_offsets is not None:
+        originals, delivered, source, window = _ragged_window_pairs(
+            _ragged_originals(original), clipped, window)
+    elif isinstance(clipped, GeoJSONClipResult):
         originals, delivered, source = _geojson_result_pairs(clipped)
     elif isinstance(clipped, dict):
         originals, delivered, source, window = _geojson_pair(original, clipped, window)
@@ -534,13 +540,17 @@ def _as_paths(value: object, name: str) -> PathArrays:
         f"with clipped paths, got {type(value).__name__}")
 
 
-def _verify_paths(original: object, clipped: object, window: Window | Iterable[float],
+def _verify_paths(original: object, clipped: object, window: _Windows,
                   mode: Mode | str | None, approx_bound: float | None,
                   fill: Fill | str | None, tolerance: float | None,
                   chooser: _Coverage) -> Verification:
-    """Return the verification of clipped paths (see `verify`)."""
-    window = Window.of(window)
+    """Return the verification of clipped paths (see `verify`).
+
+    A clip with ``windows=`` is compared pair by pair: each (path, window) pair whose
+    boxes touch is one input, its output (or nothing) compared in that window.
+    """
     flattened_by = 0.0  # a flatten-mode clip's lines are within its tolerance of the curves
+    originals_paths = _as_paths(original, "original")
     if isinstance(clipped, PathClipResult):
         delivered_paths = clipped.paths
         fill = clipped.fill if fill is None else fill
@@ -551,12 +561,24 @@ def _verify_paths(original: object, clipped: object, window: Window | Iterable[f
         delivered_paths = _as_paths(clipped, "clipped")
         mode = Mode.EXACT if mode is None else Mode(mode)
     rule = Fill.of(fill)
-    originals_paths = _as_paths(original, "original")
-    if len(originals_paths) != len(delivered_paths):
-        raise InvalidGeometryError(
-            f"verify needs one clipped path per original: {len(delivered_paths)} clipped, "
-            f"{len(originals_paths)} originals")
-    flat = (window.size * CURVE_RELATIVE_TOLERANCE if tolerance is None
+    if isinstance(clipped, PathClipResult) and clipped.window_offsets is not None:
+        assert clipped.window is not None and clipped.source is not None
+        table = _windows_of(window, clipped.windows)
+        pair_input, pair_window, output_pair = _window_pairs(
+            originals_paths.boxes(), table, clipped.window, clipped.source)
+        originals_paths = originals_paths.take(pair_input)
+        delivered_paths = _aligned_paths(delivered_paths, output_pair, pair_input.shape[0])
+        bounds = table[pair_window]
+    else:
+        one = Window.of(cast("Window | Iterable[float]", window))
+        bounds = np.tile(np.array(one.bounds), (len(originals_paths), 1))
+        if len(originals_paths) != len(delivered_paths):
+            raise InvalidGeometryError(
+                f"verify needs one clipped path per original: {len(delivered_paths)} "
+                f"clipped, {len(originals_paths)} originals")
+    sizes = np.maximum(bounds[:, 2] - bounds[:, 0], bounds[:, 3] - bounds[:, 1])
+    smallest = float(sizes.min()) if sizes.size else 1.0
+    flat = (smallest * CURVE_RELATIVE_TOLERANCE if tolerance is None
             else _non_negative(tolerance, "tolerance"))
     if not flat > 0:
         raise InvalidOptionError(f"tolerance must be > 0, got {tolerance!r}")
@@ -566,7 +588,8 @@ def _verify_paths(original: object, clipped: object, window: Window | Iterable[f
                 "verify in approx mode needs approx_bound (the largest deviation to accept)")
         allowed = approx_bound + 2.0 * flat + flattened_by
     else:
-        allowed = EXACT_RELATIVE_TOLERANCE * window.size + 2.0 * flat + flattened_by
+        largest = float(sizes.max()) if sizes.size else 1.0
+        allowed = EXACT_RELATIVE_TOLERANCE * largest + 2.0 * flat + flattened_by
     # The original is flattened 100 times finer: where a curve crosses an edge at a
     # shallow angle theta, its flattened crossing moves along the edge by up to
     # tolerance / sin(theta), which the allowance (2 * tolerance) would not cover.
@@ -590,8 +613,8 @@ def _verify_paths(original: object, clipped: object, window: Window | Iterable[f
         built = np.flatnonzero(~skipped)
         compared = _Compared.blank(which.shape[0])
         found = _compare_geometries(originals[built], delivered[built], np.arange(built.shape[0]),
-                                    _window_bounds(window, built.shape[0]), Mode.APPROX,
-                                    allowed, Boundary.CLOSED, chooser)
+                                    bounds[which][built], Mode.APPROX, allowed,
+                                    Boundary.CLOSED, chooser)
         for f in fields(_Compared):
             getattr(compared, f.name)[built] = getattr(found, f.name)
         # Too costly to build a region of, or (once built) to make valid.
@@ -601,6 +624,17 @@ def _verify_paths(original: object, clipped: object, window: Window | Iterable[f
         return compared
 
     return _judge(chooser.compare(weights[chosen], compare_chunk), mode.value, allowed)
+
+
+def _aligned_paths(paths: PathArrays, index: np.ndarray, count: int) -> PathArrays:
+    """Return `count` paths: path ``index[i]`` is ``paths``'s path i, the others empty."""
+    padded = PathArrays.from_kernel(
+        controls=paths.controls, degree=paths.degree, subpath_offsets=paths.subpath_offsets,
+        closed=paths.closed, start=paths.start,
+        path_offsets=np.append(paths.path_offsets, paths.path_offsets[-1]))
+    rows = np.full(count, len(paths), dtype=np.int64)  # the empty path appended
+    rows[index] = np.arange(len(paths))
+    return padded.take(rows)
 
 
 # --- segments -----------------------------------------------------------------------------
@@ -938,6 +972,86 @@ def _geojson_pair(original: object, clipped: dict, window: _Windows,
     whole = np.empty(1, dtype=object)
     whole[0] = shapely.geometrycollections([g for g in originals if g is not None])
     return whole, outputs, np.zeros(outputs.shape[0], dtype=np.int64), window
+
+
+def _window_pairs(boxes: np.ndarray, windows: np.ndarray, out_window: np.ndarray,
+                  out_source: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Return the (input, window) pairs to compare, and the pair of each output.
+
+    The pairs are those the clip found (every input against every window its box
+    touches: `rnsca.many_windows.assign_boxes` again, on the same boxes) and those of
+    the outputs, should an output lie in a window its input's box does not touch (its
+    oracle is then empty). Returns ``(pair_input, pair_window, output_pair)``, the pairs
+    sorted by window, then input.
+    """
+    n = boxes.shape[0]
+    found = assign_boxes(boxes, windows)
+    found_window = np.repeat(np.arange(windows.shape[0], dtype=np.int64),
+                             np.diff(found.window_offsets))
+    out_window = np.asarray(out_window, dtype=np.int64)
+    out_source = np.asarray(out_source, dtype=np.int64)
+    if out_source.size and (out_source.min() < 0 or out_source.max() >= n
+                            or out_window.min() < 0 or out_window.max() >= windows.shape[0]):
+        raise InvalidGeometryError(
+            f"verify needs the {n} inputs and the {windows.shape[0]} windows that were "
+            "clipped: an output names another input or window")
+    keys = np.union1d(found_window * n + found.segment, out_window * n + out_source)
+    return keys % max(n, 1), keys // max(n, 1), np.searchsorted(keys, out_window * n
+                                                                + out_source)
+
+
+def _windows_of(window: _Windows, held: np.ndarray | None) -> np.ndarray:
+    """Return the (k, 4) windows a many-window result was clipped against.
+
+    `window` as given to `verify`, else (None) the windows the result holds.
+    """
+    if window is None:
+        if held is None:
+            raise InvalidWindowError("verify needs the windows the result was clipped to")
+        return held
+    table = as_windows(cast("npt.ArrayLike", window))
+    if held is not None and not np.array_equal(table, held):
+        raise InvalidWindowError(
+            f"verify needs the {held.shape[0]} windows the result was clipped to "
+            "(windows=), in their order")
+    return table
+
+
+def _ragged_window_pairs(originals: np.ndarray, result: RaggedClipResult, window: _Windows,
+                         ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Return originals, outputs, their pair and the window of each pair (``windows=``).
+
+    Each (input, window) pair is one input of the comparison: the input geometry
+    repeated per window its box touches, with that window.
+    """
+    assert result.window is not None
+    table = _windows_of(window, None)
+    pair_input, pair_window, output_pair = _window_pairs(
+        shapely.bounds(originals), table, result.window, result.source)
+    delivered = to_shapely(result.geometry_type, _xy(result.coords), result.offsets)
+    return originals[pair_input], delivered, output_pair, table[pair_window]
+
+
+def _geojson_windows_pairs(result: GeoJSONWindowsResult, window: _Windows,
+                           ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Return `_ragged_window_pairs` of every kind a many-window GeoJSON clip holds."""
+    table = _windows_of(window, result.windows)
+    originals, delivered, source, bounds = [], [], [], []
+    pairs = 0
+    for kind, clipped in result.outputs.items():
+        geometry_type, coords, offsets = result.inputs[kind]
+        kind_originals, kind_delivered, kind_source, kind_bounds = _ragged_window_pairs(
+            to_shapely(geometry_type, _xy(coords), offsets), clipped, table)
+        originals.append(kind_originals)
+        delivered.append(kind_delivered)
+        source.append(kind_source + pairs)
+        bounds.append(kind_bounds)
+        pairs += kind_originals.shape[0]
+    if not originals:
+        nothing = np.empty(0, dtype=object)
+        return nothing, nothing, np.empty(0, dtype=np.int64), np.empty((0, 4))
+    return (np.concatenate(originals), np.concatenate(delivered), np.concatenate(source),
+            np.concatenate(bounds))
 
 
 def _window_bounds(window: _Windows, count: int) -> np.ndarray:

@@ -68,23 +68,7 @@ def paths_to_shapely(paths: PathArrays, tolerance: float, fill: Fill | None,
 
 def select_paths(paths: PathArrays, rows: np.ndarray) -> PathArrays:
     """Return paths `rows` (indices, in that order) of `paths` as a `PathArrays`."""
-    first, last = paths.path_offsets[rows], paths.path_offsets[rows + 1]
-    subpaths = _ranges(first, last)
-    segments = _ranges(paths.subpath_offsets[subpaths], paths.subpath_offsets[subpaths + 1])
-    # Copied from checked arrays: the layout holds by construction.
-    return PathArrays.from_kernel(
-        controls=paths.controls[segments], degree=paths.degree[segments],
-        subpath_offsets=np.concatenate([[0], np.cumsum(np.diff(paths.subpath_offsets)[subpaths])]),
-        closed=paths.closed[subpaths], start=paths.start[subpaths],
-        path_offsets=np.concatenate([[0], np.cumsum(last - first)]))
-
-
-def _ranges(first: np.ndarray, stop: np.ndarray) -> np.ndarray:
-    """Return ``first[0]..stop[0]-1, first[1]..stop[1]-1, ...`` concatenated (int64)."""
-    sizes = stop - first
-    offset = np.arange(int(sizes.sum()), dtype=np.int64) - np.repeat(np.cumsum(sizes) - sizes,
-                                                                      sizes)
-    return np.repeat(first, sizes).astype(np.int64) + offset
+    return paths.take(rows)
 
 
 def filled_region(rings: list[np.ndarray], fill: Fill) -> shapely.MultiPolygon:

@@ -44,6 +44,7 @@ async def capabilities(settings: SettingsDep, runner: RunnerDep) -> Response:
             "stream_chunk_bytes": settings.stream_chunk_bytes,
             "stream_chunk_records": settings.stream_chunk_records,
             "stream_max_record_bytes": settings.stream_max_record_bytes,
+            "max_tiles": settings.max_tiles,
         },
     }
     return Response(orjson.dumps(body), media_type="application/json")

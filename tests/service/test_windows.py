@@ -1,6 +1,7 @@
 """``windows`` beside ``window`` on ``POST /v1/clip/geojson`` and ``/v1/clip/svg``: one
-document or path list per window, each equal to a request with that window alone, and
-a work budget that counts the windows."""
+document or path list per window, each equal to a request with that window alone, one
+verification of every (input, window) pair, a work budget that counts the windows, and
+``max_tiles`` among the limits of ``GET /v1/capabilities``."""
 
 import pytest
 
@@ -21,7 +22,7 @@ def test_geojson_windows_answer_one_document_per_window(client):
     r = client.post("/v1/clip/geojson", json={"windows": WINDOWS, "geojson": DOCUMENT})
     assert r.status_code == 200, r.text
     body = r.json()
-    assert len(body["geojson"]) == len(WINDOWS) and body["verification"] is None
+    assert len(body["geojson"]) == len(WINDOWS)
     for window, document in zip(WINDOWS, body["geojson"], strict=True):
         one = client.post("/v1/clip/geojson", json={"window": window, "geojson": DOCUMENT,
                                                     "verify": False})
@@ -79,3 +80,116 @@ def test_the_work_budget_counts_every_vertex_once_per_window():
                            ).status_code == 200
         r = client.post("/v1/clip/svg", json={**path, "windows": WINDOWS})
         assert r.status_code == 422 and r.json()["type"].endswith("work-over-budget")
+
+
+PATHS = ["M -5 5 C 0 15 10 -5 15 5", "M 1 1 L 9 9", "M 2 2 Q 12 4 8 8 Z"]
+
+
+@pytest.mark.parametrize("options", [{}, {"fill": "nonzero"}, {"fill": "evenodd"},
+                                     {"curves": "flatten"}, {"fill": "nonzero",
+                                                             "fill_output": "raw"}])
+def test_svg_windows_equal_one_request_per_window(client, options):
+    r = client.post("/v1/clip/svg", json={"windows": WINDOWS, "paths": PATHS,
+                                          "options": options, "verify": False})
+    assert r.status_code == 200, r.text
+    body = r.json()
+    assert body["verification"] is None
+    for window, clipped in zip(WINDOWS, body["paths"], strict=True):
+        one = client.post("/v1/clip/svg", json={"window": window, "paths": PATHS,
+                                                "options": options, "verify": False})
+        assert one.status_code == 200
+        assert clipped == one.json()["paths"], window
+
+
+def test_svg_windows_are_clipped_in_one_library_call(client, monkeypatch):
+    calls = []
+    clip_paths = rnsca.clip_paths
+
+    def counted(*args, **kwargs):
+        calls.append(kwargs.get("windows") is not None)
+        return clip_paths(*args, **kwargs)
+
+    monkeypatch.setattr(rnsca, "clip_paths", counted)
+    r = client.post("/v1/clip/svg", json={"windows": WINDOWS, "paths": PATHS,
+                                          "verify": False})
+    assert r.status_code == 200, r.text
+    assert calls == [True]
+
+
+@pytest.mark.parametrize("endpoint, body", [
+    ("/v1/clip/svg", {"paths": PATHS}),
+    ("/v1/clip/svg", {"paths": PATHS, "options": {"fill": "nonzero"}}),
+    ("/v1/clip/geojson", {"geojson": DOCUMENT}),
+])
+def test_verify_with_windows_compares_every_pair_with_shapely(client, endpoint, body):
+    r = client.post(endpoint, json={**body, "windows": WINDOWS, "verify": "all"})
+    assert r.status_code == 200, r.text
+    verification = r.json()["verification"]
+    assert verification["passed"] is True and verification["mode"] == "exact"
+    # The pairs whose boxes touch: none in the far window, some in each of the others.
+    assert verification["inputs"] == verification["checked"] > len(WINDOWS) - 1
+    assert verification["false_positives"] == 0 and verification["sampling"] == "all"
+    # true: within the verification budget (a sample past it), as for one window; and
+    # by default (inputs under the server's verify_max_vertices).
+    for verify in ({"verify": True}, {}):
+        r = client.post(endpoint, json={**body, "windows": WINDOWS, **verify})
+        budgeted = r.json()["verification"]
+        assert budgeted["inputs"] == verification["inputs"] >= budgeted["checked"] >= 1
+        assert budgeted["passed"] is not False
+
+
+def test_geojson_windows_verification_counts_the_pairs(client):
+    line = {"type": "LineString", "coordinates": [[-5, 1], [15, 1]]}
+    r = client.post("/v1/clip/geojson", json={"windows": WINDOWS, "geojson": line,
+                                              "verify": "all"})
+    assert r.status_code == 200, r.text
+    verification = r.json()["verification"]
+    # The line's box (y = 1) touches the two lower windows only.
+    assert verification["inputs"] == verification["checked"] == 2
+    assert verification["passed"] is True
+
+
+def test_approx_windows_are_verified_with_a_bound_only(client):
+    line = {"type": "LineString", "coordinates": [[-5, 1], [15, 1]]}
+    options = {"mode": "approx", "resolution": 0.01}
+    r = client.post("/v1/clip/geojson", json={"windows": WINDOWS, "geojson": line,
+                                              "options": options})
+    assert r.status_code == 200 and r.json()["verification"] is None
+    r = client.post("/v1/clip/geojson", json={"windows": WINDOWS, "geojson": line,
+                                              "options": options, "verify": "all",
+                                              "approx_bound": 0.05})
+    assert r.status_code == 200 and r.json()["verification"]["passed"] is True
+    r = client.post("/v1/clip/svg", json={"windows": WINDOWS, "paths": PATHS,
+                                          "options": options, "verify": True})
+    assert r.status_code == 200 and r.json()["verification"] is None
+
+
+@pytest.mark.parametrize("windows, where", [
+    ([[0, 0, 1, 1], [0, 0, 1]], "windows[1]"),
+    ([[0, 0, 1, 1], [0, 0, 1, float("nan")]], "windows[1]"),
+    ([[0, 0, 1, 1], [0, 0, 1, "1"]], "windows[1]"),
+    ([], "windows"),
+])
+def test_bad_windows_are_problem_json_422_naming_them(client, windows, where):
+    import json
+
+    for endpoint, extra in (("/v1/clip/svg", {"paths": PATHS}),
+                            ("/v1/clip/geojson", {"geojson": DOCUMENT})):
+        # NaN is not JSON: sent as the text Python writes (the server must still refuse).
+        r = client.post(endpoint, content=json.dumps({**extra, "windows": windows}),
+                        headers={"Content-Type": "application/json"})
+        assert r.status_code in (400, 422), r.text
+        assert r.headers["content-type"].startswith("application/problem+json")
+        problem = r.json()
+        assert problem["status"] == r.status_code
+        if r.status_code == 422:
+            assert where in (problem.get("path") or "") + problem["detail"], problem
+
+
+def test_capabilities_name_max_tiles_beside_the_other_limits():
+    with make_client(max_tiles=321, warm_up=False) as client:
+        r = client.get("/v1/capabilities")
+    assert r.status_code == 200
+    limits = r.json()["limits"]
+    assert limits["max_tiles"] == 321
+    assert {"max_body_bytes", "max_vertices", "work_budget"} <= set(limits)

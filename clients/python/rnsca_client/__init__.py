@@ -1,6 +1,9 @@
 """Python client of the rnsca HTTP API: clip GeoJSON, GeoPandas, GeoArrow, SVG and segments.
 
-GeoJSON goes whole (`Client.clip_geojson`) or streamed (`Client.clip_geojson_seq`).
+GeoJSON goes whole (`Client.clip_geojson`) or streamed (`Client.clip_geojson_seq`);
+GeoJSON and SVG to many windows in one request (`Client.clip_geojson_windows`,
+`Client.clip_svg_windows`); vector tiles and PMTiles archives (`Client.tile`,
+`Client.tiles`).
 
 Examples
 --------
@@ -46,10 +49,14 @@ from rnsca_client.results import (
     ClipStats,
     GeoArrowResult,
     GeoJSONResult,
+    GeoJSONWindowsResult,
     Health,
     Limits,
     SegmentsResult,
     SVGResult,
+    SVGWindowsResult,
+    TileArchive,
+    VectorTile,
     Verification,
 )
 from rnsca_client.retry import Retry
@@ -61,6 +68,7 @@ __all__ = [
     "Client", "AsyncClient", "Retry", "DEFAULT_URL", "DEFAULT_TIMEOUT", "DEFAULT_RETRY",
     "DEFAULT_CONCURRENCY", "DEFAULT_BATCH_SIZE",
     "ClipResult", "GeoJSONResult", "SVGResult", "SegmentsResult", "GeoArrowResult", "ClipStats",
+    "GeoJSONWindowsResult", "SVGWindowsResult", "VectorTile", "TileArchive",
     "Verification", "ClippedRecords", "AsyncClippedRecords",
     "Capabilities", "Backend", "Limits", "Health",
     "RnscaClientError", "InvalidInputError", "ResponseFormatError", "BatchError",

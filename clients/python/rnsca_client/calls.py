@@ -29,14 +29,19 @@ from rnsca_client.results import (
     ClipStats,
     GeoArrowResult,
     GeoJSONResult,
+    GeoJSONWindowsResult,
     Health,
     SegmentsResult,
     SVGResult,
+    SVGWindowsResult,
+    TileArchive,
+    VectorTile,
     Verification,
 )
 
-__all__ = ["Call", "clip_geojson", "clip_feature_collection", "clip_svg", "clip_segments",
-           "clip_geoarrow", "capabilities", "health", "readiness", "BINARY_OPTIONS"]
+__all__ = ["Call", "clip_geojson", "clip_geojson_windows", "clip_feature_collection",
+           "clip_svg", "clip_svg_windows", "clip_segments", "clip_geoarrow", "tile", "tiles",
+           "capabilities", "health", "readiness", "BINARY_OPTIONS", "TILE_OPTIONS"]
 
 T = TypeVar("T")
 _JSON = {"Content-Type": "application/json", "Accept": "application/json"}
@@ -121,6 +126,37 @@ def clip_geojson(obj: Any, window: Any, *, verify: bool | str | None, approx_bou
     return _post_json("/v1/clip/geojson", payload, GeoJSONResult.from_dict)
 
 
+def _window_list(windows: Any) -> list[list[float]]:
+    """Return `windows` as ``[[xmin, ymin, xmax, ymax], ...]``, at least one."""
+    if isinstance(windows, (str, bytes)) or not hasattr(windows, "__iter__"):
+        raise InvalidInputError(f"windows must be a list of [xmin, ymin, xmax, ymax], got "
+                                f"{windows!r:.80}")
+    rows = windows.tolist() if is_numpy_array(windows) else list(windows)
+    if not rows:
+        raise InvalidInputError("windows must hold at least one [xmin, ymin, xmax, ymax]")
+    bounds = []
+    for i, row in enumerate(rows):
+        try:
+            bounds.append(window_bounds(row))
+        except InvalidInputError as exc:
+            raise InvalidInputError(f"windows[{i}]: {exc}") from None
+    return bounds
+
+
+def clip_geojson_windows(obj: Any, windows: Any, *, verify: bool | str | None,
+                         approx_bound: float | None,
+                         options: Mapping[str, Any]) -> Call[GeoJSONWindowsResult]:
+    """Return the call ``POST /v1/clip/geojson`` with ``windows``."""
+    payload: dict[str, Any] = {"windows": _window_list(windows),
+                               "geojson": geojson_document(obj),
+                               "options": _options(options)}
+    if verify is not None:
+        payload["verify"] = verify
+    if approx_bound is not None:
+        payload["approx_bound"] = approx_bound
+    return _post_json("/v1/clip/geojson", payload, GeoJSONWindowsResult.from_dict)
+
+
 def clip_feature_collection(features: bytes, window: Any, *, verify: bool | str | None,
                             options: Mapping[str, Any]) -> Call[GeoJSONResult]:
     """Return the call ``POST /v1/clip/geojson`` of a FeatureCollection's JSON bytes.
@@ -143,6 +179,16 @@ def clip_svg(paths: str | Sequence[str], window: Any, *, verify: bool | str | No
     if verify is not None:
         payload["verify"] = verify
     return _post_json("/v1/clip/svg", payload, SVGResult.from_dict)
+
+
+def clip_svg_windows(paths: str | Sequence[str], windows: Any, *, verify: bool | str | None,
+                     options: Mapping[str, Any]) -> Call[SVGWindowsResult]:
+    """Return the call ``POST /v1/clip/svg`` with ``windows``."""
+    payload: dict[str, Any] = {"windows": _window_list(windows), "paths": svg_paths(paths),
+                               "options": _options(options)}
+    if verify is not None:
+        payload["verify"] = verify
+    return _post_json("/v1/clip/svg", payload, SVGWindowsResult.from_dict)
 
 
 def clip_segments(segments: Any, window: Any, *, binary: bool | None, verify: bool | str | None,
@@ -244,6 +290,72 @@ def _read_binary_segments(response: httpx.Response) -> SegmentsResult:
     source = np.frombuffer(body, "<i8", count, 32 * count)
     t = np.frombuffer(body, "<f8", 2 * count, 40 * count).reshape(count, 2)
     return SegmentsResult(segments, source, t, stats, verification, method, mode, backend)
+
+
+#: The media types of the tiles endpoints' answers.
+MVT = "application/vnd.mapbox-vector-tile"
+PMTILES = "application/vnd.pmtiles"
+#: Options the tiles endpoints take as query parameters (``minzoom``, ``maxzoom``: the
+#: archive only).
+TILE_OPTIONS = ("extent", "buffer", "layer", "mode", "crs")
+
+
+def _tile_query(options: Mapping[str, Any], accepted: tuple[str, ...],
+                endpoint: str) -> dict[str, str]:
+    unknown = sorted(set(options) - set(accepted))
+    if unknown:
+        raise InvalidInputError(
+            f"unknown option(s) {', '.join(unknown)} for {endpoint}; accepted: "
+            f"{', '.join(accepted)}")
+    return {name: str(value) for name, value in _options(options).items()}
+
+
+def _whole(value: Any, name: str) -> int:
+    if isinstance(value, bool) or not isinstance(value, int) or value < 0:
+        raise InvalidInputError(f"{name} must be a whole number >= 0, got {value!r}")
+    return value
+
+
+def _count(response: httpx.Response, header: str) -> int:
+    try:
+        return int(response.headers[header])
+    except (KeyError, ValueError) as exc:
+        raise ResponseFormatError(
+            f"{response.request.url.path} answered without a readable {header} header "
+            f"({exc})") from None
+
+
+def tile(obj: Any, z: int, x: int, y: int, *,
+         options: Mapping[str, Any]) -> Call[VectorTile]:
+    """Return the call ``POST /v1/tiles/{z}/{x}/{y}``: one Mapbox Vector Tile."""
+    z, x, y = _whole(z, "z"), _whole(x, "x"), _whole(y, "y")
+
+    def read(response: httpx.Response) -> VectorTile:
+        data = b"" if response.status_code == 204 else response.content
+        return VectorTile(data, z, x, y, _count(response, "x-rnsca-features"))
+
+    return Call("POST", f"/v1/tiles/{z}/{x}/{y}", read,
+                content=encode_json(geojson_document(obj)),
+                params=_tile_query(options, TILE_OPTIONS, "a tile"),
+                headers={"Content-Type": "application/json", "Accept": MVT,
+                         **_UNCOMPRESSED})
+
+
+def tiles(obj: Any, *, minzoom: int | None, maxzoom: int | None,
+          options: Mapping[str, Any]) -> Call[TileArchive]:
+    """Return the call ``POST /v1/tiles``: a PMTiles archive of zooms minzoom..maxzoom."""
+    params = _tile_query(options, TILE_OPTIONS, "tiles")
+    for name, value in (("minzoom", minzoom), ("maxzoom", maxzoom)):
+        if value is not None:
+            params[name] = str(_whole(value, name))
+
+    def read(response: httpx.Response) -> TileArchive:
+        return TileArchive(response.content, _count(response, "x-rnsca-tiles"),
+                           _count(response, "x-rnsca-features"))
+
+    return Call("POST", "/v1/tiles", read, content=encode_json(geojson_document(obj)),
+                params=params, headers={"Content-Type": "application/json",
+                                        "Accept": PMTILES, **_UNCOMPRESSED})
 
 
 def capabilities() -> Call[Capabilities]:

@@ -28,9 +28,13 @@ from rnsca_client.results import (
     ClipResult,
     GeoArrowResult,
     GeoJSONResult,
+    GeoJSONWindowsResult,
     Health,
     SegmentsResult,
     SVGResult,
+    SVGWindowsResult,
+    TileArchive,
+    VectorTile,
 )
 from rnsca_client.retry import Retry
 from rnsca_client.streams import (
@@ -226,6 +230,52 @@ class Client:
         return self.send(calls.clip_geojson(obj, window, verify=verify,
                                             approx_bound=approx_bound, options=options))
 
+    def clip_geojson_windows(self, obj: Any, windows: Any, *,
+                             verify: bool | str | None = None,
+                             approx_bound: float | None = None,
+                             **options: Any) -> GeoJSONWindowsResult:
+        """Return a GeoJSON document clipped to each of many windows, in one request.
+
+        Parameters
+        ----------
+        obj : dict, str or geometry
+            As for `clip_geojson`.
+        windows : sequence of [xmin, ymin, xmax, ymax], or an (k, 4) array
+            The windows; the server clips the document against all of them in one
+            library call (every geometry against every window its box touches), and the
+            work budget counts every vertex once per window.
+        verify, approx_bound, **options
+            As for `clip_geojson`. Verification compares every (geometry, window) pair
+            whose boxes touch; one `Verification` covers them all.
+
+        Returns
+        -------
+        GeoJSONWindowsResult
+            ``geojson``: one document per window, in order; ``results()`` one
+            `GeoJSONResult` each; ``stats``, ``verification`` of the whole request.
+
+        Raises
+        ------
+        InvalidInputError
+            No windows, or a row that is not four numbers (before any request).
+        InvalidRequestError
+            422: a window the server refuses (``min >= max``), naming it in ``path`` or
+            the detail; see `ApiError` for the rest.
+
+        Examples
+        --------
+        With a server on the default address (``make serve``)::
+
+            line = {"type": "LineString", "coordinates": [[-5, 1], [15, 1]]}
+            with Client() as client:
+                result = client.clip_geojson_windows(line, [[0, 0, 5, 5], [5, 0, 10, 5]])
+            [d["coordinates"] for d in result.geojson]
+            # [[[0.0, 1.0], [5.0, 1.0]], [[5.0, 1.0], [10.0, 1.0]]]
+        """
+        return self.send(calls.clip_geojson_windows(obj, windows, verify=verify,
+                                                    approx_bound=approx_bound,
+                                                    options=options))
+
     def clip(self, data: Any, window: Any, *, via: str | None = None,
              column: str | None = None, verify: bool | str | None = None,
              **options: Any) -> ClipResult:
@@ -408,6 +458,97 @@ class Client:
         return self.send(calls.clip_svg(paths, window, verify=verify,
                                         options={**options, "curves": curves, "fill": fill,
                                                  "fill_output": fill_output}))
+
+    def clip_svg_windows(self, paths: str | Sequence[str], windows: Any, *,
+                         curves: str | None = None, fill: str | None = None,
+                         fill_output: str | None = None, verify: bool | str | None = None,
+                         **options: Any) -> SVGWindowsResult:
+        """Return SVG path data clipped to each of many windows, in one request.
+
+        Parameters
+        ----------
+        paths : str or sequence of str
+            Path data, as for `clip_svg`.
+        windows : sequence of [xmin, ymin, xmax, ymax], or an (k, 4) array
+            The windows; the server clips every path against every window its box
+            touches in one library call (``rnsca.clip_paths(..., windows=)``).
+        curves, fill, fill_output, verify, **options
+            As for `clip_svg`; verification compares every (path, window) pair whose
+            boxes touch.
+
+        Returns
+        -------
+        SVGWindowsResult
+            ``paths[w][i]``: path ``i`` clipped to window ``w`` (``""`` where nothing of
+            it is there); ``results()`` one `SVGResult` per window; ``stats``,
+            ``verification`` of the whole request.
+
+        Raises
+        ------
+        InvalidInputError
+            No windows, or a row that is not four numbers (before any request).
+        """
+        return self.send(calls.clip_svg_windows(
+            paths, windows, verify=verify,
+            options={**options, "curves": curves, "fill": fill, "fill_output": fill_output}))
+
+    def tile(self, obj: Any, z: int, x: int, y: int, **options: Any) -> VectorTile:
+        """Return tile z/x/y (WebMercatorQuad, XYZ) of a GeoJSON document as a vector tile.
+
+        Parameters
+        ----------
+        obj : dict, str or geometry
+            GeoJSON (lon/lat, or Web Mercator metres with ``crs="EPSG:3857"``), or what
+            `clip_geojson` takes.
+        z, x, y : int
+            The tile.
+        **options
+            ``extent`` (4096), ``buffer`` (64), ``layer`` (``"features"``), ``mode``
+            (``"exact"``), ``crs`` (``"EPSG:4326"``); None: the server's default.
+
+        Returns
+        -------
+        VectorTile
+            ``data``: the Mapbox Vector Tile's bytes (``b""`` when no feature reaches
+            the tile), ``features``: features in the body.
+
+        Raises
+        ------
+        InvalidInputError
+            An unknown option or a negative tile number (before any request).
+        InvalidRequestError
+            422: a tile outside zoom z's grid, bad GeoJSON or options.
+        """
+        return self.send(calls.tile(obj, z, x, y, options=options))
+
+    def tiles(self, obj: Any, *, minzoom: int | None = None, maxzoom: int | None = None,
+              **options: Any) -> TileArchive:
+        """Return the tiles of zooms minzoom..maxzoom of a GeoJSON document, as PMTiles.
+
+        Parameters
+        ----------
+        obj : dict, str or geometry
+            As for `tile`.
+        minzoom, maxzoom : int, optional
+            The zooms (the server's defaults: 0 and 10); the work budget counts every
+            vertex once per zoom, and a zoom may cut at most the server's ``max_tiles``
+            (`capabilities`).
+        **options
+            As for `tile`.
+
+        Returns
+        -------
+        TileArchive
+            ``data``: the PMTiles v3 archive's bytes; ``tiles``, ``features``.
+
+        Raises
+        ------
+        PayloadTooLargeError
+            413: a zoom would cut more than the server's ``max_tiles``.
+        InvalidRequestError
+            422: no feature in any tile, bad GeoJSON, zooms or options.
+        """
+        return self.send(calls.tiles(obj, minzoom=minzoom, maxzoom=maxzoom, options=options))
 
     def clip_segments(self, segments: Any, window: Any, *, binary: bool | None = None,
                       verify: bool | str | None = None, **options: Any) -> SegmentsResult:
@@ -636,6 +777,15 @@ class AsyncClient:
         return await self.send(calls.clip_geojson(obj, window, verify=verify,
                                                   approx_bound=approx_bound, options=options))
 
+    async def clip_geojson_windows(self, obj: Any, windows: Any, *,
+                                   verify: bool | str | None = None,
+                                   approx_bound: float | None = None,
+                                   **options: Any) -> GeoJSONWindowsResult:
+        """Return a document clipped to each window (see `Client.clip_geojson_windows`)."""
+        return await self.send(calls.clip_geojson_windows(obj, windows, verify=verify,
+                                                          approx_bound=approx_bound,
+                                                          options=options))
+
     async def clip(self, data: Any, window: Any, *, via: str | None = None,
                    column: str | None = None, verify: bool | str | None = None,
                    **options: Any) -> ClipResult:
@@ -714,6 +864,26 @@ class AsyncClient:
         return await self.send(calls.clip_svg(
             paths, window, verify=verify, options={**options, "curves": curves, "fill": fill,
                                                    "fill_output": fill_output}))
+
+    async def clip_svg_windows(self, paths: str | Sequence[str], windows: Any, *,
+                               curves: str | None = None, fill: str | None = None,
+                               fill_output: str | None = None,
+                               verify: bool | str | None = None,
+                               **options: Any) -> SVGWindowsResult:
+        """Return path data clipped to each window (see `Client.clip_svg_windows`)."""
+        return await self.send(calls.clip_svg_windows(
+            paths, windows, verify=verify,
+            options={**options, "curves": curves, "fill": fill, "fill_output": fill_output}))
+
+    async def tile(self, obj: Any, z: int, x: int, y: int, **options: Any) -> VectorTile:
+        """Return tile z/x/y of a GeoJSON document (see `Client.tile`)."""
+        return await self.send(calls.tile(obj, z, x, y, options=options))
+
+    async def tiles(self, obj: Any, *, minzoom: int | None = None,
+                    maxzoom: int | None = None, **options: Any) -> TileArchive:
+        """Return a PMTiles archive of a GeoJSON document's tiles (see `Client.tiles`)."""
+        return await self.send(calls.tiles(obj, minzoom=minzoom, maxzoom=maxzoom,
+                                           options=options))
 
     async def clip_segments(self, segments: Any, window: Any, *, binary: bool | None = None,
                             verify: bool | str | None = None, **options: Any) -> SegmentsResult:

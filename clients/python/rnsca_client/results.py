@@ -15,7 +15,11 @@ __all__ = [
     "ClipStats",
     "Verification",
     "GeoJSONResult",
+    "GeoJSONWindowsResult",
     "SVGResult",
+    "SVGWindowsResult",
+    "VectorTile",
+    "TileArchive",
     "SegmentsResult",
     "GeoArrowResult",
     "ClipResult",
@@ -205,6 +209,115 @@ class SVGResult:
 
 
 @dataclass(frozen=True)
+class GeoJSONWindowsResult:
+    """``POST /v1/clip/geojson`` with ``windows``: one clipped document per window.
+
+    ``geojson[w]`` is the document clipped to window ``w`` (in the order sent), as
+    `GeoJSONResult.geojson` would be for that window alone; ``results()`` gives them as
+    one `GeoJSONResult` each (the stats and verification are of the request, all windows
+    together: ``verification.inputs`` counts the (geometry, window) pairs compared).
+    """
+
+    geojson: list[dict[str, Any]]
+    stats: ClipStats
+    verification: Verification | None
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> GeoJSONWindowsResult:
+        """Return the result of the endpoint's JSON answer."""
+        return cls(list(data["geojson"]), ClipStats.from_dict(data["stats"]),
+                   _verification(data.get("verification")))
+
+    def __len__(self) -> int:
+        """Return the number of windows."""
+        return len(self.geojson)
+
+    def results(self) -> list[GeoJSONResult]:
+        """Return one `GeoJSONResult` per window (sharing the request's stats)."""
+        return [GeoJSONResult(document, self.stats, self.verification)
+                for document in self.geojson]
+
+    def to_shapely(self) -> list[Any]:
+        """Return, per window, what `GeoJSONResult.to_shapely` gives for its document."""
+        return [result.to_shapely() for result in self.results()]
+
+
+@dataclass(frozen=True)
+class SVGWindowsResult:
+    """``POST /v1/clip/svg`` with ``windows``: one path list per window.
+
+    ``paths[w][i]`` is input path ``i`` clipped to window ``w`` (``""`` where nothing of
+    it is in that window); the stats and verification are of the request, all windows
+    together.
+    """
+
+    paths: list[list[str]]
+    stats: ClipStats
+    verification: Verification | None
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> SVGWindowsResult:
+        """Return the result of the endpoint's JSON answer."""
+        return cls([list(p) for p in data["paths"]], ClipStats.from_dict(data["stats"]),
+                   _verification(data.get("verification")))
+
+    def __len__(self) -> int:
+        """Return the number of windows."""
+        return len(self.paths)
+
+    def results(self) -> list[SVGResult]:
+        """Return one `SVGResult` per window (sharing the request's stats)."""
+        return [SVGResult(paths, self.stats, self.verification) for paths in self.paths]
+
+
+@dataclass(frozen=True)
+class VectorTile:
+    """``POST /v1/tiles/{z}/{x}/{y}``: one Mapbox Vector Tile.
+
+    Attributes
+    ----------
+    data : bytes
+        The tile, an uncompressed protobuf message (``b""``: no feature reaches the
+        tile, the server's 204).
+    z, x, y : int
+        The tile asked for.
+    features : int
+        Features the body held.
+    """
+
+    data: bytes
+    z: int
+    x: int
+    y: int
+    features: int
+
+    def __bytes__(self) -> bytes:
+        return self.data
+
+
+@dataclass(frozen=True)
+class TileArchive:
+    """``POST /v1/tiles``: a PMTiles v3 archive of a document's tiles.
+
+    Attributes
+    ----------
+    data : bytes
+        The archive (its tiles gzip-compressed), e.g. to write to a ``.pmtiles`` file.
+    tiles : int
+        Tiles in the archive.
+    features : int
+        Features the body held.
+    """
+
+    data: bytes
+    tiles: int
+    features: int
+
+    def __bytes__(self) -> bytes:
+        return self.data
+
+
+@dataclass(frozen=True)
 class SegmentsResult:
     """``POST /v1/clip/segments``: the visible piece of each segment that has one.
 
@@ -350,6 +463,8 @@ class Limits(_FromDict):
     stream_chunk_bytes: int | None = None
     stream_chunk_records: int | None = None
     stream_max_record_bytes: int | None = None
+    #: Most tiles ``POST /v1/tiles`` cuts in one zoom (None from a server without it).
+    max_tiles: int | None = None
     extra: dict[str, Any] = field(default_factory=dict, repr=False, compare=False)
 
 

@@ -785,21 +785,39 @@ class OpenCLBackend:
         tables = (chunk_start[:-1].copy(), chunk_decision, piece_start, kept, pieces)
         return tables, counters, device_stats
 
-    def clip_paths(self, paths: PathArrays, window: Window,
+    def clip_paths(self, paths: PathArrays, windows: WindowTable,
                    options: PathOptions) -> PathPieces:
-        """Return the paths clipped to the window; see `ClipBackend.clip_paths`.
+        """Return each path clipped to its window; see `ClipBackend.clip_paths`.
 
         The device classifies every segment by its control points, and runs of segments
         by their box, and flattens the curves accepted whole (flatten mode); the
         ambiguous segments and the output are done on the host by the Numba kernel, from
-        those decisions: the output is the Numba backend's.
+        those decisions: the output is the Numba backend's. With one window per path
+        (many windows), the device classifies each stretch of consecutive paths that
+        share a window in turn (one stretch per window for `rnsca.clip_paths`'s pairs,
+        which are sorted by window); the host assembles them all in one call.
         """
-        segment_class, run_decisions, point_start, points, device_stats = \
-            self.classify_curves(paths.controls, paths.degree, window, options.tolerance,
-                                 "accepted" if options.curves is Curves.FLATTEN else "none",
-                                 paths.subpath_offsets)
-        return _HOST.clip_paths(paths, window, options, device=DevicePaths(
-            run_decisions, segment_class, point_start, points, device_stats))
+        flatten = "accepted" if options.curves is Curves.FLATTEN else "none"
+        sub = paths.subpath_offsets
+        classes, runs, starts, points, stats = [], [], [np.zeros(1, np.int64)], [], []
+        for row, p0, p1 in _window_stretches(windows, len(paths)):
+            s0, s1 = int(paths.path_offsets[p0]), int(paths.path_offsets[p1])
+            g0, g1 = int(sub[s0]), int(sub[s1])
+            segment_class, run_decisions, point_start, flat, device_stats = \
+                self.classify_curves(paths.controls[g0:g1], paths.degree[g0:g1],
+                                     Window(*windows.bounds[row]), options.tolerance,
+                                     flatten, sub[s0:s1 + 1] - g0)
+            classes.append(segment_class)
+            runs.append(run_decisions)
+            starts.append(point_start[1:] + starts[-1][-1])
+            points.append(flat)
+            stats.append(device_stats)
+        return _HOST.clip_paths(paths, windows, options, device=DevicePaths(
+            np.concatenate(runs) if runs else np.zeros(0, np.int8),
+            np.concatenate(classes) if classes else np.zeros(0, np.uint8),
+            np.concatenate(starts),
+            np.concatenate(points) if points else np.zeros((0, 2)),
+            DeviceStats.combine(stats)))
 
     def flatten_paths(self, paths: PathArrays, tolerance: float, close: bool) -> Polylines:
         """Return the paths as polylines within `tolerance`; see `ClipBackend.flatten_paths`.
@@ -974,6 +992,22 @@ def _data(array: cl_array.Array) -> cl.Buffer:
     if not array.size:
         return cl.Buffer(cast(cl.Context, array.context), cl.mem_flags.READ_ONLY, 1)
     return cast(cl.Buffer, array.data)
+
+
+def _window_stretches(windows: WindowTable, n: int) -> list[tuple[int, int, int]]:
+    """Return ``(row, first, end)`` for each stretch of consecutive paths of one window.
+
+    One stretch of all `n` paths for a table of one window (and none for no paths).
+    """
+    if n == 0:
+        return []
+    if windows.bounds.shape[0] == 1:
+        return [(0, 0, n)]
+    index = np.asarray(windows.index, dtype=np.int64)
+    cuts = np.flatnonzero(index[1:] != index[:-1]) + 1
+    first = np.concatenate([[0], cuts])
+    end = np.concatenate([cuts, [n]])
+    return [(int(index[a]), int(a), int(b)) for a, b in zip(first, end, strict=True)]
 
 
 def _runs(subpath_offsets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -116,14 +116,21 @@ def _post_json(path: str, payload: dict[str, Any], build: Callable[[dict], T]) -
 def clip_geojson(obj: Any, window: Any, *, verify: bool | str | None, approx_bound: float | None,
                  options: Mapping[str, Any]) -> Call[GeoJSONResult]:
     """Return the call ``POST /v1/clip/geojson``."""
-    payload: dict[str, Any] = {"window": window_bounds(window),
-                               "geojson": geojson_document(obj),
+    payload = _geojson_payload("window", window_bounds(window), obj, verify, approx_bound,
+                               options)
+    return _post_json("/v1/clip/geojson", payload, GeoJSONResult.from_dict)
+
+
+def _geojson_payload(window_key: str, bounds: Any, obj: Any, verify: bool | str | None,
+                     approx_bound: float | None, options: Mapping[str, Any]) -> dict[str, Any]:
+    """Return the body of ``POST /v1/clip/geojson`` with `bounds` under `window_key`."""
+    payload: dict[str, Any] = {window_key: bounds, "geojson": geojson_document(obj),
                                "options": _options(options)}
     if verify is not None:
         payload["verify"] = verify
     if approx_bound is not None:
         payload["approx_bound"] = approx_bound
-    return _post_json("/v1/clip/geojson", payload, GeoJSONResult.from_dict)
+    return payload
 
 
 def _window_list(windows: Any) -> list[list[float]]:
@@ -147,13 +154,8 @@ def clip_geojson_windows(obj: Any, windows: Any, *, verify: bool | str | None,
                          approx_bound: float | None,
                          options: Mapping[str, Any]) -> Call[GeoJSONWindowsResult]:
     """Return the call ``POST /v1/clip/geojson`` with ``windows``."""
-    payload: dict[str, Any] = {"windows": _window_list(windows),
-                               "geojson": geojson_document(obj),
-                               "options": _options(options)}
-    if verify is not None:
-        payload["verify"] = verify
-    if approx_bound is not None:
-        payload["approx_bound"] = approx_bound
+    payload = _geojson_payload("windows", _window_list(windows), obj, verify, approx_bound,
+                               options)
     return _post_json("/v1/clip/geojson", payload, GeoJSONWindowsResult.from_dict)
 
 

@@ -301,9 +301,10 @@ def loaded_bytecode(venv: Path) -> set[Path]:
     main = site_packages(venv) / "service/__pycache__"
     if process.returncode not in (0, -signal.SIGTERM) or not any(
             path.parent == main and path.name.startswith("main.") for path in loaded):
-        # The import trace (lines starting "#") left out: the service's own messages.
+        # The import trace (python -v's "#" and "import '...'" lines) left out: the
+        # service's own messages.
         messages = "".join(line + "\n" for line in output.splitlines()
-                           if not line.startswith("#"))
+                           if not line.startswith(("#", "import '")))
         raise RuntimeError(f"the service failed (status {process.returncode}):\n"
                            + messages[-3000:])
     return loaded

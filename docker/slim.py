@@ -78,7 +78,18 @@ def _python(venv: Path, *args: str, **options) -> subprocess.CompletedProcess:
     the installed copy.
     """
     with tempfile.TemporaryDirectory() as empty:
-        return subprocess.run([str(venv / "bin/python"), *args], cwd=empty, **options)
+        return subprocess.run([str(venv / "bin/python"), *args], cwd=empty,
+                              **{"env": installed_only(), **options})
+
+
+def installed_only(**variables: str) -> dict[str, str]:
+    """Return this process's environment without PYTHONPATH, plus `variables`.
+
+    A PYTHONPATH (a developer's source tree, as a test run may set) would be imported
+    before the environment's installed copy, which is what the image runs.
+    """
+    environment = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
+    return {**environment, **variables}
 
 
 def _remove(path: Path) -> int:
@@ -269,8 +280,8 @@ def loaded_bytecode(venv: Path) -> set[Path]:
     through importlib included (``-X importtime`` leaves those out).
     """
     port = _free_port()
-    environment = {**os.environ, "RNSCA_HOST": "127.0.0.1", "RNSCA_PORT": str(port),
-                   "RNSCA_WORKERS": "1"}
+    environment = installed_only(RNSCA_HOST="127.0.0.1", RNSCA_PORT=str(port),
+                                 RNSCA_WORKERS="1")
     url = f"http://127.0.0.1:{port}"
     # From an empty folder (see `_python`). The log goes to a file: megabytes, more than a
     # pipe holds.

@@ -90,7 +90,10 @@ def test_image_install_and_start_steps_in_a_fresh_environment(tmp_path):
                     destination.parent.mkdir(parents=True, exist_ok=True)
                     shutil.copy2(ROOT / name, destination)
     venv, cache = tmp_path / "venv", tmp_path / "numba-cache"
-    environment = {**os.environ, "NUMBA_CACHE_DIR": str(cache)}
+    # Without PYTHONPATH: the source tree (a test run may put it there) must not be
+    # imported instead of the installed copy, which is what the image runs.
+    environment = {**{k: v for k, v in os.environ.items() if k != "PYTHONPATH"},
+                   "NUMBA_CACHE_DIR": str(cache)}
     install = subprocess.run(["sh", str(source / "docker/install.sh"), str(venv), str(source)],
                              cwd=source, env=environment, capture_output=True, text=True,
                              timeout=1200)
@@ -105,7 +108,7 @@ def test_image_install_and_start_steps_in_a_fresh_environment(tmp_path):
                     ready_timeout=600) as live:
         assert httpx.get(live.url + "/healthz", timeout=5).json() == {"status": "ok"}
         check = subprocess.run([str(venv / "bin/python"), "-m", "service.healthcheck"],
-                               env={**os.environ, "RNSCA_PORT": str(live.port)}, timeout=30)
+                               env={**environment, "RNSCA_PORT": str(live.port)}, timeout=30)
         assert check.returncode == 0
         r = httpx.post(live.url + "/v1/clip/segments", timeout=30,
                        json={"window": [0, 0, 10, 10], "segments": [[-5, 5, 15, 5]]})

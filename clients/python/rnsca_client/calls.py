@@ -116,15 +116,16 @@ def _post_json(path: str, payload: dict[str, Any], build: Callable[[dict], T]) -
 def clip_geojson(obj: Any, window: Any, *, verify: bool | str | None, approx_bound: float | None,
                  options: Mapping[str, Any]) -> Call[GeoJSONResult]:
     """Return the call ``POST /v1/clip/geojson``."""
-    payload = _geojson_payload("window", window_bounds(window), obj, verify, approx_bound,
-                               options)
+    payload = _clip_payload("window", window_bounds(window), "geojson", geojson_document(obj),
+                            verify, approx_bound, options)
     return _post_json("/v1/clip/geojson", payload, GeoJSONResult.from_dict)
 
 
-def _geojson_payload(window_key: str, bounds: Any, obj: Any, verify: bool | str | None,
-                     approx_bound: float | None, options: Mapping[str, Any]) -> dict[str, Any]:
-    """Return the body of ``POST /v1/clip/geojson`` with `bounds` under `window_key`."""
-    payload: dict[str, Any] = {window_key: bounds, "geojson": geojson_document(obj),
+def _clip_payload(window_key: str, bounds: Any, input_key: str, data: Any,
+                  verify: bool | str | None, approx_bound: float | None,
+                  options: Mapping[str, Any]) -> dict[str, Any]:
+    """Return a clip's JSON body: `bounds` under `window_key`, `data` under `input_key`."""
+    payload: dict[str, Any] = {window_key: bounds, input_key: data,
                                "options": _options(options)}
     if verify is not None:
         payload["verify"] = verify
@@ -154,8 +155,8 @@ def clip_geojson_windows(obj: Any, windows: Any, *, verify: bool | str | None,
                          approx_bound: float | None,
                          options: Mapping[str, Any]) -> Call[GeoJSONWindowsResult]:
     """Return the call ``POST /v1/clip/geojson`` with ``windows``."""
-    payload = _geojson_payload("windows", _window_list(windows), obj, verify, approx_bound,
-                               options)
+    payload = _clip_payload("windows", _window_list(windows), "geojson",
+                            geojson_document(obj), verify, approx_bound, options)
     return _post_json("/v1/clip/geojson", payload, GeoJSONWindowsResult.from_dict)
 
 
@@ -176,20 +177,16 @@ def clip_feature_collection(features: bytes, window: Any, *, verify: bool | str 
 def clip_svg(paths: str | Sequence[str], window: Any, *, verify: bool | str | None,
              options: Mapping[str, Any]) -> Call[SVGResult]:
     """Return the call ``POST /v1/clip/svg``."""
-    payload: dict[str, Any] = {"window": window_bounds(window), "paths": svg_paths(paths),
-               "options": _options(options)}
-    if verify is not None:
-        payload["verify"] = verify
+    payload = _clip_payload("window", window_bounds(window), "paths", svg_paths(paths),
+                            verify, None, options)
     return _post_json("/v1/clip/svg", payload, SVGResult.from_dict)
 
 
 def clip_svg_windows(paths: str | Sequence[str], windows: Any, *, verify: bool | str | None,
                      options: Mapping[str, Any]) -> Call[SVGWindowsResult]:
     """Return the call ``POST /v1/clip/svg`` with ``windows``."""
-    payload: dict[str, Any] = {"windows": _window_list(windows), "paths": svg_paths(paths),
-                               "options": _options(options)}
-    if verify is not None:
-        payload["verify"] = verify
+    payload = _clip_payload("windows", _window_list(windows), "paths", svg_paths(paths),
+                            verify, None, options)
     return _post_json("/v1/clip/svg", payload, SVGWindowsResult.from_dict)
 
 

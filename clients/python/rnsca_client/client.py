@@ -104,6 +104,31 @@ def _finish(call: calls.Call[T], response: httpx.Response, attempts: int) -> T:
         raise
 
 
+def _assemble(plan: Any, finished: dict[Any, Any]) -> Any:
+    """Return the plan's result from its batches' finished futures or tasks.
+
+    `finished` maps each `concurrent.futures.Future` or `asyncio.Task` (both have
+    ``cancelled``, ``exception`` and ``result``) to its batch; cancelled ones (after a
+    failure) are left out. Raises the plan's failure naming every batch that failed, or
+    an error that is not the client's as it is.
+    """
+    failures: dict[int, RnscaClientError] = {}
+    pieces = {}
+    for future, batch in finished.items():
+        if future.cancelled():
+            continue
+        error = future.exception()
+        if error is None:
+            pieces[batch.number] = future.result()
+        elif isinstance(error, RnscaClientError):
+            failures[batch.number] = error
+        else:
+            raise error
+    if failures:
+        raise plan.failure(failures)
+    return plan.assemble(pieces)
+
+
 class _Options:
     """What both clients keep: the retry policy and how to make the httpx client."""
 
@@ -409,21 +434,7 @@ class Client:
                 for future in pending:
                     future.cancel()
                 wait(pending)
-            failures: dict[int, RnscaClientError] = {}
-            pieces = {}
-            for future, batch in futures.items():
-                if future.cancelled():
-                    continue
-                error = future.exception()
-                if error is None:
-                    pieces[batch.number] = future.result()
-                elif isinstance(error, RnscaClientError):
-                    failures[batch.number] = error
-                else:
-                    raise error
-        if failures:
-            raise plan.failure(failures)
-        return plan.assemble(pieces)
+        return _assemble(plan, futures)
 
     def clip_svg(self, paths: str | Sequence[str], window: Any, *, curves: str | None = None,
                  fill: str | None = None, fill_output: str | None = None,
@@ -840,21 +851,7 @@ class AsyncClient:
             for task in pending:
                 task.cancel()
             await asyncio.wait(pending)
-        failures: dict[int, RnscaClientError] = {}
-        pieces = {}
-        for task, batch in tasks.items():
-            if task.cancelled():
-                continue
-            error = task.exception()
-            if error is None:
-                pieces[batch.number] = task.result()
-            elif isinstance(error, RnscaClientError):
-                failures[batch.number] = error
-            else:
-                raise error
-        if failures:
-            raise plan.failure(failures)
-        return plan.assemble(pieces)
+        return _assemble(plan, tasks)
 
     async def clip_svg(self, paths: str | Sequence[str], window: Any, *,
                        curves: str | None = None, fill: str | None = None,

@@ -14,7 +14,7 @@ import shapely.affinity
 import shapely.geometry
 
 from rnsca import clip_ragged
-from rnsca.errors import InvalidOptionError
+from rnsca.errors import InvalidOptionError, LimitExceededError
 from rnsca.tiles import FeatureTable, tile_features, tile_table
 from rnsca.tiles.pyramid import cascade, root, tile_windows
 
@@ -346,6 +346,63 @@ def test_pmtiles_archive_reads_back_with_the_pmtiles_reader(tmp_path, dataset, t
         assert tile_ids(zoom.zoom, zoom.x, zoom.y).tolist() == [
             zxy_to_tileid(zoom.zoom, int(x), int(y)) for x, y in zip(zoom.x, zoom.y,
                                                                       strict=True)]
+
+
+def test_stored_tiles_are_each_tile_gzipped_in_order(tiles):
+    """Chunks of tiles by bytes across threads: each tile its own gzip member, in order."""
+    import gzip
+    from concurrent.futures import ThreadPoolExecutor
+
+    from rnsca.tiles.archive import Compression, _compressor, _stored
+    from rnsca.tiles.encode import ZoomTiles
+
+    compress = _compressor(Compression.GZIP)
+    sizes = [1, 70_000, 3, 0, 500_000, 10, 10, 300_000] + [17] * 600
+    data = [bytes(range(256)) * (n // 256) + bytes(n % 256) for n in sizes]
+    zoom = ZoomTiles(3, np.arange(len(data)), np.zeros(len(data), dtype=np.int64), data,
+                     np.ones(len(data), dtype=np.int64))
+    with ThreadPoolExecutor(4) as pool:
+        stored = _stored(zoom, compress, pool)
+        assert [gzip.decompress(d) for d in stored] == data
+        assert stored == [compress(d) for d in data]
+        for few in (data[:1], data[:2], []):
+            assert _stored(ZoomTiles(3, np.arange(len(few)), np.zeros(len(few), dtype=int),
+                                     few, np.ones(len(few), dtype=int)), compress,
+                           pool) == [compress(d) for d in few]
+    # A gzip member with mtime 0: the same bytes every run.
+    assert stored[0][4:8] == bytes(4) and stored[0][:3] == b"\x1f\x8b\x08"
+
+
+def test_the_next_zoom_is_made_while_one_is_written_and_errors_reach_the_writer(tmp_path,
+                                                                                 tiles):
+    import threading
+
+    from rnsca.tiles import write_pmtiles
+    from rnsca.tiles.archive import _made_ahead
+
+    made = []
+
+    def zooms():
+        for zoom in tiles:
+            made.append((zoom.zoom, threading.current_thread().name))
+            yield zoom
+
+    assert [z.zoom for z in _made_ahead(zooms())] == [z.zoom for z in tiles]
+    assert {name for _, name in made} == {"rnsca-tiles-maker"}
+
+    def failing():
+        yield tiles[0]
+        raise LimitExceededError("zoom 1 cuts too many tiles")
+
+    with pytest.raises(LimitExceededError, match="too many tiles"):
+        write_pmtiles(tmp_path / "a.pmtiles", failing(), layer="x")
+    # A writer that stops early stops the maker after the zoom it is making.
+    made.clear()
+    ahead = _made_ahead(zooms())
+    next(ahead)
+    ahead.close()
+    assert len(made) <= 3
+    assert not any(t.name == "rnsca-tiles-maker" for t in threading.enumerate())
 
 
 def test_directory_archive_holds_z_x_y_mvt(tmp_path, tiles):

@@ -505,3 +505,21 @@ def test_rounded_rings_are_cleaned_before_they_are_checked():
     assert out.tolist() == [[0, 0], [4, 0], [4, 4], [0, 4], [0, 0]]
     assert rings.tolist() == [0, 5] and polygons.tolist() == [0, 1]
     assert geometries.tolist() == [0, 1, 1]  # the second geometry is left empty
+
+
+def test_tag_values_are_told_apart_by_type_and_sign_and_stored_once():
+    from rnsca.tiles.features import tag_table
+    from rnsca.tiles.vector_tile import Value
+
+    values = [0.0, -0.0, 1, True, 1.0, float("nan"), "x", 1, "x", 2**70, -0.0, None, [1]]
+    table = tag_table([{"a": v} for v in values])
+    # NaN and None are not written; the rest numbered by first appearance.
+    assert table.tag_offsets.tolist() == [0, 1, 2, 3, 4, 5, 5, 6, 7, 8, 9, 10, 10, 11]
+    assert table.tag_value.tolist() == [0, 1, 2, 3, 4, 5, 2, 5, 6, 1, 7]
+    offsets = table.value_field_offsets
+    decoded = [Value.FromString(table.value_fields[a + 2:b].tobytes())
+               for a, b in zip(offsets[:-1], offsets[1:], strict=True)]
+    assert [d.ListFields()[0][0].name for d in decoded] == [
+        "double_value", "double_value", "int_value", "bool_value", "double_value",
+        "string_value", "double_value", "string_value"]
+    assert str(decoded[1].double_value) == "-0.0" and decoded[7].string_value == "[1]"

@@ -37,7 +37,7 @@ from rnsca.tiles.archive import (
 from rnsca.tiles.encode import Framing, Validation, ZoomTiles, encode_zoom
 from rnsca.tiles.features import FeatureTable
 from rnsca.tiles.mercator import Crs
-from rnsca.tiles.pyramid import Level, cascade, root, tile_windows
+from rnsca.tiles.pyramid import Level, cascade, root, tile_windows, wrapped
 
 __all__ = ["ArchiveSummary", "Compression", "Crs", "FeatureTable", "Framing", "Validation",
            "ZoomTiles",
@@ -107,6 +107,8 @@ def tile_one(table: FeatureTable, zoom: int, x: int, y: int, *, extent: int = 40
     for ragged, source in ((table.points, table.points_source),
                            (table.lines, table.lines_source),
                            (table.polygons, table.polygons_source)):
+        if x in (0, 2**zoom - 1):  # its buffer reaches across the antimeridian
+            ragged, source = wrapped(ragged, source, buffer / extent)
         approx = mode is Mode.APPROX and ragged.kind.dimension == 1
         result = clip_ragged(ragged.kind, ragged.coords, ragged.offsets, window,
                              mode=mode if approx else Mode.EXACT,
@@ -170,8 +172,9 @@ def tile_table(table: FeatureTable, *, minzoom: int = 0, maxzoom: int = 14,
     validate = Validation(validate)
     check_options(minzoom, maxzoom, extent, buffer, mode)
     pad_units = buffer / extent
-    levels = [root(table.points, table.points_source), root(table.lines, table.lines_source),
-              root(table.polygons, table.polygons_source)]
+    levels = [root(table.points, table.points_source, pad_units),
+              root(table.lines, table.lines_source, pad_units),
+              root(table.polygons, table.polygons_source, pad_units)]
     for zoom in range(maxzoom + 1):
         if zoom > 0:
             levels = [cascade(level, pad_units, mode, extent, backend) for level in levels]

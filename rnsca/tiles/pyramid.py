@@ -27,7 +27,7 @@ from rnsca.many_windows import vertex_boxes
 from rnsca.options import Backend, Mode
 from rnsca.ragged import clip_ragged
 
-__all__ = ["Level", "root", "cascade", "tile_windows"]
+__all__ = ["Level", "root", "cascade", "tile_windows", "wrapped"]
 
 
 @dataclass(frozen=True, slots=True, eq=False)
@@ -83,8 +83,49 @@ def tile_windows(zoom: int, x: np.ndarray, y: np.ndarray, pad_units: float) -> n
                             (y + 1) * cell + pad])
 
 
-def root(ragged: Ragged, source: np.ndarray) -> Level:
-    """Return zoom 0: every geometry (already in the world square) in tile (0, 0)."""
+def wrapped(ragged: Ragged, source: np.ndarray, pad_units: float,
+            ) -> tuple[Ragged, np.ndarray]:
+    """Return the geometries with their parts near the antimeridian copied across it.
+
+    The map is a cylinder: the buffer of a tile at the world's west edge (x = 0) holds
+    what lies just east of the east edge (x = 1), and the other way round, as map
+    clients draw the tiles of a wrapping map side by side. What lies within `pad_units`
+    (the buffer at zoom 0, ``buffer / extent``) of either edge is clipped to that band
+    and moved by a whole turn (x -= 1 for the east band, x += 1 for the west one) as
+    another geometry of the same feature, after its own; the zoom-0 tile's padded box
+    and its children's (smaller pads) take from those copies what they need. Points
+    likewise.
+    """
+    if pad_units <= 0.0 or ragged.count == 0:
+        return ragged, source
+    boxes = vertex_boxes(ragged.coords, ragged.vertex_offsets())
+    east = np.flatnonzero(boxes[:, 2] >= 1.0 - pad_units)
+    west = np.flatnonzero(boxes[:, 0] <= pad_units)
+    if east.shape[0] == 0 and west.shape[0] == 0:
+        return ragged, source
+    # y is not wrapped: the bands reach past the world square's top and bottom.
+    bands = np.array([[1.0 - pad_units, -1.0, 1.0, 2.0], [0.0, -1.0, pad_units, 2.0]])
+    rows = np.concatenate([east, west])
+    band = np.repeat(np.array([0, 1]), [east.shape[0], west.shape[0]])
+    taken = ragged.take(rows)
+    cut = clip_ragged(ragged.kind, taken.coords, taken.offsets, bands[band],
+                      mode=Mode.EXACT)
+    copies = Ragged(ragged.kind, cut.coords.copy(), cut.offsets)
+    turn = np.where(band[cut.source] == 0, -1.0, 1.0)
+    copies.coords[:, 0] += np.repeat(turn, np.diff(copies.vertex_offsets()))
+    merged = ragged.concat(copies)
+    merged_source = np.concatenate([source, source[rows[cut.source]]])
+    order = np.argsort(merged_source, kind="stable")
+    return merged.take(order), merged_source[order]
+
+
+def root(ragged: Ragged, source: np.ndarray, pad_units: float = 0.0) -> Level:
+    """Return zoom 0: every geometry (in the world square) in tile (0, 0).
+
+    With `pad_units` (``buffer / extent``), the parts near the antimeridian are copied
+    across it as well (`wrapped`).
+    """
+    ragged, source = wrapped(ragged, source, pad_units)
     one = np.zeros(1, dtype=np.int64)
     return Level(0, ragged, source, np.array([0, ragged.count], dtype=np.int64), one, one)
 

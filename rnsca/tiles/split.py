@@ -131,8 +131,9 @@ def split(table: FeatureTable, *, parts: int, split_zoom: int | None = None,
         raise InvalidOptionError(f"parts must be an int >= 1, got {parts!r}")
     mode = Mode(mode)
     pad_units = buffer / extent
-    levels = [root(table.points, table.points_source), root(table.lines, table.lines_source),
-              root(table.polygons, table.polygons_source)]
+    levels = [root(table.points, table.points_source, pad_units),
+              root(table.lines, table.lines_source, pad_units),
+              root(table.polygons, table.polygons_source, pad_units)]
     zoom = 0
     while True:
         x, y, weight = _tile_weights(levels)
@@ -175,8 +176,9 @@ def build_top(table: FeatureTable, *, split_zoom: int, minzoom: int = 0, maxzoom
     """
     mode, validation, framing = _options(mode, validate, framing)
     pad_units = buffer / extent
-    levels = [root(table.points, table.points_source), root(table.lines, table.lines_source),
-              root(table.polygons, table.polygons_source)]
+    levels = [root(table.points, table.points_source, pad_units),
+              root(table.lines, table.lines_source, pad_units),
+              root(table.polygons, table.polygons_source, pad_units)]
     out = []
     for zoom in range(min(split_zoom - 1, maxzoom) + 1):
         if zoom > 0:

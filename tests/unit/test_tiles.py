@@ -228,16 +228,85 @@ def test_a_polygon_across_the_antimeridian_is_split_and_wrapped():
     assert 0 < total < 2 * (4096 * 20 / 180 + 2 * BUFFER) * 4096 * 0.1
 
 
+def _wrapped_reference(geometry, z, x, y):
+    """Shapely's clip to the padded tile of the geometry and its copies a turn east and
+    west (the map wraps: a tile at the edge buffers what lies across the antimeridian)."""
+    parts = []
+    for turn in (-360.0, 0.0, 360.0):
+        moved = shapely.affinity.translate(geometry, turn)
+        clipped, _ = _reference(moved, z, x, y)
+        parts += [p for p in shapely.get_parts(clipped) if not p.is_empty]
+    if geometry.geom_type == "Polygon":
+        return shapely.union_all(parts)
+    return shapely.GeometryCollection(parts)
+
+
+@pytest.mark.parametrize("geometry", [
+    shapely.LineString([(170, 10), (179.5, 12)]),
+    shapely.LineString([(-179.9, -20), (-175, -25), (-179.2, -30)]),
+    shapely.Polygon([(178.5, -5), (179.8, -5), (179.8, 5), (178.5, 5)]),
+    shapely.Polygon([(175, 30), (-175, 30), (-175, 40), (175, 40)]),  # across it: below
+    shapely.Point(179.7, 0.5),
+    shapely.Point(-180, 3),
+], ids=["line-east", "line-west", "polygon-east", "polygon-across", "point-east",
+        "point-on-the-antimeridian"])
+def test_tiles_at_the_map_edge_buffer_across_the_antimeridian(geometry):
+    """Every tile (zooms 0-3) holds Shapely's clip of the input and its copies a turn
+    away, within one unit: the edge tiles' buffers reach across the antimeridian; the
+    direct path (`tile_one`) gives the same tiles."""
+    from rnsca.tiles import tile_one
+
+    table = FeatureTable.of([geometry])
+    # Shapely reads a polygon across the antimeridian the long way round: the oracle
+    # gets it unwrapped (longitudes east of 180; GeoJSON cuts such polygons in two).
+    unwrapped = shapely.transform(geometry, lambda c: np.where(c < -170, c + 360, c)) \
+        if geometry.geom_type == "Polygon" else geometry
+    across = 0
+    for zoom in tile_table(table, maxzoom=3):
+        held = {(int(x), int(y)): d for x, y, d in zip(zoom.x, zoom.y, zoom.data,
+                                                        strict=True)}
+        side = 2**zoom.zoom
+        for x in range(side):
+            for y in range(side):
+                reference = _wrapped_reference(unwrapped, zoom.zoom, x, y)
+                where = f"tile {zoom.zoom}/{x}/{y}"
+                if (x, y) not in held:
+                    assert reference.is_empty or all(_thin(p, 1.0) for p in
+                                                     shapely.get_parts(reference)), where
+                    continue
+                assert tile_one(table, zoom.zoom, x, y) == held[(x, y)], where
+                ours = shapely.union_all([shapely.geometry.shape(f["geometry"])
+                                          for f in _decode(held[(x, y)])])
+                far = shapely.distance(shapely.points(shapely.get_coordinates(ours)),
+                                       reference).max()
+                assert far <= 1.0, f"{where}: a vertex {far} from Shapely's clip"
+                assert shapely.hausdorff_distance(reference, ours) <= 1.0, where
+                if ours.geom_type in ("Polygon", "MultiPolygon"):
+                    assert ours.is_valid, where
+                # What the tile holds across the antimeridian (west of 0, or from
+                # the east edge on: the point on the antimeridian is at 0 and 4096).
+                xs = shapely.get_coordinates(ours)[:, 0]
+                across += int((x == 0 and xs.min() < 0) or (x == side - 1
+                                                            and xs.max() >= EXTENT))
+    assert across > 0
+
+
 def test_the_world_polygon_fills_each_tile_with_its_padded_square():
     world = shapely.box(-180, -90, 180, 90)
     zoom = list(tile_features([world], minzoom=2, maxzoom=2))[0]
     assert len(zoom) == 16
-    inner = [d for x, y, d in zip(zoom.x, zoom.y, zoom.data, strict=True)
-             if 0 < x < 3 and 0 < y < 3]
-    for data in inner:
-        ours = shapely.geometry.shape(_decode(data)[0]["geometry"])
-        assert shapely.equals(ours, shapely.box(-BUFFER, -BUFFER, EXTENT + BUFFER,
-                                                EXTENT + BUFFER))
+    # Every tile with a neighbour on each side across x (the map wraps round): the
+    # tiles at the antimeridian get their buffer from the other edge, as a second
+    # feature of the world (its copy a turn away), side by side with the first.
+    inner = [(x, d) for x, y, d in zip(zoom.x, zoom.y, zoom.data, strict=True)
+             if 0 < y < 3]
+    assert len(inner) == 8
+    for x, data in inner:
+        features = [shapely.geometry.shape(f["geometry"]) for f in _decode(data)]
+        assert len(features) == (2 if x in (0, 3) else 1)
+        assert shapely.union_all(features).area == sum(f.area for f in features)
+        assert shapely.equals(shapely.union_all(features), shapely.box(
+            -BUFFER, -BUFFER, EXTENT + BUFFER, EXTENT + BUFFER))
 
 
 def test_latitudes_past_the_square_are_clamped():

@@ -164,26 +164,20 @@ def write_pmtiles(path: str | Path | BinaryIO, zooms: Iterable[ZoomTiles], *, la
     """
     from pmtiles.tile import Compression as PMCompression
     from pmtiles.tile import TileType
-    from pmtiles.writer import Writer
+
+    from rnsca.tiles.pmtiles_v3 import PMTilesWriter
 
     compression = Compression(compression)
     compress = None if compressed else _compressor(compression)
     summary = ArchiveSummary()
     bounds = [math.inf, math.inf, -math.inf, -math.inf]
     zoom_range: list[int] = []
-    with _opened(path) as f, ThreadPoolExecutor() as pool:
-        writer = Writer(f)
+    with _opened(path) as f, ThreadPoolExecutor() as pool, PMTilesWriter(f) as writer:
         for zoom in _timed(zooms, summary):
             if len(zoom) == 0:
                 continue
-            order = np.argsort(tile_ids(zoom.zoom, zoom.x, zoom.y), kind="stable")
-            ids = tile_ids(zoom.zoom, zoom.x, zoom.y)[order]
-            stored = _stored(zoom, compress, pool)
-            total = 0
-            for k in order.tolist():
-                total += len(stored[k])
-            for tile_id, k in zip(ids.tolist(), order.tolist(), strict=True):
-                writer.write_tile(tile_id, stored[k])
+            total = writer.add(tile_ids(zoom.zoom, zoom.x, zoom.y),
+                               _stored(zoom, compress, pool))
             summary.zooms[-1]["bytes"] = total
             _extend_bounds(bounds, zoom)
             zoom_range = [zoom_range[0] if zoom_range else zoom.zoom, zoom.zoom]
@@ -204,7 +198,7 @@ def write_pmtiles(path: str | Path | BinaryIO, zooms: Iterable[ZoomTiles], *, la
                 "vector_layers": [{"id": layer, "fields": {}, "minzoom": zoom_range[0],
                                    "maxzoom": zoom_range[1]}]}
         meta.update(metadata or {})
-        writer.finalize(header, meta)
+        writer.finalize(header, meta, pool.map)
     return summary
 
 

@@ -57,7 +57,7 @@ import tempfile
 import zlib
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from dataclasses import dataclass
-from typing import Any, BinaryIO
+from typing import Any, BinaryIO, cast
 
 import numpy as np
 
@@ -227,7 +227,8 @@ def _first_of_content(data: Sequence[bytes], order: np.ndarray,
                [data[k] for k in order[first[repeated]].tolist()])):
         return first
     in_order = [data[k] for k in order.tolist()]
-    first_of = dict(zip(reversed(in_order), range(n - 1, -1, -1)))  # the first index stays
+    # Filled backwards: each content keeps its first tile's index.
+    first_of = dict(zip(reversed(in_order), range(n - 1, -1, -1), strict=True))
     return np.fromiter(map(first_of.__getitem__, in_order), dtype=np.int64, count=n)
 
 
@@ -275,9 +276,11 @@ class PMTilesWriter:
         previous call's, as `write_pmtiles` gives them (a zoom each, zooms increasing).
         """
         n = len(data)
+        tile_id = np.asarray(tile_id, dtype=np.uint64)
+        if tile_id.shape != (n,):
+            raise ValueError(f"{tile_id.size} tile ids for {n} tiles: give one id per tile")
         if n == 0:
             return 0
-        tile_id = np.asarray(tile_id, dtype=np.uint64)
         order = np.argsort(tile_id, kind="stable")
         length = np.fromiter(map(len, data), dtype=np.int64, count=n)
         hashes = np.fromiter(map(hash, data), dtype=np.int64, count=n)
@@ -299,20 +302,16 @@ class PMTilesWriter:
         `contents` holds the first tile of each content of the call, in tile-id order
         (new contents are stored in that order); `hashes` and `length` are theirs. A
         content stored by an earlier call is found by its hash and read back to be
-        compared, so two contents whose hashes collide are both stored.
+        compared (two contents whose hashes collide are both stored, each once).
         """
         offset = np.full(contents.shape[0], -1, dtype=np.int64)
         if self._hash.size:
             by_hash = np.argsort(hashes)  # sorted keys: NumPy's search starts at the last
-            pos = np.empty_like(by_hash)
-            pos[by_hash] = np.searchsorted(self._hash, hashes[by_hash])
-            pos = np.minimum(pos, self._hash.size - 1)
-            for j in np.flatnonzero(self._hash[pos] == hashes).tolist():
-                k = pos[j]
-                if (self._length[k] == length[j]
-                        and os.pread(self._data.fileno(), int(length[j]), int(self._offset[k]))
-                        == data[contents[j]]):
-                    offset[j] = self._offset[k]
+            low, high = np.empty_like(by_hash), np.empty_like(by_hash)
+            low[by_hash] = np.searchsorted(self._hash, hashes[by_hash], side="left")
+            high[by_hash] = np.searchsorted(self._hash, hashes[by_hash], side="right")
+            for j in np.flatnonzero(high > low).tolist():
+                offset[j] = self._find(data[contents[j]], range(low[j], high[j]))
         new = np.flatnonzero(offset < 0)
         if new.size == 0:
             return offset
@@ -328,6 +327,14 @@ class PMTilesWriter:
         self._offset = np.concatenate([self._offset, offset[new]])[order]
         self._length = np.concatenate([self._length, length[new]])[order]
         return offset
+
+    def _find(self, content: bytes, candidates: range) -> int:
+        """Return the offset of `content` if stored, else -1: `candidates` share its hash."""
+        for k in candidates:
+            if (self._length[k] == len(content) and content
+                    == os.pread(self._data.fileno(), len(content), int(self._offset[k]))):
+                return int(self._offset[k])
+        return -1
 
     def _add_runs(self, tile_id: np.ndarray, offset: np.ndarray, length: np.ndarray) -> None:
         """Add the entries of tiles whose content is at `offset`, `length` (in tile order).
@@ -366,7 +373,7 @@ class PMTilesWriter:
         bounds, center), as ``pmtiles.writer.Writer.finalize`` takes them; `metadata` is
         stored as gzipped JSON. `map_` compresses the leaf directories.
         """
-        from pmtiles.tile import Compression, serialize_header
+        from pmtiles.tile import Compression, HeaderDict, serialize_header
 
         if not self._entries:
             raise ValueError("no tile was added: a PMTiles archive needs one")
@@ -394,7 +401,7 @@ class PMTilesWriter:
             "tile_data_offset": HEADER_LENGTH + len(root) + len(meta) + len(leaves),
             "tile_data_length": self._stored,
         })
-        for section in (serialize_header(header), root, meta, leaves):
+        for section in (serialize_header(cast("HeaderDict", header)), root, meta, leaves):
             self._out.write(section)
         self._data.seek(0)
         shutil.copyfileobj(self._data, self._out, 1 << 20)

@@ -1,9 +1,10 @@
-"""Tile archives: PMTiles v3 (the ``pmtiles`` package's writer) and a ``z/x/y.mvt`` tree.
+"""Tile archives: PMTiles v3 (`rnsca.tiles.pmtiles_v3`) and a ``z/x/y.mvt`` tree.
 
 Both take the zooms as `rnsca.tiles.encode.ZoomTiles` in increasing zoom order, as
 `rnsca.tiles.tile_features` yields them, and write each zoom as it comes: memory holds
-one zoom's tiles. PMTiles wants its tiles in tile-id order (zoom, then the Hilbert
-curve) to be "clustered": each zoom is sorted by `tile_ids` before it is written.
+one zoom's tiles (and, for PMTiles, the directory entries of the zooms written). PMTiles
+wants its tiles in tile-id order (zoom, then the Hilbert curve) to be "clustered": each
+zoom is sorted by `tile_ids` as it is written.
 Tiles are gzip-compressed (``compression="gzip"``, what map clients expect of
 PMTiles and tippecanoe writes) by ISA-L (``isal``, level 2), in a pool of threads (it
 releases the GIL), while the next zoom is made in another thread (`_made_ahead`).
@@ -31,6 +32,7 @@ import numpy as np
 
 from rnsca.options import _ChoiceEnum
 from rnsca.tiles.encode import ZoomTiles
+from rnsca.tiles.pmtiles_v3 import PMTilesWriter
 
 __all__ = ["Compression", "ArchiveSummary", "tile_ids", "compress_tiles", "write_pmtiles",
            "write_directory"]
@@ -164,8 +166,6 @@ def write_pmtiles(path: str | Path | BinaryIO, zooms: Iterable[ZoomTiles], *, la
     """
     from pmtiles.tile import Compression as PMCompression
     from pmtiles.tile import TileType
-
-    from rnsca.tiles.pmtiles_v3 import PMTilesWriter
 
     compression = Compression(compression)
     compress = None if compressed else _compressor(compression)

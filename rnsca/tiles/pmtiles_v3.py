@@ -140,46 +140,53 @@ def varints(values: np.ndarray) -> bytes:
     return out.tobytes()
 
 
-def _directory_varints(entries: Entries) -> bytes:
-    """Return the directory's uncompressed bytes: the count, then the four columns."""
+def _directory_parts(entries: Entries, piece: int = 1 << 16) -> Iterator[bytes]:
+    """Yield the directory's uncompressed bytes: the count, then the four columns.
+
+    Each column comes in varints of `piece` entries at most, so that a reader that
+    stops early (`_gzipped_if_under`) has not encoded the rest.
+    """
     n = len(entries)
-    deltas = np.diff(entries.tile_id, prepend=np.uint64(0))
     follows = np.zeros(n, dtype=bool)
     follows[1:] = entries.offset[1:] == entries.offset[:-1] + entries.length[:-1]
-    offsets = np.where(follows, 0, entries.offset + 1)
-    return varints(np.concatenate([np.array([n], dtype=np.uint64), deltas,
-                                   entries.run_length.astype(np.uint64),
-                                   entries.length.astype(np.uint64),
-                                   offsets.astype(np.uint64)]))
+    columns: Iterator[Any] = (
+        np.array([n], dtype=np.uint64),
+        np.diff(entries.tile_id, prepend=np.uint64(0)),
+        entries.run_length,
+        entries.length,
+        np.where(follows, 0, entries.offset + 1),  # 0: the data follow the entry before
+    )
+    for column in columns:
+        for start in range(0, column.shape[0], piece):
+            yield varints(column[start:start + piece])
 
 
 def serialize_directory(entries: Entries) -> bytes:
     """Return the directory of `entries`, gzipped: ``pmtiles.tile.serialize_directory``."""
-    return gzip.compress(_directory_varints(entries), mtime=0)
+    return gzip.compress(b"".join(_directory_parts(entries)), mtime=0)
 
 
-def _gzipped_if_under(raw: bytes, limit: int) -> bytes | None:
-    """Return ``gzip.compress(raw, mtime=0)`` if shorter than `limit`, else None.
+def _gzipped_if_under(parts: Iterable[bytes], limit: int) -> bytes | None:
+    """Return ``gzip.compress(b"".join(parts), mtime=0)`` if shorter than `limit`, else None.
 
-    The deflate stream is fed a piece at a time and given up as soon as its output
-    reaches `limit`: a directory of many entries is never compressed whole only to
-    learn that it does not fit (the package compresses it all).
+    The deflate stream is fed a part at a time and given up as soon as its output
+    reaches `limit`: a directory of many entries is never encoded and compressed whole
+    only to learn that it does not fit (the package does both).
     """
     deflate = zlib.compressobj(9, zlib.DEFLATED, -15)
     produced = _GZIP_FRAME
-    view = memoryview(raw)
-    piece = 1 << 16
-    for start in range(0, len(raw), piece):
-        produced += len(deflate.compress(view[start:start + piece]))
+    raw = []
+    for part in parts:
+        raw.append(part)
+        produced += len(deflate.compress(part))
         if produced >= limit:
             return None
-    whole = gzip.compress(raw, mtime=0)
+    whole = gzip.compress(b"".join(raw), mtime=0)
     return whole if len(whole) < limit else None
 
 
-def build_directories(entries: Entries,
-                      map_: Callable[[Callable[[Entries], bytes], Iterable[Entries]],
-                                     Iterator[bytes]] = map) -> tuple[bytes, bytes, int]:
+def build_directories(entries: Entries, map_: Callable[..., Iterable[bytes]] = map
+                      ) -> tuple[bytes, bytes, int]:
     """Return the root directory, the leaf directories and how many leaves, all gzipped.
 
     ``pmtiles.writer.optimize_directories``: the root alone if it gzips under
@@ -187,7 +194,7 @@ def build_directories(entries: Entries,
     of leaves fits. `map_` compresses the leaves (``pool.map`` spreads them over threads;
     zlib releases the GIL).
     """
-    root = _gzipped_if_under(_directory_varints(entries), ROOT_LIMIT)
+    root = _gzipped_if_under(_directory_parts(entries), ROOT_LIMIT)
     if root is not None:
         return root, b"", 0
     n = len(entries)
@@ -347,15 +354,14 @@ class PMTilesWriter:
         same = (offset[1:] == offset[:-1]) & (length[1:] == length[:-1])
         continues = np.concatenate([[False], (tile_id[1:] == tile_id[:-1] + np.uint64(1))
                                     & same])
-        if np.any(tile_id[1:] < tile_id[:-1]):
-            self._clustered = False
         if self._entries:
             last = self._entries[-1]
-            last_id = int(last.tile_id[-1])
-            if int(tile_id[0]) < last_id:
+            after_last = int(last.tile_id[-1]) + int(last.run_length[-1])
+            # A call's tiles are sorted; the archive stays clustered if they follow the
+            # previous call's.
+            if int(tile_id[0]) < after_last:
                 self._clustered = False
-            continues[0] = (int(tile_id[0]) == last_id + int(last.run_length[-1])
-                            and offset[0] == last.offset[-1]
+            continues[0] = (int(tile_id[0]) == after_last and offset[0] == last.offset[-1]
                             and length[0] == last.length[-1])
         starts = np.flatnonzero(~continues)
         run_length = np.diff(np.append(starts, n))
@@ -366,7 +372,7 @@ class PMTilesWriter:
                                          run_length))
 
     def finalize(self, header: dict[str, Any], metadata: dict[str, Any],
-                 map_: Callable[..., Iterator[bytes]] = map) -> None:
+                 map_: Callable[..., Iterable[bytes]] = map) -> None:
         """Write the archive: header, root directory, metadata, leaves, tile data.
 
         `header` gives the fields the tiles do not (``tile_type``, ``tile_compression``,

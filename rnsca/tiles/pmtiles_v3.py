@@ -23,27 +23,33 @@ arrays, not a Python object and a Python varint per field:
 The header's layout is the package's (``pmtiles.tile.serialize_header``).
 
 Measured on the lines benchmark (``benchmarks/bench_tiles.py``: 533,200 tiles of zooms
-0-10, already gzipped, so only the writer runs; CPU seconds, this 2-core machine): the
-package's ``Writer`` 3.0 s (``write_tile`` per tile 1.6 s: Python hashing and an
-``Entry`` per tile; ``finalize`` 1.3 s, most in ``serialize_directory``, a Python varint
-per field per entry, done for the whole directory and again for each leaf), this
-writer 0.45 s, of which NumPy's varints of every directory take 0.03 s and gzip of the
-directories (zlib level 9, what the package stores) 0.1 s. NumPy alone is fast enough
-here: what is left is Python's hashing of the tiles (exact, by a dict of the tiles'
-bytes), joining and writing the bytes, so no Numba kernel is needed.
+0-10, one entry each, gzipped beforehand so that only the writer runs; CPU seconds by
+``time.process_time``, this 2-core machine): the package's ``Writer`` 3.0 s (per tile,
+``write_tile``: Python's hashing and an ``Entry`` object; ``finalize``: a Python varint
+per field per entry in ``serialize_directory``, for the whole directory and again for
+each leaf, and zlib level 9 of the whole directory), this writer 0.9-1.0 s. Of that,
+the directories take 0.33 s: 0.14 s for zlib to show that the root alone does not fit
+(given up after 256 KB of its 2.3 MB), 0.13 s zlib level 9 of the 131 leaves (what the
+package stores; the leaves are compressed across a pool's threads), and only 0.05 s for
+NumPy's varints of every leaf, so no Numba kernel is needed for them. The rest is per
+tile and mostly Python's own: taking each tile's length and ``hash``, the argsorts
+(tile ids, hashes), and joining the new contents in tile-id order for one write per
+zoom.
 
 Differences from the package, each deliberate:
 
 - Content is compared byte for byte. The package keys its table on Python's 64-bit
   ``hash`` of the data alone (two contents whose hashes collide would share one);
-  here the hash only finds the candidate stored in an earlier zoom, which is read back
-  and compared (a different content with the same hash is stored apart).
+  here the hash only groups candidates: a zoom's tiles are compared with the first
+  of their group, and a content stored by an earlier zoom is read back and compared.
 - Runs join tiles whose content has the same offset *and length*. The package compares
-  offsets only, so an empty tile (length 0) and the content stored right after it
-  (the same offset) would join one run.
+  offsets only: an empty tile (length 0) shares its offset with the content stored
+  after it, and a later copy of the empty tile would join that content's run.
 - ``max_zoom`` is the zoom of the archive's last tile. The package takes the zoom of
   the last entry's first tile, which is lower when a run crosses into the next zoom
   (a world-covering polygon gives every tile of every zoom the same content: one run).
+- The archive is clustered while each call's first tile comes after the previous
+  call's last; the package compares with the first tile of the last entry (a run).
 """
 
 from __future__ import annotations
@@ -149,7 +155,7 @@ def _directory_parts(entries: Entries, piece: int = 1 << 16) -> Iterator[bytes]:
     n = len(entries)
     follows = np.zeros(n, dtype=bool)
     follows[1:] = entries.offset[1:] == entries.offset[:-1] + entries.length[:-1]
-    columns: Iterator[Any] = (
+    columns: tuple[np.ndarray, ...] = (
         np.array([n], dtype=np.uint64),
         np.diff(entries.tile_id, prepend=np.uint64(0)),
         entries.run_length,

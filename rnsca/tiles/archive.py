@@ -1,9 +1,10 @@
-"""Tile archives: PMTiles v3 (the ``pmtiles`` package's writer) and a ``z/x/y.mvt`` tree.
+"""Tile archives: PMTiles v3 (`rnsca.tiles.pmtiles_v3`) and a ``z/x/y.mvt`` tree.
 
 Both take the zooms as `rnsca.tiles.encode.ZoomTiles` in increasing zoom order, as
 `rnsca.tiles.tile_features` yields them, and write each zoom as it comes: memory holds
-one zoom's tiles. PMTiles wants its tiles in tile-id order (zoom, then the Hilbert
-curve) to be "clustered": each zoom is sorted by `tile_ids` before it is written.
+one zoom's tiles (and, for PMTiles, the directory entries of the zooms written). PMTiles
+wants its tiles in tile-id order (zoom, then the Hilbert curve) to be "clustered": each
+zoom is sorted by `tile_ids` as it is written.
 Tiles are gzip-compressed (``compression="gzip"``, what map clients expect of
 PMTiles and tippecanoe writes) by ISA-L (``isal``, level 2), in a pool of threads (it
 releases the GIL), while the next zoom is made in another thread (`_made_ahead`).
@@ -31,6 +32,7 @@ import numpy as np
 
 from rnsca.options import _ChoiceEnum
 from rnsca.tiles.encode import ZoomTiles
+from rnsca.tiles.pmtiles_v3 import PMTilesWriter
 
 __all__ = ["Compression", "ArchiveSummary", "tile_ids", "compress_tiles", "write_pmtiles",
            "write_directory"]
@@ -164,26 +166,18 @@ def write_pmtiles(path: str | Path | BinaryIO, zooms: Iterable[ZoomTiles], *, la
     """
     from pmtiles.tile import Compression as PMCompression
     from pmtiles.tile import TileType
-    from pmtiles.writer import Writer
 
     compression = Compression(compression)
     compress = None if compressed else _compressor(compression)
     summary = ArchiveSummary()
     bounds = [math.inf, math.inf, -math.inf, -math.inf]
     zoom_range: list[int] = []
-    with _opened(path) as f, ThreadPoolExecutor() as pool:
-        writer = Writer(f)
+    with _opened(path) as f, ThreadPoolExecutor() as pool, PMTilesWriter(f) as writer:
         for zoom in _timed(zooms, summary):
             if len(zoom) == 0:
                 continue
-            order = np.argsort(tile_ids(zoom.zoom, zoom.x, zoom.y), kind="stable")
-            ids = tile_ids(zoom.zoom, zoom.x, zoom.y)[order]
-            stored = _stored(zoom, compress, pool)
-            total = 0
-            for k in order.tolist():
-                total += len(stored[k])
-            for tile_id, k in zip(ids.tolist(), order.tolist(), strict=True):
-                writer.write_tile(tile_id, stored[k])
+            total = writer.add(tile_ids(zoom.zoom, zoom.x, zoom.y),
+                               _stored(zoom, compress, pool))
             summary.zooms[-1]["bytes"] = total
             _extend_bounds(bounds, zoom)
             zoom_range = [zoom_range[0] if zoom_range else zoom.zoom, zoom.zoom]
@@ -204,7 +198,7 @@ def write_pmtiles(path: str | Path | BinaryIO, zooms: Iterable[ZoomTiles], *, la
                 "vector_layers": [{"id": layer, "fields": {}, "minzoom": zoom_range[0],
                                    "maxzoom": zoom_range[1]}]}
         meta.update(metadata or {})
-        writer.finalize(header, meta)
+        writer.finalize(header, meta, pool.map)
     return summary
 
 

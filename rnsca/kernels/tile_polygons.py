@@ -23,8 +23,7 @@ clip. What is clipped here is what `clip_polygon` gives, bit for bit:
   the same vertices).
 
 A pair is simple when, for each of its polygons that is cut: no vertex lies on the line
-of a window edge (so no chain breaks at a vertex or runs along an edge), no segment runs
-from outside to outside past the window (its ends share no outcode bit), every ring has
+of a window edge (so no chain breaks at a vertex or runs along an edge), every ring has
 area and at least four positions, no hole crosses the boundary (no walk joins two
 rings), no two boundary crossings share a point or lie on a corner, the crossings
 alternate exits and entries along the boundary (valid input), no shell vertex repeats
@@ -77,13 +76,13 @@ def _on_edge_line(x, y, window):
 
 @scalar
 def _scan_ring(xy, first, last, window):
-    """Return (inside, transitions, plain) for the closed ring ``xy[first..last]``.
+    """Return (inside, crossings, plain) for the closed ring ``xy[first..last]``.
 
     `inside` counts the vertices strictly inside (the closing one excluded),
-    `transitions` the segments with one end inside and one outside. `plain` is False
-    when a vertex lies on an edge line, or a segment goes from outside to outside with
-    ends that share no outcode bit (it may pass through the window), or the ring has
-    fewer than four positions.
+    `crossings` bounds the boundary crossings: one per segment with one end inside and
+    one outside, two per segment from outside to outside whose ends share no outcode
+    bit (it may pass through the window). `plain` is False when a vertex lies on an
+    edge line or the ring has fewer than four positions.
     """
     xmin, ymin, xmax, ymax = window
     if last - first < 3:
@@ -99,8 +98,8 @@ def _scan_ring(xy, first, last, window):
         c1 = outcode(x, y, xmin, ymin, xmax, ymax)
         inside += c0 == 0
         transitions += (c0 == 0) != (c1 == 0)
-        crossing_out = (c0 != 0) & (c1 != 0) & ((c0 & c1) == 0)
-        plain &= (not crossing_out) & (not _on_edge_line(x, y, window))
+        transitions += 2 * ((c0 != 0) & (c1 != 0) & ((c0 & c1) == 0))
+        plain &= not _on_edge_line(x, y, window)
     return inside, transitions, plain
 
 
@@ -391,9 +390,11 @@ def _window_if_covered(xy, ring_offsets, r_begin, r_end, window, any_outside, sc
 def _find_crossings(xy, first, last, window, options, stack, st, sc):
     """Store the shell's crossings in input order (``sc.seg``, ``sc.enters``, ``sc.cut``).
 
-    Each segment with one end strictly inside is clipped by `rnsca_segment`, as the
-    general clip clips it. Returns False if a chain would break there (the piece does
-    not keep the inside end) or a cut lands on a corner.
+    Each segment that may cross the boundary (one end strictly inside, or both outside
+    with no outcode bit in common) is clipped by `rnsca_segment`, as the general clip
+    clips it: one crossing where it leaves or enters, two (entry, exit) where it passes
+    through. Returns the number of crossings, or -1 if a chain would break there (a
+    piece that does not keep its inside end) or a cut lands on a corner.
     """
     xmin, ymin, xmax, ymax = window
     t = 0
@@ -401,13 +402,28 @@ def _find_crossings(xy, first, last, window, options, stack, st, sc):
     for i in range(first, last):
         c0 = c1
         c1 = outcode(xy[i + 1, 0], xy[i + 1, 1], xmin, ymin, xmax, ymax)
-        if (c0 == 0) == (c1 == 0):
+        if (c0 | c1) == 0 or (c0 & c1) != 0:
             continue
         x0 = xy[i, 0]
         y0 = xy[i, 1]
         x1 = xy[i + 1, 0]
         y1 = xy[i + 1, 1]
         keep, _, _, ax, ay, bx, by = rnsca_segment(x0, y0, x1, y1, window, options, st, stack)
+        if c0 != 0 and c1 != 0:  # passes through (a chain of its own) or by
+            if not keep:
+                continue
+            if _at_corner(ax, ay, window) or _at_corner(bx, by, window):
+                return -1
+            sc.seg[t] = i
+            sc.enters[t] = True
+            sc.cut[t, 0] = ax
+            sc.cut[t, 1] = ay
+            sc.seg[t + 1] = i
+            sc.enters[t + 1] = False
+            sc.cut[t + 1, 0] = bx
+            sc.cut[t + 1, 1] = by
+            t += 2
+            continue
         if c0 == 0:  # leaves: the piece starts at vertex i (the chain goes on)
             ok = keep and ax == x0 and ay == y0
             px = bx
@@ -416,14 +432,21 @@ def _find_crossings(xy, first, last, window, options, stack, st, sc):
             ok = keep and bx == x1 and by == y1
             px = ax
             py = ay
-        if not ok or ((px == xmin or px == xmax) and (py == ymin or py == ymax)):
-            return False
+        if not ok or _at_corner(px, py, window):
+            return -1
         sc.seg[t] = i
         sc.enters[t] = c0 != 0
         sc.cut[t, 0] = px
         sc.cut[t, 1] = py
         t += 1
-    return True
+    return t
+
+
+@scalar
+def _at_corner(x, y, window):
+    """Return whether (x, y) is a corner of the window."""
+    xmin, ymin, xmax, ymax = window
+    return (x == xmin or x == xmax) and (y == ymin or y == ymax)
 
 
 @borrowing
@@ -482,6 +505,12 @@ def _put_chain(xy, first, last, k, n_cross, reverse, sc, out, start, v):
     first_v = sc.seg[a] + 1  # the chain's input vertices: first_v .. seg[b]
     last_v = sc.seg[b]
     cut = sc.cut
+    if last_v == first_v - 1:  # a segment passing through: its two cut points
+        if reverse:
+            v = _put(out, start, v, cut[b, 0], cut[b, 1])
+            return _put(out, start, v, cut[a, 0], cut[a, 1])
+        v = _put(out, start, v, cut[a, 0], cut[a, 1])
+        return _put(out, start, v, cut[b, 0], cut[b, 1])
     if reverse:
         v = _put(out, start, v, cut[b, 0], cut[b, 1])
         if last_v >= first_v:
@@ -523,15 +552,15 @@ def _clip_simple(xy, ring_offsets, r_begin, r_end, window, options, stack, st, s
     ok, any_outside = _sort_holes(xy, ring_offsets, r_begin, r_end, window, sc)
     if not ok:
         return False, v, r, p
-    inside, n_cross, _ = _scan_ring(xy, first, last, window)
+    n_cross = _find_crossings(xy, first, last, window, options, stack, st, sc)
+    if n_cross < 0:
+        return False, v, r, p
     if n_cross == 0:
-        if inside > 0:
+        if _scan_ring(xy, first, last, window)[0] > 0:
             return False, v, r, p  # never: the shell would be inside, class INSIDE
         return _window_if_covered(xy, ring_offsets, r_begin, r_end, window, any_outside, sc,
                                   out, v, ring_len, r, poly_rings, p)
     if _has_repeat(xy, first, last, sc, generation):
-        return False, v, r, p
-    if not _find_crossings(xy, first, last, window, options, stack, st, sc):
         return False, v, r, p
     n_chains = _link_chains(n_cross, reverse, window, sc)
     if n_chains < 0:
@@ -621,13 +650,14 @@ def _block_scratch(ring_offsets, polygon_offsets, geometry_offsets, pair_geometr
     while slots < _SLOTS_PER_VERTEX * positions:
         slots *= 2
     bits = np.empty(2, dtype=np.float64)
+    crossings = 2 * positions  # two per segment, at most (one passing through)
     return Scratch(np.empty((positions, 2), dtype=np.float64),
                    np.empty(rings + 1, dtype=np.int64), np.empty(rings, dtype=np.int8),
-                   np.empty(positions, dtype=np.int64), np.empty(positions, dtype=np.bool_),
-                   np.empty((positions, 2), dtype=np.float64),
+                   np.empty(crossings, dtype=np.int64), np.empty(crossings, dtype=np.bool_),
+                   np.empty((crossings, 2), dtype=np.float64),
                    np.empty(positions, dtype=np.int64), np.empty(positions, dtype=np.int64),
-                   np.empty(positions, dtype=np.bool_), np.empty(positions, dtype=np.int64),
-                   np.empty(positions, dtype=np.float64), np.empty(positions, dtype=np.int64),
+                   np.empty(positions, dtype=np.bool_), np.empty(crossings, dtype=np.int64),
+                   np.empty(crossings, dtype=np.float64), np.empty(crossings, dtype=np.int64),
                    np.empty(slots, dtype=np.int64), np.full(slots, -1, dtype=np.int64), bits,
                    bits.view(np.int64))
 

@@ -242,9 +242,12 @@ def _has_repeat(xy, first, last, sc, generation):
             continue
         sc.bits[0] = x + 0.0
         sc.bits[1] = y + 0.0
-        h = (sc.bits_int[0] * -7046029254386353131) ^ (sc.bits_int[1] * -4658895280553007687)
-        h ^= h >> 29
-        slot = h & mask
+        # Shifts and xors only (no multiply that overflows, also in plain Python): the
+        # high bits (sign, exponent, leading mantissa) folded onto the low ones, which
+        # are zero for round numbers.
+        bx = sc.bits_int[0]
+        by = sc.bits_int[1]
+        slot = (bx ^ (bx >> 23) ^ (bx >> 47) ^ (by << 11) ^ (by >> 13) ^ (by >> 37)) & mask
         while stamp[slot] == generation:
             k = table[slot]
             if xy[k, 0] == x and xy[k, 1] == y:

@@ -68,7 +68,7 @@ def _position(events, values, e, v, coords, row, write):
     for k in range(count):
         if not np.isfinite(values[v + k]):
             return -1, v
-    if write:
+    if write and coords.shape[0] > 0:
         coords[row, 0] = values[v]
         coords[row, 1] = values[v + 1]
         if coords.shape[1] == 3:
@@ -220,7 +220,9 @@ def build(events, values, types, out, cursor, write):
     types : int8 array
         The `TYPE_CODES` code of each geometry.
     out : Layout
-        Arrays of the sizes the counting pass gave (``write``), or of length 0.
+        Arrays of the sizes the counting pass gave (``write``), or of length 0. A coords
+        array of no rows is not written: the caller already has those positions (the
+        values viewed as (n, dim), where they are all of one array and of one dimension).
     cursor : int64 array of `CURSOR_SLOTS`, zeros
         Counts rows, parts, rings, polygons and geometries of each array: after the
         counting pass, the sizes to allocate.

@@ -81,7 +81,7 @@ def padded_bytes(path: str | Path) -> tuple[np.ndarray, int]:
         f.seek(0)
         data = np.empty(size + PADDING, dtype=np.uint8)  # np.zeros would touch every page
         data[size:] = 0
-        if f.readinto(memoryview(data)[:size]) != size:
+        if f.readinto(data[:size].data) != size:
             raise OSError(f"{path}: changed size while being read")
     return data, size
 
@@ -104,7 +104,11 @@ def read_file_features(data: np.ndarray, size: int, *,
     FileFeatures or None
         None for anything this reader does not take (see the module docstring).
     """
-    scanned = scan(data, size, sequence)
+    if data.dtype != np.uint8 or data.ndim != 1 or data.shape[0] < size + PADDING \
+            or data[size:size + PADDING].any():
+        # The scan reads past the document until a zero byte, with no bounds check.
+        raise ValueError(f"data must be uint8 bytes followed by {PADDING} zero bytes")
+    scanned = scan(data, size, bool(sequence))
     if scanned.status != SCANNED:
         return None
     try:

@@ -134,7 +134,7 @@ def _eisel_lemire(w, q):
     if power2 >= 0x7FF:
         return np.inf
     # mantissa holds the hidden bit: exact as a float64, and scaling by 2**k is exact.
-    return math.ldexp(float(mantissa), power2 - 1075)
+    return math.ldexp(float(mantissa), int(power2) - 1075)
 
 
 @inlined

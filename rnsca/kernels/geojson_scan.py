@@ -79,19 +79,38 @@ _TEN = np.uint64(10)
 
 
 class Scan(NamedTuple):
-    """What `scan` read (arrays trimmed to their length)."""
+    """What `scan` read, its arrays trimmed to their lengths.
 
-    status: int              #: `SCANNED`, or `NOT_TAKEN` (then the rest is partial)
-    skeleton: np.ndarray     #: uint8: the document(s) with placeholders; a JSON array of
-    #: the documents for a sequence
-    events: np.ndarray       #: int32: `OPEN`, `CLOSE` or a count of numbers (> 0)
-    values: np.ndarray       #: float64: the numbers of every coordinates member
-    slow: np.ndarray         #: int64 (k, 3): value index, first and end byte of each
-    #: number whose value is left to the caller (more than 19 digits, too close to call)
-    geometries: np.ndarray   #: int64 (g, 3): first event, pattern (0 a top-level
-    #: geometry, 1 a Feature's, 2 a FeatureCollection's) and document of each geometry
-    min_numbers: int         #: fewest numbers in a non-empty array of numbers
-    max_numbers: int         #: most numbers in one
+    Attributes
+    ----------
+    status : int
+        `SCANNED`, or `NOT_TAKEN` (then the arrays are empty).
+    skeleton : uint8 array
+        The document with each coordinates value replaced by its geometry's index; for a
+        sequence, a JSON array of the documents.
+    events : int32 array
+        `OPEN`, `CLOSE` or a count of numbers (> 0), every geometry's in turn.
+    values : float64 array
+        The numbers of every coordinates value, in order.
+    slow : int64 array, shape (k, 3)
+        Value index, first byte and end byte of each number whose value is left to the
+        caller (more than 19 significant digits, too close to a tie to decide).
+    geometries : int64 array, shape (g, 3)
+        For each geometry: its first event, its pattern (0 a top-level geometry, 1 a
+        Feature's, 2 a FeatureCollection's) and its document (0 unless a sequence).
+    min_numbers, max_numbers : int
+        The fewest and most numbers of a non-empty array of numbers (``2**62`` and 0 if
+        there is none).
+    """
+
+    status: int
+    skeleton: np.ndarray
+    events: np.ndarray
+    values: np.ndarray
+    slow: np.ndarray
+    geometries: np.ndarray
+    min_numbers: int
+    max_numbers: int
 
 
 class _Sink(NamedTuple):

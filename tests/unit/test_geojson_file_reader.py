@@ -191,7 +191,7 @@ def test_bad_numbers_give_the_exact_readers_error(tmp_path, text):
     check(tmp_path, collection(feature(geometry("Point", f"[1,{text}]"))), taken=False)
 
 
-# --------------------------------------------------------------------------- left to the exact reader
+# ------------------------------------------------------------ left to the exact reader
 
 @pytest.mark.parametrize("text", [
     "",

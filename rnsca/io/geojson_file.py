@@ -16,8 +16,7 @@ with ``from_geojson``; in particular ``-0`` (an integer to JSON parsers) is +0.0
 duplicated keys the structure depends on, ...) it returns None, and the caller reads the
 file the exact way, which names the problem as before.
 
-Measured on a 213 MB FeatureCollection of 100,000 polygons with holes (10.4M numbers
-of 16-17 digits), CPU seconds: orjson and ``from_geojson`` 9.4 s, this reader 1.3 s.
+Measured (CPU s, one process, alternated): 213 MB, 100,000 polygons, 10.4M numbers: 7.1 -> 1.1 s.
 """
 
 from __future__ import annotations

@@ -10,6 +10,11 @@ with no fallback. A decimal of more than 19 significant digits is read from its 
 19 (``w``) and decided only when ``w`` and ``w + 1`` round alike (`decimal_to_double`
 then says so), as fast_float does; the caller converts the rare others another way.
 
+Why here and not pyarrow (an optional dependency, fast_float inside): converting while
+the scan reads the digits added 0.13 s to reading 10.4M coordinates of 16-17 digits (the
+scan 0.49 -> 0.61 s), where ``pyarrow.compute.cast`` of the same numbers as strings took
+0.27 s, besides the copy of their texts it would need.
+
 No 128-bit integers in Numba: products are put together from 32-bit halves. Every
 constant is an ``np.uint64``: Numba types uint64 mixed with int64 as float64.
 """

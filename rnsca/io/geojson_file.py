@@ -28,15 +28,20 @@ import numpy as np
 import orjson
 import shapely
 
-from rnsca.kernels.geojson_build import BUILT, CURSOR_SLOTS, TYPE_CODES, Layout, build
+from rnsca.kernels.geojson_build import (
+    BUILT,
+    CURSOR_SLOTS,
+    ROW_SLOTS,
+    TYPE_CODES,
+    Layout,
+    build,
+)
 from rnsca.kernels.geojson_scan import PADDING, SCANNED, scan
 
 __all__ = ["FileFeatures", "padded_bytes", "read_file_features"]
 
 # The pattern `scan` records for a geometry found where each top-level type has one.
 _TOP_GEOMETRY, _FEATURE_GEOMETRY, _COLLECTION_GEOMETRY = 0, 1, 2
-# The `Layout` fields (and `build` cursor slots) of the three coords arrays.
-_ROWS = (0, 2, 5)
 
 
 @dataclass(frozen=True, slots=True)
@@ -133,13 +138,13 @@ def read_file_features(data: np.ndarray, size: int, *,
     # Where every number is a coordinate of the one array that has positions, the values
     # viewed as (n, dim) are its coords: not copied (the polygons file: 83 MB less).
     shared = scanned.min_numbers == scanned.max_numbers == dim \
-        and sum(sizes[slot] > 0 for slot in _ROWS) == 1
-    arrays = [np.empty((0 if shared else sizes[slot], dim)) if slot in _ROWS
+        and sum(sizes[slot] > 0 for slot in ROW_SLOTS) == 1
+    arrays = [np.empty((0 if shared else sizes[slot], dim)) if slot in ROW_SLOTS
               else np.zeros(sizes[slot] + 1, dtype=np.int64) for slot in range(CURSOR_SLOTS)]
     build(scanned.events, values, types, Layout(*arrays),
           np.zeros(CURSOR_SLOTS, dtype=np.int64), True)
     if shared:
-        arrays[next(slot for slot in _ROWS if sizes[slot] > 0)] = values.reshape(-1, dim)
+        arrays[next(slot for slot in ROW_SLOTS if sizes[slot] > 0)] = values.reshape(-1, dim)
     out = Layout(*arrays)
     partial_z = dim == 3 and scanned.min_numbers == 2
     return FileFeatures(

@@ -18,7 +18,7 @@ import numpy as np
 from rnsca.kernels.geojson_scan import CLOSE, OPEN
 from rnsca.kernels.jit import inlined, scalar
 
-__all__ = ["BUILT", "REFUSED", "TYPE_CODES", "Layout", "build"]
+__all__ = ["BUILT", "CURSOR_SLOTS", "REFUSED", "ROW_SLOTS", "TYPE_CODES", "Layout", "build"]
 
 #: The code of each GeoJSON geometry type in `build`'s ``types``; ``code // 2`` is the
 #: array it goes to (0 points, 1 lines, 2 polygons).
@@ -34,7 +34,10 @@ BUILT, REFUSED = 0, 1
 _POINT_ROWS, _POINTS = 0, 1
 _LINE_ROWS, _PARTS, _LINES = 2, 3, 4
 _POLYGON_ROWS, _RINGS, _POLYGONS, _SHAPES = 5, 6, 7, 8
+#: The length of `build`'s cursor.
 CURSOR_SLOTS = 9
+#: The cursor slots, and `Layout` fields, of the three coords arrays.
+ROW_SLOTS = (_POINT_ROWS, _LINE_ROWS, _POLYGON_ROWS)
 
 
 class Layout(NamedTuple):

@@ -67,7 +67,6 @@ _COORDINATES_WORD = np.frombuffer(b"coordinates", dtype=np.uint8)
 
 # Parser states.
 _VALUE, _VALUE_OR_CLOSE, _KEY, _KEY_OR_CLOSE, _COLON, _AFTER, _END = 0, 1, 2, 3, 4, 5, 6
-_IS_OBJECT = np.uint8(1)
 
 _QUOTE, _BACKSLASH, _COMMA, _COLON_BYTE, _MINUS = 34, 92, 44, 58, 45
 _OPEN_BRACKET, _CLOSE_BRACKET, _OPEN_BRACE, _CLOSE_BRACE = 91, 93, 123, 125

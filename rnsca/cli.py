@@ -46,7 +46,7 @@ from rnsca.io.geojson import dumps, loads
 from rnsca.io.geojson_seq import RS, Framing, framing_of_path, split_records, write_records
 from rnsca.io.svgpath import warm_up_readers
 from rnsca.options import Backend, Boundary, Mode
-from rnsca.runtime import configure_process
+from rnsca.runtime import collector_paused, configure_process
 
 if TYPE_CHECKING:
     from rich.progress import Progress, TaskID
@@ -596,7 +596,10 @@ def tiles(
     console = Console(stderr=True)
     started = time.perf_counter()
     with _reporting(EXIT_DATA):
-        features = read_features(source)
+        # The parsed properties are acyclic: the collector's full passes over them while
+        # they are made are wasted (213 MB of polygons: reading 0.1 s faster).
+        with collector_paused():
+            features = read_features(source)
         read_seconds = time.perf_counter() - started
         table = features.table(T.Crs(crs) if crs else None)
         name = layer or source.stem

@@ -10,7 +10,11 @@ coordinate system of a file, chosen by its suffix:
   WKB, the other columns as properties; EPSG:3857 if the column's CRS says so.
 - ``.fgb``: FlatGeobuf (pyogrio, which reads it through GDAL).
 
-Geometries are made by Shapely from the whole column at once (``from_geojson`` on the
+GeoJSON and GeoJSON sequences are read by the compiled reader of
+`rnsca.io.geojson_file` (no Python object per number); a document it does not take (a
+GeometryCollection, an error) is parsed by orjson and read by
+`rnsca.io.geojson.from_geojson`, which gives the same arrays and names any problem. Other
+geometries are made by Shapely from the whole column at once (``from_geojson`` on the
 features' geometry texts, ``from_wkb`` on WKB).
 """
 
@@ -28,6 +32,7 @@ import shapely
 from rnsca.arrays import Ragged
 from rnsca.errors import InvalidGeometryError, ParseError, UnsupportedGeometryError
 from rnsca.io.geojson import from_geojson
+from rnsca.io.geojson_file import FileFeatures, padded_bytes, read_file_features
 from rnsca.tiles.features import FeatureTable
 from rnsca.tiles.mercator import Crs
 
@@ -78,6 +83,10 @@ def read_features(path: str | Path) -> Features:
     """
     path = Path(path)
     suffix = path.suffix.lower()
+    if suffix in _GEOJSON + _SEQUENCE:
+        read = read_file_features(*padded_bytes(path), sequence=suffix in _SEQUENCE)
+        if read is not None:
+            return _of_file_features(read)
     if suffix in _GEOJSON:
         try:
             document = orjson.loads(path.read_bytes())
@@ -148,6 +157,14 @@ def _of_features(features: list, path: Path) -> Features:
         ids = [f.get("id") for f in features]
         return Features(None, properties, ids, Crs.EPSG_4326, ragged, sources)
     return _of_shapely(features, path)
+
+
+def _of_file_features(read: FileFeatures) -> Features:
+    """Return the features the compiled GeoJSON reader read, as `_of_features` would."""
+    ragged = tuple(Ragged.of(*arrays, partial_z=read.partial_z)
+                   for arrays in (read.points, read.lines, read.polygons))
+    sources = tuple(np.flatnonzero(read.kinds == k) for k in range(3))
+    return Features(None, read.properties, read.ids, Crs.EPSG_4326, ragged, sources)
 
 
 def _of_shapely(features: list, path: Path) -> Features:

@@ -192,7 +192,7 @@ def tiling_step(name: str, geometries, maxzoom: int, budget: float) -> dict:
 
     table = FeatureTable.of(geometries)
     kinds = [(table.lines, table.lines_source), (table.polygons, table.polygons_source)]
-    levels = [root(r, s) for r, s in kinds]
+    levels = [root(r, s, BUFFER / EXTENT) for r, s in kinds]
     ours, ours_cpu, tiles_per_zoom = [], [], []
     for _ in range(1, maxzoom + 1):
         started, cpu = time.perf_counter(), time.process_time()

@@ -9,4 +9,4 @@ See ``fuzz/README.md``.
 """
 
 #: The targets, by module name under ``fuzz``.
-TARGETS = ("svg_path", "svg_document", "geojson_reader", "segments_endpoint")
+TARGETS = ("svg_path", "svg_document", "geojson_reader", "geojson_file", "segments_endpoint")

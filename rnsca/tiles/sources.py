@@ -143,8 +143,11 @@ def _of_features(features: list, path: Path) -> Features:
     kinds = np.array([_KIND.get(str(f["geometry"].get("type")), -1)
                       if isinstance(f, dict) and isinstance(f.get("geometry"), dict) else -2
                       for f in features], dtype=np.int64)
+    # Only GeometryCollections go to Shapely: any other type (unknown, or not a string)
+    # is refused by `from_geojson`, which names where.
     collections = any(isinstance(f, dict) and isinstance(f.get("geometry"), dict)
-                      and f["geometry"].get("type") not in _KIND for f in features)
+                      and f["geometry"].get("type") == "GeometryCollection"
+                      for f in features)
     if not collections:
         try:
             layout = from_geojson({"type": "FeatureCollection", "features": features})

@@ -54,6 +54,22 @@ def test_invalid_geojson_is_422_and_text_is_415(client):
     assert r.status_code == 415
 
 
+@pytest.mark.parametrize("body", [
+    {"type": {"a": 1}},  # once a TypeError (a 500): a type that is not a string
+    {"type": "Feature", "properties": None, "geometry": {"type": ["Point"],
+                                                         "coordinates": [1, 2]}},
+    {"type": "FeatureCollection", "features": [
+        {"type": "Feature", "properties": None, "geometry": {"type": "Polygonx",
+                                                             "coordinates": []}}]},
+], ids=["object", "array", "unknown"])
+def test_a_geometry_type_that_is_no_type_is_422_naming_where(client, body):
+    for path in ("/v1/tiles/0/0/0", "/v1/tiles"):
+        r = client.post(path, json=body)
+        assert r.status_code == 422, r.text
+        assert r.headers["content-type"] == "application/problem+json"
+        assert "geometry.type" in r.json()["detail"]
+
+
 def test_a_pyramid_is_a_pmtiles_archive_of_the_library_s_tiles(client, tmp_path):
     from pmtiles.reader import MmapSource, Reader, all_tiles
 

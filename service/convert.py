@@ -665,11 +665,10 @@ def _tile_features(body: bytes, options: Any, zooms: int, settings: Settings) ->
 
     The work budget counts every vertex once per zoom cut.
     """
-    from rnsca.io.geojson import loads
     from rnsca.tiles import Crs
-    from rnsca.tiles.sources import features_of_geojson
+    from rnsca.tiles.sources import features_of_geojson_text
 
-    features = features_of_geojson(loads(body))
+    features = features_of_geojson_text(body)
     table = features.table(Crs(options.crs))
     vertices = sum(r.coords.shape[0] for r in (table.points, table.lines, table.polygons))
     check_vertices(vertices, settings.max_vertices)

@@ -90,6 +90,16 @@ def padded_bytes(path: str | Path) -> tuple[np.ndarray, int]:
     return data, size
 
 
+def padded_text(text: bytes | bytearray | memoryview) -> tuple[np.ndarray, int]:
+    """Return GeoJSON text held in memory as `padded_bytes` returns a file's (a copy)."""
+    view = memoryview(text).cast("B")
+    size = view.nbytes
+    data = np.empty(size + PADDING, dtype=np.uint8)
+    data[:size] = np.frombuffer(view, dtype=np.uint8)
+    data[size:] = 0
+    return data, size
+
+
 def read_file_features(data: np.ndarray, size: int, *,
                        sequence: bool = False) -> FileFeatures | None:
     """Return the features of GeoJSON bytes, or None for a document to read the exact way.

@@ -31,12 +31,18 @@ import shapely
 
 from rnsca.arrays import Ragged
 from rnsca.errors import InvalidGeometryError, ParseError, UnsupportedGeometryError
-from rnsca.io.geojson import from_geojson
-from rnsca.io.geojson_file import FileFeatures, padded_bytes, read_file_features
+from rnsca.io.geojson import from_geojson, loads
+from rnsca.io.geojson_file import (
+    FileFeatures,
+    padded_bytes,
+    padded_text,
+    read_file_features,
+)
 from rnsca.tiles.features import FeatureTable
 from rnsca.tiles.mercator import Crs
 
-__all__ = ["Features", "features_of_geojson", "read_features", "SUFFIXES"]
+__all__ = ["Features", "features_of_geojson", "features_of_geojson_text", "read_features",
+           "SUFFIXES"]
 
 _GEOJSON = (".geojson", ".json")
 _SEQUENCE = (".geojsons", ".geojsonl", ".geojsonseq", ".ndjson", ".jsonl")
@@ -111,6 +117,19 @@ def read_features(path: str | Path) -> Features:
         return _read_ogr(path)
     raise UnsupportedGeometryError(
         f"{path}: unknown suffix {suffix!r}; rnsca tiles reads {', '.join(SUFFIXES)}")
+
+
+def features_of_geojson_text(text: bytes | bytearray | memoryview) -> Features:
+    """Return the features of GeoJSON text (a FeatureCollection, Feature or Geometry).
+
+    As `read_features` reads a GeoJSON file: the compiled reader first, and a document
+    it does not take parsed by orjson (`rnsca.io.geojson.loads`: a `ParseError` names
+    the offset of text that is not JSON) and read by `features_of_geojson`.
+    """
+    read = read_file_features(*padded_text(text))
+    if read is not None:
+        return _of_file_features(read)
+    return features_of_geojson(loads(text))
 
 
 def features_of_geojson(document: Any) -> Features:

@@ -298,3 +298,30 @@ def test_scan_leaves_numbers_of_more_than_19_digits_near_a_tie_to_the_caller():
 def test_scan_does_not_take_nesting_deeper_than_it_tracks():
     text = b"[" * 1100 + b"]" * 1100
     assert scan(padded(text), len(text), False).status == NOT_TAKEN
+
+
+@pytest.mark.parametrize("text", [
+    '{"type":"FeatureCollection","features":[{"type":"Feature","id":3,"properties":{"a":1},'
+    '"geometry":{"type":"Polygon","coordinates":[' + SQUARE + "," + HOLE + "]}}]}",
+    '{"type":"LineString","coordinates":[[1,2],[3,4.5]]}',
+    '{"type":"Feature","properties":null,"geometry":{"type":"GeometryCollection",'
+    '"geometries":[{"type":"Point","coordinates":[1,2]}]}}',  # declined: the exact reader
+])
+def test_text_in_memory_is_read_as_a_file_is(text):
+    """`features_of_geojson_text` (POST /v1/tiles) gives what the exact reader gives."""
+    mine = sources.features_of_geojson_text(text.encode())
+    theirs = sources.features_of_geojson(orjson.loads(text))
+    assert_same_features(mine, theirs)
+    assert_same_features(sources.features_of_geojson_text(memoryview(text.encode())), theirs)
+
+
+@pytest.mark.parametrize("text", ['{"type":"Point","coordinates":[1,NaN]}', '{"type":',
+                                  '{"type":"Point","coordinates":[1]}', '[]'])
+def test_bad_text_in_memory_gets_the_exact_reader_s_error(text):
+    from rnsca.io.geojson import loads
+
+    with pytest.raises(RnscaError) as theirs:
+        sources.features_of_geojson(loads(text))
+    with pytest.raises(type(theirs.value), match=None) as mine:
+        sources.features_of_geojson_text(text.encode())
+    assert str(mine.value) == str(theirs.value)

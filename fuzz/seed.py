@@ -57,31 +57,31 @@ def main() -> None:
         _write("geojson_reader", text.encode())
         _write("geojson_reader", json.dumps({"type": "Feature", "properties": {"id": 1},
                                              "geometry": json.loads(text)}).encode())
-    _write("geojson_reader", (EXAMPLES / "polygons-with-holes.geojson").read_bytes())
-    for doc in ('{"type":"MultiPoint","coordinates":[[1,2,3],[1,2]]}',
-                '{"type":"LineString","coordinates":[[-5,5,1,2],[15,5,3,4]]}',
-                '{"type":"GeometryCollection","geometries":[{"type":"Point","coordinates":[]},'
-                '{"type":"MultiPolygon","coordinates":[[]]}]}',
-                '{"type":"LineString","coordinates":[[0,-0.0],[18446744073709551615,1e308]]}'):
-        _write("geojson_reader", doc.encode())
-    # The compiled file reader: documents as files hold them, and sequences ("S" first).
+    # Documents for both GeoJSON targets; the file reader's also as files hold them, and
+    # as sequences ("S" first).
+    example = (EXAMPLES / "polygons-with-holes.geojson").read_bytes()
+    documents = [example] + [doc.encode() for doc in (
+        '{"type":"MultiPoint","coordinates":[[1,2,3],[1,2]]}',
+        '{"type":"LineString","coordinates":[[-5,5,1,2],[15,5,3,4]]}',
+        '{"type":"GeometryCollection","geometries":[{"type":"Point","coordinates":[]},'
+        '{"type":"MultiPolygon","coordinates":[[]]}]}',
+        '{"type":"LineString","coordinates":[[0,-0.0],[18446744073709551615,1e308]]}')]
     features = [{"type": "Feature", "id": i, "properties": {"rank": i, "name": f"n{i}"},
                  "geometry": json.loads(shapely.to_geojson(shapely.from_wkt(r["input_wkt"])))}
                 for i, r in enumerate(records[:40])]
-    _write("geojson_file", json.dumps({"type": "FeatureCollection",
-                                       "features": features[:8]}).encode())
-    _write("geojson_file", json.dumps({"type": "FeatureCollection", "features": features},
-                                      indent=1).encode())
-    _write("geojson_file", b"S" + "\n".join(json.dumps(f) for f in features[8:16]).encode())
-    _write("geojson_file", b"S\x1e" + "\n\x1e".join(json.dumps(f["geometry"])
-                                                   for f in features[16:20]).encode())
-    _write("geojson_file", (EXAMPLES / "polygons-with-holes.geojson").read_bytes())
-    for doc in ('{"type":"MultiPoint","coordinates":[[1,2,3],[1,2]]}',
-                '{"type":"Feature","geometry":null,"properties":{"coordinates":[1,2]}}',
-                '{"type":"LineString","coordinates":[[0,-0.0],[1.7976931348623157e308,'
-                '-4.9e-324],[123456789012345678901234,0.1000000000000000055511151231257827]]}',
-                '{"type":"Polygon","coordinates":[[[0,0],[1,0],[1,1],[0,0]],[]]}'):
-        _write("geojson_file", doc.encode())
+    files = documents + [doc.encode() for doc in (
+        '{"type":"Feature","geometry":null,"properties":{"coordinates":[1,2]}}',
+        '{"type":"LineString","coordinates":[[0,-0.0],[1.7976931348623157e308,'
+        '-4.9e-324],[123456789012345678901234,0.1000000000000000055511151231257827]]}',
+        '{"type":"Polygon","coordinates":[[[0,0],[1,0],[1,1],[0,0]],[]]}')] + [
+        json.dumps({"type": "FeatureCollection", "features": features[:8]}).encode(),
+        json.dumps({"type": "FeatureCollection", "features": features}, indent=1).encode(),
+        b"S" + "\n".join(json.dumps(f) for f in features[8:16]).encode(),
+        b"S\x1e" + "\n\x1e".join(json.dumps(f["geometry"]) for f in features[16:20]).encode()]
+    for data in documents:
+        _write("geojson_reader", data)
+    for data in files:
+        _write("geojson_file", data)
     # MessagePack: "M", dim, k, sizes, then the bytes (float64, int and float32 numbers).
     _write("geojson_reader", b"M\x02\x01\x01\x91\x91\x92\xcb" + struct.pack(">d", 1.5)
            + b"\x01")

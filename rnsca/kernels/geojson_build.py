@@ -149,18 +149,30 @@ def _line_part(events, values, e, v, out, cursor, write):
 
 
 @inlined
+def _members(read_one, events, values, e, v, single, out, cursor, write):
+    """Read one member with `read_one` if `single`, else an array of them (a Multi*).
+
+    Return (next e or -1, next v).
+    """
+    if single:
+        return read_one(events, values, e, v, out, cursor, write)
+    if events[e] != OPEN:
+        return -1, v
+    e += 1
+    while e >= 0 and events[e] != CLOSE:
+        e, v = read_one(events, values, e, v, out, cursor, write)
+    if e >= 0:
+        e += 1
+    return e, v
+
+
+@inlined
 def _lines(events, values, e, v, kind, out, cursor, write):
     """Read a LineString or MultiLineString; return (next e or -1, next v)."""
-    if kind == _LINESTRING:
-        e, v = _line_part(events, values, e, v, out, cursor, write)
-    elif events[e] != OPEN:
-        return -1, v
-    else:
-        e += 1
-        while e >= 0 and events[e] != CLOSE:
-            e, v = _line_part(events, values, e, v, out, cursor, write)
-        if e >= 0:
-            e += 1
+    e, v = _members(_line_part, events, values, e, v, kind == _LINESTRING, out, cursor,
+                    write)
+    if e < 0:
+        return e, v
     cursor[_LINES] += 1
     if write:
         out.line_offsets[cursor[_LINES]] = cursor[_PARTS]
@@ -194,16 +206,9 @@ def _polygon(events, values, e, v, out, cursor, write):
 @inlined
 def _polygons(events, values, e, v, kind, out, cursor, write):
     """Read a Polygon or MultiPolygon; return (next e or -1, next v)."""
-    if kind == _POLYGON:
-        e, v = _polygon(events, values, e, v, out, cursor, write)
-    elif events[e] != OPEN:
-        return -1, v
-    else:
-        e += 1
-        while e >= 0 and events[e] != CLOSE:
-            e, v = _polygon(events, values, e, v, out, cursor, write)
-        if e >= 0:
-            e += 1
+    e, v = _members(_polygon, events, values, e, v, kind == _POLYGON, out, cursor, write)
+    if e < 0:
+        return e, v
     cursor[_SHAPES] += 1
     if write:
         out.shape_offsets[cursor[_SHAPES]] = cursor[_POLYGONS]

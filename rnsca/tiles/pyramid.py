@@ -21,11 +21,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rnsca.arrays import Ragged, exclusive_sum
+from rnsca.arrays import GeometryKind, Ragged, exclusive_sum
+from rnsca.backends.numba_cpu import core_options
+from rnsca.kernels import tile_polygons as TP
 from rnsca.kernels import tiles as K
+from rnsca.kernels.copies import copy_ranges
 from rnsca.many_windows import vertex_boxes
-from rnsca.options import Backend, Mode
+from rnsca.options import Backend, Mode, SegmentOptions
 from rnsca.ragged import clip_ragged
+from rnsca.window import Window
 
 __all__ = ["Level", "root", "cascade", "tile_windows", "wrapped"]
 
@@ -166,13 +170,17 @@ def cascade(level: Level, pad_units: float, mode: Mode, extent: int,
     inside = ((box[:, 0] >= window[:, 0]) & (box[:, 2] <= window[:, 2])
               & (box[:, 1] >= window[:, 1]) & (box[:, 3] <= window[:, 3]))
     crossing = np.flatnonzero(~inside)
-    taken = ragged.take(pairs[crossing])
-    approx = mode is Mode.APPROX and ragged.kind.dimension == 1
-    result = clip_ragged(ragged.kind, taken.coords, taken.offsets, window[crossing],
-                         backend=backend, mode=Mode.APPROX if approx else Mode.EXACT,
-                         tolerance=cell / extent if approx else None)
-    clipped = Ragged(ragged.kind, result.coords, result.offsets)
-    kept_pairs = crossing[result.source]
+    if (ragged.kind is GeometryKind.MULTIPOLYGON and not ragged.has_z
+            and Backend(backend) is Backend.NUMBA):
+        clipped, source = clip_polygon_pairs(ragged, pairs[crossing], window[crossing])
+    else:
+        taken = ragged.take(pairs[crossing])
+        approx = mode is Mode.APPROX and ragged.kind.dimension == 1
+        result = clip_ragged(ragged.kind, taken.coords, taken.offsets, window[crossing],
+                             backend=backend, mode=Mode.APPROX if approx else Mode.EXACT,
+                             tolerance=cell / extent if approx else None)
+        clipped, source = Ragged(ragged.kind, result.coords, result.offsets), result.source
+    kept_pairs = crossing[source]
     out_boxes = vertex_boxes(clipped.coords, clipped.vertex_offsets())
     if crossing.shape[0] < pairs.shape[0]:
         whole = np.flatnonzero(inside)
@@ -191,3 +199,67 @@ def cascade(level: Level, pad_units: float, mode: Mode, extent: int,
     kept = per_tile > 0
     return Level(zoom, clipped, level.source[pairs[kept_pairs]],
                  exclusive_sum(per_tile[kept]), child_x[kept], child_y[kept], out_boxes)
+
+
+def clip_polygon_pairs(polygons: Ragged, geometry: np.ndarray, windows: np.ndarray
+                       ) -> tuple[Ragged, np.ndarray]:
+    """Return ``polygons.take(geometry)`` clipped to `windows` (one row each) and the source.
+
+    What ``clip_ragged`` gives for the pairs (exact mode, the geometries with something
+    left, in pair order, and the pair each came from), computed from the parent's arrays:
+    the simple pairs by `rnsca.kernels.tile_polygons` (its bounds pass, then the clip into
+    bounded slots), the others gathered and clipped by ``clip_ragged``. `polygons` is a
+    2D MULTIPOLYGON array.
+    """
+    xy = polygons.coords
+    ring_offsets = polygons.offsets[0]
+    polygon_offsets, geometry_offsets = polygons.item_offsets()
+    geometry = np.ascontiguousarray(geometry, dtype=np.int64)
+    windows = np.ascontiguousarray(windows, dtype=np.float64)
+    n = geometry.shape[0]
+    status = np.empty(n, dtype=np.int8)
+    bounds = [np.empty(n, dtype=np.int64) for _ in range(3)]
+    TP.plan_pairs(xy, ring_offsets, polygon_offsets, geometry_offsets, geometry, windows,
+                  status, *bounds)
+    slots = [exclusive_sum(b) for b in bounds]
+    out = np.empty((int(slots[0][-1]), 2))
+    ring_len = np.empty(int(slots[1][-1]), dtype=np.int64)
+    poly_rings = np.empty(int(slots[2][-1]), dtype=np.int64)
+    counts = [np.empty(n, dtype=np.int64) for _ in range(3)]
+    # The segment core's options, as `clip_ragged` resolves them for exact polygons.
+    options = core_options(SegmentOptions.resolve(Window(0.0, 0.0, 1.0, 1.0),
+                                                  mode=Mode.EXACT))._replace(exact=True)
+    n_blocks = max(1, min(n, 256))
+    TP.write_pairs(xy, ring_offsets, polygon_offsets, geometry_offsets, geometry, windows,
+                   options, n_blocks, status, slots[0][:-1], slots[1][:-1], slots[2][:-1],
+                   out, ring_len, poly_rings, *counts)
+    fast = np.flatnonzero(status == TP.FAST)
+    fast_ragged = _compact(out, ring_len, poly_rings, [s[:-1][fast] for s in slots],
+                           [c[fast] for c in counts])
+    slow = np.flatnonzero(status == TP.FALLBACK)
+    taken = polygons.take(geometry[slow])
+    result = clip_ragged(polygons.kind, taken.coords, taken.offsets, windows[slow],
+                         mode=Mode.EXACT)
+    # Each pair's output, in pair order: the fast one's (if not empty) or the general's.
+    row = np.full(n, -1, dtype=np.int64)
+    kept = counts[2][fast] > 0
+    row[fast[kept]] = np.flatnonzero(kept)
+    row[slow[result.source]] = fast.shape[0] + np.arange(result.source.shape[0])
+    source = np.flatnonzero(row >= 0)
+    slow_ragged = Ragged(polygons.kind, result.coords, result.offsets)
+    return fast_ragged.concat_take(slow_ragged, row[source]), source
+
+
+def _compact(out: np.ndarray, ring_len: np.ndarray, poly_rings: np.ndarray,
+             starts: list[np.ndarray], counts: list[np.ndarray]) -> Ragged:
+    """Return the MULTIPOLYGON array of the pairs written into slots (`starts`, `counts`)."""
+    taken = [exclusive_sum(c) for c in counts]
+    coords = np.empty((int(taken[0][-1]), 2))
+    copy_ranges(out, starts[0], counts[0], taken[0][:-1], coords)
+    levels = []
+    for source, start, count, at in zip((ring_len, poly_rings), starts[1:], counts[1:],
+                                        taken[1:], strict=True):
+        gathered = np.empty((int(at[-1]), 1), dtype=np.int64)
+        copy_ranges(source.reshape(-1, 1), start, count, at[:-1], gathered)
+        levels.append(exclusive_sum(gathered[:, 0]))
+    return Ragged(GeometryKind.MULTIPOLYGON, coords, (levels[0], levels[1], taken[2]))

@@ -304,6 +304,17 @@ class ClipBackend(Protocol):
         """Return the valid polygons each POLYGON or MULTIPOLYGON gives inside its window."""
         ...
 
+    def clip_polygon_pairs(self, polygons: Ragged, geometry: np.ndarray, windows: np.ndarray,
+                           options: SegmentOptions) -> GeometryPieces:
+        """Return ``clip_polygons`` of ``polygons.take(geometry)``, row j against ``windows[j]``.
+
+        The tile cascade's operation (`rnsca.tiles.pyramid`): many (geometry, window)
+        pairs of one MULTIPOLYGON array, whose coordinates were checked when it was made.
+        A backend may clip simple pairs straight from `polygons` (no gather), with the
+        same output bit for bit. Output geometry j is pair j's (maybe empty).
+        """
+        ...
+
     def clip_paths(self, paths: PathArrays, windows: WindowTable,
                    options: PathOptions) -> PathPieces:
         """Return each path clipped to its window (curves kept or flattened, strokes or fills).

@@ -32,7 +32,9 @@ from rnsca.kernels import polygons as PG
 from rnsca.kernels import polylines as PL
 from rnsca.kernels import records as R
 from rnsca.kernels import segments as K
+from rnsca.kernels import tile_polygons as TP
 from rnsca.kernels import windows as WK
+from rnsca.kernels.copies import copy_ranges
 from rnsca.kernels.validate import all_finite
 from rnsca.many_windows import assign
 from rnsca.options import (
@@ -233,6 +235,55 @@ class NumbaBackend:
             raise AssertionError(f"the line kernel found a non-finite coordinate in part "
                                  f"{bad_part} that the full check did not")
         return GeometryPieces(out_xy, out_z, (chain_offsets, geometry_chains), counters)
+
+    def clip_polygon_pairs(self, polygons: Ragged, geometry: np.ndarray, windows: np.ndarray,
+                           options: SegmentOptions) -> GeometryPieces:
+        """Return each (geometry, window) pair clipped; see `ClipBackend.clip_polygon_pairs`.
+
+        The simple pairs of a 2D array (rings inside, outside, or a shell crossing the
+        boundary at isolated points: `rnsca.kernels.tile_polygons`) are clipped from
+        `polygons` by index, into slots a first pass bounds; the others (and 3D input)
+        are gathered and clipped by `clip_polygons`. The same output bit for bit
+        (`tests/property/test_tiles_polygon_pairs.py`). At zoom 8 of the polygons
+        benchmark 250k of 291k pairs are simple, clipped at about 50 ns a vertex against
+        160-190 by the general kernel.
+        """
+        geometry = np.ascontiguousarray(geometry, dtype=np.int64)
+        windows = np.ascontiguousarray(windows, dtype=np.float64)
+        n = geometry.shape[0]
+        if polygons.has_z:
+            return self.clip_polygons(polygons.take(geometry),
+                                      WindowTable(windows, np.arange(n, dtype=np.int64)),
+                                      options)
+        polygon_offsets, geometry_offsets = polygons.item_offsets()
+        src = TP.Parent(polygons.coords, polygons.offsets[0], polygon_offsets,
+                        geometry_offsets)
+        status = np.empty(n, dtype=np.int8)
+        bounds = TP.PairRows(*(np.empty(n, dtype=np.int64) for _ in range(3)))
+        TP.plan_pairs(*src, geometry, windows, status, *bounds)
+        slots = [exclusive_sum(b) for b in bounds]
+        written = TP.Written(np.empty((int(slots[0][-1]), 2)),
+                             np.empty(int(slots[1][-1]), dtype=np.int64),
+                             np.empty(int(slots[2][-1]), dtype=np.int64))
+        counts = TP.PairRows(*(np.empty(n, dtype=np.int64) for _ in range(3)))
+        core = core_options(options)._replace(exact=True)
+        TP.write_pairs(src, geometry, windows, core, max(1, min(n, 256)), status,
+                       TP.PairRows(*(s[:-1] for s in slots)), written, counts)
+        fast = np.flatnonzero(status == TP.FAST)
+        fast_ragged = _compact(written, [s[:-1][fast] for s in slots],
+                               [c[fast] for c in counts])
+        slow = np.flatnonzero(status == TP.FALLBACK)
+        pieces = self.clip_polygons(polygons.take(geometry[slow]),
+                                    WindowTable(windows[slow],
+                                                np.arange(slow.shape[0], dtype=np.int64)),
+                                    options)
+        slow_ragged = Ragged(GeometryKind.MULTIPOLYGON, pieces.xy, pieces.offsets)
+        # Each pair's output in pair order: its fast geometry or its general one.
+        row = np.empty(n, dtype=np.int64)
+        row[fast] = np.arange(fast.shape[0], dtype=np.int64)
+        row[slow] = fast.shape[0] + np.arange(slow.shape[0], dtype=np.int64)
+        merged = fast_ragged.concat_take(slow_ragged, row)
+        return GeometryPieces(merged.coords, np.empty(0), merged.offsets, pieces.counters)
 
     def clip_polygons(self, polygons: Ragged, windows: WindowTable, options: SegmentOptions,
                       *, device: DevicePolygons | None = None) -> GeometryPieces:
@@ -549,3 +600,17 @@ def _block_size(n_items: int) -> int:
     """Return items per prange block: about 64 blocks for load balance, 1..1024 items each."""
     return max(1, min(1024, -(-n_items // 64)))
 
+
+def _compact(written: TP.Written, starts: list[np.ndarray], counts: list[np.ndarray]
+             ) -> Ragged:
+    """Return the MULTIPOLYGON array of the pairs written into slots (`starts`, `counts`)."""
+    taken = [exclusive_sum(c) for c in counts]
+    coords = np.empty((int(taken[0][-1]), 2))
+    copy_ranges(written.out, starts[0], counts[0], taken[0][:-1], coords)
+    levels = []
+    for source, start, count, at in zip((written.ring_len, written.poly_rings), starts[1:],
+                                        counts[1:], taken[1:], strict=True):
+        gathered = np.empty((int(at[-1]), 1), dtype=np.int64)
+        copy_ranges(source.reshape(-1, 1), start, count, at[:-1], gathered)
+        levels.append(exclusive_sum(gathered[:, 0]))
+    return Ragged(GeometryKind.MULTIPOLYGON, coords, (levels[0], levels[1], taken[2]))

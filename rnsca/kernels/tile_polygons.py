@@ -54,10 +54,10 @@ from rnsca.kernels.polygons import (
     polygon_class_of,
     signed_area,
 )
-from rnsca.kernels.records import Window
-from rnsca.kernels.segments import rnsca_segment, segment_stack
+from rnsca.kernels.records import CoreOptions, Window
+from rnsca.kernels.segments import SegmentStack, rnsca_segment, segment_stack
 
-__all__ = ["FAST", "FALLBACK", "plan_pairs", "write_pairs"]
+__all__ = ["FAST", "FALLBACK", "Parent", "PairRows", "Written", "plan_pairs", "write_pairs"]
 
 #: A pair's status: clipped here, or left to the general clip.
 FAST, FALLBACK = 0, 1
@@ -191,6 +191,39 @@ def _corner(edge, window):
     if edge == 2:
         return xmax, ymax
     return xmin, ymax
+
+
+class Parent(NamedTuple):
+    """The parent level's polygons (a 2D MULTIPOLYGON array), read by geometry index."""
+
+    xy: np.ndarray
+    ring_offsets: np.ndarray
+    polygon_offsets: np.ndarray
+    geometry_offsets: np.ndarray
+
+
+class Written(NamedTuple):
+    """Where the pairs are written: vertices, each ring's length, each polygon's rings."""
+
+    out: np.ndarray
+    ring_len: np.ndarray
+    poly_rings: np.ndarray
+
+
+class PairRows(NamedTuple):
+    """Per pair: a first row (slot) or a count of vertices, rings and polygons."""
+
+    vertices: np.ndarray
+    rings: np.ndarray
+    polygons: np.ndarray
+
+
+class Core(NamedTuple):
+    """The segment core's options (`CoreOptions`), its stack and its counters (not kept)."""
+
+    options: CoreOptions
+    stack: SegmentStack
+    st: np.ndarray
 
 
 class Scratch(NamedTuple):
@@ -357,8 +390,8 @@ def _place_holes(out, start, v, ring_len, r, poly_rings, p, n_rings, sc):
 
 
 @borrowing
-def _window_if_covered(xy, ring_offsets, r_begin, r_end, window, any_outside, sc, out, v,
-                       ring_len, r, poly_rings, p):
+def _window_if_covered(xy, ring_offsets, r_begin, r_end, window, any_outside, sc, w, v, r,
+                       p):
     """Write the window if its centre lies in the shell and in no hole outside it.
 
     `polygons._add_window_if_covered`, for a polygon none of whose rings is cut; the
@@ -381,11 +414,12 @@ def _window_if_covered(xy, ring_offsets, r_begin, r_end, window, any_outside, sc
     start = v
     for corner in range(4):
         x, y = _corner(corner, window)
-        v = _put(out, start, v, x, y)
-    v = _close(out, start, v)
-    if v - start < 4 or signed_area(out, start, v - 1) <= 0.0:
+        v = _put(w.out, start, v, x, y)
+    v = _close(w.out, start, v)
+    if v - start < 4 or signed_area(w.out, start, v - 1) <= 0.0:
         return False, start, r, p
-    v, r, p = _place_holes(out, start, v, ring_len, r, poly_rings, p, r_end - r_begin, sc)
+    v, r, p = _place_holes(w.out, start, v, w.ring_len, r, w.poly_rings, p, r_end - r_begin,
+                           sc)
     return True, v, r, p
 
 
@@ -538,8 +572,7 @@ def _put_chain(xy, first, last, k, n_cross, reverse, sc, out, start, v):
 
 
 @borrowing
-def _clip_simple(xy, ring_offsets, r_begin, r_end, window, options, stack, st, sc, out, v,
-                 ring_len, r, poly_rings, p, generation):
+def _clip_simple(xy, ring_offsets, r_begin, r_end, window, core, sc, w, v, r, p, generation):
     """Clip a cut polygon (class AMBIGUOUS) whose rings passed `_scan_ring`.
 
     Returns ``(ok, v, r, p)``; ``ok`` False if it is not simple after all (its pair
@@ -555,14 +588,14 @@ def _clip_simple(xy, ring_offsets, r_begin, r_end, window, options, stack, st, s
     ok, any_outside = _sort_holes(xy, ring_offsets, r_begin, r_end, window, sc)
     if not ok:
         return False, v, r, p
-    n_cross = _find_crossings(xy, first, last, window, options, stack, st, sc)
+    n_cross = _find_crossings(xy, first, last, window, core.options, core.stack, core.st, sc)
     if n_cross < 0:
         return False, v, r, p
     if n_cross == 0:
         if _scan_ring(xy, first, last, window)[0] > 0:
             return False, v, r, p  # never: the shell would be inside, class INSIDE
         return _window_if_covered(xy, ring_offsets, r_begin, r_end, window, any_outside, sc,
-                                  out, v, ring_len, r, poly_rings, p)
+                                  w, v, r, p)
     if _has_repeat(xy, first, last, sc, generation):
         return False, v, r, p
     n_chains = _link_chains(n_cross, reverse, window, sc)
@@ -578,7 +611,7 @@ def _clip_simple(xy, ring_offsets, r_begin, r_end, window, options, stack, st, s
         k = k0
         while True:
             sc.visited[k] = True
-            v = _put_chain(xy, first, last, k, n_cross, reverse, sc, out, start, v)
+            v = _put_chain(xy, first, last, k, n_cross, reverse, sc, w.out, start, v)
             nxt = sc.following[k]
             # The corners from chain k's exit to chain nxt's entry (`_walk_corners`).
             exit_edge = sc.edge[2 * k + 1]
@@ -587,7 +620,7 @@ def _clip_simple(xy, ring_offsets, r_begin, r_end, window, options, stack, st, s
                 e = exit_edge
                 while True:
                     x, y = _corner((e + 1) % 4, window)
-                    v = _put(out, start, v, x, y)
+                    v = _put(w.out, start, v, x, y)
                     e = (e + 1) % 4
                     if e == entry_edge:
                         break
@@ -596,39 +629,39 @@ def _clip_simple(xy, ring_offsets, r_begin, r_end, window, options, stack, st, s
             if sc.visited[nxt]:
                 return False, v, r, p
             k = nxt
-        v = _close(out, start, v)
+        v = _close(w.out, start, v)
         if v - start < 4:
             v = start
             continue
-        piece_area = signed_area(out, start, v - 1)
+        piece_area = signed_area(w.out, start, v - 1)
         if piece_area < 0.0:
             return False, v, r, p  # a piece turned hole
         if piece_area == 0.0:
             v = start
             continue
-        v, r, p = _place_holes(out, start, v, ring_len, r, poly_rings, p, n_rings, sc)
+        v, r, p = _place_holes(w.out, start, v, w.ring_len, r, w.poly_rings, p, n_rings, sc)
     return True, v, r, p
 
 
 @borrowing
-def _write_pair(xy, ring_offsets, polygon_offsets, geometry_offsets, g, window, options,
-                stack, st, sc, out, v, ring_len, r, poly_rings, p, generation):
-    """Write geometry g clipped to `window` from ``out[v]``, ``ring_len[r]``, ``poly_rings[p]``.
+def _write_pair(src, g, window, core, sc, w, v, r, p, generation):
+    """Write geometry g of `src` clipped to `window` at rows v, r, p of `w`.
 
-    Returns ``(ok, v, r, p)``.
+    From ``w.out[v]``, ``w.ring_len[r]`` and ``w.poly_rings[p]``. Returns
+    ``(ok, v, r, p)``.
     """
-    for q in range(geometry_offsets[g], geometry_offsets[g + 1]):
-        r_begin = polygon_offsets[q]
-        r_end = polygon_offsets[q + 1]
-        cls = polygon_class_of(xy, ring_offsets, r_begin, r_end, window)
+    for q in range(src.geometry_offsets[g], src.geometry_offsets[g + 1]):
+        r_begin = src.polygon_offsets[q]
+        r_end = src.polygon_offsets[q + 1]
+        cls = polygon_class_of(src.xy, src.ring_offsets, r_begin, r_end, window)
         if cls == _INSIDE:
-            v, r = _copy_inside(xy, ring_offsets, r_begin, r_end, out, v, ring_len, r)
-            poly_rings[p] = r_end - r_begin
+            v, r = _copy_inside(src.xy, src.ring_offsets, r_begin, r_end, w.out, v,
+                                w.ring_len, r)
+            w.poly_rings[p] = r_end - r_begin
             p += 1
         elif cls == AMBIGUOUS:
-            ok, v, r, p = _clip_simple(xy, ring_offsets, r_begin, r_end, window, options,
-                                       stack, st, sc, out, v, ring_len, r, poly_rings, p,
-                                       generation + q)
+            ok, v, r, p = _clip_simple(src.xy, src.ring_offsets, r_begin, r_end, window, core,
+                                       sc, w, v, r, p, generation + q)
             if not ok:
                 return False, v, r, p
     return True, v, r, p
@@ -666,53 +699,46 @@ def _block_scratch(ring_offsets, polygon_offsets, geometry_offsets, pair_geometr
 
 
 @scalar
-def _write_block(blk, n_blocks, xy, ring_offsets, polygon_offsets, geometry_offsets,
-                 pair_geometry, windows, options, status, vertex_slot, ring_slot, polygon_slot,
-                 out, ring_len, poly_rings, n_vertices, n_rings, n_polygons):
+def _write_block(blk, n_blocks, src, pair_geometry, windows, options, status, slot, w, count):
     """Clip the fast pairs of block `blk` (the body of `write_pairs`)."""
     n_pairs = pair_geometry.shape[0]
     lo = blk * n_pairs // n_blocks
     hi = (blk + 1) * n_pairs // n_blocks
-    sc = _block_scratch(ring_offsets, polygon_offsets, geometry_offsets, pair_geometry, status,
-                        lo, hi)
-    stack = segment_stack()
-    st = np.zeros(C.WIDTH, dtype=np.int64)  # the segment core's counters, not kept
+    sc = _block_scratch(src.ring_offsets, src.polygon_offsets, src.geometry_offsets,
+                        pair_geometry, status, lo, hi)
+    # The segment core's counters are not kept.
+    core = Core(options, segment_stack(), np.zeros(C.WIDTH, dtype=np.int64))
     for j in range(lo, hi):
         if status[j] != FAST:
             continue
         window = Window(windows[j, 0], windows[j, 1], windows[j, 2], windows[j, 3])
         # The hash table's generation: one per polygon (pairs of one geometry repeat
         # its polygons' indices, so the pair's position comes first).
-        ok, v, r, p = _write_pair(
-            xy, ring_offsets, polygon_offsets, geometry_offsets, pair_geometry[j], window,
-            options, stack, st, sc, out, vertex_slot[j], ring_len, ring_slot[j], poly_rings,
-            polygon_slot[j], (j - lo) * (polygon_offsets.shape[0]))
+        ok, v, r, p = _write_pair(src, pair_geometry[j], window, core, sc, w,
+                                  slot.vertices[j], slot.rings[j], slot.polygons[j],
+                                  (j - lo) * (src.polygon_offsets.shape[0]))
         if not ok:
             status[j] = FALLBACK
-            v = vertex_slot[j]
-            r = ring_slot[j]
-            p = polygon_slot[j]
-        n_vertices[j] = v - vertex_slot[j]
-        n_rings[j] = r - ring_slot[j]
-        n_polygons[j] = p - polygon_slot[j]
+            v = slot.vertices[j]
+            r = slot.rings[j]
+            p = slot.polygons[j]
+        count.vertices[j] = v - slot.vertices[j]
+        count.rings[j] = r - slot.rings[j]
+        count.polygons[j] = p - slot.polygons[j]
 
 
 @parallel
-def write_pairs(xy, ring_offsets, polygon_offsets, geometry_offsets, pair_geometry, windows,
-                options, n_blocks, status, vertex_slot, ring_slot, polygon_slot, out,
-                ring_len, poly_rings, n_vertices, n_rings, n_polygons):
+def write_pairs(src, pair_geometry, windows, options, n_blocks, status, slot, w, count):
     """Clip the `FAST` pairs into their slots; a pair found not simple becomes `FALLBACK`.
 
-    Pair j writes its vertices from ``out[vertex_slot[j]]``, its rings' lengths from
-    ``ring_len[ring_slot[j]]`` and its polygons' ring counts from
-    ``poly_rings[polygon_slot[j]]`` (slots from `plan_pairs`' bounds), and how many of
-    each it wrote to ``n_vertices[j]``, ``n_rings[j]``, ``n_polygons[j]`` (0 for a
-    fallback pair). `options` is the segment core's (`CoreOptions`, exact), as the
-    general clip gets them. One prange iteration per block of pairs, each with its own
-    scratch.
+    `src` is the parent's polygons (`Parent`). Pair j writes its vertices from
+    ``w.out[slot.vertices[j]]``, its rings' lengths from ``w.ring_len[slot.rings[j]]``
+    and its polygons' ring counts from ``w.poly_rings[slot.polygons[j]]`` (`Written`;
+    slots, `PairRows`, from `plan_pairs`' bounds), and how many of each it wrote to
+    ``count`` (`PairRows`; 0 for a fallback pair). `options` is the segment core's
+    (`CoreOptions`, exact), as the general clip gets them. One prange iteration per block
+    of pairs, each with its own scratch.
     """
     for blk in prange(n_blocks):
-        _write_block(np.int64(blk), n_blocks, xy, ring_offsets, polygon_offsets,
-                     geometry_offsets, pair_geometry, windows, options, status, vertex_slot,
-                     ring_slot, polygon_slot, out, ring_len, poly_rings, n_vertices, n_rings,
-                     n_polygons)
+        _write_block(np.int64(blk), n_blocks, src, pair_geometry, windows, options, status,
+                     slot, w, count)

@@ -22,16 +22,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from rnsca.arrays import GeometryKind, Ragged, exclusive_sum
-from rnsca.backends.numba_cpu import core_options
-from rnsca.kernels import tile_polygons as TP
 from rnsca.kernels import tiles as K
-from rnsca.kernels.copies import copy_ranges
 from rnsca.many_windows import vertex_boxes
-from rnsca.options import Backend, Mode, SegmentOptions
-from rnsca.ragged import clip_ragged
-from rnsca.window import Window
+from rnsca.options import Backend, Mode
+from rnsca.ragged import clip_ragged, resolve_geometry_options
+from rnsca.window import WindowTable
 
-__all__ = ["Level", "root", "cascade", "tile_windows", "wrapped"]
+__all__ = ["Level", "root", "cascade", "clip_polygon_pairs", "tile_windows", "wrapped"]
 
 
 @dataclass(frozen=True, slots=True, eq=False)
@@ -170,9 +167,9 @@ def cascade(level: Level, pad_units: float, mode: Mode, extent: int,
     inside = ((box[:, 0] >= window[:, 0]) & (box[:, 2] <= window[:, 2])
               & (box[:, 1] >= window[:, 1]) & (box[:, 3] <= window[:, 3]))
     crossing = np.flatnonzero(~inside)
-    if (ragged.kind is GeometryKind.MULTIPOLYGON and not ragged.has_z
-            and Backend(backend) is Backend.NUMBA):
-        clipped, source = clip_polygon_pairs(ragged, pairs[crossing], window[crossing])
+    if ragged.kind.dimension == 2:
+        clipped, source = clip_polygon_pairs(ragged, pairs[crossing], window[crossing],
+                                              backend)
     else:
         taken = ragged.take(pairs[crossing])
         approx = mode is Mode.APPROX and ragged.kind.dimension == 1
@@ -201,65 +198,20 @@ def cascade(level: Level, pad_units: float, mode: Mode, extent: int,
                  exclusive_sum(per_tile[kept]), child_x[kept], child_y[kept], out_boxes)
 
 
-def clip_polygon_pairs(polygons: Ragged, geometry: np.ndarray, windows: np.ndarray
-                       ) -> tuple[Ragged, np.ndarray]:
-    """Return ``polygons.take(geometry)`` clipped to `windows` (one row each) and the source.
+def clip_polygon_pairs(polygons: Ragged, geometry: np.ndarray, windows: np.ndarray,
+                       backend: Backend | str = Backend.NUMBA) -> tuple[Ragged, np.ndarray]:
+    """Return the pairs' polygons clipped (exact) and the pair of each non-empty output.
 
-    What ``clip_ragged`` gives for the pairs (exact mode, the geometries with something
-    left, in pair order, and the pair each came from), computed from the parent's arrays:
-    the simple pairs by `rnsca.kernels.tile_polygons` (its bounds pass, then the clip into
-    bounded slots), the others gathered and clipped by ``clip_ragged``. `polygons` is a
-    2D MULTIPOLYGON array.
+    What ``clip_ragged`` gives for ``polygons.take(geometry)`` against one window each,
+    by the backend's pair operation (`ClipBackend.clip_polygon_pairs`: the Numba backend
+    clips the simple pairs from the parent's arrays, with no gather).
     """
-    xy = polygons.coords
-    ring_offsets = polygons.offsets[0]
-    polygon_offsets, geometry_offsets = polygons.item_offsets()
-    geometry = np.ascontiguousarray(geometry, dtype=np.int64)
-    windows = np.ascontiguousarray(windows, dtype=np.float64)
-    n = geometry.shape[0]
-    status = np.empty(n, dtype=np.int8)
-    bounds = [np.empty(n, dtype=np.int64) for _ in range(3)]
-    TP.plan_pairs(xy, ring_offsets, polygon_offsets, geometry_offsets, geometry, windows,
-                  status, *bounds)
-    slots = [exclusive_sum(b) for b in bounds]
-    out = np.empty((int(slots[0][-1]), 2))
-    ring_len = np.empty(int(slots[1][-1]), dtype=np.int64)
-    poly_rings = np.empty(int(slots[2][-1]), dtype=np.int64)
-    counts = [np.empty(n, dtype=np.int64) for _ in range(3)]
-    # The segment core's options, as `clip_ragged` resolves them for exact polygons.
-    options = core_options(SegmentOptions.resolve(Window(0.0, 0.0, 1.0, 1.0),
-                                                  mode=Mode.EXACT))._replace(exact=True)
-    n_blocks = max(1, min(n, 256))
-    TP.write_pairs(xy, ring_offsets, polygon_offsets, geometry_offsets, geometry, windows,
-                   options, n_blocks, status, slots[0][:-1], slots[1][:-1], slots[2][:-1],
-                   out, ring_len, poly_rings, *counts)
-    fast = np.flatnonzero(status == TP.FAST)
-    fast_ragged = _compact(out, ring_len, poly_rings, [s[:-1][fast] for s in slots],
-                           [c[fast] for c in counts])
-    slow = np.flatnonzero(status == TP.FALLBACK)
-    taken = polygons.take(geometry[slow])
-    result = clip_ragged(polygons.kind, taken.coords, taken.offsets, windows[slow],
-                         mode=Mode.EXACT)
-    # Each pair's output, in pair order: the fast one's (if not empty) or the general's.
-    row = np.full(n, -1, dtype=np.int64)
-    kept = counts[2][fast] > 0
-    row[fast[kept]] = np.flatnonzero(kept)
-    row[slow[result.source]] = fast.shape[0] + np.arange(result.source.shape[0])
-    source = np.flatnonzero(row >= 0)
-    slow_ragged = Ragged(polygons.kind, result.coords, result.offsets)
-    return fast_ragged.concat_take(slow_ragged, row[source]), source
-
-
-def _compact(out: np.ndarray, ring_len: np.ndarray, poly_rings: np.ndarray,
-             starts: list[np.ndarray], counts: list[np.ndarray]) -> Ragged:
-    """Return the MULTIPOLYGON array of the pairs written into slots (`starts`, `counts`)."""
-    taken = [exclusive_sum(c) for c in counts]
-    coords = np.empty((int(taken[0][-1]), 2))
-    copy_ranges(out, starts[0], counts[0], taken[0][:-1], coords)
-    levels = []
-    for source, start, count, at in zip((ring_len, poly_rings), starts[1:], counts[1:],
-                                        taken[1:], strict=True):
-        gathered = np.empty((int(at[-1]), 1), dtype=np.int64)
-        copy_ranges(source.reshape(-1, 1), start, count, at[:-1], gathered)
-        levels.append(exclusive_sum(gathered[:, 0]))
-    return Ragged(GeometryKind.MULTIPOLYGON, coords, (levels[0], levels[1], taken[2]))
+    table = WindowTable(windows, np.arange(geometry.shape[0], dtype=np.int64))
+    options, _, engine = resolve_geometry_options(table, 2, mode=Mode.EXACT, backend=backend,
+                                                  size=polygons.coords.shape[0])
+    pieces = engine.clip_polygon_pairs(polygons, geometry, windows, options)
+    rings, polygon_rings, pair_polygons = pieces.offsets
+    source = np.flatnonzero(np.diff(pair_polygons) > 0)
+    kept = np.append(pair_polygons[source], pair_polygons[-1])
+    coords = pieces.xy if pieces.z.shape[0] == 0 else np.column_stack([pieces.xy, pieces.z])
+    return Ragged(GeometryKind.MULTIPOLYGON, coords, (rings, polygon_rings, kept)), source

@@ -11,6 +11,7 @@ is Shapely's (``clip_by_rect``).
 """
 
 import numpy as np
+import pytest
 import shapely
 from hypothesis import given, settings
 from hypothesis import strategies as st
@@ -192,3 +193,24 @@ def test_a_vertex_on_an_edge_line_falls_back():
     windows = np.array([(0.0, 0.5, 4.5, 4.5)])
     assert _fast_share(ragged, np.array([0]), windows)[0] == TP.FALLBACK
     _check(ragged, np.array([0]), windows)
+
+
+@pytest.mark.opencl
+def test_every_backend_clips_the_pairs_alike(opencl):
+    """The pair operation is every backend's (`ClipBackend.clip_polygon_pairs`): OpenCL
+    gathers the pairs and clips them whole, with the same output as Numba's fast path."""
+    crossing = shapely.Polygon([(-1, 1), (3, 1), (3, 3), (-1, 3)], [[(1, 1.5), (2, 1.5),
+                                                                     (2, 2.5), (1, 2.5)]])
+    star = shapely.Polygon([(2 + (3 if k % 2 else 1) * np.cos(k * np.pi / 6),
+                             2 + (3 if k % 2 else 1) * np.sin(k * np.pi / 6))
+                            for k in range(12)])
+    ragged = _as_multipolygons([crossing, star])
+    geometry = np.array([0, 1, 1, 0])
+    windows = np.array([(0.5, 0.5, 4.5, 4.5), (0.5, 0.5, 4.5, 4.5), (1.5, -1.0, 6.0, 2.5),
+                        (-2.0, 2.0, 1.0, 5.0)])
+    a, a_source = clip_polygon_pairs(ragged, geometry, windows, "numba")
+    b, b_source = clip_polygon_pairs(ragged, geometry, windows, "opencl")
+    assert np.array_equal(a_source, b_source)
+    assert a.coords.tobytes() == b.coords.tobytes()
+    for mine, theirs in zip(a.offsets, b.offsets, strict=True):
+        assert np.array_equal(mine, theirs)

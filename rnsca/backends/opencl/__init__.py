@@ -638,6 +638,17 @@ class OpenCLBackend:
             chain_offsets, group_offsets(chains_per_part, geometry_parts)), counters,
             device_stats)
 
+    def clip_polygon_pairs(self, polygons: Ragged, geometry: np.ndarray, windows: np.ndarray,
+                           options: SegmentOptions) -> GeometryPieces:
+        """Return each (geometry, window) pair clipped; see `ClipBackend.clip_polygon_pairs`.
+
+        The pairs' geometries are gathered and clipped by `clip_polygons`, one window each.
+        """
+        n = geometry.shape[0]
+        return self.clip_polygons(polygons.take(geometry),
+                                  WindowTable(np.ascontiguousarray(windows, dtype=np.float64),
+                                              np.arange(n, dtype=np.int64)), options)
+
     def clip_polygons(self, polygons: Ragged, windows: WindowTable,
                       options: SegmentOptions) -> GeometryPieces:
         """Return the output polygons of each geometry; see `ClipBackend.clip_polygons`.

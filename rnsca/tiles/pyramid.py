@@ -206,6 +206,8 @@ def clip_polygon_pairs(polygons: Ragged, geometry: np.ndarray, windows: np.ndarr
     by the backend's pair operation (`ClipBackend.clip_polygon_pairs`: the Numba backend
     clips the simple pairs from the parent's arrays, with no gather).
     """
+    if geometry.shape[0] == 0:  # nothing crosses (lines only: no polygon kernel to load)
+        return polygons.take(geometry), np.empty(0, dtype=np.int64)
     table = WindowTable(windows, np.arange(geometry.shape[0], dtype=np.int64))
     options, _, engine = resolve_geometry_options(table, 2, mode=Mode.EXACT, backend=backend,
                                                   size=polygons.coords.shape[0])

@@ -149,33 +149,30 @@ def _line_part(events, values, e, v, out, cursor, write):
 
 
 @inlined
-def _members(read_one, events, values, e, v, single, out, cursor, write):
-    """Read one member with `read_one` if `single`, else an array of them (a Multi*).
+def _geometry(read_one, single, events, values, e, v, out, cursor, write, slot, offsets,
+              inner):
+    """Read one geometry: one member with `read_one` if `single`, else an array of them.
 
-    Return (next e or -1, next v).
+    A LineString or MultiLineString (`_line_part`), a Polygon or MultiPolygon
+    (`_polygon`). The geometry is counted at ``cursor[slot]`` and, if `write`, its end
+    written to `offsets`: ``cursor[inner]``, its members' count so far. Return (next e or
+    -1, next v).
     """
     if single:
-        return read_one(events, values, e, v, out, cursor, write)
-    if events[e] != OPEN:
-        return -1, v
-    e += 1
-    while e >= 0 and events[e] != CLOSE:
         e, v = read_one(events, values, e, v, out, cursor, write)
-    if e >= 0:
+    elif events[e] != OPEN:
+        return -1, v
+    else:
         e += 1
-    return e, v
-
-
-@inlined
-def _lines(events, values, e, v, kind, out, cursor, write):
-    """Read a LineString or MultiLineString; return (next e or -1, next v)."""
-    e, v = _members(_line_part, events, values, e, v, kind == _LINESTRING, out, cursor,
-                    write)
+        while e >= 0 and events[e] != CLOSE:
+            e, v = read_one(events, values, e, v, out, cursor, write)
+        if e >= 0:
+            e += 1
     if e < 0:
         return e, v
-    cursor[_LINES] += 1
+    cursor[slot] += 1
     if write:
-        out.line_offsets[cursor[_LINES]] = cursor[_PARTS]
+        offsets[cursor[slot]] = cursor[inner]
     return e, v
 
 
@@ -201,18 +198,6 @@ def _polygon(events, values, e, v, out, cursor, write):
         if write:
             out.polygon_offsets[cursor[_POLYGONS]] = cursor[_RINGS]
     return e + 1, v
-
-
-@inlined
-def _polygons(events, values, e, v, kind, out, cursor, write):
-    """Read a Polygon or MultiPolygon; return (next e or -1, next v)."""
-    e, v = _members(_polygon, events, values, e, v, kind == _POLYGON, out, cursor, write)
-    if e < 0:
-        return e, v
-    cursor[_SHAPES] += 1
-    if write:
-        out.shape_offsets[cursor[_SHAPES]] = cursor[_POLYGONS]
-    return e, v
 
 
 @scalar
@@ -249,9 +234,11 @@ def build(events, values, types, out, cursor, write):
         if kind <= _MULTIPOINT:
             e, v = _points(events, values, e, v, kind, out, cursor, write)
         elif kind <= _MULTILINESTRING:
-            e, v = _lines(events, values, e, v, kind, out, cursor, write)
+            e, v = _geometry(_line_part, kind == _LINESTRING, events, values, e, v, out,
+                             cursor, write, _LINES, out.line_offsets, _PARTS)
         else:
-            e, v = _polygons(events, values, e, v, kind, out, cursor, write)
+            e, v = _geometry(_polygon, kind == _POLYGON, events, values, e, v, out,
+                             cursor, write, _SHAPES, out.shape_offsets, _POLYGONS)
         if e < 0:
             return REFUSED
     if e != events.shape[0] or v != values.shape[0]:

@@ -12,9 +12,12 @@ the three shapes the kernels know: points, lines (parts) and polygons (rings).
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+import os
+from collections.abc import Callable, Sequence
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from enum import Enum
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -32,7 +35,7 @@ from rnsca.kernels.validate import (
 from rnsca.kernels.windows import vertex_boxes
 
 __all__ = ["GeometryKind", "Ragged", "PathArrays", "OUTPUT_KIND", "exclusive_sum",
-           "geometry_error", "group_offsets", "to_shapely"]
+           "geometry_error", "group_offsets", "in_threads", "to_shapely"]
 
 
 class GeometryKind(str, Enum):
@@ -785,3 +788,21 @@ def _small_ints(value: npt.ArrayLike, dtype: npt.DTypeLike, name: str,
     elif array.dtype != np.bool_ and not np.isin(array, allowed).all():
         raise InvalidGeometryError(f"{name} values must be in {allowed}")
     return np.ascontiguousarray(array, dtype=dtype)
+
+
+def in_threads(function: Callable[..., np.ndarray], rows: np.ndarray, *, min_rows: int = 1024,
+               **options: Any) -> np.ndarray:
+    """Return ``function(rows, **options)``, computed on chunks of rows in threads.
+
+    For a vectorised call that releases the GIL (NumPy's ufuncs, Shapely's GEOS calls)
+    and whose rows do not depend on each other: one chunk per core (at most 8), the
+    results concatenated, the same values as one call. Fewer than `min_rows` rows (or
+    one core): one call in this thread.
+    """
+    workers = min(os.cpu_count() or 1, 8)
+    if workers == 1 or rows.shape[0] < min_rows:
+        return function(rows, **options)
+    chunks = np.array_split(rows, workers)
+    with ThreadPoolExecutor(workers) as pool:
+        return np.concatenate(list(pool.map(lambda chunk: function(chunk, **options),
+                                            chunks)))

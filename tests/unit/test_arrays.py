@@ -126,3 +126,18 @@ def test_a_polygon_whose_exterior_is_empty_clips_to_nothing_wherever_its_hole_is
         result = rnsca.clip_ragged(GeometryKind.POLYGON, coords, _offsets([0, 0, 5], [0, 2]),
                                    window)
         assert len(result) == 0 and result.coords.shape == (0, 2)
+
+
+def test_a_call_on_chunks_in_threads_gives_one_call_s_values():
+    from rnsca.arrays import in_threads
+    from rnsca.tiles.mercator import _lonlat_rows_to_world, lonlat_to_world
+
+    rng = np.random.default_rng(3)
+    xy = np.column_stack([rng.uniform(-180, 180, 70_000), rng.uniform(-89, 89, 70_000)])
+    whole = in_threads(_lonlat_rows_to_world, xy, min_rows=10**9)
+    chunked = in_threads(_lonlat_rows_to_world, xy, min_rows=1)
+    assert whole.tobytes() == chunked.tobytes() == lonlat_to_world(xy).tobytes()
+    polygons = shapely.buffer(shapely.points(xy[:3000]), 1.0, quad_segs=2)
+    assert np.array_equal(in_threads(shapely.is_valid, polygons, min_rows=1),
+                          shapely.is_valid(polygons))
+    assert in_threads(np.negative, np.zeros((0, 2)), min_rows=0).shape == (0, 2)

@@ -273,6 +273,9 @@ class NumbaBackend:
         fast_ragged = _compact(written, [s[:-1][fast] for s in slots],
                                [c[fast] for c in counts])
         slow = np.flatnonzero(status == TP.FALLBACK)
+        if slow.shape[0] == 0:  # already in pair order: no second copy
+            return GeometryPieces(fast_ragged.coords, np.empty(0), fast_ragged.offsets,
+                                  np.zeros((1, C.WIDTH), dtype=np.int64))
         pieces = self.clip_polygons(polygons.take(geometry[slow]),
                                     WindowTable(windows[slow],
                                                 np.arange(slow.shape[0], dtype=np.int64)),

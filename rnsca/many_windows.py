@@ -129,7 +129,9 @@ def assign(segments: np.ndarray, windows: np.ndarray) -> WindowPairs:
         cell_window = np.empty((0, 0), dtype=np.int64)
         order = np.argsort(windows[:, 0], kind="stable").astype(np.int64)
         xmins = np.ascontiguousarray(windows[order, 0])
-        widest = float((windows[:, 2] - windows[:, 0]).max())
+        # Rounded up: a width rounded down (a window from -1e-67 to 1 is "1.0" wide) would
+        # make the sweep miss the windows that reach furthest west.
+        widest = float(np.nextafter((windows[:, 2] - windows[:, 0]).max(), np.inf))
     n = segments.shape[0]
     threads = max(1, min(numba.get_num_threads(), -(-n // 65536)))
     uniform = grid is not None and _equally_spaced(xs) and _equally_spaced(ys)

@@ -176,7 +176,8 @@ def _visit(segments, i, finder, table, t, pairs, write):
     # Sweep: the windows sorted by xmin; candidates have xmin in [bx0 - widest, bx1].
     windows = finder.windows
     hi = _first_above(finder.xmins, bx1)
-    lo = _first_not_below(finder.xmins, bx0 - finder.widest)
+    # One ulp below the rounded difference: never above the exact bx0 - widest.
+    lo = _first_not_below(finder.xmins, np.nextafter(bx0 - finder.widest, -np.inf))
     for s in range(lo, hi):
         w = finder.order[s]
         if (windows[w, 0] <= bx1 and windows[w, 2] >= bx0 and windows[w, 1] <= by1

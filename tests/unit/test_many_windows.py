@@ -94,6 +94,17 @@ def test_random_segments_and_windows(backend, rows, boxes):
     _check(got, _per_window(segs, windows), windows)
 
 
+def test_a_window_whose_width_rounds_down_is_still_found(backend):
+    """The sweep's reach west is the widest window's width rounded up (found by
+    Hypothesis: from -3.65e-67 to 1 is 1.0 wide in floats, and the sweep stopped at 0)."""
+    segs = np.array([[1.0, 0.0, 1.0, 0.0], [0.5, 0.5, 1.0, 0.5]])
+    windows = np.array([[0.0, 0.0, 1.0, 1.0], [-3.654671209400125e-67, 0.0, 1.0, 1.0]])
+    assert grid_of(windows) is None
+    got = clip_segments(segs, windows=windows, backend=backend)
+    _check(got, _per_window(segs, windows), windows)
+    assert got.window.tolist() == [0, 0, 1, 1]
+
+
 def test_outputs_left_out(backend, rng):
     segs = rng.uniform(0.0, 1000.0, size=(500, 4))
     got = clip_segments(segs, windows=_grid(2), backend=backend, outputs=("segments",))

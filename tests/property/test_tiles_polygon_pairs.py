@@ -91,10 +91,15 @@ def test_valid_polygons_clip_as_the_general_clip_and_as_shapely(case):
     _check(ragged, geometry, windows)
     got, source = clip_polygon_pairs(ragged, geometry, windows)
     clipped = got.to_shapely()
-    assert shapely.is_valid(clipped).all()
+    # Valid in, valid out and Shapely's area (a frame's rounding can make two stars
+    # touch or overlap: then only the equality with the general clip above holds).
+    valid_in = shapely.is_valid(np.array(geometries, dtype=object))[geometry[source]]
+    assert shapely.is_valid(clipped[valid_in]).all()
     area = np.zeros(geometry.shape[0])
     area[source] = shapely.area(clipped)
     for j, g in enumerate(geometry):
+        if not shapely.is_valid(geometries[g]):
+            continue  # Shapely's area of an invalid input is no oracle
         want = shapely.clip_by_rect(geometries[g], *windows[j]).area
         size = max(windows[j, 2] - windows[j, 0], windows[j, 3] - windows[j, 1])
         assert abs(area[j] - want) <= 1e-9 * size * size + 1e-9 * want

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable, Iterable
 from typing import NamedTuple
 
 import numba
@@ -50,7 +51,7 @@ from rnsca.options import (
 from rnsca.stats import ClipStats, DeviceStats
 from rnsca.window import Window, WindowTable
 
-__all__ = ["DevicePaths", "DevicePolygons", "NumbaBackend"]
+__all__ = ["DevicePaths", "DevicePolygons", "NumbaBackend", "PolygonRange"]
 
 # Segments per prange iteration: large enough that per-block scratch and counters cost
 # nothing, small enough that the scratch columns (14 x 16 KiB) stay in L2 cache.
@@ -72,17 +73,27 @@ _PATH_BLOCK = 64
 _PATH_MIN_BLOCKS = 32
 
 
+class PolygonRange(NamedTuple):
+    """Decisions for polygons ``first`` to ``end - 1`` of a call (their rings' tables)."""
+
+    first: int
+    end: int
+    decisions: PL.Decisions
+
+
 class DevicePolygons(NamedTuple):
     """What the OpenCL backend's device decided for `NumbaBackend.clip_polygons`.
 
-    `polygon_class` (int8 per polygon, `polygons.classify_polygons`), `decisions` (the
-    rings' run decisions and clipped pieces), and the device's counter rows and stats.
+    `polygon_class` (int8 per polygon, `polygons.classify_polygons`); `ranges`, the
+    rings' run decisions and clipped pieces range by range, in polygon order, each
+    given as the device finishes it (the count pass of one range runs while the device
+    works on the next); `totals`, called once every range is read, the device's counter
+    rows and stats.
     """
 
     polygon_class: np.ndarray
-    decisions: PL.Decisions
-    counters: np.ndarray
-    stats: DeviceStats | None
+    ranges: Iterable[PolygonRange]
+    totals: Callable[[], tuple[np.ndarray, DeviceStats | None]]
 
 
 class DevicePaths(NamedTuple):
@@ -307,42 +318,51 @@ class NumbaBackend:
             # Runs and segments are clipped here, not decided elsewhere: no decision tables.
             decisions = PL.Decisions(False, nothing_i, np.empty(0, dtype=np.uint8), nothing_i,
                                      np.empty(0, dtype=np.bool_), np.empty((0, 6)))
-            device = DevicePolygons(np.empty(n_polygons, dtype=np.int8), decisions,
-                                    np.empty((0, C.WIDTH), dtype=np.int64), None)
+            device = DevicePolygons(np.empty(n_polygons, dtype=np.int8),
+                                    [PolygonRange(0, n_polygons, decisions)], _no_device_totals)
         has_z = z.shape[0] > 0
-        block = _block_size(n_polygons)
-        n_blocks = max(1, -(-n_polygons // block))
-        counters = np.zeros((n_blocks, C.WIDTH), dtype=np.int64)
         vertices = R.vertices(xy, z)
-        items = PG.Polygons(ring_offsets, polygon_offsets, windows.bounds, polygon_window)
         plan = PG.PolygonPlan(device.polygon_class, np.zeros(n_polygons, dtype=np.int64),
                               np.zeros(n_polygons, dtype=np.int64))
-        counts = PG.PolygonCounts(np.empty(n_polygons, dtype=np.int64),
-                                  np.empty(n_polygons, dtype=np.int64),
-                                  np.empty(n_polygons, dtype=np.int64), nothing_i, nothing_i,
-                                  nothing_i)
+        sizes = tuple(np.empty(n_polygons, dtype=np.int64) for _ in range(3))
         nowhere = PG.PolygonsOut(False, np.empty((0, 2)), np.empty(0), nothing_i, nothing_i)
         # Polygons are always clipped exactly: valid output needs exact cut points.
         kernel_options = core_options(options)._replace(exact=True)
-        PG.clip_polygon_blocks(vertices, items, kernel_options, block, plan, counts, nowhere,
-                               counters, device.decisions)
-        vertex_start = exclusive_sum(counts.n_vertices)
-        ring_start = exclusive_sum(counts.n_rings)
-        poly_start = exclusive_sum(counts.n_polys)
+
+        def arguments(part: PolygonRange, starts: tuple[np.ndarray, ...]) -> tuple:
+            # Polygons first..end-1 alone: rings and output slots stay the call's (the
+            # offsets are global), the per-polygon arrays are views of the range.
+            a, b = part.first, part.end
+            return (PG.Polygons(ring_offsets, polygon_offsets[a:b + 1], windows.bounds,
+                                polygon_window[a:b]),
+                    kernel_options, _block_size(b - a),
+                    PG.PolygonPlan(*(column[a:b] for column in plan)),
+                    PG.PolygonCounts(*(column[a:b] for column in sizes),
+                                     *(s[a:b] for s in starts)))
+
+        parts = []
+        for part in device.ranges:  # each as soon as the device has finished it
+            rows = max(1, -(-(part.end - part.first) // _block_size(part.end - part.first)))
+            parts.append((part, np.zeros((rows, C.WIDTH), dtype=np.int64)))
+            PG.clip_polygon_blocks(vertices, *arguments(part, (nothing_i,) * 3), nowhere,
+                                   parts[-1][1], part.decisions)
+        vertex_start, ring_start, poly_start = (exclusive_sum(column) for column in sizes)
         out_xy = np.empty((int(vertex_start[-1]), 2))
         out_z = np.empty(int(vertex_start[-1]) if has_z else 0)
         out_rings = np.empty(int(ring_start[-1]) + 1, dtype=np.int64)
         out_rings[-1] = out_xy.shape[0]
         out_poly_rings = np.empty(int(poly_start[-1]), dtype=np.int64)
-        counts = counts._replace(vertex_start=vertex_start, ring_start=ring_start,
-                                 poly_start=poly_start)
         out = PG.PolygonsOut(True, out_xy, out_z, out_rings, out_poly_rings)
-        PG.clip_polygon_blocks(vertices, items, kernel_options, block, plan, counts, out,
-                               counters, device.decisions)
+        for part, counters in parts:
+            PG.clip_polygon_blocks(vertices, *arguments(part, (vertex_start, ring_start,
+                                                               poly_start)),
+                                   out, counters, part.decisions)
+        device_counters, device_stats = device.totals()
         return GeometryPieces(out_xy, out_z, (
             out_rings, exclusive_sum(out_poly_rings),
-            group_offsets(counts.n_polys, geometry_polygons)),
-            np.concatenate([counters, device.counters]), device.stats)
+            group_offsets(sizes[2], geometry_polygons)),
+            np.concatenate([counters for _, counters in parts] + [device_counters]),
+            device_stats)
 
     def clip_paths(self, paths: PathArrays, windows: WindowTable, options: PathOptions,
                    *, device: DevicePaths | None = None) -> PathPieces:
@@ -597,6 +617,11 @@ def core_options(options: SegmentOptions) -> R.CoreOptions:
     return R.CoreOptions(METHOD_ID[options.method], int(options.n), int(options.max_depth),
                          float(options.tolerance),
                          options.mode is Mode.EXACT)
+
+
+def _no_device_totals() -> tuple[np.ndarray, None]:
+    """Return the counters and stats of no device: none."""
+    return np.zeros((0, C.WIDTH), dtype=np.int64), None
 
 
 def _block_size(n_items: int) -> int:

@@ -7,14 +7,16 @@ pyopencl's prefix sum (``pyopencl.array.cumsum``) turns the counts into slots, a
 ``write_pieces`` copies the kept results there. Only the segments go to the device and
 only the pieces (and one counter row per work-group) come back.
 
-Lines and rings (`OpenCLBackend._prune`): ``chunk_boxes`` (one work-item per chunk of
-16 segments), ``classify_runs`` (RNSCA over runs of chunks, one work-item per line or
-ring) and ``clip_chunk_segments`` (the segments of undecided chunks, one work-item per
-chunk, into slots from a prefix sum) run on the device; the chains, and for polygons
-the walk along the window, are assembled on the host by the Numba kernels that do it
-for the Numba backend (`polylines.assemble_line_blocks`, `polygons.clip_polygon_blocks`
-with decided chunks). The split keeps the sequential, data-dependent assembly (output
-order, joins, the boundary walk) on the host, and the per-segment work on the device.
+Lines and rings (`runs.RunCall`): ``chunk_boxes`` (one work-item per chunk of 16
+segments), ``classify_runs`` (RNSCA over runs of chunks, one work-item per line or ring)
+and ``clip_chunk_segments`` (the segments of undecided chunks, one work-item per chunk,
+into slots from a prefix sum) run on the device; the chains, and for polygons the walk
+along the window, are assembled on the host by the Numba kernels that do it for the
+Numba backend (`polylines.assemble_line_blocks`, `polygons.clip_polygon_blocks` with
+decided chunks). The split keeps the sequential, data-dependent assembly (output order,
+joins, the boundary walk) on the host, and the per-segment work on the device; a large
+call goes in ranges of parts, so the host assembles one range while the device works on
+the next (`runs.pipelined`).
 
 Bézier paths (`classify_curves`, for `rnsca.clip_paths` and `rnsca.flatten_paths`):
 ``classify_bezier`` (one work-item per segment: its class by its control points'
@@ -48,6 +50,7 @@ from __future__ import annotations
 
 import threading
 import warnings
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from importlib import resources
 from typing import Any, cast
@@ -79,6 +82,7 @@ from rnsca.backends.numba_cpu import (
     DevicePaths,
     DevicePolygons,
     NumbaBackend,
+    PolygonRange,
     polygon_geometry,
     polyline_layout,
     warm_up_geometry,
@@ -86,6 +90,14 @@ from rnsca.backends.numba_cpu import (
     warm_up_segments,
 )
 from rnsca.backends.opencl import segments as _segments
+from rnsca.backends.opencl.runs import (
+    Ledger,
+    RunCall,
+    buffer_of,
+    event_seconds,
+    pipelined,
+    ranges_by_vertices,
+)
 from rnsca.errors import BackendUnavailableError, InvalidGeometryError, InvalidWindowError
 from rnsca.kernels import bezier as BZ
 from rnsca.kernels import counters as C
@@ -95,7 +107,7 @@ from rnsca.kernels import records as R
 from rnsca.kernels.copies import copy_ranges
 from rnsca.kernels.outcode import BOTTOM, LEFT, RIGHT, TOP
 from rnsca.many_windows import assign
-from rnsca.options import Backend, Curves, Method, Mode, PathOptions, Precision, SegmentOptions
+from rnsca.options import Backend, Curves, Mode, PathOptions, Precision, SegmentOptions
 from rnsca.stats import ClipStats, DeviceStats
 from rnsca.window import Window, WindowTable
 
@@ -334,64 +346,6 @@ def _device(entry: dict) -> _Device:
         return _DEVICES[entry["id"]]
 
 
-class _Ledger:
-    """Transfers and kernel runs of one call, timed by OpenCL event profiling."""
-
-    def __init__(self) -> None:
-        self.bytes_to_device = 0
-        self.bytes_from_device = 0
-        self.copy_events: list[cl.Event] = []
-        self.kernel_events: list[cl.Event] = []
-        # Uploads on the other queue (`staged`), which the first kernels wait for.
-        self.ready: list[cl.Event] = []
-
-    @property
-    def transfers(self) -> int:
-        """Return the number of host-device copies so far."""
-        return len(self.copy_events)
-
-    def staged(self, device: _Device, array: np.ndarray, chunk: int) -> cl_array.Array:
-        """Copy a large `array` to the device through the pinned staging buffers.
-
-        On every core into page-locked memory, then at full bus speed, in pieces that
-        alternate between the device's two queues (`segments.upload_whole`); a small
-        one directly. The kernels that read it wait for ``ready``.
-        """
-        queue = device.queue
-        if array.nbytes < (1 << 20) or device.staging is None:
-            return self.to_device(queue, array)
-        buffer = _segments.upload_whole(self, device.staging, array, chunk, np.float64)
-        return cl_array.Array(queue, array.shape, array.dtype, data=buffer)
-
-    def to_device(self, queue: cl.CommandQueue, array: np.ndarray) -> cl_array.Array:
-        buffer = cl_array.empty(queue, array.shape, array.dtype)
-        if array.nbytes:
-            self.copy_events.append(cl.enqueue_copy(queue, _data(buffer), array))
-            self.bytes_to_device += array.nbytes
-        return buffer
-
-    def from_device(self, queue: cl.CommandQueue, buffer: cl_array.Array) -> np.ndarray:
-        out = np.empty(buffer.shape, buffer.dtype)
-        if out.nbytes:
-            self.copy_events.append(cl.enqueue_copy(queue, out, cast(cl.Buffer, buffer.base_data),
-                                                    src_offset=buffer.offset))
-            self.bytes_from_device += out.nbytes
-        return out
-
-    def stats(self, device: str, precision: Precision) -> DeviceStats:
-        if self.copy_events or self.kernel_events:  # OpenCL refuses an empty wait list
-            cl.wait_for_events(self.copy_events + self.kernel_events)
-        return DeviceStats(device=device, precision=precision.value, transfers=self.transfers,
-                           bytes_to_device=self.bytes_to_device,
-                           bytes_from_device=self.bytes_from_device,
-                           transfer_seconds=_seconds(self.copy_events),
-                           kernel_seconds=_seconds(self.kernel_events))
-
-
-def _seconds(events: list[cl.Event]) -> float:
-    return sum(e.profile.end - e.profile.start for e in events) * 1e-9
-
-
 class OpenCLBackend:
     """Run the kernels of segments, and of the runs of lines and rings, on an OpenCL device.
 
@@ -589,8 +543,8 @@ class OpenCLBackend:
                            transfers=len(run.copy_events),
                            bytes_to_device=run.bytes_to_device,
                            bytes_from_device=run.bytes_from_device,
-                           transfer_seconds=_seconds(run.copy_events),
-                           kernel_seconds=_seconds(run.kernel_events))
+                           transfer_seconds=event_seconds(run.copy_events),
+                           kernel_seconds=event_seconds(run.kernel_events))
 
     def _check_device_segments(self, segments: cl_array.Array) -> None:
         if segments.context != self._device.context:
@@ -613,10 +567,12 @@ class OpenCLBackend:
                    drop_edge_runs: bool) -> GeometryPieces:
         """Return the chains of each line geometry; see `ClipBackend.clip_lines`.
 
-        On the device (`_prune`): the chunk boxes, RNSCA over runs of
-        chunks (one work-item per part) and the clip of the segments of undecided chunks
-        (one work-item per chunk); on the host, with the Numba kernel that does it for
-        the Numba backend, the chains: accepted chunks copied, clipped pieces joined.
+        On the device (`runs.RunCall`): the chunk boxes, RNSCA over runs of chunks (one
+        work-item per part) and the clip of the segments of undecided chunks (one
+        work-item per chunk); on the host, with the Numba kernel that does it for the
+        Numba backend, the chains: accepted chunks copied, clipped pieces joined. A large
+        call goes in ranges of parts (`runs.pipelined`): the host counts one range's
+        chains while the device prunes the next.
 
         Raises
         ------
@@ -629,14 +585,38 @@ class OpenCLBackend:
         part_geometry = np.repeat(np.arange(lines.count, dtype=np.int64),
                                   np.diff(geometry_parts))
         part_window = windows.of_items(part_geometry)
-        tables, counters, device_stats = self._prune(xy, part_offsets, part_window,
-                                                     windows.bounds, options, drop_edge_runs,
-                                                     None)
-        out_xy, out_z, chain_offsets, chains_per_part = _assemble_lines(
-            xy, z, part_offsets, part_window, windows.bounds, drop_edge_runs, *tables)
+        call = self._run_call(windows.bounds, options, drop_edge_runs)
+        data = self._device_coordinates(xy, call)
+
+        def start(part_range: tuple[int, int]) -> Any:
+            a, b = part_range
+            v0, v1 = part_offsets[a], part_offsets[b]
+            return call.start(data[v0:v1], xy[v0:v1], part_offsets[a:b + 1] - v0,
+                              part_window[a:b])
+
+        assembly = _LineAssembly(R.vertices(xy, z), part_offsets, part_window,
+                                 windows.bounds, drop_edge_runs)
+        for part_range, tables in pipelined(
+                call, ranges_by_vertices(part_offsets[1:] - part_offsets[0]), start):
+            assembly.count(part_range, PL.Decisions(True, *tables))
+        out_xy, out_z, chain_offsets = assembly.write()
+        counters, device_stats = call.totals(self.name, self.precision)
         return GeometryPieces(out_xy, out_z, (
-            chain_offsets, group_offsets(chains_per_part, geometry_parts)), counters,
+            chain_offsets, group_offsets(assembly.n_chains, geometry_parts)),
+            counters if counters.shape[0] else np.zeros((1, C.WIDTH), dtype=np.int64),
             device_stats)
+
+    def _run_call(self, windows: np.ndarray, options: SegmentOptions,
+                  drop_edge_runs: bool) -> RunCall:
+        return RunCall(self._device, self.real, windows, options, drop_edge_runs, LOCAL_SIZE)
+
+    def _device_coordinates(self, xy: np.ndarray, call: RunCall) -> np.ndarray:
+        """Return `xy` in the device's dtype, checked to fit it (float32)."""
+        with np.errstate(over="ignore"):
+            data: np.ndarray = np.ascontiguousarray(xy, dtype=self.real)
+        if self.real is np.float32:
+            _check_float32_lines(data, call.bounds)
+        return data
 
     def clip_polygon_pairs(self, polygons: Ragged, geometry: np.ndarray, windows: np.ndarray,
                            options: SegmentOptions) -> GeometryPieces:
@@ -655,9 +635,11 @@ class OpenCLBackend:
 
         The shells' boxes classify the polygons on the host
         (`polygons.classify_polygons`); the rings of the ambiguous ones are pruned and
-        their undecided segments clipped on the device (`_prune`, rings broken along the
-        window's edges); the rings are closed along the window on the host by the Numba
-        polygon kernel, from the device's decisions and pieces.
+        their undecided segments clipped on the device (`runs.RunCall`, rings broken
+        along the window's edges); the rings are closed along the window on the host by
+        the Numba polygon kernel, from the device's decisions and pieces. Polygons go in
+        ranges of about `runs.PIPELINE_VERTICES` ambiguous vertices: the host's count
+        pass of one range runs while the device prunes the next (`runs.pipelined`).
         """
         xy, z = polygons.split_z()
         ring_offsets = polygons.offsets[0]
@@ -672,129 +654,35 @@ class OpenCLBackend:
                                  np.diff(polygon_offsets))
         ring_window = np.ascontiguousarray(polygon_window[ring_polygon])
         active = polygon_class[ring_polygon] == PG.AMBIGUOUS
-        tables, device_counters, device_stats = self._prune_rings(
-            xy, ring_offsets, ring_window, windows.bounds, options, active)
-        return _HOST.clip_polygons(polygons, windows, options, device=DevicePolygons(
-            polygon_class, PL.Decisions(True, *tables), device_counters, device_stats))
-
-    def _prune_rings(self, xy: np.ndarray, ring_offsets: np.ndarray, ring_window: np.ndarray,
-                     windows: np.ndarray, options: SegmentOptions, active: np.ndarray,
-                     ) -> tuple[tuple[np.ndarray, ...], np.ndarray, DeviceStats]:
-        """Prune the `active` rings on the device: `_prune` of those rings only.
-
-        Only the rings of ambiguous polygons go to the device (their vertices gathered
-        on every core); the polygons wholly inside or outside the window are most of a
-        large input (1M scattered stars: 84%), and their vertices were most of the
-        call's transfers. The tables stay in the active rings' layout: the assembly
-        reads a ring's chunks only for ambiguous polygons, through ``chunk_start[ring]``,
-        so only the active rings' entries are set (the others' are never read).
-        """
-        rings = np.flatnonzero(active)
-        starts = ring_offsets[rings]
-        sizes = ring_offsets[rings + 1] - starts
-        sub_offsets = exclusive_sum(sizes)
-        sub_xy = np.empty((int(sub_offsets[-1]), 2))
-        copy_ranges(np.ascontiguousarray(xy, dtype=np.float64), starts, sizes,
-                    sub_offsets[:-1], sub_xy)
-        (sub_chunk_start, *sub_tables), counters, device_stats = self._prune(
-            sub_xy, sub_offsets, ring_window[rings], windows, options, True, None)
+        call = self._run_call(windows.bounds, options, True)
+        active_ends = np.concatenate([[0], np.cumsum(np.where(active, np.diff(ring_offsets), 0))])
+        ranges = ranges_by_vertices(active_ends[polygon_offsets[1:]])
+        xy64 = np.ascontiguousarray(xy, dtype=np.float64)
+        # Each ring's first chunk in its range's tables; only the active rings' are read.
         chunk_start = np.zeros(ring_offsets.shape[0] - 1, dtype=np.int64)
-        chunk_start[rings] = sub_chunk_start
-        return (chunk_start, *sub_tables), counters, device_stats
 
-    def _prune(self, xy: np.ndarray, part_offsets: np.ndarray, part_window: np.ndarray,
-               windows: np.ndarray, options: SegmentOptions, drop_edge_runs: bool,
-               active: np.ndarray | None,
-               ) -> tuple[tuple[np.ndarray, ...], np.ndarray, DeviceStats]:
-        """Prune the runs of every part and clip the undecided chunks' segments on the device.
+        range_rings: dict[tuple[int, int], np.ndarray] = {}
 
-        Returns ``(tables, counters, device_stats)``: `tables` is ``(chunk_start,
-        decision, piece_start, keep, pieces)`` as `polylines.assemble_chains` reads them
-        (pieces in float64, uncut ends the exact input vertices), `counters` the device's
-        counter rows. `active` (uint8 per part, or None for all) leaves parts out.
-        """
-        real = self.real
-        n_parts = part_offsets.shape[0] - 1
-        with np.errstate(over="ignore"):
-            data: np.ndarray = np.ascontiguousarray(xy, dtype=real)
-            bounds: np.ndarray = np.ascontiguousarray(windows, dtype=real)
-        if real is np.float32:
-            _check_float32_lines(data, bounds)
-        segments = np.maximum(np.diff(part_offsets), 1) - 1
-        chunks_per_part = -(-segments // PL.RUN_LEAF_SEGMENTS)
-        chunk_start = exclusive_sum(chunks_per_part)
-        n_chunks = int(chunk_start[-1])
-        chunk_part = np.repeat(np.arange(n_parts, dtype=np.int64), chunks_per_part)
-        queue = self._device.queue
-        ledger = _Ledger()
-        part_groups = max(1, -(-n_parts // LOCAL_SIZE))
-        chunk_groups = max(1, -(-n_chunks // LOCAL_SIZE))
-        n_runs = options.n if options.n > 0 else PL.RUN_N_AUTO
-        with self._device.call_lock:
-            kernels = self._device.program(real is np.float64)
-            d_xy = ledger.staged(self._device, data.reshape(-1), _segments.CHUNK_SEGMENTS)
-            d_offsets = ledger.to_device(queue, np.ascontiguousarray(part_offsets, np.int64))
-            d_chunk_start = ledger.to_device(queue, chunk_start)
-            d_chunk_part = ledger.to_device(queue, chunk_part)
-            d_part_window = ledger.to_device(queue, np.ascontiguousarray(part_window, np.int64))
-            d_windows = ledger.to_device(queue, bounds.reshape(-1))
-            d_active = ledger.to_device(queue, np.zeros(0, np.uint8) if active is None
-                                        else np.ascontiguousarray(active, np.uint8))
-            boxes = cl_array.empty(queue, max(1, 4 * n_chunks), real)
-            decision = cl_array.empty(queue, max(1, n_chunks), np.uint8)
-            segmented = cl_array.empty(queue, max(1, n_chunks), np.int64)
-            run_counters = cl_array.empty(queue, part_groups * C.WIDTH, np.int64)
-            chunk_counters = cl_array.empty(queue, chunk_groups * C.WIDTH, np.int64)
-            if n_chunks:
-                ledger.kernel_events.append(kernels.chunk_boxes(
-                    queue, (n_chunks,), None, _data(d_xy), _data(d_offsets),
-                    _data(d_chunk_start), _data(d_chunk_part), np.int64(n_chunks), _data(boxes),
-                    wait_for=ledger.ready))
-            ledger.kernel_events.append(kernels.classify_runs(
-                queue, (part_groups * LOCAL_SIZE,), (LOCAL_SIZE,), _data(boxes), _data(d_offsets),
-                _data(d_chunk_start), _data(d_part_window), _data(d_windows),
-                np.int64(n_parts), np.int32(n_runs), np.int32(drop_edge_runs),
-                np.int32(options.method is Method.RNSCA), _data(d_active),
-                np.int32(active is None), _data(decision), _data(segmented), _data(run_counters),
-                wait_for=ledger.ready))
-            total = 0
-            position = segmented
-            if n_chunks:
-                event, position = cl_array.cumsum(segmented[:n_chunks], queue=queue,
-                                                  return_event=True)
-                ledger.kernel_events.append(event)
-                # The chunks' piece rows, inclusive: the assembly's piece_start, shifted.
-                piece_end = ledger.from_device(queue, position[:n_chunks])
-                total = int(piece_end[-1])
-            keep = cl_array.empty(queue, max(1, total), np.uint8)
-            result = cl_array.empty(queue, max(1, 6 * total), real)
-            ledger.kernel_events.append(kernels.clip_chunk_segments(
-                queue, (chunk_groups * LOCAL_SIZE,), (LOCAL_SIZE,), _data(d_xy),
-                _data(d_offsets), _data(d_chunk_start), _data(d_chunk_part),
-                _data(d_part_window), _data(d_windows), np.int64(n_chunks), _data(decision),
-                _data(segmented), _data(position), np.int32(METHOD_ID[options.method]),
-                np.int32(options.n), np.int32(options.max_depth), real(options.tolerance),
-                np.int32(options.mode is Mode.EXACT), _data(keep),
-                _data(result), _data(chunk_counters)))
-            chunk_decision = ledger.from_device(queue, decision[:n_chunks])
-            kept = ledger.from_device(queue, keep[:total]).view(np.bool_)
-            pieces = ledger.from_device(queue, result[:6 * total]).reshape(total, 6)
-            counters = np.concatenate([
-                ledger.from_device(queue, run_counters).reshape(-1, C.WIDTH),
-                ledger.from_device(queue, chunk_counters).reshape(-1, C.WIDTH)])
-            device_stats = ledger.stats(self.name, self.precision)
-        piece_start = np.zeros(n_chunks, dtype=np.int64)
-        if n_chunks:
-            piece_start[1:] = piece_end[:-1]
-        pieces = pieces.astype(np.float64, copy=False)  # a fresh array from the device
-        if real is np.float32:
-            # Each chunk's first vertex, and its rows among the pieces.
-            chunk_first = (part_offsets[chunk_part] + (np.arange(n_chunks)
-                           - chunk_start[chunk_part]) * PL.RUN_LEAF_SEGMENTS)
-            _exact_float32_ends(pieces, xy, windows, part_window, chunk_part, chunk_first,
-                                np.diff(piece_start, append=total))
-        tables = (chunk_start[:-1].copy(), chunk_decision, piece_start, kept, pieces)
-        return tables, counters, device_stats
+        def start(polygon_range: tuple[int, int]) -> Any:
+            # Only the rings of ambiguous polygons go to the device (gathered on every
+            # core): the polygons wholly inside or outside the window are most of a
+            # large input (1M scattered stars: 84%), and their vertices were most of
+            # the call's transfers.
+            a, b = polygon_range
+            rings = polygon_offsets[a] + np.flatnonzero(
+                active[polygon_offsets[a]:polygon_offsets[b]])
+            range_rings[polygon_range] = rings
+            sub_xy, sub_offsets = _gather_rings(xy64, ring_offsets, rings)
+            return call.start(self._device_coordinates(sub_xy, call), sub_xy, sub_offsets,
+                              ring_window[rings])
+
+        def decided() -> Iterator[PolygonRange]:
+            for (a, b), tables in pipelined(call, ranges, start):
+                chunk_start[range_rings.pop((a, b))] = tables.chunk_start
+                yield PolygonRange(a, b, PL.Decisions(True, chunk_start, *tables[1:]))
+
+        return _HOST.clip_polygons(polygons, windows, options, device=DevicePolygons(
+            polygon_class, decided(), lambda: call.totals(self.name, self.precision)))
 
     def clip_paths(self, paths: PathArrays, windows: WindowTable,
                    options: PathOptions) -> PathPieces:
@@ -916,7 +804,7 @@ class OpenCLBackend:
             if window is None:  # flattening only: nothing for the device to decide
                 m = n_runs = 0
         queue = self._device.queue
-        ledger = _Ledger()
+        ledger = Ledger()
         with self._device.call_lock:
             kernels = self._device.program(double)
             with np.errstate(over="ignore"):  # float32: beyond its range is ±inf, which
@@ -928,10 +816,11 @@ class OpenCLBackend:
             n_points = cl_array.empty(queue, max(1, m), np.int64)
             if m:
                 ledger.kernel_events.append(kernels.classify_bezier(
-                    queue, (m,), None, _data(d_controls), _data(d_degree), np.int64(m),
+                    queue, (m,), None, buffer_of(d_controls), buffer_of(d_degree), np.int64(m),
                     *accept, *reject,
                     np.float64(tolerance) if double else np.float32(0),  # float32: unused
-                    np.int32(_FLATTEN[device_flatten]), _data(segment_class), _data(n_points)))
+                    np.int32(_FLATTEN[device_flatten]), buffer_of(segment_class),
+                    buffer_of(n_points)))
             point_end = np.zeros(0, dtype=np.int64)
             total = 0
             if m and device_flatten != "none":
@@ -943,17 +832,17 @@ class OpenCLBackend:
             points = cl_array.empty(queue, max(1, 2 * total), self.real)
             if total:
                 ledger.kernel_events.append(kernels.flatten_bezier(
-                    queue, (m,), None, _data(d_controls), _data(d_degree), _data(n_points),
-                    _data(d_point_end), np.int64(m), _data(points)))
+                    queue, (m,), None, buffer_of(d_controls), buffer_of(d_degree),
+                    buffer_of(n_points), buffer_of(d_point_end), np.int64(m), buffer_of(points)))
             run_class = np.zeros(0, dtype=np.int8)
             if n_runs:
                 d_run_first = ledger.to_device(queue, run_first)
                 d_run_end = ledger.to_device(queue, run_end)
                 d_run_class = cl_array.empty(queue, n_runs, np.int8)
                 ledger.kernel_events.append(kernels.classify_bezier_runs(
-                    queue, (n_runs,), None, _data(d_controls), _data(d_run_first),
-                    _data(d_run_end), np.int64(n_runs), *accept, *reject,
-                    np.int32(flatten != "none"), _data(d_run_class)))
+                    queue, (n_runs,), None, buffer_of(d_controls), buffer_of(d_run_first),
+                    buffer_of(d_run_end), np.int64(n_runs), *accept, *reject,
+                    np.int32(flatten != "none"), buffer_of(d_run_class)))
                 run_class = ledger.from_device(queue, d_run_class)
             classes = ledger.from_device(queue, segment_class[:m])
             flat = ledger.from_device(queue, points[:2 * total]).reshape(total, 2)
@@ -994,17 +883,6 @@ class OpenCLBackend:
         warm_up_paths(self)
 
 
-def _data(array: cl_array.Array) -> cl.Buffer:
-    """Return the buffer of a device array (the empty ones included: 1 byte then).
-
-    pyopencl types `_data(Array)` as optional (an SVM array has none); these arrays are
-    all allocated from buffers.
-    """
-    if not array.size:
-        return cl.Buffer(cast(cl.Context, array.context), cl.mem_flags.READ_ONLY, 1)
-    return cast(cl.Buffer, array.data)
-
-
 def _window_stretches(windows: WindowTable, n: int) -> list[tuple[int, int, int]]:
     """Return ``(row, first, end)`` for each stretch of consecutive paths of one window.
 
@@ -1040,59 +918,67 @@ def _runs(subpath_offsets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
             np.ascontiguousarray(run_end[kept], np.int64))
 
 
-def _assemble_lines(xy, z, part_offsets, part_window, windows, drop_edge_runs, chunk_start,
-                    decision, piece_start, keep, pieces):
-    """Return ``(xy, z, chain_offsets, chains_per_part)``: count, prefix sum, write."""
-    n_parts = part_offsets.shape[0] - 1
-    has_z = z.shape[0] > 0
-    block = max(1, min(1024, -(-n_parts // 64)))
-    n_vertices = np.empty(n_parts, dtype=np.int64)
-    n_chains = np.empty(n_parts, dtype=np.int64)
-    nothing_i = np.empty(0, dtype=np.int64)
-    line = R.vertices(xy, z)
-    decisions = PL.Decisions(True, chunk_start, decision, piece_start, keep, pieces)
-    nowhere = np.empty((0, 2))
-    PL.assemble_line_blocks(line, part_offsets, windows, part_window, drop_edge_runs, block,
-                            False, decisions,
-                            PL.PartCounts(n_vertices, n_chains, nothing_i, nothing_i),
-                            PL.ChainsOut(nowhere, nowhere.reshape(-1), np.empty(0), nothing_i))
-    vertex_start = np.zeros(n_parts + 1, dtype=np.int64)
-    np.cumsum(n_vertices, out=vertex_start[1:])
-    chain_start = np.zeros(n_parts + 1, dtype=np.int64)
-    np.cumsum(n_chains, out=chain_start[1:])
-    out_xy = np.empty((int(vertex_start[-1]), 2))
-    out_z = np.empty(int(vertex_start[-1]) if has_z else 0)
-    chain_offsets = np.empty(int(chain_start[-1]) + 1, dtype=np.int64)
-    chain_offsets[-1] = out_xy.shape[0]
-    PL.assemble_line_blocks(line, part_offsets, windows, part_window, drop_edge_runs, block,
-                            True, decisions,
-                            PL.PartCounts(n_vertices, n_chains, vertex_start, chain_start),
-                            PL.ChainsOut(out_xy, out_xy.reshape(-1), out_z, chain_offsets))
-    return out_xy, out_z, chain_offsets, n_chains
+class _LineAssembly:
+    """The host's half of a line call: the chains, counted range by range, then written.
 
-
-def _exact_float32_ends(pieces, xy, windows, part_window, chunk_part, chunk_first, rows):
-    """Give float32 pieces their input vertices back, and keep them in their windows.
-
-    An end not cut (t = 0 or 1) is an input vertex, but rounded to float32: the host
-    puts the float64 vertex back, so chains join at it as on the other backends. A cut
-    end lies exactly on the float32 edge line: it is put on the float64 one (the polygon
-    walk compares boundary positions exactly), and every end is clamped into the window.
+    `count` runs the count pass of `polylines.assemble_line_blocks` over parts
+    ``first..end-1`` with their range's device tables (while the device works on the
+    next range); `write` sums the counts and runs the write pass of every range.
     """
-    segment = np.repeat(chunk_first, rows) + (np.arange(pieces.shape[0])
-                                              - np.repeat(np.cumsum(rows) - rows, rows))
-    window = windows[part_window[np.repeat(chunk_part, rows)]]
-    start = pieces[:, 0] == 0.0
-    end = pieces[:, 1] == 1.0
-    pieces[start, 2:4] = xy[segment[start]]
-    pieces[end, 4:6] = xy[segment[end] + 1]
-    rounded = window.astype(np.float32).astype(np.float64)
-    for column, bound in ((2, 0), (3, 1), (4, 0), (5, 1)):
-        values = pieces[:, column]
-        for side in (bound, bound + 2):
-            on_edge = values == rounded[:, side]
-            values[on_edge] = window[on_edge, side]
-        np.clip(values, window[:, bound], window[:, bound + 2], out=values)
+
+    def __init__(self, line: R.Vertices, part_offsets: np.ndarray, part_window: np.ndarray,
+                 windows: np.ndarray, drop_edge_runs: bool) -> None:
+        self.line = line
+        self.part_offsets = part_offsets
+        self.part_window = part_window
+        self.windows = windows
+        self.drop_edge_runs = drop_edge_runs
+        n_parts = part_offsets.shape[0] - 1
+        self.n_vertices = np.zeros(n_parts, dtype=np.int64)
+        self.n_chains = np.zeros(n_parts, dtype=np.int64)
+        self.ranges: list[tuple[int, int, PL.Decisions]] = []
+
+    def count(self, part_range: tuple[int, int], decisions: PL.Decisions) -> None:
+        """Count the chains of parts ``first..end-1`` from their range's decisions."""
+        a, b = part_range
+        self.ranges.append((a, b, decisions))
+        nothing = np.empty(0, dtype=np.int64)
+        nowhere = np.empty((0, 2))
+        self._pass(a, b, decisions, False, (nothing, nothing),
+                   PL.ChainsOut(nowhere, nowhere.reshape(-1), np.empty(0), nothing))
+
+    def write(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Return ``(xy, z, chain_offsets)`` of every range counted."""
+        vertex_start = exclusive_sum(self.n_vertices)
+        chain_start = exclusive_sum(self.n_chains)
+        out_xy = np.empty((int(vertex_start[-1]), 2))
+        out_z = np.empty(int(vertex_start[-1]) if self.line.has_z else 0)
+        chain_offsets = np.empty(int(chain_start[-1]) + 1, dtype=np.int64)
+        chain_offsets[-1] = out_xy.shape[0]
+        out = PL.ChainsOut(out_xy, out_xy.reshape(-1), out_z, chain_offsets)
+        for a, b, decisions in self.ranges:
+            self._pass(a, b, decisions, True, (vertex_start, chain_start), out)
+        return out_xy, out_z, chain_offsets
+
+    def _pass(self, a: int, b: int, decisions: PL.Decisions, write: bool,
+              starts: tuple[np.ndarray, np.ndarray], out: PL.ChainsOut) -> None:
+        # Parts a..b-1 alone: vertex offsets and output slots stay the call's.
+        PL.assemble_line_blocks(
+            self.line, self.part_offsets[a:b + 1], self.windows, self.part_window[a:b],
+            self.drop_edge_runs, max(1, min(1024, -(-(b - a) // 64))), write, decisions,
+            PL.PartCounts(self.n_vertices[a:b], self.n_chains[a:b],
+                          *(s[a:b] for s in starts)), out)
+
+
+def _gather_rings(xy: np.ndarray, ring_offsets: np.ndarray, rings: np.ndarray,
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """Return the vertices of `rings` one after the other (on every core), and their offsets."""
+    starts = ring_offsets[rings]
+    sizes = ring_offsets[rings + 1] - starts
+    offsets = exclusive_sum(sizes)
+    gathered = np.empty((int(offsets[-1]), 2))
+    copy_ranges(xy, starts, sizes, offsets[:-1], gathered)
+    return gathered, offsets
 
 
 def _windows32(bounds: tuple[float, ...] | np.ndarray) -> tuple[tuple, tuple]:

@@ -1,0 +1,411 @@
+"""Lines and rings on an OpenCL device, in ranges the host assembles while the device works.
+
+The device's share of a line or polygon call (`RunCall`): ``chunk_boxes`` (one
+work-item per chunk of 16 segments), ``classify_runs`` (RNSCA over runs of chunks, one
+work-item per line or ring) and ``clip_chunk_segments`` (the segments of undecided
+chunks, one work-item per chunk, into slots from a prefix sum). The host's share, the
+assembly of chains and of polygons along the window (the Numba kernels), reads the
+device's decisions and pieces; it is most of such a call (1M stars on an H100 and its
+16 cores: the Numba assembly 126 ms, the device's kernels 0.3 ms and transfers 38 ms).
+
+So a large call is cut into ranges of parts (`ranges_by_vertices`) and pipelined
+(`pipelined`): while the host assembles range i, the device has range i + 1's input
+and range i + 2's staging before it, and the host never waits for the device but at
+the two ends. Each range is three steps: `RunCall.start` (the range's input staged and
+sent up, its chunks classified, the prefix sum of their piece counts and a
+non-blocking read of it), `RunCall.clip` (once that count is back: the clip of the
+undecided chunks and non-blocking reads of the decisions and pieces) and
+`RunCall.finish` (the reads awaited; the tables the assembly reads). Nothing waits
+for the device between `start` and `finish` but `clip`'s read of one count, which the
+device has done while the host assembled the range before.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterator, Sequence
+from dataclasses import dataclass, field
+from typing import Any, NamedTuple, TypeVar, cast
+
+import numpy as np
+import pyopencl as cl
+import pyopencl.array as cl_array
+
+from rnsca.arrays import exclusive_sum
+from rnsca.backends.base import METHOD_ID
+from rnsca.backends.opencl import segments as _segments
+from rnsca.kernels import counters as C
+from rnsca.kernels import polylines as PL
+from rnsca.options import Method, Mode, Precision, SegmentOptions
+from rnsca.stats import DeviceStats
+
+__all__ = ["Ledger", "RunCall", "Tables", "buffer_of", "event_seconds", "exact_float32_ends",
+           "pipelined", "ranges_by_vertices", "PIPELINE_VERTICES", "MAX_RANGES"]
+
+#: Vertices per range of a pipelined line or ring call: 32 MB of float64 coordinates,
+#: enough that a range's kernel launches and reads are a small part of its time.
+PIPELINE_VERTICES = 1 << 21
+#: Ranges per call at most: the host's fixed cost per range (a count and a write pass
+#: of the Numba assembly, each starting the threads) stays small.
+MAX_RANGES = 16
+
+T = TypeVar("T")
+
+
+def buffer_of(array: cl_array.Array) -> cl.Buffer:
+    """Return the buffer of a device array, a 1-byte placeholder for an empty one.
+
+    pyopencl types `Array.data` as optional (an SVM array has none); these arrays are
+    all allocated from buffers.
+    """
+    if not array.size:
+        return cl.Buffer(cast(cl.Context, array.context), cl.mem_flags.READ_ONLY, 1)
+    return cast(cl.Buffer, array.data)
+
+
+def event_seconds(events: list[cl.Event]) -> float:
+    """Return the seconds the device spent on `events` (profiled queues)."""
+    return sum(e.profile.end - e.profile.start for e in events) * 1e-9
+
+
+class Ledger:
+    """Transfers and kernel runs of one call, timed by OpenCL event profiling."""
+
+    def __init__(self) -> None:
+        self.bytes_to_device = 0
+        self.bytes_from_device = 0
+        self.copy_events: list[cl.Event] = []
+        self.kernel_events: list[cl.Event] = []
+        # Uploads on the other queue (`staged`), which the first kernels wait for.
+        self.ready: list[cl.Event] = []
+
+    @property
+    def transfers(self) -> int:
+        """Return the number of host-device copies so far."""
+        return len(self.copy_events)
+
+    def staged(self, device: Any, array: np.ndarray, chunk: int) -> cl_array.Array:
+        """Copy a large `array` to the device through the pinned staging buffers.
+
+        On every core into page-locked memory, then at full bus speed, in pieces that
+        alternate between the device's two queues (`segments.upload_whole`); a small
+        one directly. The kernels that read it wait for ``ready``.
+        """
+        queue = device.queue
+        if array.nbytes < (1 << 20) or device.staging is None:
+            return self.to_device(queue, array)
+        buffer = _segments.upload_whole(self, device.staging, array, chunk, np.float64)
+        return cl_array.Array(queue, array.shape, array.dtype, data=buffer)
+
+    def to_device(self, queue: cl.CommandQueue, array: np.ndarray,
+                  wait: bool = True) -> cl_array.Array:
+        """Return a device copy of `array`; with `wait` False, keep `array` until it lands."""
+        buffer = cl_array.empty(queue, array.shape, array.dtype)
+        if array.nbytes:
+            self.copy_events.append(cl.enqueue_copy(queue, buffer_of(buffer), array,
+                                                    is_blocking=wait))
+            self.bytes_to_device += array.nbytes
+        return buffer
+
+    def from_device(self, queue: cl.CommandQueue, buffer: cl_array.Array,
+                    wait: bool = True) -> np.ndarray:
+        """Return a host copy of `buffer`; with `wait` False it lands later (`settle`)."""
+        out = np.empty(buffer.shape, buffer.dtype)
+        if out.nbytes:
+            self.copy_events.append(cl.enqueue_copy(queue, out, cast(cl.Buffer, buffer.base_data),
+                                                    src_offset=buffer.offset,
+                                                    is_blocking=wait))
+            self.bytes_from_device += out.nbytes
+        return out
+
+    def settle(self) -> None:
+        """Wait for every copy and kernel of the call so far."""
+        if self.copy_events or self.kernel_events:  # OpenCL refuses an empty wait list
+            cl.wait_for_events(self.copy_events + self.kernel_events)
+
+    def stats(self, device: str, precision: Precision) -> DeviceStats:
+        """Return the call's transfers and device times, once all of them are done."""
+        self.settle()
+        return DeviceStats(device=device, precision=precision.value, transfers=self.transfers,
+                           bytes_to_device=self.bytes_to_device,
+                           bytes_from_device=self.bytes_from_device,
+                           transfer_seconds=event_seconds(self.copy_events),
+                           kernel_seconds=event_seconds(self.kernel_events))
+
+
+def ranges_by_vertices(vertex_ends: np.ndarray, target: int | None = None,
+                       ) -> list[tuple[int, int]]:
+    """Cut items 0..n-1 into consecutive ``(first, end)`` ranges of about `target` vertices.
+
+    `vertex_ends[i]` is the count of vertices of items 0..i (an inclusive prefix sum).
+    At most `MAX_RANGES` ranges, none empty; one range for a small call, and an empty
+    list for no items. `target` defaults to `PIPELINE_VERTICES`.
+    """
+    target = PIPELINE_VERTICES if target is None else target
+    n = int(vertex_ends.shape[0])
+    if n == 0:
+        return []
+    total = int(vertex_ends[-1])
+    k = max(1, min(MAX_RANGES, n, -(-total // max(1, target))))
+    # Each cut after the first item whose prefix reaches its share of the vertices.
+    shares = total * np.arange(1, k, dtype=np.int64) // k
+    cuts = np.unique(np.searchsorted(vertex_ends, shares, side="left") + 1)
+    cuts = cuts[(cuts > 0) & (cuts < n)]
+    bounds = [0, *cuts.tolist(), n]
+    return list(zip(bounds[:-1], bounds[1:], strict=True))
+
+
+class Tables(NamedTuple):
+    """The device's decisions for one range's parts, as `polylines.Decisions` reads them.
+
+    Per part its first chunk (int64); per chunk its decision (uint8, ``CHUNK_*``) and
+    first piece row (int64); per piece row whether it is kept (bool) and ``(t0, t1, ax,
+    ay, bx, by)`` in float64 (uncut ends are the exact input vertices).
+    """
+
+    chunk_start: np.ndarray
+    decision: np.ndarray
+    piece_start: np.ndarray
+    keep: np.ndarray
+    pieces: np.ndarray
+
+
+@dataclass
+class _Range:
+    """One range of parts in flight: its host tables and its device buffers."""
+
+    xy: np.ndarray
+    part_offsets: np.ndarray
+    part_window: np.ndarray
+    chunk_start: np.ndarray
+    chunk_part: np.ndarray
+    n_chunks: int
+    device: dict = field(default_factory=dict)
+    held: list = field(default_factory=list)
+    # Read back without waiting; valid once `RunCall.clip` (piece_end) or
+    # `RunCall.finish` (the rest) has waited for them.
+    piece_end: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+    piece_end_read: list = field(default_factory=list)
+    reads: dict = field(default_factory=dict)
+    total: int = 0
+
+
+class RunCall:
+    """One line or ring call's device work: its window table, settings and ledger.
+
+    Parameters
+    ----------
+    device
+        The backend's `_Device` (queue, staging, program, call lock).
+    real
+        The device's coordinate dtype.
+    windows : ndarray of float64, shape (k, 4)
+        The call's window table.
+    options : SegmentOptions
+    drop_edge_runs : bool
+        Runs along an edge are not accepted whole (rings: they break there).
+    local_size : int
+        Work-items per group of the kernels that sum counters per group.
+    """
+
+    def __init__(self, device: Any, real: Any, windows: np.ndarray, options: SegmentOptions,
+                 drop_edge_runs: bool, local_size: int) -> None:
+        self.device = device
+        self.local_size = local_size
+        self.real = real
+        self.windows = windows
+        self.options = options
+        self.drop_edge_runs = drop_edge_runs
+        self.ledger = Ledger()
+        self.counters: list[np.ndarray] = []
+        with np.errstate(over="ignore"):
+            self.bounds = np.ascontiguousarray(windows, dtype=real)
+        with device.call_lock:
+            self.kernels = device.program(real is np.float64)
+            self.d_windows = self.ledger.to_device(device.queue, self.bounds.reshape(-1))
+            self.nothing = self.ledger.to_device(device.queue, np.zeros(0, np.uint8))
+
+    def start(self, data: np.ndarray, xy: np.ndarray, part_offsets: np.ndarray,
+              part_window: np.ndarray) -> _Range:
+        """Send a range up and classify its chunks; return it in flight.
+
+        `data` is the range's vertices in the device's dtype, `xy` the same in float64
+        (a float32 device's uncut ends are put back from it), `part_offsets` its parts'
+        offsets into them (from 0) and `part_window` their rows of the window table.
+        """
+        ledger = self.ledger
+        device = self.device
+        queue = device.queue
+        n_parts = part_offsets.shape[0] - 1
+        segments = np.maximum(np.diff(part_offsets), 1) - 1
+        chunks_per_part = -(-segments // PL.RUN_LEAF_SEGMENTS)
+        chunk_start = exclusive_sum(chunks_per_part)
+        n_chunks = int(chunk_start[-1])
+        chunk_part = np.repeat(np.arange(n_parts, dtype=np.int64), chunks_per_part)
+        r = _Range(xy, part_offsets, part_window, chunk_start, chunk_part, n_chunks)
+        local = self.local_size
+        part_groups = max(1, -(-n_parts // local))
+        n_runs = self.options.n if self.options.n > 0 else PL.RUN_N_AUTO
+        with device.call_lock:
+            d = r.device
+            d["xy"] = ledger.staged(device, data.reshape(-1), _segments.CHUNK_SEGMENTS)
+            # Not waited for: the host arrays live as long as the range (`r.held`).
+            r.held = [np.ascontiguousarray(part_offsets, np.int64), chunk_start, chunk_part,
+                      np.ascontiguousarray(part_window, np.int64)]
+            for name, array in zip(("offsets", "chunk_start", "chunk_part", "part_window"),
+                                   r.held, strict=True):
+                d[name] = ledger.to_device(queue, array, wait=False)
+            d["boxes"] = cl_array.empty(queue, max(1, 4 * n_chunks), self.real)
+            d["decision"] = cl_array.empty(queue, max(1, n_chunks), np.uint8)
+            d["segmented"] = cl_array.empty(queue, max(1, n_chunks), np.int64)
+            d["run_counters"] = cl_array.empty(queue, part_groups * C.WIDTH, np.int64)
+            # Kernels wait for the uploads through the staging queue(s).
+            ready = list(ledger.ready)
+            if n_chunks:
+                ledger.kernel_events.append(self.kernels.chunk_boxes(
+                    queue, (n_chunks,), None, buffer_of(d["xy"]), buffer_of(d["offsets"]),
+                    buffer_of(d["chunk_start"]), buffer_of(d["chunk_part"]),
+                    np.int64(n_chunks), buffer_of(d["boxes"]), wait_for=ready))
+            ledger.kernel_events.append(self.kernels.classify_runs(
+                queue, (part_groups * local,), (local,), buffer_of(d["boxes"]),
+                buffer_of(d["offsets"]), buffer_of(d["chunk_start"]),
+                buffer_of(d["part_window"]), buffer_of(self.d_windows), np.int64(n_parts),
+                np.int32(n_runs), np.int32(self.drop_edge_runs),
+                np.int32(self.options.method is Method.RNSCA), buffer_of(self.nothing),
+                np.int32(1), buffer_of(d["decision"]), buffer_of(d["segmented"]),
+                buffer_of(d["run_counters"]), wait_for=ready))
+            d["position"] = d["segmented"]
+            if n_chunks:
+                event, d["position"] = cl_array.cumsum(d["segmented"][:n_chunks], queue=queue,
+                                                       return_event=True)
+                ledger.kernel_events.append(event)
+                # The chunks' piece rows, inclusive: the assembly's piece_start, shifted.
+                r.piece_end = ledger.from_device(queue, d["position"][:n_chunks], wait=False)
+                r.piece_end_read = ledger.copy_events[-1:]
+            queue.flush()
+        return r
+
+    def clip(self, r: _Range) -> None:
+        """Clip the range's undecided chunks once their count is back; read all back later."""
+        ledger = self.ledger
+        device = self.device
+        queue = device.queue
+        options = self.options
+        if r.piece_end_read:
+            cl.wait_for_events(r.piece_end_read)
+        r.total = total = int(r.piece_end[-1]) if r.n_chunks else 0
+        local = self.local_size
+        chunk_groups = max(1, -(-r.n_chunks // local))
+        d = r.device
+        with device.call_lock:
+            reads_from = len(ledger.copy_events)
+            keep = cl_array.empty(queue, max(1, total), np.uint8)
+            result = cl_array.empty(queue, max(1, 6 * total), self.real)
+            chunk_counters = cl_array.empty(queue, chunk_groups * C.WIDTH, np.int64)
+            ledger.kernel_events.append(self.kernels.clip_chunk_segments(
+                queue, (chunk_groups * local,), (local,), buffer_of(d["xy"]),
+                buffer_of(d["offsets"]), buffer_of(d["chunk_start"]),
+                buffer_of(d["chunk_part"]), buffer_of(d["part_window"]),
+                buffer_of(self.d_windows), np.int64(r.n_chunks), buffer_of(d["decision"]),
+                buffer_of(d["segmented"]), buffer_of(d["position"]),
+                np.int32(METHOD_ID[options.method]), np.int32(options.n),
+                np.int32(options.max_depth), self.real(options.tolerance),
+                np.int32(options.mode is Mode.EXACT), buffer_of(keep), buffer_of(result),
+                buffer_of(chunk_counters)))
+            d.update(keep=keep, result=result, chunk_counters=chunk_counters)
+            r.reads = {
+                "decision": ledger.from_device(queue, d["decision"][:r.n_chunks], wait=False),
+                "keep": ledger.from_device(queue, keep[:total], wait=False),
+                "pieces": ledger.from_device(queue, result[:6 * total], wait=False),
+                "run_counters": ledger.from_device(queue, d["run_counters"], wait=False),
+                "chunk_counters": ledger.from_device(queue, chunk_counters, wait=False)}
+            r.reads["events"] = ledger.copy_events[reads_from:]
+            queue.flush()
+
+    def finish(self, r: _Range) -> Tables:
+        """Wait for the range's reads; return its tables (and keep its counter rows)."""
+        events = r.reads.pop("events")
+        if events:
+            cl.wait_for_events(events)
+        reads = r.reads
+        total = r.total
+        n_chunks = r.n_chunks
+        self.counters += [reads["run_counters"].reshape(-1, C.WIDTH),
+                          reads["chunk_counters"].reshape(-1, C.WIDTH)]
+        piece_start = np.zeros(n_chunks, dtype=np.int64)
+        if n_chunks:
+            piece_start[1:] = r.piece_end[:-1]
+        pieces = reads["pieces"].reshape(total, 6).astype(np.float64, copy=False)
+        if self.real is np.float32:
+            # Each chunk's first vertex, and its rows among the pieces.
+            chunk_first = (r.part_offsets[r.chunk_part] + (np.arange(n_chunks)
+                           - r.chunk_start[r.chunk_part]) * PL.RUN_LEAF_SEGMENTS)
+            exact_float32_ends(pieces, r.xy, self.windows, r.part_window, r.chunk_part,
+                               chunk_first, np.diff(piece_start, append=total))
+        r.device.clear()  # the device buffers go back
+        r.held.clear()
+        return Tables(r.chunk_start[:-1].copy(), reads["decision"], piece_start,
+                      reads["keep"].view(np.bool_), pieces)
+
+    def whole(self, data: np.ndarray, xy: np.ndarray, part_offsets: np.ndarray,
+              part_window: np.ndarray) -> Tables:
+        """Return the tables of one range, start to finish (nothing to overlap with)."""
+        r = self.start(data, xy, part_offsets, part_window)
+        self.clip(r)
+        return self.finish(r)
+
+    def totals(self, name: str, precision: Precision) -> tuple[np.ndarray, DeviceStats]:
+        """Return the call's device counter rows and stats, once every range is finished."""
+        counters = (np.concatenate(self.counters) if self.counters
+                    else np.zeros((0, C.WIDTH), dtype=np.int64))
+        return counters, self.ledger.stats(name, precision)
+
+
+def pipelined(call: RunCall, ranges: Sequence[T], start: Callable[[T], _Range],
+              ) -> Iterator[tuple[T, Tables]]:
+    """Yield each range with its tables, in order, the device ahead of the consumer.
+
+    `start` sends a range up (`RunCall.start`). Range i + 1 is started and range i
+    clipped before range i - 1 is yielded: while the consumer assembles range i - 1,
+    the device works on those two.
+    """
+    previous: tuple[T, _Range] | None = None
+    current: tuple[T, _Range] | None = None
+    for item in ranges:
+        upcoming = (item, start(item))
+        if current is not None:
+            call.clip(current[1])
+            if previous is not None:
+                yield previous[0], call.finish(previous[1])
+            previous = current
+        current = upcoming
+    if current is not None:
+        call.clip(current[1])
+    for pending in (previous, current):
+        if pending is not None:
+            yield pending[0], call.finish(pending[1])
+
+
+def exact_float32_ends(pieces: np.ndarray, xy: np.ndarray, windows: np.ndarray,
+                       part_window: np.ndarray, chunk_part: np.ndarray,
+                       chunk_first: np.ndarray, rows: np.ndarray) -> None:
+    """Give float32 pieces their input vertices back, and keep them in their windows.
+
+    An end not cut (t = 0 or 1) is an input vertex, but rounded to float32: the host
+    puts the float64 vertex back, so chains join at it as on the other backends. A cut
+    end lies exactly on the float32 edge line: it is put on the float64 one (the polygon
+    walk compares boundary positions exactly), and every end is clamped into the window.
+    """
+    segment = np.repeat(chunk_first, rows) + (np.arange(pieces.shape[0])
+                                              - np.repeat(np.cumsum(rows) - rows, rows))
+    window = windows[part_window[np.repeat(chunk_part, rows)]]
+    start = pieces[:, 0] == 0.0
+    end = pieces[:, 1] == 1.0
+    pieces[start, 2:4] = xy[segment[start]]
+    pieces[end, 4:6] = xy[segment[end] + 1]
+    rounded = window.astype(np.float32).astype(np.float64)
+    for column, bound in ((2, 0), (3, 1), (4, 0), (5, 1)):
+        values = pieces[:, column]
+        for side in (bound, bound + 2):
+            on_edge = values == rounded[:, side]
+            values[on_edge] = window[on_edge, side]
+        np.clip(values, window[:, bound], window[:, bound + 2], out=values)

@@ -147,3 +147,45 @@ def test_drawn_geometries_in_ranges_agree(runs, data, kind, vertices, z):
     triple = shapely.to_ragged_array(np.array(geometries, dtype=object), include_z=z)
     with ranges_of(runs, vertices):
         assert_same(triple, window, keep_empty=True)
+
+
+# --- the pipeline's order: the device is given work before the host waits ---------------
+
+class _Recorder:
+    """A stand-in for `RunCall` that records the order of the pipeline's steps."""
+
+    def __init__(self):
+        self.steps = []
+
+    def start(self, item):
+        self.steps.append(("start", item))
+        return item
+
+    def clip(self, item):
+        self.steps.append(("clip", item))
+
+    def finish(self, item):
+        self.steps.append(("finish", item))
+        return f"tables {item}"
+
+
+@pytest.mark.parametrize("n", [0, 1, 2, 3, 6])
+def test_the_device_is_two_ranges_ahead_of_the_host(runs, n):
+    call = _Recorder()
+    yielded = []
+    for item, tables in runs.pipelined(call, range(n), call.start):
+        assert tables == f"tables {item}"
+        # While the host works on `item`, the next range is clipped and the one after
+        # started (where there are such ranges).
+        done = {step for step in call.steps}
+        if item + 1 < n:
+            assert ("clip", item + 1) in done
+        if item + 2 < n:
+            assert ("start", item + 2) in done
+        assert ("finish", item + 1) not in done
+        yielded.append(item)
+    assert yielded == list(range(n))
+    # Each range is started, clipped and finished once, in that order.
+    for item in range(n):
+        order = [s for s in call.steps if s[1] == item]
+        assert order == [("start", item), ("clip", item), ("finish", item)]

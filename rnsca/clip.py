@@ -128,7 +128,10 @@ def clip_segments(segments: npt.ArrayLike, window: Window | Iterable[float] | No
     segments : array_like, shape (n, 4) or (n, 2, 2), or pyopencl.array.Array
         ``[x0, y0, x1, y1]`` per segment; finite; converted to float64. With
         ``backend="opencl"``, an (n, 4) device array in the device's precision stays on
-        the device, and so do the pieces (see README, "Data kept on the device").
+        the device, and so do the pieces (see README, "Data kept on the device"); with
+        ``windows=`` too: the pairs are found and clipped there, and `segments`,
+        `source`, `t` and ``window`` come back as device arrays (``window_offsets`` on
+        the host).
     window : Window or sequence of 4 floats
         ``(xmin, ymin, xmax, ymax)``.
     windows : array_like, shape (k, 4), optional
@@ -206,10 +209,6 @@ def clip_segments(segments: npt.ArrayLike, window: Window | Iterable[float] | No
     else:
         array = as_segments(segments, check_values=False)
     if table is not None:
-        if is_device_array(array):
-            raise InvalidGeometryError(
-                "windows= takes host segments (the windows each segment touches are found "
-                "on the host); give a NumPy array")
         engine.capabilities.require("windows", options.mode)
         out = engine.clip_segment_windows(array, table, options, source="source" in wanted,
                                           t="t" in wanted)

@@ -21,7 +21,8 @@ import numpy.typing as npt
 from rnsca.errors import InvalidWindowError
 from rnsca.kernels import windows as K
 
-__all__ = ["WindowPairs", "as_windows", "assign", "assign_boxes", "grid_of", "vertex_boxes"]
+__all__ = ["WindowPairs", "as_windows", "assign", "assign_boxes", "grid_of", "vertex_boxes",
+           "window_finder"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -112,12 +113,13 @@ def _equally_spaced(edges: np.ndarray) -> bool:
     return bool(steps.size and np.ptp(steps) <= 1e-9 * steps.mean())
 
 
-def assign(segments: np.ndarray, windows: np.ndarray) -> WindowPairs:
-    """Return the pairs of every segment with every window its box touches.
+def window_finder(windows: np.ndarray) -> K.WindowFinder:
+    """Return how `assign` finds the windows of a box: a grid's edges, or the sweep's order.
 
-    `segments` is float64 (n, 4), finite; `windows` a table from `as_windows`.
+    `windows` is a table from `as_windows`. Small (the size of the table) and cheap: the
+    OpenCL backend computes it here and runs the same search on the device, so the two
+    find the same pairs.
     """
-    k = windows.shape[0]
     grid = grid_of(windows)
     if grid is not None:
         xs, ys, cell_window = grid
@@ -132,13 +134,22 @@ def assign(segments: np.ndarray, windows: np.ndarray) -> WindowPairs:
         # Rounded up: a width rounded down (a window from -1e-67 to 1 is "1.0" wide) would
         # make the sweep miss the windows that reach furthest west.
         widest = float(np.nextafter((windows[:, 2] - windows[:, 0]).max(), np.inf))
+    uniform = grid is not None and _equally_spaced(xs) and _equally_spaced(ys)
+    return K.WindowFinder(grid is not None, uniform,
+                          (xs.shape[0] - 1) / (xs[-1] - xs[0]) if uniform else 0.0,
+                          (ys.shape[0] - 1) / (ys[-1] - ys[0]) if uniform else 0.0,
+                          xs, ys, cell_window, windows, order, xmins, widest)
+
+
+def assign(segments: np.ndarray, windows: np.ndarray) -> WindowPairs:
+    """Return the pairs of every segment with every window its box touches.
+
+    `segments` is float64 (n, 4), finite; `windows` a table from `as_windows`.
+    """
+    k = windows.shape[0]
+    finder = window_finder(windows)
     n = segments.shape[0]
     threads = max(1, min(numba.get_num_threads(), -(-n // 65536)))
-    uniform = grid is not None and _equally_spaced(xs) and _equally_spaced(ys)
-    finder = K.WindowFinder(grid is not None, uniform,
-                            (xs.shape[0] - 1) / (xs[-1] - xs[0]) if uniform else 0.0,
-                            (ys.shape[0] - 1) / (ys[-1] - ys[0]) if uniform else 0.0,
-                            xs, ys, cell_window, windows, order, xmins, widest)
     counts = np.zeros((threads, k), dtype=np.int64)
     K.assign_counts(segments, finder, threads, counts)
     per_window = counts.sum(axis=0)

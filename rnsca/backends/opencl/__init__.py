@@ -90,6 +90,7 @@ from rnsca.backends.numba_cpu import (
     warm_up_segments,
 )
 from rnsca.backends.opencl import segments as _segments
+from rnsca.backends.opencl import windows as _windows
 from rnsca.backends.opencl.runs import (
     Ledger,
     RunCall,
@@ -106,7 +107,7 @@ from rnsca.kernels import polylines as PL
 from rnsca.kernels import records as R
 from rnsca.kernels.copies import copy_ranges
 from rnsca.kernels.outcode import BOTTOM, LEFT, RIGHT, TOP
-from rnsca.many_windows import assign
+from rnsca.many_windows import assign, window_finder
 from rnsca.options import Backend, Curves, Mode, PathOptions, Precision, SegmentOptions
 from rnsca.stats import ClipStats, DeviceStats
 from rnsca.window import Window, WindowTable
@@ -279,7 +280,8 @@ class _Device:
                     program.clip_segments, program.write_pieces, program.chunk_boxes,
                     program.classify_runs, program.clip_chunk_segments,
                     program.classify_bezier, program.flatten_bezier,
-                    program.classify_bezier_runs, program.reduce_counters)
+                    program.classify_bezier_runs, program.reduce_counters,
+                    program.assign_pairs, program.reduce_first_bad, program.window_starts)
             return self.programs[options]
 
     def scan(self) -> GenericScanKernel:
@@ -292,6 +294,21 @@ class _Device:
                     input_expr="keep[i]", scan_expr="a+b", neutral="0",
                     output_statement="position[i] = item;")
             return self.scans["int64"]
+
+    def table_scan(self) -> GenericScanKernel:
+        """Return the in-place exclusive int64 prefix sum of the many-window assignment.
+
+        Each entry becomes the sum of those before it, and ``summary[0]`` the sum of all
+        (`windows.assign_on_device`; built once).
+        """
+        with self.lock:
+            if "table" not in self.scans:
+                self.scans["table"] = GenericScanKernel(
+                    self.context, np.int64,
+                    arguments="__global long *table, __global long *summary",
+                    input_expr="table[i]", scan_expr="a+b", neutral="0",
+                    output_statement="table[i] = prev_item; if (i == 0) summary[0] = last_item;")
+            return self.scans["table"]
 
 
 def _build_program(context: cl.Context, name: str, source: str, options: list) -> cl.Program:
@@ -322,6 +339,9 @@ class _Kernels:
     flatten_bezier: cl.Kernel
     classify_bezier_runs: cl.Kernel
     reduce_counters: cl.Kernel
+    assign_pairs: cl.Kernel
+    reduce_first_bad: cl.Kernel
+    window_starts: cl.Kernel
 
 
 _DEVICES: dict[str, _Device] = {}
@@ -457,61 +477,111 @@ class OpenCLBackend:
             np.clip(pieces[:, 1::2], window.ymin, window.ymax, out=pieces[:, 1::2])
         return SegmentPieces(pieces, host.source, host.t, stats)
 
-    def clip_segment_windows(self, segments: np.ndarray, windows: np.ndarray,
+    def clip_segment_windows(self, segments: np.ndarray | cl_array.Array, windows: np.ndarray,
                              options: SegmentOptions, *, source: bool = True,
                              t: bool = True) -> SegmentPieces:
         """Return each segment's piece in each window; see `ClipBackend.clip_segment_windows`.
 
-        The pairs come from the host (`many_windows.assign`, the one assignment); the
-        segments go up once, whole, and so do the pairs; the pairs are then clipped in
-        pipelined chunks (`segments.clip_host` with ``pairs``), each piece written with
-        its window.
+        In float64 the (segment, window) pairs are made on the device, where the segments
+        are (`windows.assign_on_device`: `many_windows.assign`'s pairs, in its order);
+        only their count comes back before the clip. Host segments go up once, whole,
+        and the pairs are clipped in pipelined chunks (`segments.clip_host` with
+        ``pairs``), each piece written with its window. A `pyopencl.array.Array` of this
+        backend's context and dtype stays on the device, and so do the pieces, `source`,
+        `t` and ``window`` (`segments.clip_device`); ``window_offsets`` (int64, on the
+        host) is found there too: only it and the counts come back.
+
+        The host assigns instead (`many_windows.assign`, the pairs then sent up; device
+        segments are read back for it) on a float32 device, whose coordinates cannot
+        give the float64 boxes' pairs exactly, and for more windows than
+        `windows.assign_items` takes.
 
         Raises
         ------
         InvalidGeometryError, InvalidWindowError
-            A segment that is not finite; in float32, as `clip_segments`.
+            A segment that is not finite (on the device, found before anything is
+            clipped); in float32, as `clip_segments`.
+        ValueError
+            A device array of another context, dtype or shape.
         """
-        check_segment_values(segments)  # the assignment reads the boxes
         real = self.real
+        on_device = isinstance(segments, cl_array.Array)
+        if isinstance(segments, cl_array.Array):
+            self._check_device_segments(segments)
+        n = int(segments.shape[0])
+        k = windows.shape[0]
+        items = _windows.assign_items(n, k) if real is np.float64 and n else 0
         with np.errstate(over="ignore"):
-            data: np.ndarray = np.ascontiguousarray(segments, dtype=real)
             bounds: np.ndarray = np.ascontiguousarray(windows, dtype=real)
-        if real is np.float32:
-            _check_float32(data, bounds[0])
-            _check_float32_lines(data.reshape(-1, 2), bounds)
-        pairs = assign(segments, windows)
-        p = int(pairs.segment.shape[0])
+        pairs = None
+        data: np.ndarray | None = None
+        if items == 0:
+            host = np.ascontiguousarray(
+                segments.get() if isinstance(segments, cl_array.Array) else segments,
+                dtype=np.float64)
+            check_segment_values(host)  # the assignment reads the boxes
+            if real is np.float32:
+                with np.errstate(over="ignore"):
+                    data = host.astype(np.float32)
+                _check_float32(data, bounds[0])
+                _check_float32_lines(data.reshape(-1, 2), bounds)
+            else:
+                data = host
+            pairs = assign(host, windows)
+        elif not on_device:
+            data = np.ascontiguousarray(segments, dtype=np.float64)
         device = self._device
         assert device.staging is not None
+        chunk = _segments.CHUNK_SEGMENTS
         with device.call_lock:
-            run = self._segment_run(bounds if p else None, options, source, t)
-            if p:
-                chunk = _segments.CHUNK_SEGMENTS
-                whole = _segments.upload_whole(run, device.staging, data, chunk)
-                run.pair_segment = _segments.upload_whole(run, device.staging, pairs.segment,
-                                                          chunk)
-                run.pair_window = _segments.upload_whole(run, device.staging, pairs.window(),
-                                                         chunk)
-                host, totals, m = _segments.clip_host(run, device.staging, None, chunk,
-                                                      pairs=p, segments=whole)
+            run = self._segment_run(bounds, options, source, t)
+            if isinstance(segments, cl_array.Array):
+                whole = buffer_of(segments)
             else:
-                host = _segments.HostOutputs.empty(0, source, t, True)
+                assert data is not None
+                whole = _segments.upload_whole(run, device.staging, data, chunk)
+            if pairs is None:
+                p, bad = (_windows.assign_on_device(run, device.queue, device.table_scan(),
+                                                    whole, n, window_finder(windows), items)
+                          if n else (0, n))
+                if bad < n:
+                    self._raise_invalid(segments, bad, on_device)
+            else:
+                p = int(pairs.segment.shape[0])
+                if p:
+                    run.pair_segment = _segments.upload_whole(run, device.staging,
+                                                              pairs.segment, chunk)
+                    run.pair_window = _segments.upload_whole(run, device.staging,
+                                                             pairs.window(), chunk)
+            window_offsets = None
+            if isinstance(segments, cl_array.Array):
+                outputs, totals, m = _segments.clip_device(run, device.queue, segments, p,
+                                                           device.allocator)
+                window_offsets = _windows.window_offsets_on_device(
+                    run, device.queue, outputs["window"], m, k)
+            elif p:
+                host_out, totals, m = _segments.clip_host(run, device.staging, None, chunk,
+                                                          pairs=p, segments=whole)
+            else:
+                host_out = _segments.HostOutputs.empty(0, source, t, True)
                 totals, m = np.zeros((0, _SEGMENT_COUNTERS + 1), np.int64), 0
             device_stats = self._run_stats(run)
         rows = np.zeros((max(1, totals.shape[0]), C.WIDTH), dtype=np.int64)
         rows[:totals.shape[0], :_SEGMENT_COUNTERS] = totals[:, :-1]
         stats = ClipStats.from_counters(rows, p, m, device=device_stats)
-        assert host.window is not None
+        if window_offsets is not None:
+            return SegmentPieces(outputs["pieces"], outputs["source"], outputs["t"], stats,
+                                 outputs["window"], window_offsets)
+        assert host_out.window is not None
         if real is np.float32:
-            bounds64 = windows[host.window]
+            bounds64 = windows[host_out.window]
             for axis in (0, 1):
-                np.clip(host.pieces[:, axis::2], bounds64[:, [axis]], bounds64[:, [axis + 2]],
-                        out=host.pieces[:, axis::2])
-        window_offsets = np.zeros(windows.shape[0] + 1, dtype=np.int64)
-        np.cumsum(np.bincount(host.window, minlength=windows.shape[0]), out=window_offsets[1:])
-        return SegmentPieces(host.pieces, host.source, host.t, stats, host.window,
-                             window_offsets)
+                np.clip(host_out.pieces[:, axis::2], bounds64[:, [axis]],
+                        bounds64[:, [axis + 2]], out=host_out.pieces[:, axis::2])
+        window_offsets = np.zeros(k + 1, dtype=np.int64)
+        np.cumsum(np.bincount(host_out.window, minlength=k), out=window_offsets[1:])
+        return SegmentPieces(host_out.pieces, host_out.source, host_out.t, stats,
+                             host_out.window, window_offsets)
 
     def _segment_run(self, bounds: np.ndarray | None, options: SegmentOptions, source: bool,
                      t: bool) -> _segments.SegmentRun:

@@ -1463,3 +1463,230 @@ __kernel void classify_bezier_runs(__global const REAL *controls,
     run_decision[r] = (inside && !flatten) ? CURVE_RUN_ACCEPTED
                       : (beyond ? CURVE_RUN_REJECTED : CURVE_RUN_SEGMENTED);
 }
+
+/* --- kernels/windows.py: the (segment, window) pairs of many windows ------------------ */
+/* `assign_pairs` is `assign_counts` and `assign_write` (one body, a `write` flag): the
+ * same box, the same closed-cell and box tests, the same guess-and-correct on equally
+ * spaced edges (`_low_cell`, `_high_cell`), the same binary searches and the same sweep
+ * (from one ulp below bx0 - widest, `widest` rounded up by the host), so in float64 the
+ * pairs are `rnsca.many_windows.assign`'s, in the same order. Work-item t of `items`
+ * owns the segments t n / items .. (t + 1) n / items - 1 and counts its pairs of window
+ * w in table[w items + t] (window-major): the host's exclusive scan of the table gives
+ * every (window, work-item) its first slot, and the write pass puts the pairs there,
+ * sorted by window then segment (a stable counting sort, as on the host). */
+
+/* What `_visit` reads of the host's `WindowFinder` (`many_windows.window_finder`). */
+typedef struct {
+    int grid, uniform;
+    REAL x_scale, y_scale;
+    __global const REAL *xs;
+    long n_xs;
+    __global const REAL *ys;
+    long n_ys;
+    __global const long *cell_window;  /* (rows, cols) row-major */
+    __global const REAL *windows;
+    long k;
+    __global const long *order;
+    __global const REAL *xmins;
+    REAL widest;
+} Finder;
+
+/* The first index of the sorted `edges` whose value is >= `value` (`_first_not_below`). */
+long first_not_below(__global const REAL *edges, long count, REAL value) {
+    long lo = 0, hi = count;
+    while (lo < hi) {
+        long mid = (lo + hi) / 2;
+        if (edges[mid] < value)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    return lo;
+}
+
+/* The first index of the sorted `edges` whose value is > `value` (`_first_above`). */
+long first_above(__global const REAL *edges, long count, REAL value) {
+    long lo = 0, hi = count;
+    while (lo < hi) {
+        long mid = (lo + hi) / 2;
+        if (edges[mid] <= value)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    return lo;
+}
+
+/* `_guess`: the cell of `value` on equally spaced edges by arithmetic, off by one at most. */
+long guess_cell(__global const REAL *edges, long count, REAL value, REAL scale) {
+    long cells = count - 1;
+    REAL g = (value - edges[0]) * scale;
+    if (!(g > (REAL)0))  /* below the first edge, or NaN */
+        return 0;
+    if (g >= (REAL)(cells - 1))
+        return cells - 1;
+    return (long)g;
+}
+
+/* `_low_cell`: the first cell whose right edge is >= `value` (0 if none is below). */
+long low_cell(__global const REAL *edges, long count, REAL value, REAL scale) {
+    long g = guess_cell(edges, count, value, scale);
+    while (g > 0 && edges[g] >= value)
+        g--;
+    while (g < count - 2 && edges[g + 1] < value)
+        g++;
+    return g;
+}
+
+/* `_high_cell`: the last cell whose left edge is <= `value` (-1 if none). */
+long high_cell(__global const REAL *edges, long count, REAL value, REAL scale) {
+    long g = guess_cell(edges, count, value, scale);
+    while (g < count - 2 && edges[g + 1] <= value)
+        g++;
+    while (g >= 0 && edges[g] > value)
+        g--;
+    return g;
+}
+
+/* `_take`: count the pair (segment i, window w) of work-item t, or write it at its slot. */
+void take_pair(long w, long t, long items, long i, int write, __global long *table,
+               __global long *pair_segment, __global int *pair_window) {
+    __global long *slot = table + w * items + t;
+    if (write) {
+        pair_segment[*slot] = i;
+        pair_window[*slot] = (int)w;
+    }
+    *slot += 1;
+}
+
+/* `_visit`: count or write the pairs of segment i (its box against the windows). */
+void visit_windows(__global const REAL *segments, long i, const Finder *f, long t,
+                   long items, int write, __global long *table, __global long *pair_segment,
+                   __global int *pair_window) {
+    REAL x0 = segments[4 * i], y0 = segments[4 * i + 1];
+    REAL x1 = segments[4 * i + 2], y1 = segments[4 * i + 3];
+    REAL bx0 = py_min(x0, x1), by0 = py_min(y0, y1);
+    REAL bx1 = py_max(x0, x1), by1 = py_max(y0, y1);
+    if (f->grid) {
+        __global const REAL *xs = f->xs, *ys = f->ys;
+        long cols = f->n_xs - 1, rows = f->n_ys - 1;
+        long c0, c1, r0, r1;
+        /* Columns c with xs[c] <= bx1 and xs[c + 1] >= bx0 (closed cells). */
+        if (f->uniform) {
+            c0 = low_cell(xs, f->n_xs, bx0, f->x_scale);
+            c1 = high_cell(xs, f->n_xs, bx1, f->x_scale);
+            r0 = low_cell(ys, f->n_ys, by0, f->y_scale);
+            r1 = high_cell(ys, f->n_ys, by1, f->y_scale);
+        } else {
+            c0 = max(first_not_below(xs, f->n_xs, bx0) - 1, 0L);
+            c1 = min(first_above(xs, f->n_xs, bx1) - 1, cols - 1);
+            r0 = max(first_not_below(ys, f->n_ys, by0) - 1, 0L);
+            r1 = min(first_above(ys, f->n_ys, by1) - 1, rows - 1);
+        }
+        for (long r = r0; r <= r1; r++)
+            for (long c = c0; c <= c1; c++)
+                if (xs[c] <= bx1 && xs[c + 1] >= bx0 && ys[r] <= by1 && ys[r + 1] >= by0)
+                    take_pair(f->cell_window[r * cols + c], t, items, i, write, table,
+                              pair_segment, pair_window);
+        return;
+    }
+    /* Sweep: the windows sorted by xmin; candidates have xmin in [bx0 - widest, bx1]. */
+    long hi = first_above(f->xmins, f->k, bx1);
+    /* One ulp below the rounded difference: never above the exact bx0 - widest. */
+    long lo = first_not_below(f->xmins, f->k, nextafter(bx0 - f->widest, -INF_REAL));
+    for (long s = lo; s < hi; s++) {
+        long w = f->order[s];
+        __global const REAL *win = f->windows + 4 * w;
+        if (win[0] <= bx1 && win[2] >= bx0 && win[1] <= by1 && win[3] >= by0)
+            take_pair(w, t, items, i, write, table, pair_segment, pair_window);
+    }
+}
+
+/* One pass of the assignment (`write` 0: count into `table`, which it zeroes first;
+ * 1: write at the slots the scan left in `table`). A segment that is not finite (as
+ * `clip_segments` tests it) gets no pair; counting, the smallest such segment of each
+ * group goes to first_bad[group] (n if none), and the host raises before writing. */
+__kernel __attribute__((reqd_work_group_size(LOCAL_SIZE, 1, 1)))
+void assign_pairs(__global const REAL *segments, const long n, const long items,
+                  const int grid, const int uniform, const REAL x_scale, const REAL y_scale,
+                  __global const REAL *xs, const long n_xs, __global const REAL *ys,
+                  const long n_ys, __global const long *cell_window,
+                  __global const REAL *windows, const long k, __global const long *order,
+                  __global const REAL *xmins, const REAL widest, const int write,
+                  __global long *table, __global long *pair_segment,
+                  __global int *pair_window, __global long *first_bad) {
+    __local long bad[LOCAL_SIZE];
+    long t = get_global_id(0);
+    long my_bad = n;
+    if (t < items) {
+        Finder f = {grid, uniform, x_scale, y_scale, xs, n_xs, ys, n_ys, cell_window,
+                    windows, k, order, xmins, widest};
+        if (!write)
+            for (long w = 0; w < k; w++)
+                table[w * items + t] = 0;
+        long end = (t + 1) * n / items;
+        for (long i = t * n / items; i < end; i++) {
+            REAL x0 = segments[4 * i], y0 = segments[4 * i + 1];
+            REAL x1 = segments[4 * i + 2], y1 = segments[4 * i + 3];
+            if (!(isfinite(x0) && isfinite(y0) && isfinite(x1) && isfinite(y1)
+                  && isfinite(x1 - x0) && isfinite(y1 - y0))) {
+                if (my_bad == n)  /* a work-item's segments rise: its first is its smallest */
+                    my_bad = i;
+                continue;
+            }
+            visit_windows(segments, i, &f, t, items, write, table, pair_segment,
+                          pair_window);
+        }
+    }
+    if (write)
+        return;
+    int l = get_local_id(0);
+    bad[l] = my_bad;
+    for (int step = LOCAL_SIZE / 2; step > 0; step /= 2) {
+        barrier(CLK_LOCAL_MEM_FENCE);
+        if (l < step)
+            bad[l] = min(bad[l], bad[l + step]);
+    }
+    if (l == 0)
+        first_bad[get_group_id(0)] = bad[0];
+}
+
+/* The smallest of the `groups` entries of first_bad into summary[1] (one work-group);
+ * the scan of the table puts the count of pairs in summary[0]: the one read before the
+ * write pass. */
+__kernel __attribute__((reqd_work_group_size(LOCAL_SIZE, 1, 1)))
+void reduce_first_bad(__global const long *first_bad, const long groups,
+                      __global long *summary) {
+    __local long part[LOCAL_SIZE];
+    int l = get_local_id(0);
+    long acc = LONG_MAX;
+    for (long r = l; r < groups; r += LOCAL_SIZE)
+        acc = min(acc, first_bad[r]);
+    part[l] = acc;
+    for (int step = LOCAL_SIZE / 2; step > 0; step /= 2) {
+        barrier(CLK_LOCAL_MEM_FENCE);
+        if (l < step)
+            part[l] = min(part[l], part[l + step]);
+    }
+    if (l == 0)
+        summary[1] = part[0];
+}
+
+/* offsets[w] (w = 0..k): the first of the `m` pieces, sorted by window, whose window is
+ * >= w (a binary search; offsets[k] = m): the pieces' window offsets, made where the
+ * pieces are, so only k + 1 numbers come back. */
+__kernel void window_starts(__global const int *window, const long m, const long k,
+                            __global long *offsets) {
+    long w = get_global_id(0);
+    if (w > k)
+        return;
+    long lo = 0, hi = m;
+    while (lo < hi) {
+        long mid = (lo + hi) / 2;
+        if (window[mid] < w)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    offsets[w] = lo;
+}

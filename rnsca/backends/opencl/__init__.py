@@ -553,6 +553,8 @@ class OpenCLBackend:
                                                               pairs.segment, chunk)
                     run.pair_window = _segments.upload_whole(run, device.staging,
                                                              pairs.window(), chunk)
+            if run.pair_segment is None:  # no pairs: still a pair run (a window output)
+                run.pair_segment = run.pair_window = device.nowhere
             window_offsets = None
             if isinstance(segments, cl_array.Array):
                 outputs, totals, m = _segments.clip_device(run, device.queue, segments, p,
@@ -582,6 +584,47 @@ class OpenCLBackend:
         np.cumsum(np.bincount(host_out.window, minlength=k), out=window_offsets[1:])
         return SegmentPieces(host_out.pieces, host_out.source, host_out.t, stats,
                              host_out.window, window_offsets)
+
+    def assign_windows(self, segments: np.ndarray | cl_array.Array,
+                       windows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Return the (segment, window) pairs `clip_segment_windows` clips, read back.
+
+        ``(pair_segment, pair_window)``, int64 and int32, sorted by window then segment:
+        made on the device where `clip_segment_windows` makes them (float64, windows
+        `windows.assign_items` takes), else by `many_windows.assign`; equal either way.
+        `segments` as for `clip_segment_windows`, finite; `windows` a table from
+        `many_windows.as_windows`. For checking the device's assignment.
+        """
+        n = int(segments.shape[0])
+        items = _windows.assign_items(n, windows.shape[0]) if self.real is np.float64 else 0
+        if items == 0 or n == 0:
+            host = np.ascontiguousarray(
+                segments.get() if isinstance(segments, cl_array.Array) else segments,
+                dtype=np.float64)
+            pairs = assign(host, windows)
+            return pairs.segment, pairs.window()
+        device = self._device
+        assert device.staging is not None
+        with device.call_lock:
+            # The clip settings are unused: only the window table is needed.
+            run = self._segment_run(windows, SegmentOptions.resolve(Window(*windows[0])),
+                                    False, False)
+            whole = (buffer_of(segments) if isinstance(segments, cl_array.Array) else
+                     _segments.upload_whole(run, device.staging,
+                                            np.ascontiguousarray(segments, np.float64),
+                                            _segments.CHUNK_SEGMENTS))
+            p, bad = _windows.assign_on_device(run, device.queue, device.table_scan(), whole,
+                                               n, window_finder(windows), items)
+            if bad < n:
+                self._raise_invalid(segments, bad, isinstance(segments, cl_array.Array))
+            pair_segment = np.empty(p, np.int64)
+            pair_window = np.empty(p, np.int32)
+            if p:
+                assert run.pair_segment is not None and run.pair_window is not None
+                run.download(device.queue, pair_segment, run.pair_segment, run.ready)
+                run.download(device.queue, pair_window, run.pair_window, run.ready)
+            self._run_stats(run)
+        return pair_segment, pair_window
 
     def _segment_run(self, bounds: np.ndarray | None, options: SegmentOptions, source: bool,
                      t: bool) -> _segments.SegmentRun:

@@ -33,6 +33,7 @@ from typing import Any, cast
 import numpy as np
 import pyopencl as cl
 import pyopencl.array as cl_array
+import pyopencl.tools
 from pyopencl.scan import GenericScanKernel
 
 from rnsca import constants
@@ -90,6 +91,11 @@ class _Slot:
     pinned_out: _Pinned
     segments: cl.Buffer
     buffers: dict
+    # The scan's scratch: a pool of the slot's own. A pool hands freed memory out again
+    # at once; shared by the two queues, the scratch of one slot's scan, freed while it
+    # still runs, went to the other's (garbage slots, pieces written out of bounds, when
+    # the pair clip's chunks overlapped). In one in-order queue, reuse waits its turn.
+    allocator: Any = None
     # The last copy out of `pinned_in`: its staging memory is free once that is done.
     staged: cl.Event | None = None
 
@@ -140,7 +146,8 @@ class Staging:
                            _Pinned(self.context, queue, (6 * item + 12) * capacity),
                            cl.Buffer(self.context, cl.mem_flags.READ_ONLY,
                                      4 * item * capacity),
-                           _device_buffers(self.context, capacity, real))
+                           _device_buffers(self.context, capacity, real),
+                           cl.tools.MemoryPool(cl.tools.ImmediateAllocator(queue)))
                      for queue in self.queues]
             self.slots[real] = slots
         return slots
@@ -195,11 +202,13 @@ class SegmentRun:
         return self.pair_segment is not None
 
     def clip(self, queue: cl.CommandQueue, segments: cl.Buffer, n: int, first: int,
-             buffers: dict, wait_for: list) -> cl.Event:
+             buffers: dict, wait_for: list, allocator: Any = None) -> cl.Event:
         """Enqueue the clip, scan and counter reduction of items first..first+n-1.
 
         Returns the reduction's event: after it, ``buffers["total"]`` holds the counters,
         the first non-finite item and the count of pieces (one row to read back).
+        `allocator` gives the scan's scratch: one used by `queue` alone (a slot's), or
+        the run's where everything runs on one queue.
         """
         real = self.real
         groups = groups_for(n, self.local_size)
@@ -209,9 +218,10 @@ class SegmentRun:
             np.int32(self.method), np.int32(self.n_fixed), np.int32(self.max_depth),
             real(self.tolerance), np.int32(self.exact), buffers["result"], buffers["keep"],
             buffers["counters"], buffers["first_bad"], wait_for=wait_for + self.ready)
-        keep = _Raw(buffers["keep"], queue, self.allocator)
-        position = _Raw(buffers["position"], queue, self.allocator)
-        scan = self.scan(keep, position, queue=queue, size=n, allocator=self.allocator,
+        allocator = allocator or self.allocator
+        keep = _Raw(buffers["keep"], queue, allocator)
+        position = _Raw(buffers["position"], queue, allocator)
+        scan = self.scan(keep, position, queue=queue, size=n, allocator=allocator,
                          wait_for=[clip])
         reduce = self.kernels.reduce_counters(
             queue, ((_WIDTH + 1) * self.local_size,), (self.local_size,), buffers["counters"],
@@ -382,7 +392,7 @@ def _start(run: SegmentRun, chunk: _Chunk, segments: cl.Buffer, wait_for: list) 
     """Enqueue the chunk's clip, scan and reduction, and the download of its row."""
     slot = chunk.slot
     reduced = run.clip(slot.queue, segments, chunk.n, chunk.first if run.pairs else 0,
-                       slot.buffers, wait_for)
+                       slot.buffers, wait_for, slot.allocator)
     chunk.events = [run.download(slot.queue, chunk.row, slot.buffers["total"],
                                  wait_for=[reduced])]
 

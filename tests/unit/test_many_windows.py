@@ -159,8 +159,11 @@ def test_device_stats_count_one_upload_of_the_segments(opencl, rng):
     windows = _grid(4)
     got = clip_segments(segs, windows=windows, backend="opencl")
     pairs = assign(segs, windows).segment.shape[0]
-    real = 8 if got.stats.device.precision == "float64" else 4
-    # Up: the window table, the segments once, each pair's segment and window.
-    assert got.stats.device.bytes_to_device == (16 * 4 + 2000 * 4) * real + pairs * 12
+    if got.stats.device.precision == "float64":
+        # Up: the window table, the segments once, the grid's edges (5 + 5) and cells
+        # (16); the pairs are made on the device.
+        assert got.stats.device.bytes_to_device == (16 * 4 + 2000 * 4 + 5 + 5 + 16) * 8
+    else:  # float32: assigned on the host, each pair's segment and window sent up
+        assert got.stats.device.bytes_to_device == (16 * 4 + 2000 * 4) * 4 + pairs * 12
     assert dataclasses.replace(got.stats, device=None) == clip_segments(
         segs, windows=windows).stats

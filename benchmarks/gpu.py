@@ -179,8 +179,32 @@ def many_windows(table: Table, n: int, k: int, repeats: int) -> None:
     to, ro = _best(lambda: rnsca.clip_segments(segs, windows=grid, backend="opencl"),
                    repeats)
     equal = _same_segments(ro, rn) and bool(np.array_equal(ro.window, rn.window))
-    table.add(f"{len(grid)} windows over {n / 1e6:g}M segments", tn, to, _split(ro, to),
-              equal, pieces=len(rn))
+    label = f"{len(grid)} windows over {n / 1e6:g}M segments"
+    table.add(label, tn, to, _split(ro, to), equal, pieces=len(rn))
+    _many_windows_device_resident(table, segs, grid, label, tn, rn, repeats)
+
+
+def _many_windows_device_resident(table: Table, segs: np.ndarray, grid: np.ndarray,
+                                  label: str, tn: float, rn, repeats: int) -> None:
+    """Time the same grid over segments already on the device, the outputs left there.
+
+    Beside the host row: the pairs are made and clipped on the device either way; this
+    row has no segment upload and no download of the pieces (the upload is timed apart).
+    """
+    import pyopencl.array as cl_array
+
+    from rnsca.backends.registry import get_backend
+
+    queue = get_backend("opencl")._device.queue
+    start = time.perf_counter()
+    on_device = cl_array.to_device(queue, segs)
+    queue.finish()
+    upload = time.perf_counter() - start
+    to, ro = _best(lambda: rnsca.clip_segments(on_device, windows=grid, backend="opencl"),
+                   repeats)
+    equal = (_same_segments(ro, rn) and bool(np.array_equal(ro.window.get(), rn.window))
+             and bool(np.array_equal(ro.window_offsets, rn.window_offsets)))
+    table.add(f"{label} device-resident", tn, to, _split(ro, to), equal, upload_s=upload)
 
 
 def lines(table: Table, n_lines: int, repeats: int) -> None:

@@ -282,8 +282,11 @@ class ClipBackend(Protocol):
         """Return the piece of each segment in each window it crosses.
 
         `windows` is a checked float64 (k, 4) table (`rnsca.many_windows.as_windows`);
-        the pairs come from `rnsca.many_windows.assign`. The pieces are sorted by window,
-        then source, with ``window`` and ``window_offsets`` set; the counters count the
+        the pairs are `rnsca.many_windows.assign`'s (a device backend may make them
+        itself, the same pairs). `segments` as for `clip_segments`: a device backend
+        also takes a device array it accepts, and then returns device arrays
+        (``window_offsets`` stays a host array). The pieces are sorted by window, then
+        source, with ``window`` and ``window_offsets`` set; the counters count the
         (segment, window) pairs clipped. Bad segments as `clip_segments`.
         """
         ...

@@ -7,6 +7,11 @@ pyopencl's prefix sum (``pyopencl.array.cumsum``) turns the counts into slots, a
 ``write_pieces`` copies the kept results there. Only the segments go to the device and
 only the pieces (and one counter row per work-group) come back.
 
+Many windows (`OpenCLBackend.clip_segment_windows`): the (segment, window) pairs are
+made on the device, where the segments are (`windows.assign_on_device`: the host's
+assignment ported, the same pairs in the same order), and clipped as segments are,
+each item a pair; only the pairs' count comes back before the clip.
+
 Lines and rings (`runs.RunCall`): ``chunk_boxes`` (one work-item per chunk of 16
 segments), ``classify_runs`` (RNSCA over runs of chunks, one work-item per line or ring)
 and ``clip_chunk_segments`` (the segments of undecided chunks, one work-item per chunk,

@@ -17,9 +17,10 @@ over `items` work-items, each owning a contiguous range of segments:
    window, then segment: `assign`'s pairs exactly, in the same order.
 
 The table has ``items * k`` entries (int64), at most `ASSIGN_TABLE_ENTRIES`: the more
-windows, the fewer work-items. Past `windows_fit` (k above 2**18 with the defaults)
-too few work-items would be left to fill a device and the host assigns
-(`assign_items` returns 0).
+windows, the fewer work-items. Past k = 2**18 (with the defaults) fewer than
+`MIN_ASSIGN_ITEMS` would be left, too few to fill a device, and the host assigns
+(`assign_items` returns 0). A device scheme for that regime (pairs per segment, then a
+sort by window) was not needed yet: tiles and grids have far fewer windows per call.
 """
 
 from __future__ import annotations

@@ -158,3 +158,65 @@ def test_device_input_needs_the_opencl_backend(small_chunks):
     on_device = cl_array.zeros(small_chunks._device.queue, (3, 4), np.float64)
     with pytest.raises(InvalidGeometryError, match="backend='opencl'"):
         clip_segments(on_device, W, backend="numba")
+
+
+# --- the caller's arrays in pinned memory: the pieces land where they stay ----------------
+
+def _pool(backend):
+    return backend._device.staging.outputs
+
+
+def test_float64_pieces_land_in_pinned_arrays_that_go_back_to_the_pool(small_chunks, rng):
+    import gc
+
+    segs = _uniform(rng, 30_000)
+    expected = clip_segments(segs, W)
+    pool = _pool(small_chunks)
+    first = clip_segments(segs, W, backend="opencl")
+    _same(first, expected)
+    assert first.segments.flags.c_contiguous and first.segments.dtype == np.float64
+    pinned = pool.allocated
+    del first
+    gc.collect()
+    # The next call of the same size pins nothing: it reuses what the first gave back.
+    again = clip_segments(segs, W, backend="opencl")
+    assert pool.allocated == pinned
+    _same(again, expected)
+
+
+def test_pinned_results_held_by_the_caller_are_never_reused(small_chunks, rng):
+    segs = _uniform(rng, 30_000)
+    held = [clip_segments(segs, W, backend="opencl") for _ in range(3)]
+    copies = [h.segments.copy() for h in held]
+    other = clip_segments(_uniform(rng, 30_000), W, backend="opencl")
+    for h, c in zip(held, copies, strict=True):
+        np.testing.assert_array_equal(h.segments, c)
+        assert not np.shares_memory(h.segments, other.segments)
+    assert not np.shares_memory(held[0].segments, held[1].segments)
+
+
+def test_a_call_that_keeps_few_pieces_returns_them_out_of_the_pool(small_chunks, rng):
+    pool = _pool(small_chunks)
+    segs = _uniform(rng, 30_000)
+    got = clip_segments(segs, (0.0, 0.0, 10.0, 10.0), backend="opencl")
+    _same(got, clip_segments(segs, (0.0, 0.0, 10.0, 10.0)))
+    # Fewer than a quarter kept: copied out, and the pinned memory is free again.
+    assert 0 < got.segments.shape[0] < 30_000 // 4
+    assert got.segments.base is None
+    assert pool.free_bytes > 0
+
+
+def test_the_pool_keeps_at_most_its_budget_free(opencl):
+    import gc
+
+    from rnsca.backends.opencl.segments import PinnedPool
+
+    device = opencl._device
+    pool = PinnedPool(device.context, device.queue, keep_bytes=1 << 20)
+    arrays = [pool.empty((1 << 15,), np.float64) for _ in range(8)]  # 256 KiB each
+    for a in arrays:
+        a[:] = 1.0
+    del arrays, a
+    gc.collect()
+    assert pool.free_bytes == 1 << 20
+    assert pool.empty((3, 4), np.int32).shape == (3, 4)

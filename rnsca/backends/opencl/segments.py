@@ -520,10 +520,9 @@ def _finish(run: SegmentRun, chunk: _Chunk, m: int, outputs: HostOutputs) -> int
         views = _out_views(slot, chunk.m)
         if outputs.direct:
             a, b = m, m + chunk.m
-            views = {"pieces": outputs.pieces[a:b],
-                     "source": outputs.source[a:b] if outputs.source is not None else None,
-                     "t": outputs.t[a:b] if outputs.t is not None else None,
-                     "window": outputs.window[a:b] if outputs.window is not None else None}
+            views = {name: array[a:b] for name, array in (
+                ("pieces", outputs.pieces), ("source", outputs.source), ("t", outputs.t),
+                ("window", outputs.window)) if array is not None}
         wanted = ["pieces"] + (["source"] if run.want_source else []) + (
             ["t"] if run.want_t else []) + (["window"] if run.pairs else [])
         chunk.events = [run.download(slot.queue, views[name], slot.buffers[name],

@@ -421,6 +421,18 @@ class OpenCLBackend:
         """Return the NumPy dtype of device coordinates."""
         return np.float64 if self.precision is Precision.FLOAT64 else np.float32
 
+    def empty_pinned(self, shape: int | tuple[int, ...], dtype: Any = np.float64) -> np.ndarray:
+        """Return an uninitialised host array in page-locked memory for this device.
+
+        Segments filled in here go up at full bus speed without the copy into the
+        staging buffers (the float64 results of host calls are such arrays too, so a
+        result fed to the next call goes up as it is). The memory returns to the
+        backend's pool when the array and its views are gone.
+        """
+        assert self._device.staging is not None
+        shape = (shape,) if isinstance(shape, int) else tuple(shape)
+        return self._device.staging.outputs.empty(shape, dtype)
+
     def clip_segments(self, segments: np.ndarray | cl_array.Array, window: Window,
                       options: SegmentOptions, *, source: bool = True,
                       t: bool = True) -> SegmentPieces:

@@ -90,7 +90,8 @@ class _Lease:
     finalizer gives the buffer back to the pool (`PinnedPool`).
     """
 
-    def __init__(self, pinned: _Pinned) -> None:
+    def __init__(self, pinned: _Pinned, pool: PinnedPool) -> None:
+        self.pool = pool
         self.__array_interface__ = {
             "data": (pinned.view.__array_interface__["data"][0], False),
             "shape": (pinned.nbytes,), "typestr": "|u1", "version": 3}
@@ -140,9 +141,16 @@ class PinnedPool:
         if pinned is None:
             pinned = _Pinned(self.context, self.queue, size)
             self.allocated += 1
-        lease = _Lease(pinned)
+        lease = _Lease(pinned, self)
         weakref.finalize(lease, self._give_back, pinned)
         return np.asarray(lease)[:nbytes].view(dtype).reshape(shape)
+
+    def owns(self, array: np.ndarray) -> bool:
+        """Return whether `array` is a view of memory this pool handed out (and is pinned)."""
+        base: Any = array
+        while isinstance(base, np.ndarray):
+            base = base.base
+        return isinstance(base, _Lease) and base.pool is self
 
     def _give_back(self, pinned: _Pinned) -> None:
         with self._lock:
@@ -412,19 +420,24 @@ def upload_whole(run: Any, staging: Staging, array: np.ndarray, chunk: int,
 
     The copies of successive pieces alternate between the slots' queues (one piece's
     host copy overlaps the other's transfer); the clips wait for them (``run.ready``).
+    An array in the pool's pinned memory (`PinnedPool.owns`: a result of an earlier
+    call, or `PinnedPool.empty`) goes up without the host copy.
     """
     slots = staging.slots_for(real or run.real, chunk)
     raw = np.ascontiguousarray(array).reshape(-1).view(np.uint8)
     buffer = cl.Buffer(staging.context, cl.mem_flags.READ_ONLY, max(8, raw.nbytes))
     step = slots[0].pinned_in.nbytes
+    pinned = staging.outputs.owns(raw)  # already page-locked: sent up as it is
     for c, offset in enumerate(range(0, raw.nbytes, step)):
         slot = slots[c % len(slots)]
-        staged = slot.stage(raw[offset:offset + step])
-        slot.staged = cl.enqueue_copy(slot.queue, buffer, staged, dst_offset=offset,
-                                      is_blocking=False)
-        run.copy_events.append(slot.staged)
+        staged = raw[offset:offset + step] if pinned else slot.stage(raw[offset:offset + step])
+        sent = cl.enqueue_copy(slot.queue, buffer, staged, dst_offset=offset,
+                               is_blocking=False)
+        if not pinned:
+            slot.staged = sent
+        run.copy_events.append(sent)
         run.bytes_to_device += staged.nbytes
-        run.ready.append(slot.staged)
+        run.ready.append(sent)
     return buffer
 
 
@@ -456,14 +469,19 @@ def clip_host(run: SegmentRun, staging: Staging, data: np.ndarray | None,
     non-finite item, or the largest int) and the count of pieces.
 
     Chunk c, in the slot c % 2: its input is copied into the slot's staging buffer and
-    sent up, and its kernels enqueued; then chunk c - 1's count is awaited and its
-    pieces written and sent down; then chunk c - 2's pieces, down by now, are copied
-    into the caller's arrays, while the device works on chunks c and c - 1.
+    sent up (from where it is, if it is pinned already), and its kernels enqueued; then
+    chunk c - 1's count is awaited and its pieces written and sent down (float64:
+    straight into the caller's pinned arrays); then chunk c - 2's pieces, down by now,
+    are copied into the caller's arrays (float32: converted; float64: nothing to do but
+    wait), while the device works on chunks c and c - 1.
     """
     n = data.shape[0] if data is not None else pairs
     slots = staging.slots_for(run.real, min(max(n, 1), chunk))
     outputs = HostOutputs.empty(n, run.want_source, run.want_t, run.pairs,
                                 staging.outputs if run.real is np.float64 else None)
+    # Input already page-locked (an earlier call's pieces, `PinnedPool.empty`): sent up
+    # from where it is, without the copy into the staging buffer.
+    pinned_input = data is not None and staging.outputs.owns(data)
     chunks: list[_Chunk] = []
     m = 0
     chunk = slots[0].capacity
@@ -471,9 +489,12 @@ def clip_host(run: SegmentRun, staging: Staging, data: np.ndarray | None,
         slot = slots[c % len(slots)]
         item = _Chunk(slot, min(chunk, n - start), start)
         if data is not None:
-            staged = slot.stage(data[start:start + item.n])
-            slot.staged = run.upload(slot.queue, slot.segments, staged)
-            _start(run, item, slot.segments, [slot.staged])
+            if pinned_input:
+                sent = run.upload(slot.queue, slot.segments, data[start:start + item.n])
+            else:
+                slot.staged = sent = run.upload(slot.queue, slot.segments,
+                                                slot.stage(data[start:start + item.n]))
+            _start(run, item, slot.segments, [sent])
         else:
             assert segments is not None
             _start(run, item, segments, [])

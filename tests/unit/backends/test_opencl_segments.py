@@ -220,3 +220,28 @@ def test_the_pool_keeps_at_most_its_budget_free(opencl):
     gc.collect()
     assert pool.free_bytes == 1 << 20
     assert pool.empty((3, 4), np.int32).shape == (3, 4)
+
+
+def test_pinned_input_goes_up_without_the_staging_copy(small_chunks, rng, monkeypatch):
+    from rnsca.backends.opencl import segments
+
+    segs = _uniform(rng, 30_000)
+    expected = clip_segments(segs, W)
+    filled = small_chunks.empty_pinned(segs.shape)
+    filled[:] = segs
+    first = clip_segments(segs, W, backend="opencl")  # staged (ordinary memory)
+
+    def no_staging(*args, **kwargs):
+        raise AssertionError("pinned input was copied into the staging buffer")
+
+    monkeypatch.setattr(segments._Slot, "stage", no_staging)
+    _same(clip_segments(filled, W, backend="opencl"), expected)
+    # A result is pinned: fed to the next call, it goes up as it is.
+    chained = clip_segments(first.segments, (300.0, 300.0, 700.0, 700.0), backend="opencl")
+    _same(chained, clip_segments(expected.segments, (300.0, 300.0, 700.0, 700.0)))
+    # So do many windows' segments (uploaded whole).
+    grid = np.array([[x, y, x + 250.0, y + 250.0] for x in (250.0, 500.0)
+                     for y in (250.0, 500.0)])
+    np.testing.assert_array_equal(
+        clip_segments(filled, windows=grid, backend="opencl").segments,
+        clip_segments(segs, windows=grid).segments)

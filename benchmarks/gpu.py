@@ -109,9 +109,21 @@ def segments(table: Table, n: int, repeats: int, variants: bool) -> None:
     to, ro = _best(lambda: rnsca.clip_segments(segs, W, backend="opencl",
                                                outputs=("segments",)), repeats)
     table.add(f"segments {label} pieces only", tn, to, _split(ro, to), _same_segments(ro, rn))
+    _pinned_input(table, segs, label, repeats)
     _device_resident(table, segs, label, repeats)
     _chunk_sizes(table, segs, label)
     _copies(table, segs)
+
+
+def _pinned_input(table: Table, segs: np.ndarray, label: str, repeats: int) -> None:
+    """Time host segments already in page-locked memory: no copy into the staging buffers."""
+    from rnsca.backends.registry import get_backend
+
+    pinned = get_backend("opencl").empty_pinned(segs.shape)
+    pinned[:] = segs
+    tn, rn = _best(lambda: rnsca.clip_segments(segs, W), repeats)
+    to, ro = _best(lambda: rnsca.clip_segments(pinned, W, backend="opencl"), repeats)
+    table.add(f"segments {label} pinned input", tn, to, _split(ro, to), _same_segments(ro, rn))
 
 
 def _device_resident(table: Table, segs: np.ndarray, label: str, repeats: int) -> None:

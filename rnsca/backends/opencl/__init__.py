@@ -421,6 +421,14 @@ class OpenCLBackend:
         """Return the NumPy dtype of device coordinates."""
         return np.float64 if self.precision is Precision.FLOAT64 else np.float32
 
+    @property
+    def queue(self) -> cl.CommandQueue:
+        """Return the backend's command queue: make device inputs on it (its context).
+
+        For example ``pyopencl.array.to_device(backend.queue, segments)``.
+        """
+        return self._device.queue
+
     def empty_pinned(self, shape: int | tuple[int, ...], dtype: Any = np.float64) -> np.ndarray:
         """Return an uninitialised host array in page-locked memory for this device.
 

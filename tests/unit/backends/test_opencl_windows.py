@@ -256,3 +256,23 @@ def test_float32_assigns_on_the_host_and_keeps_device_input_there(opencl, rng):
     # The host call clamps its float64 copy into the float64 windows; the device's
     # float32 pieces are within float32 rounding of them.
     np.testing.assert_allclose(got.pieces.get(), host.pieces, rtol=0, atol=1e-3)
+
+
+def test_the_readme_pipeline_clip_then_tiles_stays_on_the_device(opencl, rng):
+    """README, "Data kept on the device": clip, then a grid of tiles, all device arrays."""
+    import pyopencl.array as cl_array
+
+    if opencl.precision is not Precision.FLOAT64:
+        pytest.skip("bit-for-bit agreement is float64's")
+    host = rng.uniform(0, 100, (20_000, 4))
+    segments = cl_array.to_device(opencl.queue, host)
+    region = clip_segments(segments, (0, 0, 50, 50), backend="opencl", outputs=("segments",))
+    edges = np.linspace(0, 50, 5)
+    tiles = np.array([(x0, y0, x1, y1) for y0, y1 in zip(edges, edges[1:], strict=False)
+                      for x0, x1 in zip(edges, edges[1:], strict=False)])
+    tiled = clip_segments(region.segments, windows=tiles, backend="opencl")
+    assert isinstance(tiled.segments, cl_array.Array)
+    expected = clip_segments(clip_segments(host, (0, 0, 50, 50)).segments, windows=tiles)
+    np.testing.assert_array_equal(tiled.segments.get(), expected.segments)
+    np.testing.assert_array_equal(tiled.window.get(), expected.window)
+    np.testing.assert_array_equal(tiled.window_offsets, expected.window_offsets)

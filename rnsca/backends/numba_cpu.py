@@ -51,7 +51,7 @@ from rnsca.options import (
 from rnsca.stats import ClipStats, DeviceStats
 from rnsca.window import Window, WindowTable
 
-__all__ = ["DevicePaths", "DevicePolygons", "NumbaBackend", "PolygonRange"]
+__all__ = ["DevicePaths", "DevicePolygons", "NumbaBackend", "PathRange", "PolygonRange"]
 
 # Segments per prange iteration: large enough that per-block scratch and counters cost
 # nothing, small enough that the scratch columns (14 x 16 KiB) stay in L2 cache.
@@ -96,19 +96,29 @@ class DevicePolygons(NamedTuple):
     totals: Callable[[], tuple[np.ndarray, DeviceStats | None]]
 
 
+class PathRange(NamedTuple):
+    """Decisions for subpaths ``first`` to ``end - 1`` of a call.
+
+    `decisions` (`bezier.Decisions`) is indexed by the range's segments, from its first:
+    each segment's class, each run's decision and the flattened points of the curves
+    accepted whole (or, not given, the runs' table the count pass fills).
+    """
+
+    first: int
+    end: int
+    decisions: BZ.Decisions
+
+
 class DevicePaths(NamedTuple):
     """What the OpenCL backend's device decided for `NumbaBackend.clip_paths`.
 
-    `run_decisions` (int8 per segment), `segment_class`, `point_start` and `points` (each
-    segment's class and the flattened points of the curves accepted whole), and the
-    device's stats.
+    `ranges`, in subpath order, each given as the device finishes it (the count pass of
+    one range runs while the device works on the next), and `totals`, called once every
+    range is read: the device's stats.
     """
 
-    run_decisions: np.ndarray
-    segment_class: np.ndarray
-    point_start: np.ndarray
-    points: np.ndarray
-    stats: DeviceStats | None
+    ranges: Iterable[PathRange]
+    totals: Callable[[], DeviceStats | None]
 
 
 # Without a device, no segment classes nor flattened points are given to the path kernel.
@@ -373,35 +383,48 @@ class NumbaBackend:
         class, the runs' decisions and the flattened points of the curves accepted whole.
         Without it, the kernel decides everything itself.
         """
-        decided = device is not None
         clean = options.fill is not None and options.fill_output is FillOutput.CLEAN
+        n_subpaths = paths.closed.shape[0]
+        sub = paths.subpath_offsets
         if device is None:
             # The kernel decides each run in its count pass and keeps the decision here.
-            device = DevicePaths(np.empty(paths.degree.shape[0], dtype=np.int8),
-                                 *_NO_CLASSES, None)
-        n_subpaths = paths.closed.shape[0]
+            device = DevicePaths([PathRange(0, n_subpaths, BZ.Decisions(
+                False, np.empty(paths.degree.shape[0], dtype=np.int8), *_NO_CLASSES))],
+                _no_device_stats)
         subpath_source = np.repeat(np.arange(len(paths), dtype=np.int64),
                                    np.diff(paths.path_offsets))
-        block = max(1, min(_PATH_BLOCK, n_subpaths // _PATH_MIN_BLOCKS))
-        n_blocks = max(1, -(-n_subpaths // block))
-        counters = np.zeros((n_blocks, C.WIDTH), dtype=np.int64)
         n_segments = np.zeros(n_subpaths, dtype=np.int64)
         n_out = np.zeros(n_subpaths, dtype=np.int64)
-        kernel_input = (
-            BZ.PathInput(paths.controls, paths.degree, paths.subpath_offsets, paths.closed,
-                         paths.start, subpath_source),
-            _window_rows(windows),
-            BZ.Options(fill=options.fill is not None, flatten=options.curves is Curves.FLATTEN,
-                       exact=options.mode is Mode.EXACT, n_split=int(options.n_split),
-                       leaf_depth=int(options.leaf_depth), tolerance=float(options.tolerance),
-                       clean=clean),
-            BZ.Decisions(decided, device.run_decisions, device.segment_class,
-                         device.point_start, device.points))
+        window_rows = _window_rows(windows)
+        kernel_options = BZ.Options(
+            fill=options.fill is not None, flatten=options.curves is Curves.FLATTEN,
+            exact=options.mode is Mode.EXACT, n_split=int(options.n_split),
+            leaf_depth=int(options.leaf_depth), tolerance=float(options.tolerance),
+            clean=clean)
+
+        def arguments(part: PathRange, starts: tuple[np.ndarray, np.ndarray]) -> tuple:
+            # Subpaths first..end-1 alone, their segments from the range's first (as the
+            # decisions are), their output slots the call's.
+            a, b = part.first, part.end
+            g0, g1 = int(sub[a]), int(sub[b])
+            return (BZ.PathInput(paths.controls[g0:g1], paths.degree[g0:g1],
+                                 sub[a:b + 1] - g0, paths.closed[a:b], paths.start[a:b],
+                                 subpath_source[a:b]),
+                    window_rows, kernel_options, part.decisions,
+                    BZ.Layout(n_segments[a:b], n_out[a:b], *(s[a:b] for s in starts)))
+
         nothing = np.empty(0, dtype=np.int64)
-        BZ.clip_path_blocks(*kernel_input, BZ.Layout(n_segments, n_out, nothing, nothing),
-                            BZ.Output(False, np.empty((0, 4, 2)), np.empty(0, np.int8), nothing,
-                                      np.empty((0, 2)), np.empty(0, bool), nothing),
-                            counters, block)
+        parts = []
+        for part in device.ranges:  # each as soon as the device has finished it
+            block = max(1, min(_PATH_BLOCK, (part.end - part.first) // _PATH_MIN_BLOCKS))
+            counters = np.zeros((max(1, -(-(part.end - part.first) // block)), C.WIDTH),
+                                dtype=np.int64)
+            parts.append((part, block, counters))
+            BZ.clip_path_blocks(*arguments(part, (nothing, nothing)),
+                                BZ.Output(False, np.empty((0, 4, 2)), np.empty(0, np.int8),
+                                          nothing, np.empty((0, 2)), np.empty(0, bool),
+                                          nothing),
+                                counters, block)
         segment_start = exclusive_sum(n_segments)
         subpath_start = exclusive_sum(n_out)
         m = int(segment_start[-1])
@@ -413,11 +436,11 @@ class NumbaBackend:
         out_start = np.empty((k, 2))
         out_closed = np.empty(k, dtype=bool)
         out_from = np.empty(k, dtype=np.int64)
-        BZ.clip_path_blocks(*kernel_input,
-                            BZ.Layout(n_segments, n_out, segment_start, subpath_start),
-                            BZ.Output(True, out_ctrl, out_deg, out_first, out_start, out_closed,
-                                      out_from),
-                            np.zeros((n_blocks, C.WIDTH), dtype=np.int64), block)
+        for part, block, counters in parts:
+            BZ.clip_path_blocks(*arguments(part, (segment_start, subpath_start)),
+                                BZ.Output(True, out_ctrl, out_deg, out_first, out_start,
+                                          out_closed, out_from),
+                                np.zeros_like(counters), block)
         kept = out_from >= 0
         if not kept.all():  # entries freed by joining the two ends of a closed stroke
             out_first = np.append(out_first[:-1][kept], m)
@@ -431,7 +454,9 @@ class NumbaBackend:
         segments_in = paths.degree.shape[0] + BZ.closing_edges(
             paths.controls, paths.subpath_offsets, paths.closed, paths.start,
             options.fill is not None)
-        return PathPieces(clipped, int(segments_in), counters, device.stats)
+        counters = (np.concatenate([counters for _, _, counters in parts]) if parts
+                    else np.zeros((1, C.WIDTH), dtype=np.int64))
+        return PathPieces(clipped, int(segments_in), counters, device.totals())
 
     def flatten_paths(self, paths: PathArrays, tolerance: float, close: bool) -> Polylines:
         """Return the paths as polylines within `tolerance`; see `ClipBackend.flatten_paths`."""
@@ -617,6 +642,11 @@ def core_options(options: SegmentOptions) -> R.CoreOptions:
     return R.CoreOptions(METHOD_ID[options.method], int(options.n), int(options.max_depth),
                          float(options.tolerance),
                          options.mode is Mode.EXACT)
+
+
+def _no_device_stats() -> None:
+    """Return the stats of no device: none."""
+    return None
 
 
 def _no_device_totals() -> tuple[np.ndarray, None]:

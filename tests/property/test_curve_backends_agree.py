@@ -160,3 +160,31 @@ def test_glyph_outlines_clip_the_same(precision, font, degree):
         assert_curves_agree(source, window, precision, fill="nonzero", fill_output="raw",
                             tolerance=1e-3 * w)
     assert_flattening_agrees(source, 1e-3 * w, True, precision)
+
+
+@pytest.mark.parametrize("curves", ["flatten", "preserve"])
+@pytest.mark.parametrize("fill", [None, "nonzero"])
+def test_paths_in_ranges_clip_the_same(precision, rng, curves, fill, monkeypatch):
+    """A call cut into many ranges of subpaths (the host counts one while the device
+    classifies the next): the same output and counters as one range."""
+    from rnsca.backends import opencl as module
+    from rnsca.backends.opencl import curves as C
+
+    finished = []
+    finish = C.CurveCall.finish
+    monkeypatch.setattr(module, "PIPELINE_SEGMENTS", 50)
+    monkeypatch.setattr(C.CurveCall, "finish",
+                        lambda call, r: finished.append(r) or finish(call, r))
+    source = parse_paths([_random_path(rng, int(rng.integers(1, 120))) for _ in range(30)])
+    for window in [(0.0, 0.0, 10.0, 10.0), (-20.0, -20.0, 30.0, 30.0)]:
+        assert_curves_agree(source, window, precision, curves=curves, fill=fill,
+                            tolerance=1e-4)
+    assert len(finished) > 2 * 2  # several ranges per call
+    # Many windows: ranges within each window's stretch of paths.
+    windows = np.array([[0.0, 0.0, 10.0, 10.0], [-20.0, -20.0, 30.0, 30.0],
+                        [4.0, 4.5, 4.2, 7.0]])
+    ref = clip_paths(source, windows=windows, backend="numba", curves=curves, fill=fill,
+                     tolerance=1e-4)
+    got = clip_paths(source, windows=windows, backend="opencl", curves=curves, fill=fill,
+                     tolerance=1e-4)
+    assert_paths_equal(got.paths, ref.paths, "many windows", precision)

@@ -23,17 +23,19 @@ joins, the boundary walk) on the host, and the per-segment work on the device; a
 call goes in ranges of parts, so the host assembles one range while the device works on
 the next (`runs.pipelined`).
 
-Bézier paths (`classify_curves`, for `rnsca.clip_paths` and `rnsca.flatten_paths`):
+Bézier paths (`curves.CurveCall`, for `rnsca.clip_paths` and `rnsca.flatten_paths`):
 ``classify_bezier`` (one work-item per segment: its class by its control points'
 outcodes, and the step count of the segments to flatten), ``classify_bezier_runs`` (one
 work-item per run of 16 segments: the box of its control points) and, after a prefix
 sum of the step counts, ``flatten_bezier`` (each segment's points into its slots) run
 on the device; the Numba path kernel (`bezier.clip_path_blocks` with decisions) reads
 the classes, run decisions and points and does the ambiguous segments and the output
-on the host, as it does for the Numba backend. On a float32 device the device's classes
-are conservative (inside, or beyond an edge, only where that is sure for the float64
-input: `_windows32`); the host decides the rest from the float64 input and flattens in
-float64, so the output is the float64 output exactly (only the device's share differs).
+on the host, as it does for the Numba backend; a large call goes in ranges of subpaths
+(`PIPELINE_SEGMENTS`), the host's count pass of one overlapping the device's work on
+the next. On a float32 device the device's classes are conservative (inside, or beyond
+an edge, only where that is sure for the float64 input: `curves.windows32`); the host
+decides the rest from the float64 input and flattens in float64, so the output is the
+float64 output exactly (only the device's share differs).
 
 Devices and programs: the device is picked once per backend (`select_device`); each
 device gets one context and one profiling queue per process, and ``clip.cl`` is built
@@ -87,6 +89,7 @@ from rnsca.backends.numba_cpu import (
     DevicePaths,
     DevicePolygons,
     NumbaBackend,
+    PathRange,
     PolygonRange,
     polygon_geometry,
     polyline_layout,
@@ -96,8 +99,8 @@ from rnsca.backends.numba_cpu import (
 )
 from rnsca.backends.opencl import segments as _segments
 from rnsca.backends.opencl import windows as _windows
+from rnsca.backends.opencl.curves import CurveCall
 from rnsca.backends.opencl.runs import (
-    Ledger,
     RunCall,
     buffer_of,
     event_seconds,
@@ -111,7 +114,6 @@ from rnsca.kernels import polygons as PG
 from rnsca.kernels import polylines as PL
 from rnsca.kernels import records as R
 from rnsca.kernels.copies import copy_ranges
-from rnsca.kernels.outcode import BOTTOM, LEFT, RIGHT, TOP
 from rnsca.many_windows import assign, window_finder
 from rnsca.options import Backend, Curves, Mode, PathOptions, Precision, SegmentOptions
 from rnsca.stats import ClipStats, DeviceStats
@@ -134,9 +136,9 @@ FLOAT32_RELATIVE_BOUND = 16 * 2.0 ** -24
 # Counters the segment kernel fills: the head of the row (rnsca.kernels.counters).
 _SEGMENT_COUNTERS = constants.SEGMENT_COUNTERS
 _F32 = np.finfo(np.float32)
-# `classify_curves`'s `flatten` as clip.cl numbers it (FLATTEN_*).
-_FLATTEN = {"none": constants.FLATTEN_NONE, "accepted": constants.FLATTEN_ACCEPTED_CURVES,
-            "all": constants.FLATTEN_ALL}
+#: Segments per range of a pipelined path call (`clip_paths`): the host's path kernel
+#: costs far more per segment than the line assembly per vertex.
+PIPELINE_SEGMENTS = 1 << 17
 
 
 def constant_options() -> list[str]:
@@ -836,25 +838,29 @@ class OpenCLBackend:
         """
         flatten = "accepted" if options.curves is Curves.FLATTEN else "none"
         sub = paths.subpath_offsets
-        classes, runs, starts, points, stats = [], [], [np.zeros(1, np.int64)], [], []
+        call = CurveCall(self._device, self.precision, self.real)
+        # Ranges of subpaths of one window, of about PIPELINE_SEGMENTS segments each.
+        ranges = []
         for row, p0, p1 in _window_stretches(windows, len(paths)):
             s0, s1 = int(paths.path_offsets[p0]), int(paths.path_offsets[p1])
-            g0, g1 = int(sub[s0]), int(sub[s1])
-            segment_class, run_decisions, point_start, flat, device_stats = \
-                self.classify_curves(paths.controls[g0:g1], paths.degree[g0:g1],
-                                     Window(*windows.bounds[row]), options.tolerance,
-                                     flatten, sub[s0:s1 + 1] - g0)
-            classes.append(segment_class)
-            runs.append(run_decisions)
-            starts.append(point_start[1:] + starts[-1][-1])
-            points.append(flat)
-            stats.append(device_stats)
+            ranges += [(s0 + a, s0 + b, row) for a, b in ranges_by_vertices(
+                sub[s0 + 1:s1 + 1] - sub[s0], PIPELINE_SEGMENTS)]
+
+        def start(item: tuple[int, int, int]) -> Any:
+            a, b, row = item
+            g0, g1 = int(sub[a]), int(sub[b])
+            return call.start(paths.controls[g0:g1], paths.degree[g0:g1],
+                              Window(*windows.bounds[row]), options.tolerance, flatten,
+                              sub[a:b + 1] - g0)
+
+        def decided() -> Iterator[PathRange]:
+            for (a, b, _), tables in pipelined(call, ranges, start):
+                yield PathRange(a, b, BZ.Decisions(True, tables.run_decision,
+                                                   tables.segment_class, tables.point_start,
+                                                   tables.points))
+
         return _HOST.clip_paths(paths, windows, options, device=DevicePaths(
-            np.concatenate(runs) if runs else np.zeros(0, np.int8),
-            np.concatenate(classes) if classes else np.zeros(0, np.uint8),
-            np.concatenate(starts),
-            np.concatenate(points) if points else np.zeros((0, 2)),
-            DeviceStats.combine(stats)))
+            decided(), lambda: call.totals(self.name)))
 
     def flatten_paths(self, paths: PathArrays, tolerance: float, close: bool) -> Polylines:
         """Return the paths as polylines within `tolerance`; see `ClipBackend.flatten_paths`.
@@ -919,94 +925,15 @@ class OpenCLBackend:
         points : ndarray, shape (point_start[-1], 2)
         device_stats : DeviceStats
 
-        In float32 the device's classes are conservative (`_windows32`): "inside" and
+        In float32 the device's classes are conservative (`curves.windows32`): "inside" and
         "beyond an edge" only where that holds for the float64 input too; the host
         decides the rest (ambiguous segments, segmented runs) from the float64 input and
         flattens in float64, so the classes, decisions and points returned are exactly
         the float64 ones.
         """
-        m = degree.shape[0]
-        bounds = (0.0, 0.0, 0.0, 0.0) if window is None else window.bounds
-        run_first, run_end = _runs(subpath_offsets if subpath_offsets is not None
-                                   else np.zeros(1, np.int64))
-        n_runs = run_first.shape[0]
-        double = self.precision is Precision.FLOAT64
-        controls = np.ascontiguousarray(controls, np.float64)
-        degree = np.ascontiguousarray(degree, np.int8)
-        if double:
-            accept = reject = tuple(np.float64(b) for b in bounds)
-            device_flatten = flatten
-        else:
-            accept, reject = _windows32(bounds)
-            device_flatten = "none"  # the host flattens, in float64 (below)
-            if window is None:  # flattening only: nothing for the device to decide
-                m = n_runs = 0
-        queue = self._device.queue
-        ledger = Ledger()
-        with self._device.call_lock:
-            kernels = self._device.program(double)
-            with np.errstate(over="ignore"):  # float32: beyond its range is ±inf, which
-                # still orders the points against the window (`_windows32`)
-                device_controls: np.ndarray = controls[:m].astype(self.real).reshape(-1)
-            d_controls = ledger.to_device(queue, device_controls)
-            d_degree = ledger.to_device(queue, degree[:m])
-            segment_class = cl_array.empty(queue, max(1, m), np.uint8)
-            n_points = cl_array.empty(queue, max(1, m), np.int64)
-            if m:
-                ledger.kernel_events.append(kernels.classify_bezier(
-                    queue, (m,), None, buffer_of(d_controls), buffer_of(d_degree), np.int64(m),
-                    *accept, *reject,
-                    np.float64(tolerance) if double else np.float32(0),  # float32: unused
-                    np.int32(_FLATTEN[device_flatten]), buffer_of(segment_class),
-                    buffer_of(n_points)))
-            point_end = np.zeros(0, dtype=np.int64)
-            total = 0
-            if m and device_flatten != "none":
-                event, d_point_end = cl_array.cumsum(n_points[:m], queue=queue,
-                                                     return_event=True)
-                ledger.kernel_events.append(event)
-                point_end = ledger.from_device(queue, d_point_end)
-                total = int(point_end[-1])
-            points = cl_array.empty(queue, max(1, 2 * total), self.real)
-            if total:
-                ledger.kernel_events.append(kernels.flatten_bezier(
-                    queue, (m,), None, buffer_of(d_controls), buffer_of(d_degree),
-                    buffer_of(n_points), buffer_of(d_point_end), np.int64(m), buffer_of(points)))
-            run_class = np.zeros(0, dtype=np.int8)
-            if n_runs:
-                d_run_first = ledger.to_device(queue, run_first)
-                d_run_end = ledger.to_device(queue, run_end)
-                d_run_class = cl_array.empty(queue, n_runs, np.int8)
-                ledger.kernel_events.append(kernels.classify_bezier_runs(
-                    queue, (n_runs,), None, buffer_of(d_controls), buffer_of(d_run_first),
-                    buffer_of(d_run_end), np.int64(n_runs), *accept, *reject,
-                    np.int32(flatten != "none"), buffer_of(d_run_class)))
-                run_class = ledger.from_device(queue, d_run_class)
-            classes = ledger.from_device(queue, segment_class[:m])
-            flat = ledger.from_device(queue, points[:2 * total]).reshape(total, 2)
-            device_stats = ledger.stats(self.name, self.precision)
-        m = degree.shape[0]
-        point_start = np.zeros(m + 1, dtype=np.int64)
-        if not double:
-            if window is None:  # classes and runs mean nothing here (see `window`)
-                classes = np.full(m, BZ.SEGMENT_AMBIGUOUS, dtype=np.uint8)
-                run_class = np.full(run_first.shape[0], BZ._RUN_SEGMENTED, dtype=np.int8)
-            else:
-                _decide_ambiguous(classes, run_class, controls, degree, run_first, run_end,
-                                  bounds, flatten != "none")
-            if flatten != "none":
-                wanted = (flatten == "all") | ((classes == BZ.SEGMENT_ACCEPTED) & (degree > 1))
-                steps = np.where(wanted, BZ.flatten_steps(controls, degree, float(tolerance)),
-                                 0)
-                np.cumsum(steps, out=point_start[1:])
-                flat = np.empty((int(point_start[-1]), 2))
-                BZ.flatten_segments(controls, degree, point_start, flat)
-        elif point_end.shape[0]:
-            point_start[1:] = point_end
-        run_decision = np.zeros(m if subpath_offsets is not None else 0, dtype=np.int8)
-        run_decision[run_first] = run_class
-        return (classes, run_decision, point_start, flat.astype(np.float64, copy=False),
-                device_stats)
+        call = CurveCall(self._device, self.precision, self.real)
+        tables = call.whole(controls, degree, window, tolerance, flatten, subpath_offsets)
+        return (*tables, call.totals(self.name))
 
     def warm_up(self) -> None:
         """Build the program (or load it from the caches), run every method, lines, rings.
@@ -1035,25 +962,6 @@ def _window_stretches(windows: WindowTable, n: int) -> list[tuple[int, int, int]
     first = np.concatenate([[0], cuts])
     end = np.concatenate([cuts, [n]])
     return [(int(index[a]), int(a), int(b)) for a, b in zip(first, end, strict=True)]
-
-
-def _runs(subpath_offsets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Return the first and end segments of the runs `bezier.clip_path_blocks` tests.
-
-    Runs of `bezier.RUN_SEGMENTS` segments from each subpath's first one; a last run
-    of a single segment is not a run (its segment is tested alone).
-    """
-    first = subpath_offsets[:-1]
-    last = subpath_offsets[1:]
-    per_subpath = -(-(last - first) // BZ.RUN_SEGMENTS)
-    subpath = np.repeat(np.arange(first.shape[0]), per_subpath)
-    index = np.arange(subpath.shape[0]) - np.repeat(exclusive_sum(per_subpath)[:-1],
-                                                    per_subpath)
-    run_first = first[subpath] + index * BZ.RUN_SEGMENTS
-    run_end = np.minimum(run_first + BZ.RUN_SEGMENTS, last[subpath])
-    kept = run_end - run_first >= 2
-    return (np.ascontiguousarray(run_first[kept], np.int64),
-            np.ascontiguousarray(run_end[kept], np.int64))
 
 
 class _LineAssembly:
@@ -1117,80 +1025,6 @@ def _gather_rings(xy: np.ndarray, ring_offsets: np.ndarray, rings: np.ndarray,
     gathered = np.empty((int(offsets[-1]), 2))
     copy_ranges(xy, starts, sizes, offsets[:-1], gathered)
     return gathered, offsets
-
-
-def _windows32(bounds: tuple[float, ...] | np.ndarray) -> tuple[tuple, tuple]:
-    """Return the (accept, reject) float32 windows that make the device's curve classes sure.
-
-    Rounding to float32 keeps order (``x <= y`` gives ``f(x) <= f(y)``, also where it
-    overflows to ±inf or a device flushes subnormals to zero), so ``f(x) < f(xmin)``
-    proves ``x < xmin`` and ``f(x) > f(xmin)`` proves ``x > xmin``. The reject window:
-    each bound rounded to nearest (moved outward to a normal float32 where that is
-    subnormal), so a point beyond one of its edges is beyond the float64 edge. The
-    accept window: the nearest normal float32 strictly inside each rounded bound, so a
-    point inside it is inside the float64 window (none is where a bound overflows
-    inward). Points between the two are ambiguous and go to the host.
-    """
-    tiny = np.float32(_F32.tiny)  # the smallest normal: subnormals may be flushed to 0
-    inf = np.float32(np.inf)
-    with np.errstate(over="ignore"):
-        rounded = np.asarray(bounds, np.float64).astype(np.float32)
-
-    def above(h):  # the smallest normal float32 > h
-        return tiny if -tiny <= h < tiny else np.nextafter(h, inf)
-
-    def not_above(h):  # the largest normal float32 (or -inf) <= h
-        return -tiny if -tiny < h < tiny else h
-
-    xmin, ymin, xmax, ymax = rounded
-    reject = (not_above(xmin), not_above(ymin), -not_above(-xmax), -not_above(-ymax))
-    if np.isposinf(xmin) or np.isposinf(ymin) or np.isneginf(xmax) or np.isneginf(ymax):
-        accept = (_F32.max, _F32.max, -_F32.max, -_F32.max)  # no point is inside it
-    else:
-        accept = (above(xmin), above(ymin), -above(-xmax), -above(-ymax))
-    return tuple(map(np.float32, accept)), tuple(map(np.float32, reject))
-
-
-def _outcodes(x, y, bounds):
-    xmin, ymin, xmax, ymax = bounds
-    return ((x < xmin) * LEFT) | ((x > xmax) * RIGHT) | ((y < ymin) * BOTTOM) | (
-        (y > ymax) * TOP)
-
-
-def _decide_ambiguous(classes: np.ndarray, run_class: np.ndarray, controls: np.ndarray,
-                      degree: np.ndarray, run_first: np.ndarray, run_end: np.ndarray,
-                      bounds: tuple[float, ...], flatten: bool) -> None:
-    """Decide, in float64 and in place, the segments and runs a float32 device left open.
-
-    The same tests as `bezier.clip_path_blocks` (control points' outcodes, a run's box),
-    on the float64 input: the result is the float64 device's.
-    """
-    rows = np.flatnonzero(classes == BZ.SEGMENT_AMBIGUOUS)
-    if rows.size:
-        codes = _outcodes(controls[rows, :, 0], controls[rows, :, 1], bounds)
-        d = degree[rows]
-        used = np.ones(codes.shape, dtype=bool)
-        used[:, 2] = d >= 2
-        used[:, 3] = d == 3
-        c_or = np.bitwise_or.reduce(np.where(used, codes, 0), axis=1)
-        c_and = np.bitwise_and.reduce(np.where(used, codes, LEFT | RIGHT | BOTTOM | TOP),
-                                      axis=1)
-        classes[rows] = np.where(c_or == 0, BZ.SEGMENT_ACCEPTED, np.where(
-            c_and != 0, BZ.SEGMENT_REJECTED, BZ.SEGMENT_AMBIGUOUS))
-    runs = np.flatnonzero(run_class == BZ._RUN_SEGMENTED)
-    if runs.size:
-        first, end = run_first[runs], run_end[runs]
-        # Each run's segments (its last repeated up to RUN_SEGMENTS), slots 1..3, and
-        # slot 0 of its first (`bezier._run_box`).
-        members = np.minimum(first[:, None] + np.arange(BZ.RUN_SEGMENTS), end[:, None] - 1)
-        points = controls[members][:, :, 1:, :].reshape(runs.size, -1, 2)
-        lo = np.minimum(points.min(axis=1), controls[first, 0])
-        hi = np.maximum(points.max(axis=1), controls[first, 0])
-        c_lo = _outcodes(lo[:, 0], lo[:, 1], bounds)
-        c_hi = _outcodes(hi[:, 0], hi[:, 1], bounds)
-        run_class[runs] = np.where(((c_lo | c_hi) == 0) & (not flatten), BZ._RUN_ACCEPTED,
-                                   np.where((c_lo & c_hi) != 0, BZ._RUN_REJECTED,
-                                            BZ._RUN_SEGMENTED))
 
 
 def _check_float32_lines(xy: np.ndarray, windows: np.ndarray) -> None:

@@ -24,7 +24,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
-from typing import Any, NamedTuple, TypeVar, cast
+from typing import Any, NamedTuple, Protocol, TypeVar, cast
 
 import numpy as np
 import pyopencl as cl
@@ -39,7 +39,7 @@ from rnsca.options import Method, Mode, Precision, SegmentOptions
 from rnsca.stats import DeviceStats
 
 __all__ = ["Ledger", "RunCall", "Tables", "buffer_of", "event_seconds", "exact_float32_ends",
-           "pipelined", "ranges_by_vertices", "PIPELINE_VERTICES", "MAX_RANGES"]
+           "pipelined", "ranges_by_vertices", "Stages", "PIPELINE_VERTICES", "MAX_RANGES"]
 
 #: Vertices per range of a pipelined line or ring call: 32 MB of float64 coordinates,
 #: enough that a range's kernel launches and reads are a small part of its time.
@@ -49,6 +49,17 @@ PIPELINE_VERTICES = 1 << 21
 MAX_RANGES = 16
 
 T = TypeVar("T")
+Out = TypeVar("Out", covariant=True)
+
+
+class Stages(Protocol[Out]):
+    """A call that takes ranges in flight through its last two steps (`RunCall`, curves)."""
+
+    def clip(self, r: Any) -> None:
+        """Enqueue the range's second step once its first is far enough."""
+
+    def finish(self, r: Any) -> Out:
+        """Wait for the range and return what it gives."""
 
 
 def buffer_of(array: cl_array.Array) -> cl.Buffer:
@@ -360,16 +371,16 @@ class RunCall:
         return counters, self.ledger.stats(name, precision)
 
 
-def pipelined(call: RunCall, ranges: Sequence[T], start: Callable[[T], _Range],
-              ) -> Iterator[tuple[T, Tables]]:
+def pipelined(call: Stages[Out], ranges: Sequence[T], start: Callable[[T], Any],
+              ) -> Iterator[tuple[T, Out]]:
     """Yield each range with its tables, in order, the device ahead of the consumer.
 
     `start` sends a range up (`RunCall.start`). Range i + 1 is started and range i
     clipped before range i - 1 is yielded: while the consumer assembles range i - 1,
     the device works on those two.
     """
-    previous: tuple[T, _Range] | None = None
-    current: tuple[T, _Range] | None = None
+    previous: tuple[T, Any] | None = None
+    current: tuple[T, Any] | None = None
     for item in ranges:
         upcoming = (item, start(item))
         if current is not None:

@@ -603,13 +603,15 @@ def test_float32_device_classes_are_only_the_sure_ones(opencl, opencl_module, mo
                      + " ".join(f"{x!r} {y!r}" for x, y in pts[1:]))
     paths = rnsca.parse_paths(parts)
     seen = {}
-    decide = opencl_module._decide_ambiguous
+    from rnsca.backends.opencl import curves
+
+    decide = curves.decide_ambiguous
 
     def record(classes, run_class, *args):
         seen["device"] = classes.copy()
         decide(classes, run_class, *args)
 
-    monkeypatch.setattr(opencl_module, "_decide_ambiguous", record)
+    monkeypatch.setattr(curves, "decide_ambiguous", record)
     float32 = opencl_module.OpenCLBackend(opencl.device["id"], "float32")
     window = Window(*bounds)
     classes, *_ = float32.classify_curves(paths.controls, paths.degree, window, 0.01, "none")

@@ -227,8 +227,26 @@ def lines(table: Table, n_lines: int, repeats: int) -> None:
     equal = bool(np.array_equal(rn.coords, ro.coords)
                  and all(np.array_equal(a, b) for a, b in zip(rn.offsets, ro.offsets,
                                                               strict=True)))
-    table.add(f"polylines {n_lines} ({len(coords) / 1e6:.1f}M vertices)", tn, to,
-              _split(ro, to), equal)
+    label = f"polylines {n_lines} ({len(coords) / 1e6:.1f}M vertices)"
+    table.add(label, tn, to, _split(ro, to), equal)
+    _range_sizes(table, label, lambda: rnsca.clip_ragged("linestring", coords, (offsets,),
+                                                         W, backend="opencl"))
+
+
+def _range_sizes(table: Table, label: str, call) -> None:
+    """Time the ranges of a pipelined line or ring call: how much overlap pays here."""
+    from rnsca.backends.opencl import runs
+
+    kept = runs.PIPELINE_VERTICES
+    try:
+        for shift in (19, 20, 21, 22, 40):
+            runs.PIPELINE_VERTICES = 1 << shift
+            to, ro = _best(call, 2)
+            name = "one range" if shift == 40 else f"ranges of 2**{shift}"
+            table.add(f"  {name} ({label})", None, to, _split(ro, to), None,
+                      range_vertices=1 << shift)
+    finally:
+        runs.PIPELINE_VERTICES = kept
 
 
 def polygons(table: Table, n: int, repeats: int) -> None:
@@ -240,7 +258,10 @@ def polygons(table: Table, n: int, repeats: int) -> None:
     equal = bool(np.array_equal(rn.coords, ro.coords)
                  and all(np.array_equal(a, b) for a, b in zip(rn.offsets, ro.offsets,
                                                               strict=True)))
-    table.add(f"polygons {n / 1e3:g}k stars with holes", tn, to, _split(ro, to), equal)
+    label = f"polygons {n / 1e3:g}k stars with holes"
+    table.add(label, tn, to, _split(ro, to), equal)
+    _range_sizes(table, label, lambda: rnsca.clip_ragged("polygon", coords, offsets, W,
+                                                         backend="opencl"))
 
 
 def curves(table: Table, small: bool, repeats: int) -> None:

@@ -41,9 +41,11 @@ from rnsca.stats import DeviceStats
 __all__ = ["Ledger", "RunCall", "Tables", "buffer_of", "event_seconds", "exact_float32_ends",
            "pipelined", "ranges_by_vertices", "Stages", "PIPELINE_VERTICES", "MAX_RANGES"]
 
-#: Vertices per range of a pipelined line or ring call: 32 MB of float64 coordinates,
-#: enough that a range's kernel launches and reads are a small part of its time.
-PIPELINE_VERTICES = 1 << 21
+#: Vertices per range of a pipelined line or ring call: 16 MB of float64 coordinates,
+#: enough that a range's kernel launches and reads are a small part of its time, few
+#: enough that the first range (whose device work nothing hides) is a small part of a
+#: large call (1M stars: 4.2M vertices to prune, 5 ranges; 14M-vertex lines, 14).
+PIPELINE_VERTICES = 1 << 20
 #: Ranges per call at most: the host's fixed cost per range (a count and a write pass
 #: of the Numba assembly, each starting the threads) stays small.
 MAX_RANGES = 16

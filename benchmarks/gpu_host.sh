@@ -18,4 +18,5 @@ echo "cores $(nproc)"
 timeout ${BENCH_TIMEOUT:-380} python3 -m benchmarks.gpu --profile ${BENCH_ARGS:-} 2>&1 | grep -v -i "warn\|_create_built\|prg.build" | tee "$OUT/bench.log"
 cp benchmarks/results/gpu-*.json "$OUT/" 2>/dev/null
 timeout ${TEST_TIMEOUT:-140} python3 -m pytest -q -p no:cacheprovider -o addopts="-ra" \
-  tests/unit/backends tests/unit/test_many_windows.py tests/property/test_geometry_backends_agree.py 2>&1 | tail -12 | tee "$OUT/tests.log"
+  tests/unit/backends tests/unit/test_many_windows.py tests/property/test_geometry_backends_agree.py \
+  tests/property/test_windows_backends_agree.py 2>&1 | tail -12 | tee "$OUT/tests.log"

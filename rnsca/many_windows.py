@@ -135,10 +135,13 @@ def window_finder(windows: np.ndarray) -> K.WindowFinder:
         # make the sweep miss the windows that reach furthest west.
         widest = float(np.nextafter((windows[:, 2] - windows[:, 0]).max(), np.inf))
     uniform = grid is not None and _equally_spaced(xs) and _equally_spaced(ys)
-    return K.WindowFinder(grid is not None, uniform,
-                          (xs.shape[0] - 1) / (xs[-1] - xs[0]) if uniform else 0.0,
-                          (ys.shape[0] - 1) / (ys[-1] - ys[0]) if uniform else 0.0,
-                          xs, ys, cell_window, windows, order, xmins, widest)
+    # Cells per unit. On a grid a few subnormals wide it overflows to inf, which the
+    # guess clamps to the last cell (and the edges correct): no warning for it.
+    with np.errstate(over="ignore"):
+        x_scale = (xs.shape[0] - 1) / (xs[-1] - xs[0]) if uniform else 0.0
+        y_scale = (ys.shape[0] - 1) / (ys[-1] - ys[0]) if uniform else 0.0
+    return K.WindowFinder(grid is not None, uniform, x_scale, y_scale, xs, ys, cell_window,
+                          windows, order, xmins, widest)
 
 
 def assign(segments: np.ndarray, windows: np.ndarray) -> WindowPairs:

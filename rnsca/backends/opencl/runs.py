@@ -11,10 +11,10 @@ device's decisions and pieces; it is most of such a call (1M stars on an H100 an
 So a large call is cut into ranges of parts (`ranges_by_vertices`) and pipelined
 (`pipelined`): while the host assembles range i, the device has the clip of range
 i + 1 and the classification of range i + 2 before it, and the host waits for the
-device only at the two ends. Each range is three steps: `RunCall.start` (the range's input staged and
-sent up, its chunks classified, the prefix sum of their piece counts and a
-non-blocking read of it), `RunCall.clip` (once that count is back: the clip of the
-undecided chunks and non-blocking reads of the decisions and pieces) and
+device only at the two ends. Each range is three steps: `RunCall.start` (the range's
+input staged and sent up, its chunks classified, the prefix sum of their piece counts
+and a non-blocking read of it), `RunCall.clip` (once that count is back: the clip of
+the undecided chunks and non-blocking reads of the decisions and pieces) and
 `RunCall.finish` (the reads awaited; the tables the assembly reads). Nothing waits
 for the device between `start` and `finish` but `clip`'s read of one count, which the
 device has done while the host assembled the range before.

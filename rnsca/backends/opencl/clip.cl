@@ -1002,6 +1002,20 @@ void store_counters(Counters st, int width, __global long *counters) {
         row[k] = st[k];
 }
 
+/* The group's smallest `my_bad` (each work-item's first item that is not finite) into
+ * first_bad[group]: a tree reduction in `bad`, local memory of LOCAL_SIZE entries. */
+void store_first_bad(__local long *bad, long my_bad, __global long *first_bad) {
+    int l = get_local_id(0);
+    bad[l] = my_bad;
+    for (int step = LOCAL_SIZE / 2; step > 0; step /= 2) {
+        barrier(CLK_LOCAL_MEM_FENCE);
+        if (l < step)
+            bad[l] = min(bad[l], bad[l + step]);
+    }
+    if (l == 0)
+        first_bad[get_group_id(0)] = bad[0];
+}
+
 /* Pass 1 over `n` items, each a segment (`pairs` 0: item i is segment i, clipped to
  * window 0) or a (segment, window) pair (`pairs` 1: item i is pair p = item_base + i,
  * segment pair_segment[p] clipped to window pair_window[p]). Item i's result (t0, t1, ax, ay, bx, by) goes to
@@ -1054,15 +1068,7 @@ void clip_segments(__global const REAL *segments, const long n,
                 result[6 * i + k] = out[k];
     }
     store_counters(st, SEGMENT_COUNTERS, counters);
-    int l = get_local_id(0);
-    bad[l] = my_bad;
-    for (int step = LOCAL_SIZE / 2; step > 0; step /= 2) {
-        barrier(CLK_LOCAL_MEM_FENCE);
-        if (l < step)
-            bad[l] = min(bad[l], bad[l + step]);
-    }
-    if (l == 0)
-        first_bad[get_group_id(0)] = bad[0];
+    store_first_bad(bad, my_bad, first_bad);
 }
 
 /* Pass 3: copy item i's kept result to slot position[i] - 1 (`position` is the
@@ -1640,15 +1646,7 @@ void assign_pairs(__global const REAL *segments, const long n, const long items,
     }
     if (write)
         return;
-    int l = get_local_id(0);
-    bad[l] = my_bad;
-    for (int step = LOCAL_SIZE / 2; step > 0; step /= 2) {
-        barrier(CLK_LOCAL_MEM_FENCE);
-        if (l < step)
-            bad[l] = min(bad[l], bad[l + step]);
-    }
-    if (l == 0)
-        first_bad[get_group_id(0)] = bad[0];
+    store_first_bad(bad, my_bad, first_bad);
 }
 
 /* The smallest of the `groups` entries of first_bad into summary[1] (one work-group);

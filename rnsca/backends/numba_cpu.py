@@ -84,13 +84,15 @@ class PolygonRange(NamedTuple):
 class DevicePolygons(NamedTuple):
     """What the OpenCL backend's device decided for `NumbaBackend.clip_polygons`.
 
-    `polygon_class` (int8 per polygon, `polygons.classify_polygons`); `ranges`, the
+    `polygon_class` (int8 per polygon, `polygons.classify_polygons`, where `classified`;
+    else filled by the count pass); `ranges`, the
     rings' run decisions and clipped pieces range by range, in polygon order, each
     given as the device finishes it (the count pass of one range runs while the device
     works on the next); `totals`, called once every range is read, the device's counter
     rows and stats.
     """
 
+    classified: bool
     polygon_class: np.ndarray
     ranges: Iterable[PolygonRange]
     totals: Callable[[], tuple[np.ndarray, DeviceStats | None]]
@@ -328,12 +330,12 @@ class NumbaBackend:
             # Runs and segments are clipped here, not decided elsewhere: no decision tables.
             decisions = PL.Decisions(False, nothing_i, np.empty(0, dtype=np.uint8), nothing_i,
                                      np.empty(0, dtype=np.bool_), np.empty((0, 6)))
-            device = DevicePolygons(np.empty(n_polygons, dtype=np.int8),
+            device = DevicePolygons(False, np.empty(n_polygons, dtype=np.int8),
                                     [PolygonRange(0, n_polygons, decisions)], _no_device_totals)
         has_z = z.shape[0] > 0
         vertices = R.vertices(xy, z)
-        plan = PG.PolygonPlan(device.polygon_class, np.zeros(n_polygons, dtype=np.int64),
-                              np.zeros(n_polygons, dtype=np.int64))
+        plan = (device.polygon_class, np.zeros(n_polygons, dtype=np.int64),
+                np.zeros(n_polygons, dtype=np.int64))
         sizes = tuple(np.empty(n_polygons, dtype=np.int64) for _ in range(3))
         nowhere = PG.PolygonsOut(False, np.empty((0, 2)), np.empty(0), nothing_i, nothing_i)
         # Polygons are always clipped exactly: valid output needs exact cut points.
@@ -346,7 +348,7 @@ class NumbaBackend:
             return (PG.Polygons(ring_offsets, polygon_offsets[a:b + 1], windows.bounds,
                                 polygon_window[a:b]),
                     kernel_options, _block_size(b - a),
-                    PG.PolygonPlan(*(column[a:b] for column in plan)),
+                    PG.PolygonPlan(device.classified, *(column[a:b] for column in plan)),
                     PG.PolygonCounts(*(column[a:b] for column in sizes),
                                      *(s[a:b] for s in starts)))
 

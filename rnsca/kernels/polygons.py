@@ -118,11 +118,14 @@ class PolygonCounts(NamedTuple):
 class PolygonPlan(NamedTuple):
     """Per polygon, from the count pass: its class, and the chain scratch its clip needs.
 
-    `polygon_class` is int8 (`polygon_class_of`); `scratch_vertices` and
-    `scratch_chains` bound the vertices and chains of the ambiguous polygons' rings
+    `polygon_class` is int8 (`polygon_class_of`), computed by the count pass unless
+    `classified` (the OpenCL backend classifies every polygon before it chooses the
+    rings to send to the device: the count pass reuses those classes); `scratch_vertices`
+    and `scratch_chains` bound the vertices and chains of the ambiguous polygons' rings
     (`bound_chains`).
     """
 
+    classified: bool
     polygon_class: np.ndarray
     scratch_vertices: np.ndarray
     scratch_chains: np.ndarray
@@ -1336,8 +1339,11 @@ def _plan_block(line, polygons, lo_p, hi_p, classify, plan, counts):
         n_r = r_end - r_begin
         if classify:
             window = window_of(polygons.windows, polygons.polygon_window, p)
-            cls = polygon_class_of(xy, ring_offsets, r_begin, r_end, window)
-            plan.polygon_class[p] = cls
+            if plan.classified:
+                cls = plan.polygon_class[p]
+            else:
+                cls = polygon_class_of(xy, ring_offsets, r_begin, r_end, window)
+                plan.polygon_class[p] = cls
             counts.n_vertices[p] = 0
             counts.n_rings[p] = 0
             counts.n_polys[p] = 0

@@ -822,7 +822,7 @@ class OpenCLBackend:
                 yield PolygonRange(a, b, PL.Decisions(True, chunk_start, *tables[1:]))
 
         return _HOST.clip_polygons(polygons, windows, options, device=DevicePolygons(
-            polygon_class, decided(), lambda: call.totals(self.name, self.precision)))
+            True, polygon_class, decided(), lambda: call.totals(self.name, self.precision)))
 
     def clip_paths(self, paths: PathArrays, windows: WindowTable,
                    options: PathOptions) -> PathPieces:

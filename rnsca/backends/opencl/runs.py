@@ -33,6 +33,7 @@ import pyopencl.array as cl_array
 from rnsca.arrays import exclusive_sum
 from rnsca.backends.base import METHOD_ID
 from rnsca.backends.opencl import segments as _segments
+from rnsca.backends.opencl.segments import _Raw
 from rnsca.kernels import counters as C
 from rnsca.kernels import polylines as PL
 from rnsca.options import Method, Mode, Precision, SegmentOptions
@@ -106,8 +107,14 @@ class Ledger:
         queue = device.queue
         if array.nbytes < (1 << 20) or device.staging is None:
             return self.to_device(queue, array)
-        buffer = _segments.upload_whole(self, device.staging, array, chunk, np.float64)
-        return cl_array.Array(queue, array.shape, array.dtype, data=buffer)
+        return cl_array.Array(queue, array.shape, array.dtype,
+                              data=self.staged_buffer(device, array, chunk))
+
+    def staged_buffer(self, device: Any, array: np.ndarray, chunk: int) -> Any:
+        """Return `staged`'s device copy of `array` as a raw buffer (small: pooled)."""
+        if array.nbytes < (1 << 20) or device.staging is None:
+            return self.upload(device.queue, array, device.allocator)
+        return _segments.upload_whole(self, device.staging, array, chunk, np.float64)
 
     def to_device(self, queue: cl.CommandQueue, array: np.ndarray,
                   wait: bool = True) -> cl_array.Array:
@@ -118,6 +125,27 @@ class Ledger:
                                                     is_blocking=wait))
             self.bytes_to_device += array.nbytes
         return buffer
+
+    def upload(self, queue: cl.CommandQueue, array: np.ndarray, allocator: Any) -> Any:
+        """Return a pooled device buffer holding `array`, copied without waiting.
+
+        The caller keeps `array` alive until the copy is done. A raw buffer, not an
+        `Array`: creating one of those costs tens of microseconds of NumPy checks, and
+        a pipelined call makes a dozen per range.
+        """
+        buffer = allocator(max(8, array.nbytes))
+        if array.nbytes:
+            self.copy_events.append(cl.enqueue_copy(queue, buffer, array, is_blocking=False))
+            self.bytes_to_device += array.nbytes
+        return buffer
+
+    def read(self, queue: cl.CommandQueue, buffer: Any, dtype: Any, count: int) -> np.ndarray:
+        """Return `count` items of `dtype` from a raw buffer, landing later (`settle`)."""
+        out = np.empty(count, dtype)
+        if out.nbytes:
+            self.copy_events.append(cl.enqueue_copy(queue, out, buffer, is_blocking=False))
+            self.bytes_from_device += out.nbytes
+        return out
 
     def from_device(self, queue: cl.CommandQueue, buffer: cl_array.Array,
                     wait: bool = True) -> np.ndarray:
@@ -192,6 +220,7 @@ class _Range:
     chunk_start: np.ndarray
     chunk_part: np.ndarray
     n_chunks: int
+    part_groups: int
     device: dict = field(default_factory=dict)
     held: list = field(default_factory=list)
     # Read back without waiting; valid once `RunCall.clip` (piece_end) or
@@ -234,8 +263,8 @@ class RunCall:
             self.bounds = np.ascontiguousarray(windows, dtype=real)
         with device.call_lock:
             self.kernels = device.program(real is np.float64)
-            self.d_windows = self.ledger.to_device(device.queue, self.bounds.reshape(-1))
-            self.nothing = self.ledger.to_device(device.queue, np.zeros(0, np.uint8))
+            self.d_windows = self.ledger.upload(device.queue, self.bounds.reshape(-1),
+                                                device.allocator)
 
     def start(self, data: np.ndarray, xy: np.ndarray, part_offsets: np.ndarray,
               part_window: np.ndarray) -> _Range:
@@ -254,45 +283,45 @@ class RunCall:
         chunk_start = exclusive_sum(chunks_per_part)
         n_chunks = int(chunk_start[-1])
         chunk_part = np.repeat(np.arange(n_parts, dtype=np.int64), chunks_per_part)
-        r = _Range(xy, part_offsets, part_window, chunk_start, chunk_part, n_chunks)
         local = self.local_size
         part_groups = max(1, -(-n_parts // local))
+        r = _Range(xy, part_offsets, part_window, chunk_start, chunk_part, n_chunks,
+                   part_groups)
         n_runs = self.options.n if self.options.n > 0 else PL.RUN_N_AUTO
+        item = np.dtype(self.real).itemsize
         with device.call_lock:
+            alloc = device.allocator
             d = r.device
-            d["xy"] = ledger.staged(device, data.reshape(-1), _segments.CHUNK_SEGMENTS)
+            d["xy"] = ledger.staged_buffer(device, data.reshape(-1), _segments.CHUNK_SEGMENTS)
             # Not waited for: the host arrays live as long as the range (`r.held`).
             r.held = [np.ascontiguousarray(part_offsets, np.int64), chunk_start, chunk_part,
                       np.ascontiguousarray(part_window, np.int64)]
             for name, array in zip(("offsets", "chunk_start", "chunk_part", "part_window"),
                                    r.held, strict=True):
-                d[name] = ledger.to_device(queue, array, wait=False)
-            d["boxes"] = cl_array.empty(queue, max(1, 4 * n_chunks), self.real)
-            d["decision"] = cl_array.empty(queue, max(1, n_chunks), np.uint8)
-            d["segmented"] = cl_array.empty(queue, max(1, n_chunks), np.int64)
-            d["run_counters"] = cl_array.empty(queue, part_groups * C.WIDTH, np.int64)
+                d[name] = ledger.upload(queue, array, alloc)
+            d["boxes"] = alloc(max(8, 4 * item * n_chunks))
+            d["decision"] = alloc(max(8, n_chunks))
+            d["segmented"] = alloc(max(8, 8 * n_chunks))
+            d["position"] = alloc(max(8, 8 * n_chunks))
+            d["run_counters"] = alloc(8 * part_groups * C.WIDTH)
             # Kernels wait for the uploads through the staging queue(s).
             ready = list(ledger.ready)
             if n_chunks:
                 ledger.kernel_events.append(self.kernels.chunk_boxes(
-                    queue, (n_chunks,), None, buffer_of(d["xy"]), buffer_of(d["offsets"]),
-                    buffer_of(d["chunk_start"]), buffer_of(d["chunk_part"]),
-                    np.int64(n_chunks), buffer_of(d["boxes"]), wait_for=ready))
+                    queue, (n_chunks,), None, d["xy"], d["offsets"], d["chunk_start"],
+                    d["chunk_part"], np.int64(n_chunks), d["boxes"], wait_for=ready))
             ledger.kernel_events.append(self.kernels.classify_runs(
-                queue, (part_groups * local,), (local,), buffer_of(d["boxes"]),
-                buffer_of(d["offsets"]), buffer_of(d["chunk_start"]),
-                buffer_of(d["part_window"]), buffer_of(self.d_windows), np.int64(n_parts),
+                queue, (part_groups * local,), (local,), d["boxes"], d["offsets"],
+                d["chunk_start"], d["part_window"], self.d_windows, np.int64(n_parts),
                 np.int32(n_runs), np.int32(self.drop_edge_runs),
-                np.int32(self.options.method is Method.RNSCA), buffer_of(self.nothing),
-                np.int32(1), buffer_of(d["decision"]), buffer_of(d["segmented"]),
-                buffer_of(d["run_counters"]), wait_for=ready))
-            d["position"] = d["segmented"]
+                np.int32(self.options.method is Method.RNSCA), device.nowhere, np.int32(1),
+                d["decision"], d["segmented"], d["run_counters"], wait_for=ready))
             if n_chunks:
-                event, d["position"] = cl_array.cumsum(d["segmented"][:n_chunks], queue=queue,
-                                                       return_event=True)
-                ledger.kernel_events.append(event)
                 # The chunks' piece rows, inclusive: the assembly's piece_start, shifted.
-                r.piece_end = ledger.from_device(queue, d["position"][:n_chunks], wait=False)
+                ledger.kernel_events.append(device.scan()(
+                    _Raw(d["segmented"], queue, alloc), _Raw(d["position"], queue, alloc),
+                    queue=queue, size=n_chunks, allocator=alloc))
+                r.piece_end = ledger.read(queue, d["position"], np.int64, n_chunks)
                 r.piece_end_read = ledger.copy_events[-1:]
             queue.flush()
         return r
@@ -309,28 +338,29 @@ class RunCall:
         local = self.local_size
         chunk_groups = max(1, -(-r.n_chunks // local))
         d = r.device
+        item = np.dtype(self.real).itemsize
         with device.call_lock:
+            alloc = device.allocator
             reads_from = len(ledger.copy_events)
-            keep = cl_array.empty(queue, max(1, total), np.uint8)
-            result = cl_array.empty(queue, max(1, 6 * total), self.real)
-            chunk_counters = cl_array.empty(queue, chunk_groups * C.WIDTH, np.int64)
+            d["keep"] = alloc(max(8, total))
+            d["result"] = alloc(max(8, 6 * item * total))
+            d["chunk_counters"] = alloc(8 * chunk_groups * C.WIDTH)
             ledger.kernel_events.append(self.kernels.clip_chunk_segments(
-                queue, (chunk_groups * local,), (local,), buffer_of(d["xy"]),
-                buffer_of(d["offsets"]), buffer_of(d["chunk_start"]),
-                buffer_of(d["chunk_part"]), buffer_of(d["part_window"]),
-                buffer_of(self.d_windows), np.int64(r.n_chunks), buffer_of(d["decision"]),
-                buffer_of(d["segmented"]), buffer_of(d["position"]),
+                queue, (chunk_groups * local,), (local,), d["xy"], d["offsets"],
+                d["chunk_start"], d["chunk_part"], d["part_window"], self.d_windows,
+                np.int64(r.n_chunks), d["decision"], d["segmented"], d["position"],
                 np.int32(METHOD_ID[options.method]), np.int32(options.n),
                 np.int32(options.max_depth), self.real(options.tolerance),
-                np.int32(options.mode is Mode.EXACT), buffer_of(keep), buffer_of(result),
-                buffer_of(chunk_counters)))
-            d.update(keep=keep, result=result, chunk_counters=chunk_counters)
+                np.int32(options.mode is Mode.EXACT), d["keep"], d["result"],
+                d["chunk_counters"]))
             r.reads = {
-                "decision": ledger.from_device(queue, d["decision"][:r.n_chunks], wait=False),
-                "keep": ledger.from_device(queue, keep[:total], wait=False),
-                "pieces": ledger.from_device(queue, result[:6 * total], wait=False),
-                "run_counters": ledger.from_device(queue, d["run_counters"], wait=False),
-                "chunk_counters": ledger.from_device(queue, chunk_counters, wait=False)}
+                "decision": ledger.read(queue, d["decision"], np.uint8, r.n_chunks),
+                "keep": ledger.read(queue, d["keep"], np.uint8, total),
+                "pieces": ledger.read(queue, d["result"], self.real, 6 * total),
+                "run_counters": ledger.read(queue, d["run_counters"], np.int64,
+                                            r.part_groups * C.WIDTH),
+                "chunk_counters": ledger.read(queue, d["chunk_counters"], np.int64,
+                                              chunk_groups * C.WIDTH)}
             r.reads["events"] = ledger.copy_events[reads_from:]
             queue.flush()
 

@@ -27,11 +27,11 @@ from typing import Any, NamedTuple
 
 import numpy as np
 import pyopencl as cl
-import pyopencl.array as cl_array
 
 from rnsca import constants
 from rnsca.arrays import exclusive_sum
-from rnsca.backends.opencl.runs import Ledger, buffer_of
+from rnsca.backends.opencl.runs import Ledger
+from rnsca.backends.opencl.segments import _Raw
 from rnsca.kernels import bezier as BZ
 from rnsca.kernels.outcode import BOTTOM, LEFT, RIGHT, TOP
 from rnsca.options import Precision
@@ -125,40 +125,41 @@ class CurveCall:
         kernels = self.kernels
         reads_from = len(ledger.copy_events)
         with device.call_lock:
+            alloc = device.allocator
             with np.errstate(over="ignore"):  # float32: beyond its range is ±inf, which
                 # still orders the points against the window (`windows32`)
                 device_controls: np.ndarray = controls[:m].astype(self.real).reshape(-1)
             # Not waited for: the host arrays live as long as the range (`r.held`).
             r.held = [device_controls, degree[:m].copy(), run_first, run_end]
             d = r.device
-            d["controls"] = ledger.to_device(queue, r.held[0], wait=False)
-            d["degree"] = ledger.to_device(queue, r.held[1], wait=False)
-            d["class"] = cl_array.empty(queue, max(1, m), np.uint8)
-            d["n_points"] = cl_array.empty(queue, max(1, m), np.int64)
+            d["controls"] = ledger.upload(queue, r.held[0], alloc)
+            d["degree"] = ledger.upload(queue, r.held[1], alloc)
+            d["class"] = alloc(max(8, m))
+            d["n_points"] = alloc(max(8, 8 * m))
             if m:
                 ledger.kernel_events.append(kernels.classify_bezier(
-                    queue, (m,), None, buffer_of(d["controls"]), buffer_of(d["degree"]),
-                    np.int64(m), *accept, *reject,
+                    queue, (m,), None, d["controls"], d["degree"], np.int64(m), *accept,
+                    *reject,
                     np.float64(tolerance) if self.double else np.float32(0),  # float32: unused
-                    np.int32(_FLATTEN[device_flatten]), buffer_of(d["class"]),
-                    buffer_of(d["n_points"])))
+                    np.int32(_FLATTEN[device_flatten]), d["class"], d["n_points"]))
             if m and device_flatten != "none":
-                event, d["point_end"] = cl_array.cumsum(d["n_points"][:m], queue=queue,
-                                                        return_event=True)
-                ledger.kernel_events.append(event)
-                r.point_end = ledger.from_device(queue, d["point_end"], wait=False)
+                d["point_end"] = alloc(8 * m)
+                ledger.kernel_events.append(device.scan()(
+                    _Raw(d["n_points"], queue, alloc), _Raw(d["point_end"], queue, alloc),
+                    queue=queue, size=m, allocator=alloc))
+                r.point_end = ledger.read(queue, d["point_end"], np.int64, m)
                 r.point_end_read = ledger.copy_events[-1:]
             r.reads["run_class"] = np.zeros(0, dtype=np.int8)
             if n_runs:
-                d["run_first"] = ledger.to_device(queue, run_first, wait=False)
-                d["run_end"] = ledger.to_device(queue, run_end, wait=False)
-                d["run_class"] = cl_array.empty(queue, n_runs, np.int8)
+                d["run_first"] = ledger.upload(queue, run_first, alloc)
+                d["run_end"] = ledger.upload(queue, run_end, alloc)
+                d["run_class"] = alloc(max(8, n_runs))
                 ledger.kernel_events.append(kernels.classify_bezier_runs(
-                    queue, (n_runs,), None, buffer_of(d["controls"]),
-                    buffer_of(d["run_first"]), buffer_of(d["run_end"]), np.int64(n_runs),
-                    *accept, *reject, np.int32(flatten != "none"), buffer_of(d["run_class"])))
-                r.reads["run_class"] = ledger.from_device(queue, d["run_class"], wait=False)
-            r.reads["classes"] = ledger.from_device(queue, d["class"][:m], wait=False)
+                    queue, (n_runs,), None, d["controls"], d["run_first"], d["run_end"],
+                    np.int64(n_runs), *accept, *reject, np.int32(flatten != "none"),
+                    d["run_class"]))
+                r.reads["run_class"] = ledger.read(queue, d["run_class"], np.int8, n_runs)
+            r.reads["classes"] = ledger.read(queue, d["class"], np.uint8, m)
             r.events = ledger.copy_events[reads_from:]
             queue.flush()
         return r
@@ -177,12 +178,11 @@ class CurveCall:
         queue = device.queue
         d = r.device
         with device.call_lock:
-            d["points"] = cl_array.empty(queue, 2 * total, self.real)
+            d["points"] = device.allocator(2 * np.dtype(self.real).itemsize * total)
             ledger.kernel_events.append(self.kernels.flatten_bezier(
-                queue, (r.m,), None, buffer_of(d["controls"]), buffer_of(d["degree"]),
-                buffer_of(d["n_points"]), buffer_of(d["point_end"]), np.int64(r.m),
-                buffer_of(d["points"])))
-            r.reads["points"] = ledger.from_device(queue, d["points"], wait=False)
+                queue, (r.m,), None, d["controls"], d["degree"], d["n_points"],
+                d["point_end"], np.int64(r.m), d["points"]))
+            r.reads["points"] = ledger.read(queue, d["points"], self.real, 2 * total)
             r.events += ledger.copy_events[-1:]
             queue.flush()
 

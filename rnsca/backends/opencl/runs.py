@@ -97,34 +97,16 @@ class Ledger:
         """Return the number of host-device copies so far."""
         return len(self.copy_events)
 
-    def staged(self, device: Any, array: np.ndarray, chunk: int) -> cl_array.Array:
-        """Copy a large `array` to the device through the pinned staging buffers.
+    def staged(self, device: Any, array: np.ndarray, chunk: int) -> Any:
+        """Return a device copy of `array`: a large one through the pinned staging buffers.
 
         On every core into page-locked memory, then at full bus speed, in pieces that
-        alternate between the device's two queues (`segments.upload_whole`); a small
-        one directly. The kernels that read it wait for ``ready``.
+        alternate between the device's two queues (`segments.upload_whole`; the kernels
+        that read it wait for ``ready``); a small one is uploaded into a pooled buffer.
         """
-        queue = device.queue
-        if array.nbytes < (1 << 20) or device.staging is None:
-            return self.to_device(queue, array)
-        return cl_array.Array(queue, array.shape, array.dtype,
-                              data=self.staged_buffer(device, array, chunk))
-
-    def staged_buffer(self, device: Any, array: np.ndarray, chunk: int) -> Any:
-        """Return `staged`'s device copy of `array` as a raw buffer (small: pooled)."""
         if array.nbytes < (1 << 20) or device.staging is None:
             return self.upload(device.queue, array, device.allocator)
         return _segments.upload_whole(self, device.staging, array, chunk, np.float64)
-
-    def to_device(self, queue: cl.CommandQueue, array: np.ndarray,
-                  wait: bool = True) -> cl_array.Array:
-        """Return a device copy of `array`; with `wait` False, keep `array` until it lands."""
-        buffer = cl_array.empty(queue, array.shape, array.dtype)
-        if array.nbytes:
-            self.copy_events.append(cl.enqueue_copy(queue, buffer_of(buffer), array,
-                                                    is_blocking=wait))
-            self.bytes_to_device += array.nbytes
-        return buffer
 
     def upload(self, queue: cl.CommandQueue, array: np.ndarray, allocator: Any) -> Any:
         """Return a pooled device buffer holding `array`, copied without waiting.
@@ -144,17 +126,6 @@ class Ledger:
         out = np.empty(count, dtype)
         if out.nbytes:
             self.copy_events.append(cl.enqueue_copy(queue, out, buffer, is_blocking=False))
-            self.bytes_from_device += out.nbytes
-        return out
-
-    def from_device(self, queue: cl.CommandQueue, buffer: cl_array.Array,
-                    wait: bool = True) -> np.ndarray:
-        """Return a host copy of `buffer`; with `wait` False it lands later (`settle`)."""
-        out = np.empty(buffer.shape, buffer.dtype)
-        if out.nbytes:
-            self.copy_events.append(cl.enqueue_copy(queue, out, cast(cl.Buffer, buffer.base_data),
-                                                    src_offset=buffer.offset,
-                                                    is_blocking=wait))
             self.bytes_from_device += out.nbytes
         return out
 
@@ -292,7 +263,7 @@ class RunCall:
         with device.call_lock:
             alloc = device.allocator
             d = r.device
-            d["xy"] = ledger.staged_buffer(device, data.reshape(-1), _segments.CHUNK_SEGMENTS)
+            d["xy"] = ledger.staged(device, data.reshape(-1), _segments.CHUNK_SEGMENTS)
             # Not waited for: the host arrays live as long as the range (`r.held`).
             r.held = [np.ascontiguousarray(part_offsets, np.int64), chunk_start, chunk_part,
                       np.ascontiguousarray(part_window, np.int64)]
@@ -388,13 +359,6 @@ class RunCall:
         r.held.clear()
         return Tables(r.chunk_start[:-1].copy(), reads["decision"], piece_start,
                       reads["keep"].view(np.bool_), pieces)
-
-    def whole(self, data: np.ndarray, xy: np.ndarray, part_offsets: np.ndarray,
-              part_window: np.ndarray) -> Tables:
-        """Return the tables of one range, start to finish (nothing to overlap with)."""
-        r = self.start(data, xy, part_offsets, part_window)
-        self.clip(r)
-        return self.finish(r)
 
     def totals(self, name: str, precision: Precision) -> tuple[np.ndarray, DeviceStats]:
         """Return the call's device counter rows and stats, once every range is finished."""

@@ -568,11 +568,7 @@ class OpenCLBackend:
                 assert data is not None
                 whole = _segments.upload_whole(run, device.staging, data, chunk)
             if pairs is None:
-                p, bad = (_windows.assign_on_device(run, device.queue, device.table_scan(),
-                                                    whole, n, window_finder(windows), items)
-                          if n else (0, n))
-                if bad < n:
-                    self._raise_invalid(segments, bad, on_device)
+                p = self._device_pairs(run, whole, segments, windows, items) if n else 0
             else:
                 p = int(pairs.segment.shape[0])
                 if p:
@@ -640,10 +636,7 @@ class OpenCLBackend:
                      _segments.upload_whole(run, device.staging,
                                             np.ascontiguousarray(segments, np.float64),
                                             _segments.CHUNK_SEGMENTS))
-            p, bad = _windows.assign_on_device(run, device.queue, device.table_scan(), whole,
-                                               n, window_finder(windows), items)
-            if bad < n:
-                self._raise_invalid(segments, bad, isinstance(segments, cl_array.Array))
+            p = self._device_pairs(run, whole, segments, windows, items)
             pair_segment = np.empty(p, np.int64)
             pair_window = np.empty(p, np.int32)
             if p:
@@ -652,6 +645,22 @@ class OpenCLBackend:
                 run.download(device.queue, pair_window, run.pair_window, run.ready)
             self._run_stats(run)
         return pair_segment, pair_window
+
+    def _device_pairs(self, run: _segments.SegmentRun, whole: cl.Buffer,
+                      segments: np.ndarray | cl_array.Array, windows: np.ndarray,
+                      items: int) -> int:
+        """Make the pairs of the `whole` segments on the device (`run`'s tables); their count.
+
+        Raises the error of the first segment that is not finite, before anything is
+        clipped.
+        """
+        n = int(segments.shape[0])
+        device = self._device
+        p, bad = _windows.assign_on_device(run, device.queue, device.table_scan(), whole, n,
+                                           window_finder(windows), items)
+        if bad < n:
+            self._raise_invalid(segments, bad, isinstance(segments, cl_array.Array))
+        return p
 
     def _segment_run(self, bounds: np.ndarray | None, options: SegmentOptions, source: bool,
                      t: bool) -> _segments.SegmentRun:

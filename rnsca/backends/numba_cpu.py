@@ -84,12 +84,11 @@ class PolygonRange(NamedTuple):
 class DevicePolygons(NamedTuple):
     """What the OpenCL backend's device decided for `NumbaBackend.clip_polygons`.
 
-    `polygon_class` (int8 per polygon, `polygons.classify_polygons`, where `classified`;
-    else filled by the count pass); `ranges`, the
-    rings' run decisions and clipped pieces range by range, in polygon order, each
-    given as the device finishes it (the count pass of one range runs while the device
-    works on the next); `totals`, called once every range is read, the device's counter
-    rows and stats.
+    `polygon_class` (int8 per polygon: `polygons.classify_polygons`'s where
+    `classified`, else filled by the count pass); `ranges`, the rings' run decisions and
+    clipped pieces range by range, in polygon order, each given as the device finishes
+    it (the count pass of one range runs while the device works on the next); `totals`,
+    called once every range is read, the device's counter rows and stats.
     """
 
     classified: bool

@@ -346,10 +346,10 @@ print(f"{imported - start:.3f} {done - imported:.3f}")
 """
 
 
-def _first_call(kind: str, backend: str) -> dict:
+def _first_call(kind: str, backend: str, env: dict) -> dict:
     start = time.perf_counter()
     run = subprocess.run([sys.executable, "-c", _CHILD, kind, backend], capture_output=True,
-                         text=True, cwd=HERE.parent, timeout=400)
+                         text=True, cwd=HERE.parent, timeout=400, env=env)
     wall = time.perf_counter() - start
     if run.returncode:
         return {"kind": kind, "backend": backend, "error": run.stderr[-2000:]}
@@ -359,14 +359,23 @@ def _first_call(kind: str, backend: str) -> dict:
 
 
 def cold_start(backends: tuple[str, ...]) -> list[dict]:
-    """First calls with empty caches (all kinds at once: one child each), then warm."""
+    """First calls with empty caches (all kinds at once: one child each), then warm.
+
+    The children's caches (Numba's, pyopencl's binaries, the calibration's) live in a new
+    folder, so "empty" holds whatever this process compiled before.
+    """
+    import tempfile
+
     jobs = [(kind, backend) for backend in backends for kind in COLD_KINDS]
     rows = []
-    with ThreadPoolExecutor(len(jobs)) as pool:
-        for row in pool.map(lambda job: _first_call(*job), jobs):
-            rows.append({**row, "caches": "cold (compiled beside the other kinds)"})
-    for job in jobs:
-        rows.append({**_first_call(*job), "caches": "warm"})
+    with tempfile.TemporaryDirectory(prefix="rnsca-cold-") as caches:
+        env = {**os.environ, "NUMBA_CACHE_DIR": f"{caches}/numba",
+               "XDG_CACHE_HOME": f"{caches}/xdg", "RNSCA_CACHE_DIR": f"{caches}/rnsca"}
+        with ThreadPoolExecutor(len(jobs)) as pool:
+            for row in pool.map(lambda job: _first_call(*job, env), jobs):
+                rows.append({**row, "caches": "cold (compiled beside the other kinds)"})
+        for job in jobs:
+            rows.append({**_first_call(*job, env), "caches": "warm"})
     for row in rows:
         shown = (f"first call {row['first_call_s']:7.2f} s (import {row['import_s']:.2f} s)"
                  if "error" not in row else "ERROR " + row["error"][-300:])
@@ -375,12 +384,31 @@ def cold_start(backends: tuple[str, ...]) -> list[dict]:
     return rows
 
 
+FAMILIES = ("segments", "windows", "lines", "polygons", "curves", "cold-start")
+
+
+def _guarded(report: dict, part: str, run) -> None:
+    """Run one part of the report; a failure is recorded and printed, the rest still runs.
+
+    A GPU machine is lent for minutes: one workload failing must not cost the others.
+    """
+    import traceback
+
+    try:
+        run()
+    except Exception:
+        text = traceback.format_exc()
+        report["errors"].append({"part": part, "traceback": text})
+        print(f"ERROR in {part}:\n{text}", flush=True)
+
+
 def main(argv: list[str] | None = None) -> dict:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--small", action="store_true", help="toy sizes (a CPU check)")
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--skip-cold-start", action="store_true")
-    parser.add_argument("--only", default="", help="comma-separated workload families")
+    parser.add_argument("--only", default="",
+                        help="comma-separated families: " + ",".join(FAMILIES))
     parser.add_argument("--out", type=Path, default=HERE / "results",
                         help="directory of the JSON (default benchmarks/results)")
     parser.add_argument("--skip-calibration", action="store_true",
@@ -397,32 +425,40 @@ def main(argv: list[str] | None = None) -> dict:
                     "host": {"cores": os.cpu_count(), "numba_threads": numba.get_num_threads(),
                              "python": platform.python_version(), "numpy": np.__version__,
                              "numba": numba.__version__, "machine": platform.processor()},
-                    "devices": list_devices(), "small": args.small}
+                    "devices": list_devices(), "small": args.small, "errors": []}
     print(json.dumps(report, indent=1), flush=True)
-    if not args.skip_cold_start:
-        report["cold_start"] = cold_start(("numba", "opencl"))
+    families = set(filter(None, args.only.split(","))) or set(FAMILIES)
+    if unknown := families - set(FAMILIES):
+        parser.error(f"unknown families {sorted(unknown)}; known: {', '.join(FAMILIES)}")
+    if args.skip_cold_start:
+        families.discard("cold-start")
+    small = args.small
+    workloads = {
+        "segments": lambda: (
+            segments(table, 20_000 if small else 10_000_000, args.repeats, variants=True),
+            segments(table, 50_000 if small else 50_000_000, args.repeats, variants=False)),
+        "windows": lambda: many_windows(table, 20_000 if small else 10_000_000, 1024,
+                                        args.repeats),
+        "lines": lambda: lines(table, 10 if small else 4000, args.repeats),
+        "polygons": lambda: polygons(table, 1000 if small else 1_000_000, args.repeats),
+        "curves": lambda: curves(table, small, args.repeats)}
     opencl = get_backend("opencl")
     report["opencl_device"] = opencl.name
     table = Table()
-    families = set(filter(None, args.only.split(","))) or {
-        "segments", "windows", "lines", "polygons", "curves"}
-    small = args.small
-    if "segments" in families:
-        segments(table, 20_000 if small else 10_000_000, args.repeats, variants=True)
-        segments(table, 50_000 if small else 50_000_000, args.repeats, variants=False)
-    if "windows" in families:
-        many_windows(table, 20_000 if small else 10_000_000, 1024, args.repeats)
-    if "lines" in families:
-        lines(table, 10 if small else 4000, args.repeats)
-    if "polygons" in families:
-        polygons(table, 1000 if small else 1_000_000, args.repeats)
-    if "curves" in families:
-        curves(table, small, args.repeats)
+    for family, run in workloads.items():
+        if family in families:
+            _guarded(report, family, run)
     report["rows"] = table.rows
     if not args.skip_calibration:
-        report["auto_calibration"] = _calibration()
+        _guarded(report, "calibration",
+                 lambda: report.__setitem__("auto_calibration", _calibration()))
     if args.profile:
-        report["profiles"] = _profiles(small)
+        _guarded(report, "profiles",
+                 lambda: report.__setitem__("profiles", _profiles(small)))
+    if "cold-start" in families:
+        # Last: its children compile every kind with empty caches, the longest part.
+        _guarded(report, "cold-start", lambda: report.__setitem__(
+            "cold_start", cold_start(("numba", "opencl"))))
     stamp = datetime.now(timezone.utc).strftime("%Y%m%dT%H%M%SZ")
     paths = [args.out / f"gpu-{stamp}.json"]
     if os.environ.get("OUT"):

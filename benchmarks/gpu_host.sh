@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # The GPU measurements on a lent GPU machine (README, "Development"), from the project
 # root: install the wheels carried in .whl/ (that machine reaches no package index),
-# register NVIDIA's OpenCL driver, run benchmarks/gpu.py (cold start, every workload on
-# Numba and OpenCL, the calibration, profiles), then the OpenCL tests on the GPU.
-# Results: $OUT/bench.log, $OUT/gpu-*.json, $OUT/tests.log.
+# register NVIDIA's OpenCL driver, run benchmarks/gpu.py (every workload on Numba and
+# OpenCL, the calibration, profiles), the OpenCL tests on the GPU, then the cold start
+# last (its children compile every kind with empty caches: the longest, least needed part).
+# Results: $OUT/bench.log, $OUT/gpu*.json, $OUT/tests.log, $OUT/cold.log.
 set -u
 export PYTHONUNBUFFERED=1
 OUT=${OUT:-/tmp/out}; mkdir -p "$OUT"
@@ -15,8 +16,12 @@ lib=$(ls /usr/local/nvidia/lib64/libnvidia-opencl.so* /usr/lib/x86_64-linux-gnu/
 export OCL_ICD_VENDORS=/tmp/vendors RNSCA_CACHE_DIR=/tmp/rnsca-cache
 nvidia-smi --query-gpu=name,driver_version,memory.total --format=csv,noheader
 echo "cores $(nproc)"
-timeout ${BENCH_TIMEOUT:-380} python3 -m benchmarks.gpu --profile ${BENCH_ARGS:-} 2>&1 | grep -v -i "warn\|_create_built\|prg.build" | tee "$OUT/bench.log"
-cp benchmarks/results/gpu-*.json "$OUT/" 2>/dev/null
-timeout ${TEST_TIMEOUT:-140} python3 -m pytest -q -p no:cacheprovider -o addopts="-ra" \
+quiet() { grep -v -i "warn\|_create_built\|prg.build"; }
+timeout ${BENCH_TIMEOUT:-280} python3 -m benchmarks.gpu --profile --only segments,windows,lines,polygons,curves ${BENCH_ARGS:-} 2>&1 | quiet | tee "$OUT/bench.log"
+cp "$OUT/gpu.json" "$OUT/gpu-workloads.json" 2>/dev/null
+timeout ${TEST_TIMEOUT:-110} python3 -m pytest -q -p no:cacheprovider -o addopts="-ra" \
   tests/unit/backends tests/unit/test_many_windows.py tests/property/test_geometry_backends_agree.py \
-  tests/property/test_windows_backends_agree.py 2>&1 | tail -12 | tee "$OUT/tests.log"
+  tests/property/test_windows_backends_agree.py 2>&1 | tail -15 | tee "$OUT/tests.log"
+timeout ${COLD_TIMEOUT:-140} python3 -m benchmarks.gpu --only cold-start --skip-calibration 2>&1 | quiet | tee "$OUT/cold.log"
+cp "$OUT/gpu.json" "$OUT/gpu-cold.json" 2>/dev/null
+ls -la "$OUT"

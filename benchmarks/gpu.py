@@ -37,6 +37,7 @@ from benchmarks import datasets as D
 W = (250.0, 250.0, 750.0, 750.0)
 HERE = Path(__file__).resolve().parent
 COLD_KINDS = ("segments", "lines", "polygons", "paths")
+SWEEPS = {"on": True}  # the size sweeps (--skip-sweeps: a short run)
 
 
 def _best(call, repeats: int) -> tuple[float, object]:
@@ -111,8 +112,9 @@ def segments(table: Table, n: int, repeats: int, variants: bool) -> None:
     table.add(f"segments {label} pieces only", tn, to, _split(ro, to), _same_segments(ro, rn))
     _pinned_input(table, segs, label, repeats)
     _device_resident(table, segs, label, repeats)
-    _chunk_sizes(table, segs, label)
-    _copies(table, segs)
+    if SWEEPS["on"]:
+        _chunk_sizes(table, segs, label)
+        _copies(table, segs)
 
 
 def _pinned_input(table: Table, segs: np.ndarray, label: str, repeats: int) -> None:
@@ -229,8 +231,9 @@ def lines(table: Table, n_lines: int, repeats: int) -> None:
                                                               strict=True)))
     label = f"polylines {n_lines} ({len(coords) / 1e6:.1f}M vertices)"
     table.add(label, tn, to, _split(ro, to), equal)
-    _range_sizes(table, label, lambda: rnsca.clip_ragged("linestring", coords, (offsets,),
-                                                         W, backend="opencl"))
+    if SWEEPS["on"]:
+        _range_sizes(table, label, lambda: rnsca.clip_ragged(
+            "linestring", coords, (offsets,), W, backend="opencl"))
 
 
 def _range_sizes(table: Table, label: str, call) -> None:
@@ -260,8 +263,9 @@ def polygons(table: Table, n: int, repeats: int) -> None:
                                                               strict=True)))
     label = f"polygons {n / 1e3:g}k stars with holes"
     table.add(label, tn, to, _split(ro, to), equal)
-    _range_sizes(table, label, lambda: rnsca.clip_ragged("polygon", coords, offsets, W,
-                                                         backend="opencl"))
+    if SWEEPS["on"]:
+        _range_sizes(table, label, lambda: rnsca.clip_ragged(
+            "polygon", coords, offsets, W, backend="opencl"))
 
 
 def curves(table: Table, small: bool, repeats: int) -> None:
@@ -276,12 +280,13 @@ def curves(table: Table, small: bool, repeats: int) -> None:
         table.add(label, tn, to, _split(ro, to), equal)
 
 
-def _calibration() -> dict:
+def _calibration(operations: set[str] | None = None) -> dict:
     """Run backend='auto''s calibration here and print each operation's crossover."""
     from rnsca.backends import auto
 
     start = time.perf_counter()
-    result = auto.calibrate()
+    result = auto.calibrate({op: sizes for op, sizes in auto.CALIBRATED.items()
+                             if operations is None or op in operations})
     result["wall_s"] = time.perf_counter() - start
     for operation, rows in result["seconds"].items():
         cells = "  ".join(f"{size}: {n * 1e3:.2f}/{o * 1e3:.2f} ms" for size, n, o in rows)
@@ -413,6 +418,10 @@ def main(argv: list[str] | None = None) -> dict:
                         help="directory of the JSON (default benchmarks/results)")
     parser.add_argument("--skip-calibration", action="store_true",
                         help="skip backend='auto''s calibration (its crossover sizes)")
+    parser.add_argument("--calibrate", default="",
+                        help="comma-separated operations to calibrate (default: all)")
+    parser.add_argument("--skip-sweeps", action="store_true",
+                        help="skip the chunk and range size sweeps and the host copies")
     parser.add_argument("--profile", action="store_true",
                         help="profile one OpenCL call of lines and of polygons (host time)")
     args = parser.parse_args(argv)
@@ -433,6 +442,7 @@ def main(argv: list[str] | None = None) -> dict:
     if args.skip_cold_start:
         families.discard("cold-start")
     small = args.small
+    SWEEPS["on"] = not args.skip_sweeps
     workloads = {
         "segments": lambda: (
             segments(table, 20_000 if small else 10_000_000, args.repeats, variants=True),
@@ -450,8 +460,9 @@ def main(argv: list[str] | None = None) -> dict:
             _guarded(report, family, run)
     report["rows"] = table.rows
     if not args.skip_calibration:
-        _guarded(report, "calibration",
-                 lambda: report.__setitem__("auto_calibration", _calibration()))
+        _guarded(report, "calibration", lambda: report.__setitem__(
+            "auto_calibration", _calibration(set(filter(None, args.calibrate.split(",")))
+                                             or None)))
     if args.profile:
         _guarded(report, "profiles",
                  lambda: report.__setitem__("profiles", _profiles(small)))

@@ -5,6 +5,7 @@
 # OpenCL, the calibration, profiles), the OpenCL tests on the GPU, then the cold start
 # last (its children compile every kind with empty caches: the longest, least needed part).
 # Results: $OUT/bench.log, $OUT/gpu*.json, $OUT/tests.log, $OUT/cold.log.
+# A short rerun: BENCH_ARGS="--only segments,windows --skip-sweeps" TESTS=0 COLD=0.
 set -u
 export PYTHONUNBUFFERED=1
 OUT=${OUT:-/tmp/out}; mkdir -p "$OUT"
@@ -17,11 +18,11 @@ export OCL_ICD_VENDORS=/tmp/vendors RNSCA_CACHE_DIR=/tmp/rnsca-cache
 nvidia-smi --query-gpu=name,driver_version,memory.total --format=csv,noheader
 echo "cores $(nproc)"
 quiet() { grep -v -i "warn\|_create_built\|prg.build"; }
-timeout ${BENCH_TIMEOUT:-280} python3 -m benchmarks.gpu --profile --only segments,windows,lines,polygons,curves ${BENCH_ARGS:-} 2>&1 | quiet | tee "$OUT/bench.log"
+timeout ${BENCH_TIMEOUT:-280} python3 -m benchmarks.gpu ${BENCH_ARGS:---profile --only segments,windows,lines,polygons,curves} 2>&1 | quiet | tee "$OUT/bench.log"
 cp "$OUT/gpu.json" "$OUT/gpu-workloads.json" 2>/dev/null
-timeout ${TEST_TIMEOUT:-110} python3 -m pytest -q -p no:cacheprovider -o addopts="-ra" \
+[[ ${TESTS:-1} == 1 ]] && timeout ${TEST_TIMEOUT:-110} python3 -m pytest -q -p no:cacheprovider -o addopts="-ra" \
   tests/unit/backends tests/unit/test_many_windows.py tests/property/test_geometry_backends_agree.py \
   tests/property/test_windows_backends_agree.py 2>&1 | tail -15 | tee "$OUT/tests.log"
-timeout ${COLD_TIMEOUT:-140} python3 -m benchmarks.gpu --only cold-start --skip-calibration 2>&1 | quiet | tee "$OUT/cold.log"
+[[ ${COLD:-1} == 1 ]] && timeout ${COLD_TIMEOUT:-140} python3 -m benchmarks.gpu --only cold-start --skip-calibration 2>&1 | quiet | tee "$OUT/cold.log"
 cp "$OUT/gpu.json" "$OUT/gpu-cold.json" 2>/dev/null
 ls -la "$OUT"

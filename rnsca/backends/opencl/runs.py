@@ -42,11 +42,12 @@ from rnsca.stats import DeviceStats
 __all__ = ["Ledger", "RunCall", "Tables", "buffer_of", "event_seconds", "exact_float32_ends",
            "pipelined", "ranges_by_vertices", "Stages", "PIPELINE_VERTICES", "MAX_RANGES"]
 
-#: Vertices per range of a pipelined line or ring call: 16 MB of float64 coordinates,
-#: enough that a range's kernel launches and reads are a small part of its time, few
-#: enough that the first range (whose device work nothing hides) is a small part of a
-#: large call (1M stars: 4.2M vertices to prune, 5 ranges; 14M-vertex lines, 14).
-PIPELINE_VERTICES = 1 << 20
+#: Vertices per range of a pipelined line or ring call: 64 MB of float64 coordinates.
+#: Measured on an H100 (run D, `benchmarks/gpu.py`'s range sweep): 14M-vertex lines took
+#: 64 / 64 / 43 / 39 ms in ranges of 2**19 / 2**20 / 2**21 / 2**22 vertices (31.5 ms in
+#: one range), 1M stars 319 / 291 / 287 / 284 ms (298 in one): each range's launches,
+#: reads and host passes cost more than the overlap of small ranges gains there.
+PIPELINE_VERTICES = 1 << 22
 #: Ranges per call at most: the host's fixed cost per range (a count and a write pass
 #: of the Numba assembly, each starting the threads) stays small.
 MAX_RANGES = 16

@@ -566,17 +566,16 @@ class OpenCLBackend:
                 whole = buffer_of(segments)
             else:
                 assert data is not None
-                whole = _segments.upload_whole(run, device.staging, data, chunk,
-                                               device.allocator)
+                whole = _segments.upload_whole(run, device.staging, data, chunk)
             if pairs is None:
                 p = self._device_pairs(run, whole, segments, windows, items) if n else 0
             else:
                 p = int(pairs.segment.shape[0])
                 if p:
-                    run.pair_segment = _segments.upload_whole(
-                        run, device.staging, pairs.segment, chunk, device.allocator)
-                    run.pair_window = _segments.upload_whole(
-                        run, device.staging, pairs.window(), chunk, device.allocator)
+                    run.pair_segment = _segments.upload_whole(run, device.staging,
+                                                              pairs.segment, chunk)
+                    run.pair_window = _segments.upload_whole(run, device.staging,
+                                                             pairs.window(), chunk)
             if run.pair_segment is None:  # no pairs: still a pair run (a window output)
                 run.pair_segment = run.pair_window = device.nowhere
             window_offsets = None
@@ -638,7 +637,7 @@ class OpenCLBackend:
             whole = (buffer_of(segments) if isinstance(segments, cl_array.Array) else
                      _segments.upload_whole(run, device.staging,
                                             np.ascontiguousarray(segments, np.float64),
-                                            _segments.CHUNK_SEGMENTS, device.allocator))
+                                            _segments.CHUNK_SEGMENTS))
             p = self._device_pairs(run, whole, segments, windows, items)
             pair_segment = np.empty(p, np.int64)
             pair_window = np.empty(p, np.int32)

@@ -107,8 +107,7 @@ class Ledger:
         """
         if array.nbytes < (1 << 20) or device.staging is None:
             return self.upload(device.queue, array, device.allocator)
-        return _segments.upload_whole(self, device.staging, array, chunk, device.allocator,
-                                      np.float64)
+        return _segments.upload_whole(self, device.staging, array, chunk, np.float64)
 
     def upload(self, queue: cl.CommandQueue, array: np.ndarray, allocator: Any) -> Any:
         """Return a pooled device buffer holding `array`, copied without waiting.

@@ -236,6 +236,8 @@ class Staging:
         self.slots: dict[Any, list[_Slot]] = {}
         # The callers' outputs of float64 calls (`HostOutputs.pinned`).
         self.outputs = PinnedPool(context, queues[0])
+        # Device buffers of whole uploads (`upload_whole`), kept for the next call.
+        self.uploads = cl.tools.MemoryPool(cl.tools.ImmediateAllocator(queues[0]))
 
     def slots_for(self, real: Any, chunk: int) -> list[_Slot]:
         """Return the slots for `real` coordinates, each holding at least `chunk` items.
@@ -439,7 +441,7 @@ def _out_views(slot: _Slot, m: int) -> dict[str, np.ndarray]:
             "window": slot.pinned_out.array((6 * item + 8) * c, np.int32, m)}
 
 
-def upload_whole(run: Any, staging: Staging, array: np.ndarray, chunk: int, allocator: Any,
+def upload_whole(run: Any, staging: Staging, array: np.ndarray, chunk: int,
                  real: Any = None) -> cl.Buffer:
     """Return a device copy of `array`, streamed through the slots' staging buffers.
 
@@ -451,14 +453,17 @@ def upload_whole(run: Any, staging: Staging, array: np.ndarray, chunk: int, allo
     An array in the pool's pinned memory (`PinnedPool.owns`: a result of an earlier
     call, or `PinnedPool.empty`) goes up without the host copy.
 
-    The buffer comes from `allocator`, the device's memory pool: releasing a buffer to
+    The buffer comes from a memory pool (``staging.uploads``): releasing a buffer to
     NVIDIA's driver waits for the whole device (as ``cudaFree`` does), so a pipelined
     call that freed each range's coordinates stalled on the ranges still in flight
     (run D: 16 ms of 59 in a line call, 41 of 326 in a polygon call, in ``dict.clear``).
+    A pool of their own: a caller drops such a buffer only once every command that
+    reads it is done, whereas the device's pool gets scratch back (a scan's) while its
+    kernels still run, and these copies go on either queue.
     """
     slots = staging.slots_for(real or run.real, chunk)
     raw = np.ascontiguousarray(array).reshape(-1).view(np.uint8)
-    buffer = allocator(max(8, raw.nbytes))
+    buffer = cast(cl.Buffer, staging.uploads(max(8, raw.nbytes)))
     step = slots[0].pinned_in.nbytes
     pinned = staging.outputs.owns(raw)  # already page-locked: sent up as it is
     for c, offset in enumerate(range(0, raw.nbytes, step)):

@@ -23,6 +23,7 @@ import numpy as np
 import numpy.typing as npt
 import shapely
 
+from rnsca.constants import MVT_COORDINATE_LIMIT
 from rnsca.errors import InvalidGeometryError, UnsupportedGeometryError
 from rnsca.kernels.copies import copy_ranges
 from rnsca.kernels.validate import (
@@ -152,6 +153,21 @@ def segment_error(row: int, values: np.ndarray) -> InvalidGeometryError:
         error = InvalidGeometryError(
             f"segment {row} spans more than float64 can hold (x1 - x0 or y1 - y0 "
             f"overflows): {values.tolist()}")
+    error.row = row
+    return error
+
+
+def tile_piece_error(row: int, tile: int, values: np.ndarray) -> InvalidGeometryError:
+    """Return the error for piece `row` of `tile`, which does not quantise into MVT's range.
+
+    Its coordinates are not finite, or lie ``MVT_COORDINATE_LIMIT`` (`rnsca.constants`)
+    tile units or more from its tile's origin: a piece of another window, most likely.
+    """
+    error = InvalidGeometryError(
+        f"piece {row} {np.asarray(values, dtype=np.float64).tolist()} of tile {tile} lies "
+        f"{MVT_COORDINATE_LIMIT} tile units or more from the tile's origin (or is not finite), beyond the "
+        f"32-bit coordinates of a vector tile: encode the pieces of clip_segments(..., "
+        f"windows=windows) with the same windows")
     error.row = row
     return error
 

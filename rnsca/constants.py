@@ -81,6 +81,8 @@ __all__ = [
     "FLATTEN_NONE",
     "FLATTEN_ACCEPTED_CURVES",
     "FLATTEN_ALL",
+    # Vector tiles of segment pieces.
+    "MVT_COORDINATE_LIMIT",
 ]
 
 # --- Outcode bits and edge ids (rnsca/kernels/outcode.py draws the nine regions) -------
@@ -224,3 +226,11 @@ CURVE_RUN_SEGMENTED = 2
 FLATTEN_NONE = 0
 FLATTEN_ACCEPTED_CURVES = 1
 FLATTEN_ALL = 2
+
+# --- Vector tiles of segment pieces (rnsca/tiles/segment_tiles.py) ---------------------
+# A piece's quantised coordinates lie strictly within this many tile units of its tile's
+# origin: MVT writes a geometry's deltas as zigzag-encoded 32-bit integers (specification
+# 2.1, 4.3.2), and two coordinates within +-2**30 are always less than 2**31 apart. Tested
+# before rounding (``|v| < limit`` with ``v = (x - x0) * scale + 0.5``), so no
+# conversion to an integer ever overflows, on the host or on a device.
+MVT_COORDINATE_LIMIT = 1 << 30

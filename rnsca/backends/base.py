@@ -17,6 +17,7 @@ lines        `Ragged` lines, `WindowTable`            `GeometryPieces`
 polygons     `Ragged` polygons, `WindowTable`         `GeometryPieces`
 paths        `PathArrays`, `WindowTable`              `PathPieces`
 flatten      `PathArrays`, tolerance                  `Polylines`
+tiles        pieces sorted by window, `TileLayer`     `TileBytes`
 ===========  =======================================  ===========================
 
 Every result says where each output came from (`source`, or offsets per input) and
@@ -49,6 +50,8 @@ __all__ = [
     "PathPieces",
     "Polylines",
     "SegmentPieces",
+    "TileBytes",
+    "TileLayer",
 ]
 
 #: The number each segment kernel (Numba and OpenCL) knows a method by.
@@ -76,20 +79,22 @@ class Operation(_ChoiceEnum):
     """Clip Bézier paths (`ClipBackend.clip_paths`)."""
     FLATTEN = "flatten"
     """Turn Bézier paths into polylines (`ClipBackend.flatten_paths`)."""
+    TILES = "tiles"
+    """Encode pieces sorted by window as vector tiles (`ClipBackend.encode_segment_tiles`)."""
 
     @property
     def methods(self) -> tuple[Method, ...]:
         """Return the methods the operation accepts, on every backend (in `Method` order).
 
         Curves are clipped by RNSCA only (the line baselines clip them after
-        `flatten_paths`); flattening takes no method.
+        `flatten_paths`); flattening and encoding tiles take no method.
 
         Examples
         --------
         >>> [m.value for m in Operation.PATHS.methods]
         ['rnsca']
         """
-        if self is Operation.FLATTEN:
+        if self in (Operation.FLATTEN, Operation.TILES):
             return ()
         return (Method.RNSCA,) if self is Operation.PATHS else tuple(Method)
 
@@ -98,15 +103,15 @@ class Operation(_ChoiceEnum):
         """Return the modes the operation accepts, on every backend (in `Mode` order).
 
         Polygons are clipped in exact mode only: valid polygon output needs the exact
-        boundary crossings. Flattening takes no mode. A backend may run fewer
-        (`Capabilities.modes`).
+        boundary crossings. Flattening and encoding tiles take no mode. A backend may
+        run fewer (`Capabilities.modes`).
 
         Examples
         --------
         >>> [m.value for m in Operation.POLYGONS.modes]
         ['exact']
         """
-        if self is Operation.FLATTEN:
+        if self in (Operation.FLATTEN, Operation.TILES):
             return ()
         return (Mode.EXACT,) if self is Operation.POLYGONS else tuple(Mode)
 
@@ -254,6 +259,47 @@ class Polylines(NamedTuple):
     line_path: np.ndarray
 
 
+@dataclass(frozen=True, slots=True)
+class TileLayer:
+    """How pieces sorted by window become one MVT layer per window (`encode_segment_tiles`).
+
+    Attributes
+    ----------
+    window_offsets : ndarray of int64, shape (k + 1,)
+        Tile ``w``'s pieces are rows ``window_offsets[w]:window_offsets[w + 1]``.
+    quantisation : ndarray of float64, shape (k, 4)
+        ``(x0, y1, sx, sy)`` of each tile: its window's left and top edges and its
+        scales, tile units per unit. A piece end ``(x, y)`` becomes
+        ``floor((x - x0) * sx + 0.5)``, ``floor((y1 - y) * sy + 0.5)`` (y down), each
+        operation rounded on its own (no fused multiply-add), on every backend.
+    head, tail : ndarray of uint8
+        The layer's fields before its features (name) and after them (extent,
+        version), as protobuf serializes them.
+    """
+
+    window_offsets: np.ndarray
+    quantisation: np.ndarray
+    head: np.ndarray
+    tail: np.ndarray
+
+
+@dataclass(frozen=True, slots=True)
+class TileBytes:
+    """Encoded tiles, back to back: tile ``w`` is ``data[offsets[w]:offsets[w + 1]]``.
+
+    Attributes
+    ----------
+    data : ndarray of uint8
+    offsets : ndarray of int64, shape (k + 1,)
+        A tile left with no feature is empty (no bytes).
+    device : DeviceStats or None
+    """
+
+    data: np.ndarray
+    offsets: np.ndarray
+    device: DeviceStats | None = None
+
+
 class ClipBackend(Protocol):
     """A place where the clipping kernels run; every backend gives the same outputs."""
 
@@ -329,6 +375,20 @@ class ClipBackend(Protocol):
 
     def flatten_paths(self, paths: PathArrays, tolerance: float, close: bool) -> Polylines:
         """Return the paths as polylines within `tolerance` (`close`: every subpath closed)."""
+        ...
+
+    def encode_segment_tiles(self, pieces: Any, source: Any, layer: TileLayer) -> TileBytes:
+        """Return each window's pieces as a Mapbox Vector Tile of one layer.
+
+        `pieces` (m, 4) float64 are sorted by window (``layer.window_offsets``), a host
+        array or, on a device backend, a device array it accepts; `source` (m,) int64
+        (host or device) or None. Each piece is a LINESTRING feature: id ``source[i]``
+        (none without `source`), no tags, MoveTo its first end, LineTo its second
+        (zigzag deltas from (0, 0)); a piece whose ends quantise to one position is left
+        out. The bytes are the same on every backend. Raises `InvalidGeometryError`
+        naming the first piece that quantises beyond ``MVT_COORDINATE_LIMIT``
+        (`rnsca.constants`) or is not finite.
+        """
         ...
 
     def warm_up(self) -> None:

@@ -15,6 +15,7 @@ from rnsca.arrays import (
     check_segment_values,
     exclusive_sum,
     group_offsets,
+    tile_piece_error,
 )
 from rnsca.backends.base import (
     METHOD_ID,
@@ -24,11 +25,15 @@ from rnsca.backends.base import (
     PathPieces,
     Polylines,
     SegmentPieces,
+    TileBytes,
+    TileLayer,
 )
+from rnsca.constants import MVT_COORDINATE_LIMIT
 from rnsca.errors import LimitExceededError
 from rnsca.kernels import bezier as BZ
 from rnsca.kernels import counters as C
 from rnsca.kernels import fill_rings as FR
+from rnsca.kernels import mvt as MVT
 from rnsca.kernels import polygons as PG
 from rnsca.kernels import polylines as PL
 from rnsca.kernels import records as R
@@ -65,6 +70,9 @@ SERIAL_BLOCKS = 4
 MAX_FLATTENED_POINTS = 2**27
 _CAPABILITIES = Capabilities(Backend.NUMBA)
 _NO_INDEX = np.empty(0, dtype=np.int64)
+_NO_BYTES = np.empty(0, dtype=np.uint8)
+# The geometries of the kinds a tile of segment pieces has none of.
+_NO_SHAPES = MVT.Shapes(np.empty((0, 2), dtype=np.int64), _NO_INDEX, _NO_INDEX, _NO_INDEX)
 # Subpaths per block of the parallel path kernel: enough work per block to pay for its
 # scratch arrays, enough blocks to balance the threads (at most _PATH_BLOCK subpaths, and
 # at least _PATH_MIN_BLOCKS blocks when there are that many subpaths: a few long paths,
@@ -472,11 +480,70 @@ class NumbaBackend:
         line_path = np.repeat(np.arange(len(paths), dtype=np.int64), np.diff(paths.path_offsets))
         return Polylines(coords, line_offsets, line_path[lines])
 
+    def encode_segment_tiles(self, pieces: np.ndarray, source: np.ndarray | None,
+                             layer: TileLayer) -> TileBytes:
+        """Return each window's pieces as a vector tile; see `ClipBackend.encode_segment_tiles`.
+
+        The pieces are quantised here (NumPy, one rounding per operation) and encoded
+        by the kernels of `rnsca.tiles.encode_zoom` (`kernels.mvt`): each piece a
+        LINESTRING of one part of two positions, written by `feature_sizes` and
+        `write_features`, each tile framed around them by `tile_sizes` and `write_tiles`.
+        """
+        pieces = np.ascontiguousarray(pieces, dtype=np.float64)
+        window_offsets = layer.window_offsets
+        k = window_offsets.shape[0] - 1
+        m = pieces.shape[0]
+        origin_scale = layer.quantisation[np.repeat(np.arange(k), np.diff(window_offsets))]
+        with np.errstate(invalid="ignore", over="ignore"):
+            unrounded = np.empty((m, 4))
+            unrounded[:, 0::2] = ((pieces[:, 0::2] - origin_scale[:, 0:1]) * origin_scale[:, 2:3]
+                                  + 0.5)
+            unrounded[:, 1::2] = ((origin_scale[:, 1:2] - pieces[:, 1::2]) * origin_scale[:, 3:4]
+                                  + 0.5)
+            beyond = ~(np.abs(unrounded) < MVT_COORDINATE_LIMIT).all(axis=1)
+        if beyond.any():
+            row = int(np.argmax(beyond))
+            raise tile_piece_error(row, int(np.searchsorted(window_offsets, row, "right")) - 1,
+                                   pieces[row])
+        lines = MVT.Shapes(np.floor(unrounded).astype(np.int64).reshape(-1, 2),
+                           np.arange(0, 2 * m + 1, 2, dtype=np.int64),
+                           np.arange(m + 1, dtype=np.int64), _NO_INDEX)
+        features = MVT.Features(
+            np.full(m, MVT.LINESTRING, dtype=np.int8), np.arange(m, dtype=np.int64),
+            np.full(m, -1, dtype=np.int64) if source is None
+            else np.ascontiguousarray(source, dtype=np.int64),
+            np.zeros(m + 1, dtype=np.int64), np.empty(0, dtype=np.uint32))
+        sizes = np.empty(m, dtype=np.int64)
+        geometry_bytes = np.empty(m, dtype=np.int64)
+        MVT.feature_sizes(features, _NO_SHAPES, lines, _NO_SHAPES, _NO_SHAPES, sizes,
+                          geometry_bytes)
+        starts = exclusive_sum(sizes)
+        written = np.empty(int(starts[-1]), dtype=np.uint8)
+        MVT.write_features(features, _NO_SHAPES, lines, _NO_SHAPES, _NO_SHAPES, starts, sizes,
+                           geometry_bytes, written)
+        # Each tile holding a feature: its features' bytes, and no keys nor values.
+        tile_feature_start = starts[window_offsets]
+        holding = np.flatnonzero(np.diff(tile_feature_start) > 0)
+        ranges = np.zeros((holding.shape[0], 6), dtype=np.int64)
+        ranges[:, 0] = tile_feature_start[holding]
+        ranges[:, 1] = tile_feature_start[holding + 1]
+        tile_bytes = np.zeros(k, dtype=np.int64)
+        held_bytes = np.empty(holding.shape[0], dtype=np.int64)
+        MVT.tile_sizes(layer.head, layer.tail, ranges, held_bytes)
+        tile_bytes[holding] = held_bytes
+        offsets = exclusive_sum(tile_bytes)
+        data = np.empty(int(offsets[-1]), dtype=np.uint8)
+        # The tiles holding features are back to back (the others are empty).
+        MVT.write_tiles(layer.head, layer.tail, written, _NO_BYTES, _NO_BYTES, ranges,
+                        np.append(offsets[holding], offsets[-1]), data)
+        return TileBytes(data, offsets)
+
     def warm_up(self) -> None:
         """Compile (or load from the cache) the kernels, so the first real call is fast."""
         warm_up_segments(self)
         warm_up_geometry(self)
         warm_up_paths(self)
+        warm_up_tiles(self)
 
 
 def warm_up_segments(backend: ClipBackend) -> None:
@@ -495,6 +562,17 @@ def warm_up_segments(backend: ClipBackend) -> None:
         for method in (Method.RNSCA, Method.LIANG_BARSKY):
             backend.clip_segment_windows(segments, windows,
                                          SegmentOptions.resolve(window, method=method))
+
+
+def warm_up_tiles(backend: ClipBackend) -> None:
+    """Encode two tiles of pieces on `backend`, with ids and without (one tile empty)."""
+    pieces = np.array([[0.0, 0.0, 0.5, 1.0], [0.5, 0.5, 0.5, 0.5]])
+    layer = TileLayer(np.array([0, 2, 2], dtype=np.int64),
+                      np.array([[0.0, 1.0, 16.0, 16.0], [1.0, 1.0, 16.0, 16.0]]),
+                      np.array([0x0A, 0x01, 0x73], dtype=np.uint8),
+                      np.array([0x28, 0x10, 0x78, 0x02], dtype=np.uint8))
+    for source in (np.array([3, 4], dtype=np.int64), None):
+        backend.encode_segment_tiles(pieces, source, layer)
 
 
 def warm_up_paths(backend: ClipBackend) -> None:

@@ -38,9 +38,10 @@ from rnsca.tiles.encode import Framing, Validation, ZoomTiles, encode_zoom
 from rnsca.tiles.features import FeatureTable
 from rnsca.tiles.mercator import Crs
 from rnsca.tiles.pyramid import Level, cascade, root, tile_windows, wrapped
+from rnsca.tiles.segment_tiles import EncodedTiles, encode_segment_tiles
 
-__all__ = ["ArchiveSummary", "Compression", "Crs", "FeatureTable", "Framing", "Validation",
-           "ZoomTiles",
+__all__ = ["ArchiveSummary", "Compression", "Crs", "EncodedTiles", "FeatureTable", "Framing",
+           "Validation", "ZoomTiles", "encode_segment_tiles",
            "MAX_ZOOM", "check_options", "tile_features", "tile_one", "tile_table", "tile_ids",
            "write_directory", "write_pmtiles"]
 

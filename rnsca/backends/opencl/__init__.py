@@ -76,14 +76,18 @@ from rnsca.arrays import (
     exclusive_sum,
     group_offsets,
     segment_error,
+    tile_piece_error,
 )
 from rnsca.backends.base import (
     METHOD_ID,
     Capabilities,
     GeometryPieces,
+    Operation,
     PathPieces,
     Polylines,
     SegmentPieces,
+    TileBytes,
+    TileLayer,
 )
 from rnsca.backends.numba_cpu import (
     DevicePaths,
@@ -96,11 +100,14 @@ from rnsca.backends.numba_cpu import (
     warm_up_geometry,
     warm_up_paths,
     warm_up_segments,
+    warm_up_tiles,
 )
 from rnsca.backends.opencl import segments as _segments
 from rnsca.backends.opencl import windows as _windows
+from rnsca.backends.opencl.tiles import encode_on_device
 from rnsca.backends.opencl.curves import CurveCall
 from rnsca.backends.opencl.runs import (
+    Ledger,
     RunCall,
     buffer_of,
     event_seconds,
@@ -288,7 +295,9 @@ class _Device:
                     program.classify_runs, program.clip_chunk_segments,
                     program.classify_bezier, program.flatten_bezier,
                     program.classify_bezier_runs, program.reduce_counters,
-                    program.assign_pairs, program.reduce_first_bad, program.window_starts)
+                    program.assign_pairs, program.reduce_first_bad, program.window_starts,
+                    program.segment_feature_sizes, program.tile_feature_starts,
+                    program.write_segment_features, program.write_tile_frames)
             return self.programs[options]
 
     def scan(self) -> GenericScanKernel:
@@ -349,6 +358,10 @@ class _Kernels:
     assign_pairs: cl.Kernel
     reduce_first_bad: cl.Kernel
     window_starts: cl.Kernel
+    segment_feature_sizes: cl.Kernel
+    tile_feature_starts: cl.Kernel
+    write_segment_features: cl.Kernel
+    write_tile_frames: cl.Kernel
 
 
 _DEVICES: dict[str, _Device] = {}
@@ -414,8 +427,15 @@ class OpenCLBackend:
 
     @property
     def capabilities(self) -> Capabilities:
-        """Return what this backend runs: every operation, both modes, on its device."""
-        return Capabilities(Backend.OPENCL, precision=self.precision,
+        """Return what this backend runs: every operation, both modes, on its device.
+
+        In float32, every operation but tiles: their quantisation is float64's, the
+        same bit for bit on every backend (`encode_segment_tiles`).
+        """
+        operations = frozenset(Operation)
+        if self.precision is not Precision.FLOAT64:
+            operations -= {Operation.TILES}
+        return Capabilities(Backend.OPENCL, operations, precision=self.precision,
                             devices=(self.device["id"],), device_arrays=True)
 
     @property
@@ -946,6 +966,63 @@ class OpenCLBackend:
         tables = call.whole(controls, degree, window, tolerance, flatten, subpath_offsets)
         return (*tables, call.totals(self.name))
 
+    def encode_segment_tiles(self, pieces: np.ndarray | cl_array.Array,
+                             source: np.ndarray | cl_array.Array | None,
+                             layer: TileLayer) -> TileBytes:
+        """Return each window's pieces as a vector tile; see `ClipBackend.encode_segment_tiles`.
+
+        On the device (`tiles.encode_on_device`): the features' sizes, a prefix sum and
+        their writes, one work-item per piece, and each tile's framing; the host reads
+        back only the tiles' feature byte counts (k + 2 numbers) to lay the tiles out,
+        then the tiles' bytes. Device arrays (float64 pieces, int64 source) are read
+        where they are; host arrays are sent up first. The bytes are the Numba
+        backend's.
+
+        Raises
+        ------
+        BackendUnavailableError
+            On a float32 device (the quantisation is float64's).
+        InvalidGeometryError
+            For a piece that does not quantise into MVT's range (found on the device).
+        ValueError
+            A device array of another context, dtype or shape.
+        """
+        if self.precision is not Precision.FLOAT64:
+            raise BackendUnavailableError(
+                f"the OpenCL backend runs float32 here ({self.name!r}): encoding tiles "
+                "needs float64, so that every backend quantises the pieces alike; use a "
+                "float64 device, or backend='numba' on the pieces brought to the host")
+        m = int(pieces.shape[0])
+        device = self._device
+        ledger = Ledger()
+        chunk = _segments.CHUNK_SEGMENTS
+        with device.call_lock:
+            if isinstance(pieces, cl_array.Array):
+                self._check_device_segments(pieces)
+                device_pieces = buffer_of(pieces)
+            else:
+                pieces = np.ascontiguousarray(pieces, dtype=np.float64)
+                device_pieces = ledger.staged(device, pieces, chunk)
+            device_source = None
+            if isinstance(source, cl_array.Array):
+                if (source.context != device.context or source.dtype != np.int64
+                        or source.shape != (m,)):
+                    raise ValueError(f"device sources must be ({m},) int64 on the backend's "
+                                     f"context, got {source.shape} {source.dtype}")
+                device_source = buffer_of(source)
+            elif source is not None:
+                source = np.ascontiguousarray(source, dtype=np.int64)
+                device_source = ledger.staged(device, source, chunk)
+            encoded = encode_on_device(device, device.program(True), ledger, device_pieces,
+                                       device_source, m, layer, LOCAL_SIZE)
+            device_stats = ledger.stats(self.name, self.precision)
+        if encoded.first_bad < m:
+            row = encoded.first_bad
+            tile = int(np.searchsorted(layer.window_offsets, row, "right")) - 1
+            values = pieces[row].get() if isinstance(pieces, cl_array.Array) else pieces[row]
+            raise tile_piece_error(row, tile, values)
+        return TileBytes(encoded.data, encoded.offsets, device_stats)
+
     def warm_up(self) -> None:
         """Build the program (or load it from the caches), run every method, lines, rings.
 
@@ -957,6 +1034,8 @@ class OpenCLBackend:
         # Curves: every flatten choice of the device, and the host kernel that reads
         # the device's decisions (compiled or loaded here).
         warm_up_paths(self)
+        if Operation.TILES in self.capabilities.operations:
+            warm_up_tiles(self)
 
 
 def _window_stretches(windows: WindowTable, n: int) -> list[tuple[int, int, int]]:

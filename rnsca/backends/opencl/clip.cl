@@ -1688,3 +1688,200 @@ __kernel void window_starts(__global const int *window, const long m, const long
     }
     offsets[w] = lo;
 }
+
+/* --- Vector tiles of segment pieces (rnsca/backends/opencl/tiles.py) ---------------- */
+/* Each piece, of `m` sorted by window (tile w's are window_offsets[w]..[w + 1] - 1), is
+ * one LINESTRING feature of its tile's layer, written as rnsca/kernels/mvt.py writes it
+ * (`feature_sizes`, `write_features`: the Numba backend's bytes, byte for byte):
+ * 0x12 len (Layer.features), [0x08 id] (Feature.id, with a source), 0x18 0x02
+ * (Feature.type LINESTRING), 0x22 len (Feature.geometry, packed): MoveTo 1 (0x09) and
+ * its first end, LineTo 1 (0x0A) and the step to its second, zigzag-encoded from a
+ * cursor at (0, 0). A piece whose ends quantise to one position is left out (the
+ * specification's 4.3.4: a line of fewer than two positions). Three passes, as the
+ * segments' compaction: the features' sizes, a prefix sum, the writes; then each tile's
+ * framing (`write_tile_frames`). */
+
+/* Bytes of `value` as a protobuf varint (mvt.py's _varint_size). */
+long varint_size(ulong value) {
+    long size = 1;
+    while (value >= 128) {
+        value >>= 7;
+        size++;
+    }
+    return size;
+}
+
+/* Write `value` as a varint at out[pos]; return the position after (mvt.py's _varint). */
+long write_varint(ulong value, __global uchar *out, long pos) {
+    while (value >= 128) {
+        out[pos++] = (uchar)((value & 127) | 128);
+        value >>= 7;
+    }
+    out[pos] = (uchar)value;
+    return pos + 1;
+}
+
+/* (n << 1) ^ (n >> 63), without shifting a negative number left. */
+ulong zigzag(long n) {
+    ulong doubled = (ulong)n << 1;
+    return n < 0 ? ~doubled : doubled;
+}
+
+/* The tile of piece i: the last w with window_offsets[w] <= i (offsets[k] = m > i). */
+long piece_tile(__global const long *window_offsets, long k, long i) {
+    long lo = 0, hi = k;
+    while (lo < hi) {
+        long mid = (lo + hi) / 2;
+        if (window_offsets[mid] <= i)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    return lo - 1;
+}
+
+/* Piece i's ends in tile units (x0, y0, x1, y1; y down) into q, with tile w's
+ * (x0, y1, sx, sy) in `quantisation`: floor((x - x0) * sx + 0.5), floor((y1 - y) * sy
+ * + 0.5), each operation rounded (FP_CONTRACT OFF, as NumPy computes it on the host).
+ * 0 where one is MVT_COORDINATE_LIMIT or more from the origin, or not finite: tested
+ * before the conversion, which could otherwise overflow. */
+int quantise_piece(__global const REAL *pieces, long i, __global const REAL *quantisation,
+                   long w, long *q) {
+    __global const REAL *g = quantisation + 4 * w;
+    for (int e = 0; e < 2; e++) {
+        REAL vx = (pieces[4 * i + 2 * e] - g[0]) * g[2] + (REAL)0.5;
+        REAL vy = (g[1] - pieces[4 * i + 2 * e + 1]) * g[3] + (REAL)0.5;
+        if (!(fabs(vx) < (REAL)MVT_COORDINATE_LIMIT && fabs(vy) < (REAL)MVT_COORDINATE_LIMIT))
+            return 0;
+        q[2 * e] = (long)floor(vx);
+        q[2 * e + 1] = (long)floor(vy);
+    }
+    return 1;
+}
+
+/* Bytes of the packed geometry: two command integers of one byte, four parameters. */
+long piece_geometry_size(const long *q) {
+    return 2 + varint_size(zigzag(q[0])) + varint_size(zigzag(q[1]))
+        + varint_size(zigzag(q[2] - q[0])) + varint_size(zigzag(q[3] - q[1]));
+}
+
+/* Bytes of the Feature message (mvt.py's _body_size, without tags); id < 0: none. */
+long feature_body_size(long geometry, long id) {
+    long size = 2 + 1 + varint_size(geometry) + geometry;
+    if (id >= 0)
+        size += 1 + varint_size(id);
+    return size;
+}
+
+/* Pass 1: sizes[i], the bytes of piece i's Layer.features entry (0: left out). A
+ * grid-stride loop; each group's first piece that does not quantise (`quantise_piece`)
+ * goes to first_bad[group] (m if none). */
+__kernel __attribute__((reqd_work_group_size(LOCAL_SIZE, 1, 1)))
+void segment_feature_sizes(__global const REAL *pieces, const long m,
+                           __global const long *source, const int has_source,
+                           __global const long *window_offsets, const long k,
+                           __global const REAL *quantisation, __global long *sizes,
+                           __global long *first_bad) {
+    __local long bad[LOCAL_SIZE];
+    long my_bad = m;
+    long stride = get_global_size(0);
+    for (long i = get_global_id(0); i < m; i += stride) {
+        long q[4];
+        long size = 0;
+        if (!quantise_piece(pieces, i, quantisation, piece_tile(window_offsets, k, i), q)) {
+            if (my_bad == m)  /* a work-item's pieces rise: its first is its smallest */
+                my_bad = i;
+        } else if (q[0] != q[2] || q[1] != q[3]) {
+            long body = feature_body_size(piece_geometry_size(q), has_source ? source[i] : -1);
+            size = 1 + varint_size(body) + body;
+        }
+        sizes[i] = size;
+    }
+    store_first_bad(bad, my_bad, first_bad);
+}
+
+/* feature_start[w] (w = 0..k): the feature bytes of tiles before w (`position` is the
+ * inclusive prefix sum of the sizes); feature_start[k + 1]: the first piece that does
+ * not quantise (summary[1], from reduce_first_bad). The one read before the framing. */
+__kernel void tile_feature_starts(__global const long *position,
+                                  __global const long *window_offsets, const long k,
+                                  __global const long *summary,
+                                  __global long *feature_start) {
+    long w = get_global_id(0);
+    if (w > k + 1)
+        return;
+    if (w == k + 1) {
+        feature_start[w] = summary[1];
+        return;
+    }
+    long first = window_offsets[w];
+    feature_start[w] = first > 0 ? position[first - 1] : 0;
+}
+
+/* The bytes of tile w's Layer message (head, features, tail), given its features'. */
+long tile_layer_size(__global const long *feature_start, long w, long frame) {
+    return frame + feature_start[w + 1] - feature_start[w];
+}
+
+/* Pass 3: piece i's Layer.features entry, after its tile's header (0x1A, the layer's
+ * length, the `head_size` bytes of the layer's head) and the features before it in its
+ * tile; tile w starts at tile_start[w] (the host's layout of the tiles). `frame` is
+ * the head's and the tail's bytes together. */
+__kernel void write_segment_features(__global const REAL *pieces, const long m,
+                                     __global const long *source, const int has_source,
+                                     __global const long *window_offsets, const long k,
+                                     __global const REAL *quantisation,
+                                     __global const long *sizes,
+                                     __global const long *position,
+                                     __global const long *feature_start,
+                                     __global const long *tile_start, const long head_size,
+                                     const long frame, __global uchar *out) {
+    long i = get_global_id(0);
+    if (i >= m || sizes[i] == 0)
+        return;
+    long w = piece_tile(window_offsets, k, i);
+    long q[4];
+    quantise_piece(pieces, i, quantisation, w, q);
+    long layer = tile_layer_size(feature_start, w, frame);
+    long pos = tile_start[w] + 1 + varint_size(layer) + head_size
+        + (position[i] - sizes[i] - feature_start[w]);
+    long geometry = piece_geometry_size(q);
+    long id = has_source ? source[i] : -1;
+    out[pos] = 0x12;  /* Layer.features, length-delimited */
+    pos = write_varint(feature_body_size(geometry, id), out, pos + 1);
+    if (id >= 0) {
+        out[pos] = 0x08;  /* Feature.id, varint */
+        pos = write_varint(id, out, pos + 1);
+    }
+    out[pos] = 0x18;  /* Feature.type, varint: LINESTRING */
+    out[pos + 1] = 2;
+    out[pos + 2] = 0x22;  /* Feature.geometry, packed */
+    pos = write_varint(geometry, out, pos + 3);
+    out[pos] = 0x09;  /* MoveTo, 1 */
+    pos = write_varint(zigzag(q[0]), out, pos + 1);
+    pos = write_varint(zigzag(q[1]), out, pos);
+    out[pos] = 0x0A;  /* LineTo, 1 */
+    pos = write_varint(zigzag(q[2] - q[0]), out, pos + 1);
+    write_varint(zigzag(q[3] - q[1]), out, pos);
+}
+
+/* Each tile w holding a feature: Tile.layers (0x1A) and the layer's length, its head
+ * bytes before the features and its tail bytes after them (mvt.py's write_tiles). */
+__kernel void write_tile_frames(__global const long *feature_start,
+                                __global const long *tile_start, const long k,
+                                __global const uchar *head, const long head_size,
+                                __global const uchar *tail, const long tail_size,
+                                __global uchar *out) {
+    long w = get_global_id(0);
+    if (w >= k || feature_start[w + 1] == feature_start[w])
+        return;
+    long pos = tile_start[w];
+    out[pos] = 0x1A;
+    pos = write_varint(tile_layer_size(feature_start, w, head_size + tail_size), out,
+                       pos + 1);
+    for (long b = 0; b < head_size; b++)
+        out[pos + b] = head[b];
+    pos += head_size + feature_start[w + 1] - feature_start[w];
+    for (long b = 0; b < tail_size; b++)
+        out[pos + b] = tail[b];
+}

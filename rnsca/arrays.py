@@ -165,9 +165,9 @@ def tile_piece_error(row: int, tile: int, values: np.ndarray) -> InvalidGeometry
     """
     error = InvalidGeometryError(
         f"piece {row} {np.asarray(values, dtype=np.float64).tolist()} of tile {tile} lies "
-        f"{MVT_COORDINATE_LIMIT} tile units or more from the tile's origin (or is not finite), beyond the "
-        f"32-bit coordinates of a vector tile: encode the pieces of clip_segments(..., "
-        f"windows=windows) with the same windows")
+        f"{MVT_COORDINATE_LIMIT} tile units or more from the tile's origin (or is not "
+        f"finite), beyond the 32-bit coordinates of a vector tile: encode the pieces of "
+        f"clip_segments(..., windows=windows) with the same windows")
     error.row = row
     return error
 

@@ -139,7 +139,8 @@ def test_backends_lists_each_available_backend(runner):
     lines = [line for line in result.stdout.splitlines() if not line.startswith(" ")]
     assert [line.split(":")[0] for line in lines] == [b.value for b in available_backends()]
     # With what each runs: its capabilities.
-    assert lines[0] == "numba: segments, windows, lines, polygons, paths, flatten (float64)"
+    assert lines[0] == ("numba: segments, windows, lines, polygons, paths, flatten, tiles "
+                        "(float64)")
 
 
 @pytest.mark.opencl

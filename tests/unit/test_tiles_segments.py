@@ -235,7 +235,8 @@ def test_a_one_window_result_is_refused():
 
 
 def test_windows_that_are_not_the_results_are_refused(tiled):
-    with pytest.raises(InvalidOptionError, match=r"\(4 windows, 2 pieces\) do not match the 3 windows"):
+    with pytest.raises(InvalidOptionError,
+                       match=r"\(4 windows, 2 pieces\) do not match the 3 windows"):
         encode_segment_tiles(tiled, GRID[:3])
     with pytest.raises(InvalidOptionError, match="do not match the 8 windows"):
         encode_segment_tiles(tiled, np.vstack([GRID, GRID]))

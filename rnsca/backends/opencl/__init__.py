@@ -12,6 +12,11 @@ made on the device, where the segments are (`windows.assign_on_device`: the host
 assignment ported, the same pairs in the same order), and clipped as segments are,
 each item a pair; only the pairs' count comes back before the clip.
 
+Vector tiles of segment pieces (`OpenCLBackend.encode_segment_tiles`, `tiles.py`): the
+pieces of a many-window clip, on the device where it left them, are sized as MVT
+features, placed by a prefix sum and written, one work-item per piece, and each tile
+framed there; only the per-tile byte counts and the tiles' bytes come back.
+
 Lines and rings (`runs.RunCall`): ``chunk_boxes`` (one work-item per chunk of 16
 segments), ``classify_runs`` (RNSCA over runs of chunks, one work-item per line or ring)
 and ``clip_chunk_segments`` (the segments of undecided chunks, one work-item per chunk,
@@ -104,7 +109,6 @@ from rnsca.backends.numba_cpu import (
 )
 from rnsca.backends.opencl import segments as _segments
 from rnsca.backends.opencl import windows as _windows
-from rnsca.backends.opencl.tiles import encode_on_device
 from rnsca.backends.opencl.curves import CurveCall
 from rnsca.backends.opencl.runs import (
     Ledger,
@@ -114,6 +118,7 @@ from rnsca.backends.opencl.runs import (
     pipelined,
     ranges_by_vertices,
 )
+from rnsca.backends.opencl.tiles import encode_on_device
 from rnsca.errors import BackendUnavailableError, InvalidGeometryError, InvalidWindowError
 from rnsca.kernels import bezier as BZ
 from rnsca.kernels import counters as C

@@ -15,7 +15,7 @@ from rnsca.errors import BackendUnavailableError, InvalidOptionError
 from rnsca.options import Backend, Method, Mode
 
 OPERATIONS = ["clip_segments", "clip_segment_windows", "clip_lines", "clip_polygons",
-              "clip_paths", "flatten_paths", "warm_up"]
+              "clip_paths", "flatten_paths", "encode_segment_tiles", "warm_up"]
 
 
 def test_every_backend_implements_every_operation_with_the_contracts_signature(backend):

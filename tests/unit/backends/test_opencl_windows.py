@@ -17,7 +17,7 @@ from rnsca import clip_segments
 from rnsca.backends.opencl import OpenCLBackend
 from rnsca.errors import InvalidGeometryError
 from rnsca.many_windows import as_windows, assign, grid_of, window_finder
-from rnsca.options import Precision
+from rnsca.options import Backend, Precision
 
 pytestmark = pytest.mark.opencl
 
@@ -259,8 +259,11 @@ def test_float32_assigns_on_the_host_and_keeps_device_input_there(opencl, rng):
 
 
 def test_the_readme_pipeline_clip_then_tiles_stays_on_the_device(opencl, rng):
-    """README, "Data kept on the device": clip, then a grid of tiles, all device arrays."""
+    """README, "Data kept on the device": clip, then a grid of tiles, all device arrays,
+    then the tiles encoded there: the Numba backend's bytes from the host's pieces."""
     import pyopencl.array as cl_array
+
+    from rnsca.tiles import encode_segment_tiles
 
     if opencl.precision is not Precision.FLOAT64:
         pytest.skip("bit-for-bit agreement is float64's")
@@ -276,3 +279,9 @@ def test_the_readme_pipeline_clip_then_tiles_stays_on_the_device(opencl, rng):
     np.testing.assert_array_equal(tiled.segments.get(), expected.segments)
     np.testing.assert_array_equal(tiled.window.get(), expected.window)
     np.testing.assert_array_equal(tiled.window_offsets, expected.window_offsets)
+    encoded = encode_segment_tiles(tiled, tiles)  # on the device: the pieces are there
+    assert encoded.backend is Backend.OPENCL
+    assert encoded.device.bytes_from_device == 8 * (len(tiles) + 2) + encoded.data.nbytes
+    on_host = encode_segment_tiles(expected, tiles)
+    assert [encoded.tile(w) for w in range(16)] == [on_host.tile(w) for w in range(16)]
+    assert all(encoded.tile(w) for w in range(16))  # every tile holds features

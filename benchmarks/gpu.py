@@ -52,7 +52,9 @@ def _best(call, repeats: int) -> tuple[float, object]:
 
 def _split(result, wall: float) -> dict:
     stats = getattr(result, "stats", None)
-    device = getattr(stats, "device", None)
+    # A clip's device stats are in its ClipStats; encoded tiles carry theirs.
+    device = getattr(stats, "device", None) if stats is not None else getattr(
+        result, "device", None)
     if device is None:
         return {}
     return {"kernel_s": device.kernel_seconds, "transfer_s": device.transfer_seconds,
@@ -219,6 +221,20 @@ def _many_windows_device_resident(table: Table, segs: np.ndarray, grid: np.ndarr
     equal = (_same_segments(ro, rn) and bool(np.array_equal(ro.window.get(), rn.window))
              and bool(np.array_equal(ro.window_offsets, rn.window_offsets)))
     table.add(f"{label} device-resident", tn, to, _split(ro, to), equal, upload_s=upload)
+    _many_windows_encode(table, grid, label, rn, ro, repeats)
+
+
+def _many_windows_encode(table: Table, grid: np.ndarray, label: str, rn, ro,
+                         repeats: int) -> None:
+    """Time the tiles' encoding (MVT): the device-resident pieces on the device, the host's
+    by the Numba backend; only the per-tile counts and the tiles' bytes come back."""
+    from rnsca.tiles import encode_segment_tiles
+
+    tn, en = _best(lambda: encode_segment_tiles(rn, grid, backend="numba"), repeats)
+    to, eo = _best(lambda: encode_segment_tiles(ro, grid, backend="opencl"), repeats)
+    equal = bool(np.array_equal(en.data, eo.data) and np.array_equal(en.offsets, eo.offsets))
+    table.add(f"{label} encode tiles", tn, to, _split(eo, to), equal,
+              tile_bytes=int(en.data.nbytes))
 
 
 def lines(table: Table, n_lines: int, repeats: int) -> None:

@@ -379,6 +379,7 @@ def test_the_gpu_benchmark_runs_and_checks_every_result(opencl, tmp_path):
     assert len(compared) >= 9 and all(row["equal"] for row in compared)
     assert any(name.startswith("1024 windows") for name in rows)
     assert any("device-resident" in name for name in rows)
+    assert any(name.endswith("encode tiles") for name in rows)
     assert set(report["auto_calibration"]["crossover"]) == {"segments", "windows", "lines",
                                                             "polygons"}
     for row in compared:

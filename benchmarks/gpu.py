@@ -226,8 +226,11 @@ def _many_windows_device_resident(table: Table, segs: np.ndarray, grid: np.ndarr
 
 def _many_windows_encode(table: Table, grid: np.ndarray, label: str, rn, ro,
                          repeats: int) -> None:
-    """Time the tiles' encoding (MVT): the device-resident pieces on the device, the host's
-    by the Numba backend; only the per-tile counts and the tiles' bytes come back."""
+    """Time the tiles' encoding (MVT), the device-resident pieces against the host's.
+
+    The device's pieces are encoded on the device (only the per-tile counts and the
+    tiles' bytes come back), the host's by the Numba backend; the bytes compared.
+    """
     from rnsca.tiles import encode_segment_tiles
 
     tn, en = _best(lambda: encode_segment_tiles(rn, grid, backend="numba"), repeats)

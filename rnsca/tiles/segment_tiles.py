@@ -142,11 +142,13 @@ def encode_segment_tiles(result: Any, windows: npt.ArrayLike, *, extent: int = 4
     window_offsets = np.ascontiguousarray(window_offsets, dtype=np.int64)
     pieces, source = result.segments, result.source
     m = int(pieces.shape[0])
-    if window_offsets.shape != (table.shape[0] + 1,) or window_offsets[-1] != m:
+    if (window_offsets.ndim != 1 or window_offsets.shape[0] != table.shape[0] + 1
+            or window_offsets[0] != 0 or window_offsets[-1] != m
+            or (np.diff(window_offsets) < 0).any()):
         raise InvalidOptionError(
-            f"result's window_offsets ({window_offsets.shape[0] - 1} windows, "
-            f"{int(window_offsets[-1])} pieces) do not match the {table.shape[0]} windows "
-            f"and {m} pieces: pass the windows the result was clipped with")
+            f"result's window_offsets (shape {window_offsets.shape}, "
+            f"{window_offsets[-1:].tolist()} pieces) do not match the {table.shape[0]} "
+            f"windows and {m} pieces: pass the windows the result was clipped with")
     with np.errstate(over="ignore"):
         scales = extent / (table[:, 2:] - table[:, :2])
     good = (np.isfinite(scales) & (scales > 0)).all(axis=1)

@@ -236,10 +236,20 @@ def test_a_one_window_result_is_refused():
 
 def test_windows_that_are_not_the_results_are_refused(tiled):
     with pytest.raises(InvalidOptionError,
-                       match=r"\(4 windows, 2 pieces\) do not match the 3 windows"):
+                       match=r"\(shape \(5,\), \[2\] pieces\) do not match the 3 windows"):
         encode_segment_tiles(tiled, GRID[:3])
     with pytest.raises(InvalidOptionError, match="do not match the 8 windows"):
         encode_segment_tiles(tiled, np.vstack([GRID, GRID]))
+
+
+@pytest.mark.parametrize("offsets", [[], [0, 2, 1, 1, 2], [1, 1, 1, 1, 2], [0, 1, 1, 1, 3]],
+                         ids=["empty", "decreasing", "not-from-0", "not-to-m"])
+def test_window_offsets_that_do_not_describe_the_pieces_are_refused(tiled, offsets):
+    import dataclasses
+
+    broken = dataclasses.replace(tiled, window_offsets=np.array(offsets, dtype=np.int64))
+    with pytest.raises(InvalidOptionError, match="window_offsets .* do not match"):
+        encode_segment_tiles(broken, GRID)
 
 
 def test_bad_windows_are_refused(tiled):

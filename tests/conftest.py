@@ -74,6 +74,20 @@ def opencl():
     return get_backend(require_backend(Backend.OPENCL))
 
 
+@pytest.fixture(scope="session")
+def opencl64(opencl):
+    """The OpenCL backend on a float64 device: what bit-for-bit agreement with Numba needs.
+
+    Skipped on a float32 device (whose own tests cover it), a failure in CI, whose CPU
+    runtimes all have float64.
+    """
+    from rnsca.options import Precision
+
+    if opencl.precision is not Precision.FLOAT64:
+        missing(f"the OpenCL device {opencl.name!r} runs float32: this test needs float64")
+    return opencl
+
+
 @pytest.fixture(scope="session", params=list(Method), ids=lambda m: m.value)
 def method(request):
     """Each segment clipping method."""

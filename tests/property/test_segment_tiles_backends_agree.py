@@ -15,7 +15,6 @@ from hypothesis import strategies as st
 
 from rnsca import clip_segments
 from rnsca.errors import InvalidWindowError
-from rnsca.options import Precision
 from rnsca.tiles import encode_segment_tiles
 from tests.property.test_windows_backends_agree import SETTINGS, boxes, grids, segments_near
 from tests.unit.test_tiles_segments import expected_tiles
@@ -24,10 +23,8 @@ pytestmark = pytest.mark.opencl
 
 
 @pytest.fixture(scope="module")
-def device(opencl):
-    if opencl.precision is not Precision.FLOAT64:
-        pytest.skip("tiles need a float64 device")
-    return opencl
+def device(opencl64):
+    return opencl64
 
 
 @SETTINGS

@@ -21,7 +21,6 @@ from hypothesis import strategies as st
 
 from rnsca import clip_segments
 from rnsca.many_windows import as_windows, assign
-from rnsca.options import Precision
 
 pytestmark = pytest.mark.opencl
 
@@ -91,10 +90,8 @@ def segments_near(draw, windows):
 
 
 @pytest.fixture(scope="module")
-def device(opencl):
-    if opencl.precision is not Precision.FLOAT64:
-        pytest.skip("bit-for-bit agreement is float64's")
-    return opencl
+def device(opencl64):
+    return opencl64
 
 
 @SETTINGS

@@ -190,11 +190,10 @@ def test_the_layer_name_and_extent_are_those_asked_for(backend, rng):
     assert decode(tiles.tile(0), layer="roads é", extent=256)
 
 
-def test_numba_and_opencl_give_the_same_bytes(opencl, rng):
-    from rnsca.options import Backend, Precision
+def test_numba_and_opencl_give_the_same_bytes(opencl64, rng):
+    from rnsca.options import Backend
 
-    if opencl.precision is not Precision.FLOAT64:
-        pytest.skip("tiles need a float64 device")  # float32: test_opencl_tiles.py
+    # opencl64: a float64 device (float32 devices refuse tiles: test_opencl_tiles.py)
     segs = rng.uniform(-10, 1010, (20_000, 4))
     segs[::2, 2:] = segs[::2, :2] + rng.normal(0, 3, (10_000, 2))
     edges = np.linspace(0, 1000, 9)
@@ -278,13 +277,10 @@ def test_pieces_far_beyond_their_tile_are_refused_naming_the_piece(backend):
         encode_segment_tiles(tiled, far, backend=backend)
 
 
-def test_a_result_on_a_device_is_refused_by_a_host_backend(opencl):
+def test_a_result_on_a_device_is_refused_by_a_host_backend(opencl64):
     import pyopencl.array as cl_array
 
-    from rnsca.options import Precision
-
-    if opencl.precision is not Precision.FLOAT64:
-        pytest.skip("device segments in float64")
+    opencl = opencl64
     segs = cl_array.to_device(opencl.queue, np.array([[1.0, 1.0, 15.0, 15.0]]))
     tiled = rnsca.clip_segments(segs, windows=GRID, backend="opencl")
     with pytest.raises(InvalidGeometryError, match="pyopencl arrays.*backend='opencl'"):

@@ -13,7 +13,6 @@ from hypothesis import strategies as st
 
 from rnsca import clip_segments
 from rnsca.errors import InvalidGeometryError, InvalidOptionError
-from rnsca.options import Precision
 
 pytestmark = pytest.mark.opencl
 
@@ -21,14 +20,12 @@ W = (250.0, 250.0, 750.0, 750.0)
 
 
 @pytest.fixture
-def small_chunks(opencl, monkeypatch):
+def small_chunks(opencl64, monkeypatch):
     """Chunks of 4,096 segments (the smallest slot), so a call of 30,000 has eight."""
     from rnsca.backends.opencl import segments
 
     monkeypatch.setattr(segments, "CHUNK_SEGMENTS", 1 << 12)
-    if opencl.precision is not Precision.FLOAT64:
-        pytest.skip("bit-for-bit agreement is float64's")  # float32: test_opencl.py
-    return opencl
+    return opencl64  # float32: test_opencl.py
 
 
 def _uniform(rng, n):

@@ -13,17 +13,15 @@ import rnsca
 from rnsca.backends import registry
 from rnsca.backends.base import Operation, TileLayer
 from rnsca.errors import BackendUnavailableError, InvalidGeometryError
-from rnsca.options import Backend, Precision
+from rnsca.options import Backend
 from rnsca.tiles import encode_segment_tiles
 
 pytestmark = pytest.mark.opencl
 
 
 @pytest.fixture(scope="module")
-def device(opencl):
-    if opencl.precision is not Precision.FLOAT64:
-        pytest.skip("tiles need a float64 device")  # a float32 device: tested below
-    return opencl
+def device(opencl64):
+    return opencl64  # a float32 device: tested below
 
 
 def _grid(side, extent=1000.0):

@@ -17,20 +17,18 @@ from rnsca import clip_segments
 from rnsca.backends.opencl import OpenCLBackend
 from rnsca.errors import InvalidGeometryError
 from rnsca.many_windows import as_windows, assign, grid_of, window_finder
-from rnsca.options import Backend, Precision
+from rnsca.options import Backend
 
 pytestmark = pytest.mark.opencl
 
 
 @pytest.fixture
-def device(opencl, monkeypatch):
+def device(opencl64, monkeypatch):
     """The float64 OpenCL backend, with chunks of 4,096 pairs (the smallest slot)."""
     from rnsca.backends.opencl import segments
 
     monkeypatch.setattr(segments, "CHUNK_SEGMENTS", 1 << 12)
-    if opencl.precision is not Precision.FLOAT64:
-        pytest.skip("bit-for-bit agreement is float64's")  # float32: test below
-    return opencl
+    return opencl64  # float32: test below
 
 
 @pytest.fixture
@@ -258,15 +256,14 @@ def test_float32_assigns_on_the_host_and_keeps_device_input_there(opencl, rng):
     np.testing.assert_allclose(got.pieces.get(), host.pieces, rtol=0, atol=1e-3)
 
 
-def test_the_readme_pipeline_clip_then_tiles_stays_on_the_device(opencl, rng):
+def test_the_readme_pipeline_clip_then_tiles_stays_on_the_device(opencl64, rng):
     """README, "Data kept on the device": clip, then a grid of tiles, all device arrays,
     then the tiles encoded there: the Numba backend's bytes from the host's pieces."""
     import pyopencl.array as cl_array
 
     from rnsca.tiles import encode_segment_tiles
 
-    if opencl.precision is not Precision.FLOAT64:
-        pytest.skip("bit-for-bit agreement is float64's")
+    opencl = opencl64
     host = rng.uniform(0, 100, (20_000, 4))
     segments = cl_array.to_device(opencl.queue, host)
     region = clip_segments(segments, (0, 0, 50, 50), backend="opencl", outputs=("segments",))

@@ -521,17 +521,8 @@ class NumbaBackend:
         written = np.empty(int(starts[-1]), dtype=np.uint8)
         MVT.write_features(features, _NO_SHAPES, lines, _NO_SHAPES, _NO_SHAPES, starts, sizes,
                            geometry_bytes, written)
-        # Each tile holding a feature: its features' bytes, and no keys nor values.
-        tile_feature_start = starts[window_offsets]
-        holding = np.flatnonzero(np.diff(tile_feature_start) > 0)
-        ranges = np.zeros((holding.shape[0], 6), dtype=np.int64)
-        ranges[:, 0] = tile_feature_start[holding]
-        ranges[:, 1] = tile_feature_start[holding + 1]
-        tile_bytes = np.zeros(k, dtype=np.int64)
-        held_bytes = np.empty(holding.shape[0], dtype=np.int64)
-        MVT.tile_sizes(layer.head, layer.tail, ranges, held_bytes)
-        tile_bytes[holding] = held_bytes
-        offsets = exclusive_sum(tile_bytes)
+        holding, ranges, offsets = MVT.segment_tile_layout(starts[window_offsets],
+                                                           layer.head, layer.tail)
         data = np.empty(int(offsets[-1]), dtype=np.uint8)
         # The tiles holding features are back to back (the others are empty).
         MVT.write_tiles(layer.head, layer.tail, written, _NO_BYTES, _NO_BYTES, ranges,

@@ -33,8 +33,8 @@ from numba import prange
 from rnsca.kernels.jit import borrowing, parallel
 
 __all__ = ["Features", "Shapes", "feature_sizes", "write_features", "tile_sizes",
-           "write_tiles", "MOVE_TO", "LINE_TO", "CLOSE_PATH", "POINT", "LINESTRING",
-           "POLYGON", "REPAIRED"]
+           "write_tiles", "segment_tile_layout", "MOVE_TO", "LINE_TO", "CLOSE_PATH", "POINT",
+           "LINESTRING", "POLYGON", "REPAIRED"]
 
 MOVE_TO, LINE_TO, CLOSE_PATH = 1, 2, 7
 #: Feature kinds (``Tile.GeomType``).
@@ -315,6 +315,28 @@ def tile_sizes(head, tail, ranges, sizes):
     for t in prange(sizes.shape[0]):
         layer = _layer_size(head, tail, ranges, t)
         sizes[t] = 1 + _varint_size(layer) + layer
+
+
+def segment_tile_layout(feature_start: np.ndarray, head: np.ndarray, tail: np.ndarray,
+                        ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Lay out one tile of one layer per window, each holding a run of features' bytes.
+
+    Tile ``w``'s features are bytes ``feature_start[w]:feature_start[w + 1]`` of the
+    features written back to back (k + 1 entries). Returns ``(holding, ranges,
+    offsets)``: the tiles holding a feature, their `tile_sizes`/`write_tiles` ranges
+    (features only: no keys nor values) and every tile's byte offsets (k + 1; a tile
+    with no feature has no bytes). The Numba and OpenCL backends frame tiles by it.
+    """
+    holding = np.flatnonzero(np.diff(feature_start) > 0)
+    ranges = np.zeros((holding.shape[0], 6), dtype=np.int64)
+    ranges[:, 0] = feature_start[holding]
+    ranges[:, 1] = feature_start[holding + 1]
+    held_bytes = np.empty(holding.shape[0], dtype=np.int64)
+    tile_sizes(head, tail, ranges, held_bytes)
+    offsets = np.zeros(feature_start.shape[0], dtype=np.int64)
+    offsets[holding + 1] = held_bytes
+    np.cumsum(offsets, out=offsets)
+    return holding, ranges, offsets
 
 
 @borrowing

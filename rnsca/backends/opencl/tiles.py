@@ -29,7 +29,6 @@ from typing import Any, NamedTuple
 import numpy as np
 import pyopencl as cl
 
-from rnsca.arrays import exclusive_sum
 from rnsca.backends.base import TileLayer
 from rnsca.backends.opencl.runs import Ledger
 from rnsca.backends.opencl.segments import _Raw, groups_for
@@ -87,15 +86,7 @@ def encode_on_device(device: Any, kernels: Any, ledger: Ledger, pieces: cl.Buffe
     if bad < m:
         return nothing._replace(first_bad=bad)
     # The tiles' layout: the Numba backend's framing of each tile holding a feature.
-    feature_bytes = np.diff(feature_start[:k + 1])
-    holding = np.flatnonzero(feature_bytes > 0)
-    ranges = np.zeros((holding.shape[0], 6), dtype=np.int64)
-    ranges[:, 1] = feature_bytes[holding]
-    held_bytes = np.empty(holding.shape[0], dtype=np.int64)
-    MVT.tile_sizes(layer.head, layer.tail, ranges, held_bytes)
-    tile_bytes = np.zeros(k, dtype=np.int64)
-    tile_bytes[holding] = held_bytes
-    offsets = exclusive_sum(tile_bytes)
+    offsets = MVT.segment_tile_layout(feature_start[:k + 1], layer.head, layer.tail)[2]
     total = int(offsets[-1])
     if total == 0:
         return EncodedOnDevice(nothing.data, offsets, m)

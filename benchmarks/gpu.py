@@ -37,7 +37,6 @@ from benchmarks import datasets as D
 W = (250.0, 250.0, 750.0, 750.0)
 HERE = Path(__file__).resolve().parent
 COLD_KINDS = ("segments", "lines", "polygons", "paths")
-SWEEPS = {"on": True}  # the size sweeps (--skip-sweeps: a short run)
 
 
 def _best(call, repeats: int) -> tuple[float, object]:
@@ -97,7 +96,7 @@ def _same_segments(a, b) -> bool:
                 and (a.t is None or np.array_equal(host(a.t), b.t)))
 
 
-def segments(table: Table, n: int, repeats: int, variants: bool) -> None:
+def segments(table: Table, n: int, repeats: int, variants: bool, sweeps: bool = True) -> None:
     segs = D.uniform_segments(n)
     label = f"{n / 1e6:g}M" if n >= 1e6 else f"{n}"
     for method in ("rnsca", "liang_barsky") if variants else ("rnsca",):
@@ -114,7 +113,7 @@ def segments(table: Table, n: int, repeats: int, variants: bool) -> None:
     table.add(f"segments {label} pieces only", tn, to, _split(ro, to), _same_segments(ro, rn))
     _pinned_input(table, segs, label, repeats)
     _device_resident(table, segs, label, repeats)
-    if SWEEPS["on"]:
+    if sweeps:
         _chunk_sizes(table, segs, label)
         _copies(table, segs)
 
@@ -136,7 +135,7 @@ def _device_resident(table: Table, segs: np.ndarray, label: str, repeats: int) -
     from rnsca.backends.registry import get_backend
 
     backend = get_backend("opencl")
-    queue = backend._device.queue
+    queue = backend.queue
     start = time.perf_counter()
     on_device = cl_array.to_device(queue, segs)
     queue.finish()
@@ -211,7 +210,7 @@ def _many_windows_device_resident(table: Table, segs: np.ndarray, grid: np.ndarr
 
     from rnsca.backends.registry import get_backend
 
-    queue = get_backend("opencl")._device.queue
+    queue = get_backend("opencl").queue
     start = time.perf_counter()
     on_device = cl_array.to_device(queue, segs)
     queue.finish()
@@ -240,7 +239,7 @@ def _many_windows_encode(table: Table, grid: np.ndarray, label: str, rn, ro,
               tile_bytes=int(en.data.nbytes))
 
 
-def lines(table: Table, n_lines: int, repeats: int) -> None:
+def lines(table: Table, n_lines: int, repeats: int, sweeps: bool = True) -> None:
     coords, offsets = D.smooth_polylines(n_lines)
     tn, rn = _best(lambda: rnsca.clip_ragged("linestring", coords, (offsets,), W), repeats)
     to, ro = _best(lambda: rnsca.clip_ragged("linestring", coords, (offsets,), W,
@@ -250,7 +249,7 @@ def lines(table: Table, n_lines: int, repeats: int) -> None:
                                                               strict=True)))
     label = f"polylines {n_lines} ({len(coords) / 1e6:.1f}M vertices)"
     table.add(label, tn, to, _split(ro, to), equal)
-    if SWEEPS["on"]:
+    if sweeps:
         _range_sizes(table, label, lambda: rnsca.clip_ragged(
             "linestring", coords, (offsets,), W, backend="opencl"))
 
@@ -271,7 +270,7 @@ def _range_sizes(table: Table, label: str, call) -> None:
         runs.PIPELINE_VERTICES = kept
 
 
-def polygons(table: Table, n: int, repeats: int) -> None:
+def polygons(table: Table, n: int, repeats: int, sweeps: bool = True) -> None:
     coords, ring_offsets, geometry_offsets = D.star_polygons(n)
     offsets = (ring_offsets, geometry_offsets)
     tn, rn = _best(lambda: rnsca.clip_ragged("polygon", coords, offsets, W), repeats)
@@ -282,7 +281,7 @@ def polygons(table: Table, n: int, repeats: int) -> None:
                                                               strict=True)))
     label = f"polygons {n / 1e3:g}k stars with holes"
     table.add(label, tn, to, _split(ro, to), equal)
-    if SWEEPS["on"]:
+    if sweeps:
         _range_sizes(table, label, lambda: rnsca.clip_ragged(
             "polygon", coords, offsets, W, backend="opencl"))
 
@@ -386,7 +385,7 @@ def cold_start(backends: tuple[str, ...]) -> list[dict]:
     """First calls with empty caches (all kinds at once: one child each), then warm.
 
     The children's caches (Numba's, pyopencl's binaries, the calibration's) live in a new
-    folder, so "empty" holds whatever this process compiled before.
+    folder, so "empty" stays empty whatever this process compiled before.
     """
     import tempfile
 
@@ -461,15 +460,17 @@ def main(argv: list[str] | None = None) -> dict:
     if args.skip_cold_start:
         families.discard("cold-start")
     small = args.small
-    SWEEPS["on"] = not args.skip_sweeps
+    sweeps = not args.skip_sweeps
     workloads = {
         "segments": lambda: (
-            segments(table, 20_000 if small else 10_000_000, args.repeats, variants=True),
+            segments(table, 20_000 if small else 10_000_000, args.repeats, variants=True,
+                     sweeps=sweeps),
             segments(table, 50_000 if small else 50_000_000, args.repeats, variants=False)),
         "windows": lambda: many_windows(table, 20_000 if small else 10_000_000, 1024,
                                         args.repeats),
-        "lines": lambda: lines(table, 10 if small else 4000, args.repeats),
-        "polygons": lambda: polygons(table, 1000 if small else 1_000_000, args.repeats),
+        "lines": lambda: lines(table, 10 if small else 4000, args.repeats, sweeps),
+        "polygons": lambda: polygons(table, 1000 if small else 1_000_000, args.repeats,
+                                     sweeps),
         "curves": lambda: curves(table, small, args.repeats)}
     opencl = get_backend("opencl")
     report["opencl_device"] = opencl.name
